@@ -1,0 +1,127 @@
+# deformd build. Everything is found by glob so that new files need no Makefile edit:
+#   core/<area>/*.c      -> build/lib/libdf_<area>.a      (math only)
+#   proto/*.c            -> build/lib/libdf_proto.a       (wire format only)
+#   server/*.c           -> build/bin/deformd
+#   client/*.c           -> build/lib/libdeformclient.a, client/deformctl/*.c -> build/bin/deformctl
+#   tests/unit/<area>/test_*.c -> build/tests/unit/<area>/test_*   (cmocka, one binary per file)
+#   tests/bench/bench_*.c      -> build/bench/bench_*
+#   tests/fuzz/fuzz_*.c        -> build/fuzz/fuzz_*  (clang libFuzzer, `make fuzz`)
+# Release flags: -O2 -march=x86-64-v2 (SSE4.2/POPCNT: every x86-64 server of the last decade) plus
+# -ffp-contract=off so float results are reproducible across builds; OpenMP for kernels.
+
+SHELL   := /bin/bash
+CC      ?= gcc
+BUILD   ?= build
+OPT     ?= -O2 -march=x86-64-v2 -ffp-contract=off
+SAN     ?=
+PYTHON  := /usr/bin/python3
+MESHES  ?= $(abspath $(CURDIR)/../shared/meshes)
+
+WARN    := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes
+CPPFLAGS := -I. -I/usr/include/suitesparse -D_GNU_SOURCE
+CFLAGS  := -std=c11 $(OPT) $(SAN) $(WARN) -fopenmp -g -MMD -MP
+MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
+SERVER_LIBS := -luv -lhidapi-hidraw -lusb-1.0 -lsqlite3 -lpthread
+LDFLAGS := -fopenmp $(SAN)
+
+AREAS      := $(notdir $(patsubst %/,%,$(wildcard core/*/)))
+CORE_LIBS  := $(foreach a,$(AREAS),$(BUILD)/lib/libdf_$(a).a)
+PROTO_SRC  := $(wildcard proto/*.c)
+PROTO_LIB  := $(if $(PROTO_SRC),$(BUILD)/lib/libdf_proto.a)
+CLIENT_SRC := $(wildcard client/*.c)
+CLIENT_LIB := $(if $(CLIENT_SRC),$(BUILD)/lib/libdeformclient.a)
+SERVER_SRC := $(filter-out server/main.c,$(wildcard server/*.c))
+SERVER_LIB := $(if $(SERVER_SRC),$(BUILD)/lib/libdf_server.a)
+CTL_SRC    := $(wildcard client/deformctl/*.c)
+ALL_LIBS   := $(SERVER_LIB) $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
+LINK_LIBS  := -Wl,--start-group $(ALL_LIBS) -Wl,--end-group $(MATH_LIBS)
+
+UNIT_SRC   := $(wildcard tests/unit/*/test_*.c)
+UNIT_BIN   := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
+UNIT_HELP  := $(wildcard tests/unit/*.c)
+BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
+BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
+FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
+BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
+
+.PHONY: all deps test unit bench asan fuzz run clean
+all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
+
+# Idempotent: installs every Debian package the build, the tests and the fuzzers need.
+deps:
+	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
+	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
+	if [ "$$need" != "$(words $(DEB_PKGS))" ]; then \
+	  $$SUDO apt-get update && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y --no-install-recommends $(DEB_PKGS); \
+	else echo "deps: all $(words $(DEB_PKGS)) Debian packages present"; fi
+DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
+            libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
+            python3 python3-pytest clang libclang-rt-14-dev
+
+$(BUILD)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+
+define area_lib
+$(BUILD)/lib/libdf_$(1).a: $(patsubst %.c,$(BUILD)/obj/%.o,$(wildcard core/$(1)/*.c))
+	@mkdir -p $$(dir $$@)
+	rm -f $$@ && ar rcs $$@ $$^
+endef
+$(foreach a,$(AREAS),$(eval $(call area_lib,$(a))))
+
+$(BUILD)/lib/libdf_proto.a: $(patsubst %.c,$(BUILD)/obj/%.o,$(PROTO_SRC))
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+$(BUILD)/lib/libdeformclient.a: $(patsubst %.c,$(BUILD)/obj/%.o,$(CLIENT_SRC))
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+
+$(BUILD)/lib/libdf_server.a: $(patsubst %.c,$(BUILD)/obj/%.o,$(SERVER_SRC))
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+$(BUILD)/bin/deformd: $(BUILD)/obj/server/main.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LINK_LIBS) $(SERVER_LIBS)
+$(BUILD)/bin/deformctl: $(patsubst %.c,$(BUILD)/obj/%.o,$(CTL_SRC)) $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LINK_LIBS) $(SERVER_LIBS)
+
+$(BUILD)/tests/unit/%: tests/unit/%.c $(patsubst %.c,$(BUILD)/obj/%.o,$(UNIT_HELP)) $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(patsubst %.c,$(BUILD)/obj/%.o,$(UNIT_HELP)) $(LDFLAGS) $(LINK_LIBS) $(SERVER_LIBS) -lcmocka
+$(BUILD)/bench/%: tests/bench/%.c $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(LDFLAGS) $(LINK_LIBS) $(SERVER_LIBS)
+
+# The README's test command: deps, build, every suite, one closing "N passed, N failed" line.
+test: deps
+	$(MAKE) all
+	BUILD=$(BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
+
+unit: all
+	BUILD=$(BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES=unit bash tests/run_tests.sh
+
+bench: all
+	@for b in $(BENCH_BIN); do echo "== $$b"; MESHES=$(MESHES) $$b || exit 1; done
+
+asan:
+	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
+	ASAN_OPTIONS=detect_leaks=1 BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
+
+# libFuzzer targets: each tests/fuzz/fuzz_X.c runs FUZZ_SECONDS over tests/fuzz/corpus/X.
+FUZZ_SECONDS ?= 60
+fuzz:
+	@mkdir -p $(BUILD)/fuzz
+	@for f in $(FUZZ_SRC); do n=$$(basename $$f .c); \
+	  clang -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=fuzzer,address,undefined -fopenmp=libgomp $$f $(PROTO_SRC) $(wildcard core/*/*.c) \
+	    -o $(BUILD)/fuzz/$$n $(MATH_LIBS) -lgomp || exit 1; \
+	  mkdir -p tests/fuzz/corpus/$${n#fuzz_}; \
+	  $(BUILD)/fuzz/$$n -max_total_time=$(FUZZ_SECONDS) tests/fuzz/corpus/$${n#fuzz_} || exit 1; done
+
+run: all
+	bash tests/demo_run.sh
+
+clean:
+	rm -rf build build-asan
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Runs every test suite and prints one closing line "N passed, N failed[, N skipped]".
+#   unit: each build/tests/unit/<area>/test_* cmocka binary (its "[  PASSED  ] N test(s)." lines
+#         are summed; a binary that dies without a FAILED line counts as one failure).
+#   integration: /usr/bin/python3 -m pytest tests/integration (when it holds test_*.py files).
+# Environment: BUILD (build dir), MESHES (../shared/meshes), PYTHON, SUITES ("unit integration").
+set -u
+BUILD=${BUILD:-build}
+PYTHON=${PYTHON:-/usr/bin/python3}
+SUITES=${SUITES:-unit integration}
+export MESHES=${MESHES:-$(cd "$(dirname "$0")/.." && pwd)/../shared/meshes}
+passed=0; failed=0; skipped=0
+log=$(mktemp); trap 'rm -f "$log"' EXIT
+
+count() { # $1 = regex with one capture group of the count; reads $log
+  sed -n -E "s/$1/\\1/p" "$log" | awk '{s+=$1} END {print s+0}'
+}
+
+if [[ " $SUITES " == *" unit "* ]]; then
+  for t in $(find "$BUILD/tests/unit" -type f -name 'test_*' -perm -u+x 2>/dev/null | sort); do
+    echo "== $t"
+    "$t" >"$log" 2>&1; rc=$?
+    cat "$log"
+    p=$(count '^\[  PASSED  \] ([0-9]+) test.*')
+    f=$(count '^\[  FAILED  \] ([0-9]+) test.*')
+    s=$(count '^\[  SKIPPED \] ([0-9]+) test.*')
+    if [ "$rc" -ne 0 ] && [ "$f" -eq 0 ]; then f=1; echo "!! $t exited with status $rc"; fi
+    passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + s))
+  done
+fi
+
+if [[ " $SUITES " == *" integration "* ]] && ls tests/integration/test_*.py >/dev/null 2>&1; then
+  echo "== pytest tests/integration"
+  BUILD=$BUILD "$PYTHON" -m pytest tests/integration -q -rs -p no:cacheprovider >"$log" 2>&1; rc=$?
+  cat "$log"
+  last=$(grep -E '[0-9]+ (passed|failed|error)' "$log" | tail -n 1)
+  pick() { echo "$last" | grep -oE "[0-9]+ $1" | head -n 1 | awk '{print $1+0}'; }
+  p=$(pick passed); f=$(pick failed); e=$(pick error); s=$(pick skipped)
+  p=${p:-0}; f=${f:-0}; e=${e:-0}; s=${s:-0}
+  f=$((f + e))
+  if [ "$rc" -ne 0 ] && [ "$rc" -ne 5 ] && [ "$f" -eq 0 ]; then f=1; echo "!! pytest exited with status $rc"; fi
+  passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + s))
+fi
+
+if [ "$skipped" -gt 0 ]; then
+  echo "$passed passed, $failed failed, $skipped skipped"
+else
+  echo "$passed passed, $failed failed"
+fi
+[ "$failed" -eq 0 ] && [ "$passed" -gt 0 ]
