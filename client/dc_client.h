@@ -1,0 +1,49 @@
+/* dc_client.h — libdeformclient internals: the df_client struct and the request helpers shared
+ * by the per-message call files (dc_calls_*.c). Not installed. */
+#ifndef DF_CLIENT_DC_CLIENT_H
+#define DF_CLIENT_DC_CLIENT_H
+
+#include "client/deformclient.h"
+#include "proto/buf.h"
+
+struct df_client {
+    int fd;
+    int timeout_ms;              /* per-wait timeout inside requests, < 0 forever */
+    uint64_t next_id;            /* next request id (starts at 1) */
+    df_client_event_fn on_event;
+    void *event_user;
+    int remote_err;              /* 1 when the last failed call's error came from the server */
+    int broken;                  /* 1 after a framing error or lost connection */
+    uint8_t *rbuf;               /* DF_CLIENT_READ_BUF buffered socket bytes */
+    size_t rpos, rlen;           /* unread bytes are rbuf[rpos .. rlen) */
+    uint8_t *pbuf;               /* payload storage for frames larger than the buffered part */
+    size_t pcap;
+    df_buf out;                  /* encoded request scratch */
+    df_msg_hello_reply server;   /* hello reply */
+};
+
+/* Encodes a request body with `enc` into c->out (reset first) and runs df_client_transact.
+ * `enc` is a df_msg_X_encode function cast to this type together with its message. */
+typedef int (*dc_encode_fn)(const void *m, df_buf *out, df_error *err);
+int dc_request(df_client *c, uint16_t type, dc_encode_fn enc, const void *msg,
+               df_client_reply_fn on_reply, void *user, df_error *err);
+
+/* Waits for the whole reply of request `id` of `type` (see df_client_transact), dispatching
+ * events meanwhile. */
+int dc_wait_reply(df_client *c, uint16_t type, uint64_t id, df_client_reply_fn on_reply,
+                  void *user, df_error *err);
+
+/* Reply decoders for the common single-frame replies (user points at the output struct, which
+ * may be NULL to ignore the body). */
+int dc_reply_ack(void *user, const df_frame_header *h, const uint8_t *p, df_error *err);
+int dc_reply_session_info(void *user, const df_frame_header *h, const uint8_t *p, df_error *err);
+
+/* Sends a request made only of a session id (brush end/cancel, undo, redo, reset rest, close,
+ * unsubscribe) and decodes an ack reply into *ack (may be NULL). */
+int dc_session_ref_call(df_client *c, uint16_t type, uint64_t session_id, df_msg_ack *ack,
+                        df_error *err);
+
+/* Monotonic clock in microseconds. */
+double dc_now_us(void);
+
+#endif

@@ -1,0 +1,22 @@
+/* dc_meshout.h — writes a mesh fetched from the daemon to a file through core/mesh's
+ * df_mesh_write_file (format from the extension: .obj .off .ply .node .mesh).
+ *
+ * Kept apart from deformclient.h on purpose: it includes only core/mesh/mesh.h, so callers need
+ * not include both proto/messages.h and core/mesh/mesh_io.h in one translation unit. */
+#ifndef DF_CLIENT_DC_MESHOUT_H
+#define DF_CLIENT_DC_MESHOUT_H
+
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "core/mesh/mesh.h"
+
+/* Writes the mesh of `kind` (df_mesh_kind), `planar` flag, nv float32 positions `xyz` (nv x 3),
+ * ne elements `E` (ne x elem size, 0-based) and nf boundary faces `F` (nf x 3, may be NULL when
+ * nf == 0) to `path`. Positions are widened to double exactly. Errors: those of
+ * df_mesh_write_file (DF_EINVAL unknown extension or bad mesh, DF_EUNSUPPORTED kind not
+ * representable in the format, DF_EIO), DF_ENOMEM. */
+int dc_meshout_write(const char *path, int kind, int planar, uint32_t nv, const float *xyz,
+                     uint32_t ne, const int32_t *E, uint32_t nf, const int32_t *F, df_error *err);
+
+#endif

@@ -1,0 +1,255 @@
+/* deformclient.h — libdeformclient: the C client of the deformd daemon (proto/PROTOCOL.md).
+ *
+ * A df_client is one connection (Unix socket or TCP). Requests are blocking: each call sends one
+ * request (several frames for a chunked upload), then reads frames until the reply carrying the
+ * same request id is complete (all DF_FLAG_MORE chunks), dispatching every event frame that
+ * arrives meanwhile (displacement stream, progress, session closed) to the event callback.
+ * Replies to other request ids (e.g. of a request that timed out) are discarded.
+ *
+ * Errors: every function returns DF_OK or a negative code and fills `err` when non-NULL. Errors
+ * the server reported carry the server's wire code (core/common/df_error.h DF_E* or
+ * proto/wire_error.h DF_EPROTO_*) and message; df_client_last_error_was_remote tells them apart
+ * from local failures (DF_EIO: connection lost, DF_ESTATE: timeout, DF_EINVAL: bad arguments,
+ * DF_EFORMAT/DF_EPROTO_*: malformed reply). After DF_EIO or a malformed reply the connection is
+ * unusable; close it.
+ *
+ * Threading: a df_client is used by one thread at a time. The event callback runs inside
+ * whichever call is reading; it must not call back into the same df_client.
+ *
+ * Message bodies are the proto/messages.h structs; decoded replies that own memory are released
+ * with their df_msg_X_free. */
+#ifndef DEFORMCLIENT_H
+#define DEFORMCLIENT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "proto/frame.h"
+#include "proto/messages.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Buffered bytes read from the socket at once, and the client name sent in hello. */
+#define DF_CLIENT_READ_BUF 65536
+#define DF_CLIENT_NAME "libdeformclient"
+/* Largest reply reassembled from chunks (get mesh of the largest mesh with every section). */
+#define DF_CLIENT_MAX_REPLY_BYTES (2ull << 30)
+
+typedef struct df_client df_client;
+
+/* Event callback: `h` is the frame header (DF_FLAG_EVENT set; DF_FLAG_MORE on all but the last
+ * chunk of a chunked event), `payload` its h->payload_len bytes (valid during the call only). */
+typedef void (*df_client_event_fn)(void *user, const df_frame_header *h, const uint8_t *payload);
+
+/* ------------------------------------------------------------------------- connection */
+
+/* Connects to the Unix socket `path` and performs the hello handshake (protocol version 1,
+ * client name `name`, NULL -> DF_CLIENT_NAME). *out receives the client. Errors: DF_EINVAL,
+ * DF_EIO (cannot connect / connection lost), DF_ENOMEM, or the server's error for the hello. */
+int df_client_connect_unix(const char *path, const char *name, df_client **out, df_error *err);
+
+/* Same over TCP to `host`:`port` (TCP_NODELAY set). */
+int df_client_connect_tcp(const char *host, int port, const char *name, df_client **out,
+                          df_error *err);
+
+/* Closes the connection and frees the client. NULL-safe. */
+void df_client_close(df_client *c);
+
+/* The server's hello reply (limits, features, name) as received at connect. */
+const df_msg_hello_reply *df_client_server_info(const df_client *c);
+
+/* Registers the event callback (NULL: events are dropped). */
+void df_client_set_event_callback(df_client *c, df_client_event_fn fn, void *user);
+
+/* Timeout in ms for each wait on the socket inside a request (< 0: wait forever, the default).
+ * A timeout returns DF_ESTATE; the late reply is discarded by later calls. */
+void df_client_set_timeout(df_client *c, int timeout_ms);
+
+/* The socket fd, for poll()-based event loops (read readiness: call df_client_pump). */
+int df_client_fd(const df_client *c);
+
+/* 1 when the error of the last failed call was reported by the server, else 0. */
+int df_client_last_error_was_remote(const df_client *c);
+
+/* ---------------------------------------------------------------------- low level */
+
+/* Sends one frame of `type` with `flags` (0 or DF_FLAG_MORE) and request id `id` (0: allocate
+ * the next id) carrying `len` bytes of `payload`. *id_out (may be NULL) receives the id used.
+ * Errors: DF_EINVAL (len > DF_MAX_FRAME_PAYLOAD), DF_EIO. */
+int df_client_send(df_client *c, uint16_t type, uint16_t flags, uint64_t id, const void *payload,
+                   size_t len, uint64_t *id_out, df_error *err);
+
+/* Reads the next frame (waiting at most `timeout_ms`, < 0 forever) WITHOUT dispatching it: *h
+ * receives its header and *payload its bytes, valid until the next call on `c`. Errors:
+ * DF_ESTATE (timeout, nothing consumed), DF_EIO, DF_EPROTO_* (bad header: connection unusable). */
+int df_client_recv(df_client *c, int timeout_ms, df_frame_header *h, const uint8_t **payload,
+                   df_error *err);
+
+/* Reads and dispatches frames for up to `timeout_ms` (0: only what is already readable without
+ * blocking; < 0: until one event frame was dispatched). Returns the number of event frames
+ * dispatched (>= 0), or a negative error (DF_EIO...). Stray replies are discarded. */
+int df_client_pump(df_client *c, int timeout_ms, df_error *err);
+
+/* Reply frame callback of df_client_transact: one call per reply chunk, in order. Return DF_OK
+ * to continue, or a negative code to fail the request (the remaining chunks are still drained). */
+typedef int (*df_client_reply_fn)(void *user, const df_frame_header *h, const uint8_t *payload,
+                                  df_error *err);
+
+/* Sends a single-frame request and waits for its whole reply. Without an error flag each reply
+ * frame goes to `on_reply` (may be NULL: reply ignored); an error reply is decoded into `err` and
+ * its code returned. Events that arrive meanwhile go to the event callback. */
+int df_client_transact(df_client *c, uint16_t type, const void *payload, size_t len,
+                       df_client_reply_fn on_reply, void *user, df_error *err);
+
+/* ------------------------------------------------------------------ one call per message */
+
+/* Ping: sends `len` (<= DF_MAX_PING_BYTES) bytes and checks the echo. *rtt_us (may be NULL)
+ * receives the round trip in microseconds. */
+int df_client_ping(df_client *c, const void *data, uint32_t len, double *rtt_us, df_error *err);
+
+/* Auth with `method` and a token (<= DF_MAX_AUTH_TOKEN bytes). Servers without auth answer
+ * DF_EUNSUPPORTED. */
+int df_client_auth(df_client *c, uint16_t method, const void *token, uint32_t len, df_error *err);
+
+/* Uploads `len` bytes of a mesh file in `format` (DF_FMT_*, DF_FMT_AUTO sniffs) as session
+ * `name` (may be NULL/""), in chunks that fit the server's max frame payload. For DF_FMT_TETGEN
+ * `bytes` holds the .node bytes then the .ele bytes, the .ele starting at `part2_offset`
+ * (0 for other formats). *info receives the new session. Limit: DF_MAX_MESH_BYTES. */
+int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, const void *bytes,
+                              uint64_t len, uint64_t part2_offset, df_msg_session_info *info,
+                              df_error *err);
+
+/* Reads the local file `path` (.obj .off .ply .mesh; X.node or X.ele: the X.node + X.ele pair)
+ * and uploads it inline (see df_client_load_mesh_bytes). DF_EIO when a file cannot be read. */
+int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
+                             df_msg_session_info *info, df_error *err);
+
+/* Asks the server to read `path` itself (needs DF_FEAT_PATH_LOAD and a path allowed by its
+ * config). */
+int df_client_load_mesh_path(df_client *c, const char *path, const char *name, uint8_t format,
+                             df_msg_session_info *info, df_error *err);
+
+/* Lists the sessions; free *out with df_msg_session_list_free. */
+int df_client_list_sessions(df_client *c, df_msg_session_list *out, df_error *err);
+
+/* Opens a session by id (session_id != 0) or by `name` (session_id == 0); *info may be NULL. */
+int df_client_open_session(df_client *c, uint64_t session_id, const char *name,
+                           df_msg_session_info *info, df_error *err);
+
+/* Destroys a session (subscribers receive DF_MSG_SESSION_CLOSED). *ack may be NULL. */
+int df_client_close_session(df_client *c, uint64_t session_id, df_msg_ack *ack, df_error *err);
+
+/* Subscribes to a session's displacement stream; `flags` DF_SUBSCRIBE_SNAPSHOT asks for a dense
+ * snapshot event first. *info (may be NULL) receives the session state at subscription. */
+int df_client_subscribe(df_client *c, uint64_t session_id, uint32_t flags,
+                        df_msg_session_info *info, df_error *err);
+int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err);
+
+/* Brush stroke: begin with every Kelvinlet parameter, cumulative updates, end (commits the
+ * stroke as the session's change) or cancel (back to the stroke's start). *ack may be NULL. */
+int df_client_brush_begin(df_client *c, const df_msg_brush *b, df_msg_ack *ack, df_error *err);
+int df_client_brush_update(df_client *c, const df_msg_brush_update *u, df_msg_ack *ack,
+                           df_error *err);
+int df_client_brush_end(df_client *c, uint64_t session_id, df_msg_ack *ack, df_error *err);
+int df_client_brush_cancel(df_client *c, uint64_t session_id, df_msg_ack *ack, df_error *err);
+
+/* Sets one brush parameter (DF_BP_*) of this connection's brush on a session. */
+int df_client_set_brush_param(df_client *c, uint64_t session_id, uint8_t param, double value,
+                              df_error *err);
+
+/* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets). */
+int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);
+
+/* Moves the handles to m->targets and waits for the final reply (*res). Progress iterates
+ * arrive meanwhile as DF_MSG_PROGRESS events (the callback). */
+int df_client_handles_move(df_client *c, const df_msg_handle_move *m, df_msg_move_result *res,
+                           df_error *err);
+
+/* Session-wide changes; *ack (may be NULL) receives the new version. */
+int df_client_reset_rest(df_client *c, uint64_t session_id, df_msg_ack *ack, df_error *err);
+int df_client_undo(df_client *c, uint64_t session_id, df_msg_ack *ack, df_error *err);
+int df_client_redo(df_client *c, uint64_t session_id, df_msg_ack *ack, df_error *err);
+
+/* A whole mesh as returned by df_client_get_mesh (all arrays malloc'd, row-major). */
+typedef struct df_client_mesh {
+    uint64_t session_id;
+    uint64_t version;     /* version of `positions` */
+    uint8_t kind;         /* df_mesh_kind 1 polyline, 2 triangle, 3 tet */
+    uint8_t planar;
+    uint32_t nv, ne, nf;
+    float *positions;     /* nv x 3 current positions */
+    float *base;          /* nv x 3 load-time positions (the stream's reference), or NULL */
+    float *rest;          /* nv x 3 current rest shape, or NULL */
+    int32_t *elements;    /* ne x (2|3|4) */
+    int32_t *faces;       /* nf x 3 tet boundary triangles, NULL when nf == 0 */
+} df_client_mesh;
+
+/* Fetches the current mesh (chunked reply reassembled); `flags` DF_GET_MESH_BASE / _REST also
+ * fetch those sections. Free with df_client_mesh_free. Errors include DF_EFORMAT when the chunks
+ * are inconsistent (counts, overlaps, missing rows). */
+int df_client_get_mesh(df_client *c, uint64_t session_id, uint32_t flags, df_client_mesh *out,
+                       df_error *err);
+void df_client_mesh_free(df_client_mesh *m);
+
+/* Dense displacement snapshot at `version` (0: current): u (nv x 3 floats, caller-allocated,
+ * nv must be the session's vertex count) receives every vertex's displacement from the base,
+ * *version_out the version. */
+int df_client_snapshot(df_client *c, uint64_t session_id, uint64_t version, uint32_t nv, float *u,
+                       uint64_t *version_out, df_error *err);
+
+/* Daemon-wide (session_id 0) or per-session stats; free *out with df_msg_stats_free. */
+int df_client_stats(df_client *c, uint64_t session_id, df_msg_stats *out, df_error *err);
+
+/* ------------------------------------------------------------ displacement stream replica */
+
+/* Pure helper: writes the rows of one displacement chunk into u (nv x 3 floats): dense rows
+ * offset..offset+count-1, or sparse rows at their indices (u_i is SET: values are displacements
+ * from the base, not increments). Errors (u untouched): DF_EINVAL when d->nv != nv, a row or
+ * index is out of range, or a value is not finite. */
+int df_client_disp_apply(const df_msg_disp *d, float *u, uint32_t nv, df_error *err);
+
+/* Pure helper: out[i] = base[i] + u[i] in float32 for the nv x 3 arrays (out may alias u). */
+void df_client_positions(const float *base, const float *u, uint32_t nv, float *out);
+
+/* A local copy of one session's positions kept current from the displacement stream. */
+typedef struct df_client_replica {
+    uint64_t session_id;
+    uint32_t nv;
+    uint64_t version;       /* last complete version applied */
+    float *base;            /* nv x 3 base positions */
+    float *u;               /* nv x 3 current displacements */
+    uint64_t building;      /* version whose chunks are being applied, 0 when none */
+    uint32_t rows_seen;     /* rows of `building` applied so far */
+    int stale;              /* 1 after a gap or bad chunk: resync with a snapshot */
+    uint64_t versions_applied; /* complete versions applied */
+} df_client_replica;
+
+/* Initialises a replica from `base` (nv x 3, copied) at `version`, with u = 0 (or a copy of
+ * `u0` when non-NULL). Free with df_client_replica_free. */
+int df_client_replica_init(df_client_replica *r, uint64_t session_id, uint32_t nv,
+                           const float *base, const float *u0, uint64_t version, df_error *err);
+void df_client_replica_free(df_client_replica *r);
+
+/* Feeds one frame (a DF_MSG_DISPLACEMENT or DF_MSG_PROGRESS event, or a snapshot reply chunk)
+ * to the replica. Frames of other sessions are ignored (returns 0). Returns 1 when the frame
+ * completed a version (r->version updated), 0 when more chunks are needed or the frame was
+ * ignored, or a negative error: DF_ESTATE for a version gap (r->stale set: resync with
+ * df_client_replica_resync), DF_EFORMAT/DF_EINVAL for a bad chunk (r->stale set). A snapshot
+ * (kind DF_CHANGE_SNAPSHOT) clears `stale`. */
+int df_client_replica_feed(df_client_replica *r, const df_frame_header *h, const uint8_t *payload,
+                           df_error *err);
+
+/* Resynchronises the replica with a dense snapshot of the current version. */
+int df_client_replica_resync(df_client *c, df_client_replica *r, df_error *err);
+
+/* Current positions base + u into out (nv x 3). */
+void df_client_replica_positions(const df_client_replica *r, float *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

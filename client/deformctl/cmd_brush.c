@@ -1,0 +1,202 @@
+/* cmd_brush.c — `deformctl brush`: one whole Kelvinlet stroke (begin with every parameter and
+ * a zero load, one update carrying the load, end) committed as one session version. */
+#include <inttypes.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "client/dc_files.h"
+#include "client/deformctl/ctl.h"
+
+/* Defaults of an unspecified option (those of core/kelvinlet's df_kelvinlet_brush_defaults). */
+#define BRUSH_DEFAULT_RADIUS 1.0
+#define BRUSH_DEFAULT_NU 0.5
+#define BRUSH_DEFAULT_RATIO 1.1
+
+enum {
+    O_TYPE = CTL_NGLOBAL, O_CENTER, O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_RADIUS, O_NU,
+    O_FALLOFF, O_RATIO, O_DIM, O_INTEGRATOR, O_STEPS, O_MIRROR, O_PIN, O_STRENGTH, O_MOVING,
+    O_COUNT
+};
+
+static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
+    CTL_GLOBAL_OPTS,
+    {"type", 1, "--type grab|twist|scale|pinch|affine   brush kind (required)"},
+    {"center", 1, "--center X,Y,Z     brush centre (required)"},
+    {"move", 1, "--move DX,DY,DZ    grab: displacement of the centre"},
+    {"twist", 1, "--twist WX,WY,WZ   twist: rotation vector at the centre (radians)"},
+    {"scale", 1, "--scale S          scale: centre dilation (grad u = S I)"},
+    {"matrix", 1, "--matrix M00,M01,...,M22   pinch (symmetric, traceless) / affine: centre "
+                  "gradient, row-major"},
+    {"radius", 1, "--radius R         regularization radius, mesh units (default 1)"},
+    {"nu", 1, "--nu NU            Poisson ratio in [-1, 0.5], or inf (default 0.5)"},
+    {"falloff", 1, "--falloff N        1 single, 2 bi-scale, 3 tri-scale (default 1)"},
+    {"ratio", 1, "--ratio Q          multi-scale radius ratio > 1 (default 1.1)"},
+    {"dim", 1, "--dim 2|3          2: planar brush for z = 0 meshes (default 3)"},
+    {"integrator", 1, "--integrator euler|rk4   time integrator (default euler)"},
+    {"steps", 1, "--steps N          integration steps (default 1)"},
+    {"mirror", 1, "--mirror PX,PY,PZ,NX,NY,NZ   also apply mirrored across this plane"},
+    {"pin", 1, "--pin FILE         points held fixed, one 'x y z' per line"},
+    {"strength", 1, "--strength S       load multiplier (default 1)"},
+    {"moving", 0, "--moving           moving brush: the centre follows the load"},
+};
+
+static const char *const TYPES[] = {"grab", "twist", "scale", "pinch", "affine", NULL};
+static const char *const INTEGRATORS[] = {"euler", "rk4", NULL};
+
+/* The load option each type needs, indexed by type - 1. */
+static const int LOAD_OPT[5] = {O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_MATRIX};
+
+/* Fills the begin message and the update from the options; DF_EINVAL with a message on bad
+ * input (the caller reports a usage error). */
+static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, df_error *e)
+{
+    memset(b, 0, sizeof *b);
+    memset(u, 0, sizeof *u);
+    if (!a->val[O_TYPE] || !a->val[O_CENTER])
+        return df_error_set(e, DF_EINVAL, "--type and --center are required");
+    int t = dc_cli_choice(a->val[O_TYPE], "--type", TYPES, e);
+    if (t < 0)
+        return t;
+    b->type = (uint8_t)(t + 1);
+    int need = LOAD_OPT[t];
+    if (!a->val[need])
+        return df_error_set(e, DF_EINVAL, "--type %s needs --%s", TYPES[t], BRUSH_OPTS[need].name);
+    for (int k = O_MOVE; k <= O_MATRIX; k++)
+        if (a->val[k] && k != need)
+            return df_error_set(e, DF_EINVAL, "--%s does not apply to --type %s",
+                                BRUSH_OPTS[k].name, TYPES[t]);
+    int rc = dc_cli_vec(a->val[O_CENTER], "--center", 3, b->center, e);
+    if (rc)
+        return rc;
+    if (need == O_MOVE)
+        rc = dc_cli_vec(a->val[O_MOVE], "--move", 3, u->move, e);
+    else if (need == O_TWIST)
+        rc = dc_cli_vec(a->val[O_TWIST], "--twist", 3, u->twist, e);
+    else if (need == O_SCALE)
+        rc = dc_cli_double(a->val[O_SCALE], "--scale", 0, &u->scale, e);
+    else
+        rc = dc_cli_vec(a->val[O_MATRIX], "--matrix", 9, u->matrix, e);
+    if (rc)
+        return rc;
+    b->radius = BRUSH_DEFAULT_RADIUS;
+    b->nu = BRUSH_DEFAULT_NU;
+    b->ratio = BRUSH_DEFAULT_RATIO;
+    b->strength = 1.0;
+    b->falloff = 1;
+    b->dim = 3;
+    b->steps = 1;
+    b->integrator = DF_INTEG_EULER;
+    long long v;
+    if (a->val[O_RADIUS] && (rc = dc_cli_double(a->val[O_RADIUS], "--radius", 0, &b->radius, e)))
+        return rc;
+    if (b->radius <= 0)
+        return df_error_set(e, DF_EINVAL, "--radius: %g must be > 0", b->radius);
+    if (a->val[O_NU] && (rc = dc_cli_double(a->val[O_NU], "--nu", 1, &b->nu, e)))
+        return rc;
+    if (a->val[O_RATIO] && (rc = dc_cli_double(a->val[O_RATIO], "--ratio", 0, &b->ratio, e)))
+        return rc;
+    if (b->ratio <= 1)
+        return df_error_set(e, DF_EINVAL, "--ratio: %g must be > 1", b->ratio);
+    if (a->val[O_STRENGTH] &&
+        (rc = dc_cli_double(a->val[O_STRENGTH], "--strength", 0, &b->strength, e)))
+        return rc;
+    if (a->val[O_FALLOFF]) {
+        if ((rc = dc_cli_int(a->val[O_FALLOFF], "--falloff", 1, DF_MAX_FALLOFF, &v, e)))
+            return rc;
+        b->falloff = (uint8_t)v;
+    }
+    if (a->val[O_DIM]) {
+        if ((rc = dc_cli_int(a->val[O_DIM], "--dim", 2, 3, &v, e)))
+            return rc;
+        b->dim = (uint8_t)v;
+    }
+    if (a->val[O_INTEGRATOR]) {
+        int k = dc_cli_choice(a->val[O_INTEGRATOR], "--integrator", INTEGRATORS, e);
+        if (k < 0)
+            return k;
+        b->integrator = (uint8_t)(k + 1);
+    }
+    if (a->val[O_STEPS]) {
+        if ((rc = dc_cli_int(a->val[O_STEPS], "--steps", 1, DF_MAX_BRUSH_STEPS, &v, e)))
+            return rc;
+        b->steps = (uint16_t)v;
+    }
+    if (a->val[O_MIRROR]) {
+        double m[6];
+        if ((rc = dc_cli_vec(a->val[O_MIRROR], "--mirror", 6, m, e)))
+            return rc;
+        if (m[3] == 0 && m[4] == 0 && m[5] == 0)
+            return df_error_set(e, DF_EINVAL, "--mirror: the plane normal is zero");
+        b->has_mirror = 1;
+        memcpy(b->mirror_point, m, sizeof b->mirror_point);
+        memcpy(b->mirror_normal, m + 3, sizeof b->mirror_normal);
+    }
+    b->moving = a->val[O_MOVING] ? 1 : 0;
+    /* Begin with the identity load; the update carries the whole load. */
+    return DF_OK;
+}
+
+static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    df_msg_brush b;
+    df_msg_brush_update u;
+    df_error e;
+    df_error_clear(&e);
+    if (build(a, &b, &u, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    double *pins = NULL;
+    int32_t npins = 0;
+    if (a->val[O_PIN]) {
+        if (dc_load_points_file(a->val[O_PIN], &pins, &npins, &e))
+            return ctl_usage_error(ctx, cmd, e.msg);
+        if ((uint32_t)npins > DF_MAX_PINNED_POINTS) {
+            free(pins);
+            return ctl_usage_error(ctx, cmd, "--pin: more than DF_MAX_PINNED_POINTS (1024) points");
+        }
+        b.n_pinned = (uint32_t)npins;
+        b.pinned = pins;
+    }
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c) {
+        free(pins);
+        return CTL_EXIT_SERVER;
+    }
+    df_msg_ack ack = {0, 0};
+    int rc = ctl_session_id(c, a->pos[0], &b.session_id, &e);
+    u.session_id = b.session_id;
+    if (rc == DF_OK)
+        rc = df_client_brush_begin(c, &b, NULL, &e);
+    if (rc == DF_OK) {
+        rc = df_client_brush_update(c, &u, NULL, &e);
+        if (rc == DF_OK)
+            rc = df_client_brush_end(c, b.session_id, &ack, &e);
+        else if (df_client_last_error_was_remote(c)) {
+            df_error e2;
+            df_client_brush_cancel(c, b.session_id, NULL, &e2);
+        }
+    }
+    free(pins);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json)
+        printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 "}\n", ack.session_id, ack.version);
+    else
+        printf("session %" PRIu64 " version %" PRIu64 "\n", ack.session_id, ack.version);
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+const ctl_cmd ctl_cmds_brush[] = {
+    {"brush",
+     "brush SESSION --type grab|twist|scale|pinch|affine --center X,Y,Z [--move DX,DY,DZ]\n"
+     "       [--twist WX,WY,WZ] [--scale S] [--matrix M00,M01,...,M22] [--radius R] [--nu NU]\n"
+     "       [--falloff N] [--ratio Q] [--dim 2|3] [--integrator euler|rk4] [--steps N]\n"
+     "       [--mirror PX,PY,PZ,NX,NY,NZ] [--pin FILE] [--strength S] [--moving]",
+     "Apply one whole Kelvinlet brush stroke (begin, update, end) as one new version.",
+     BRUSH_OPTS, O_COUNT, 1, run_brush},
+    {NULL, NULL, NULL, NULL, 0, 0, NULL},
+};

@@ -1,0 +1,210 @@
+/* cmd_handles.c — `deformctl handles` (define a session's SC-L1 handle set) and `deformctl move`
+ * (move the handles to targets and wait for the final ADMM iterate). */
+#include <inttypes.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "client/dc_files.h"
+#include "client/deformctl/ctl.h"
+
+/* Handle-set defaults (core/admm's df_admm_params_default): w, s, rho, tol, max_iters; the
+ * Neo-Hookean row uses the paper's pig settings (rho 5e5, w 500). */
+#define HANDLES_DEFAULT_W 1e-4
+#define HANDLES_DEFAULT_S 0.01
+#define HANDLES_DEFAULT_RHO 0.1
+#define HANDLES_DEFAULT_NH_W 500.0
+#define HANDLES_DEFAULT_NH_RHO 5e5
+#define HANDLES_DEFAULT_TOL 1e-11
+#define HANDLES_DEFAULT_ITERS 500
+
+enum { H_ENERGY = CTL_NGLOBAL, H_HANDLES, H_W, H_S, H_RHO, H_ITERS, H_TOL, H_COUNT };
+
+static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
+    CTL_GLOBAL_OPTS,
+    {"energy", 1, "--energy arap|acap|neohookean|cloth|polyline   elastic energy (required)"},
+    {"handles", 1, "--handles FILE     handle vertices, one 0-based index per line (required)"},
+    {"w", 1, "--w W              SC-L1 locality weight >= 0 (default 1e-4; neohookean 500)"},
+    {"s", 1, "--s S              SC-L1 threshold distance > 0, mesh units (default 0.01)"},
+    {"rho", 1, "--rho RHO          ADMM penalty > w/s (default 0.1; neohookean 5e5)"},
+    {"iters", 1, "--iters N          default iteration budget of a move (default 500)"},
+    {"tol", 1, "--tol T            residual tolerance >= 0 (default 1e-11)"},
+};
+
+static const char *const ENERGIES[] = {"arap", "acap", "neohookean", "cloth", "polyline", NULL};
+
+static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    df_error e;
+    df_error_clear(&e);
+    if (!a->val[H_ENERGY] || !a->val[H_HANDLES])
+        return ctl_usage_error(ctx, cmd, "--energy and --handles are required");
+    int en = dc_cli_choice(a->val[H_ENERGY], "--energy", ENERGIES, &e);
+    if (en < 0)
+        return ctl_usage_error(ctx, cmd, e.msg);
+    df_msg_handles h;
+    memset(&h, 0, sizeof h);
+    h.energy = (uint8_t)(en + 1);
+    int nh = h.energy == DF_ENERGY_NEOHOOKEAN;
+    h.w = nh ? HANDLES_DEFAULT_NH_W : HANDLES_DEFAULT_W;
+    h.rho = nh ? HANDLES_DEFAULT_NH_RHO : HANDLES_DEFAULT_RHO;
+    h.s = HANDLES_DEFAULT_S;
+    h.tol = HANDLES_DEFAULT_TOL;
+    h.max_iters = HANDLES_DEFAULT_ITERS;
+    long long it;
+    if ((a->val[H_W] && dc_cli_double(a->val[H_W], "--w", 0, &h.w, &e)) ||
+        (a->val[H_S] && dc_cli_double(a->val[H_S], "--s", 0, &h.s, &e)) ||
+        (a->val[H_RHO] && dc_cli_double(a->val[H_RHO], "--rho", 0, &h.rho, &e)) ||
+        (a->val[H_TOL] && dc_cli_double(a->val[H_TOL], "--tol", 0, &h.tol, &e)))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    if (a->val[H_ITERS]) {
+        if (dc_cli_int(a->val[H_ITERS], "--iters", 1, DF_MAX_MOVE_ITERS, &it, &e))
+            return ctl_usage_error(ctx, cmd, e.msg);
+        h.max_iters = (uint32_t)it;
+    }
+    if (h.w < 0 || h.s <= 0 || h.rho <= 0 || h.tol < 0)
+        return ctl_usage_error(ctx, cmd, "need --w >= 0, --s > 0, --rho > 0, --tol >= 0");
+    int32_t *idx = NULL, n = 0;
+    if (dc_load_index_file(a->val[H_HANDLES], &idx, &n, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    h.n_handles = (uint32_t)n;
+    h.handles = idx;
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c) {
+        free(idx);
+        return CTL_EXIT_SERVER;
+    }
+    int rc = ctl_session_id(c, a->pos[0], &h.session_id, &e);
+    if (rc == DF_OK)
+        rc = df_client_handles_set(c, &h, &e);
+    free(idx);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json)
+        printf("{\"session\":%" PRIu64 ",\"handles\":%d,\"energy\":\"%s\"}\n", h.session_id, n,
+               ENERGIES[en]);
+    else
+        printf("session %" PRIu64 ": %d handles, %s\n", h.session_id, n, ENERGIES[en]);
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_COUNT };
+
+static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
+    CTL_GLOBAL_OPTS,
+    {"targets", 1, "--targets FILE     'x y z' per handle in handle order, or a .node file "
+                   "whose rows at the handle indices are the targets (required)"},
+    {"handles", 1, "--handles FILE     the handle index file given to `handles` (needed to pick "
+                   "the rows of a .node targets file)"},
+    {"max-iters", 1, "--max-iters N      iteration budget (default: the handle set's --iters)"},
+    {"max-ms", 1, "--max-ms MS        wall-clock budget in ms (default: none)"},
+    {"progress-every", 1, "--progress-every N progress event every N iterations (default 10)"},
+};
+
+static const char *status_name(unsigned s)
+{
+    return s == DF_MOVE_CONVERGED    ? "converged"
+           : s == DF_MOVE_BUDGET     ? "budget"
+           : s == DF_MOVE_SUPERSEDED ? "superseded"
+           : s == DF_MOVE_FAILED     ? "failed"
+                                     : "running";
+}
+
+static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    df_error e;
+    df_error_clear(&e);
+    const char *tf = a->val[M_TARGETS];
+    if (!tf)
+        return ctl_usage_error(ctx, cmd, "--targets is required");
+    df_msg_handle_move m;
+    memset(&m, 0, sizeof m);
+    m.progress_every = 10;
+    long long v;
+    if (a->val[M_ITERS]) {
+        if (dc_cli_int(a->val[M_ITERS], "--max-iters", 1, DF_MAX_MOVE_ITERS, &v, &e))
+            return ctl_usage_error(ctx, cmd, e.msg);
+        m.max_iters = (uint32_t)v;
+    }
+    if (a->val[M_MS]) {
+        if (dc_cli_int(a->val[M_MS], "--max-ms", 1, UINT32_MAX, &v, &e))
+            return ctl_usage_error(ctx, cmd, e.msg);
+        m.max_ms = (uint32_t)v;
+    }
+    if (a->val[M_EVERY]) {
+        if (dc_cli_int(a->val[M_EVERY], "--progress-every", 0, DF_MAX_MOVE_ITERS, &v, &e))
+            return ctl_usage_error(ctx, cmd, e.msg);
+        m.progress_every = (uint32_t)v;
+    }
+    size_t tl = strlen(tf);
+    int is_node = tl >= 5 && strcasecmp(tf + tl - 5, ".node") == 0;
+    int32_t *hidx = NULL, nh = 0, np = 0;
+    double *targets = NULL;
+    int rc;
+    if (is_node) {
+        if (!a->val[M_HANDLES])
+            return ctl_usage_error(ctx, cmd, "a .node --targets file needs --handles FILE");
+        rc = dc_load_index_file(a->val[M_HANDLES], &hidx, &nh, &e);
+        if (rc == DF_OK)
+            rc = dc_load_targets(tf, hidx, nh, &targets, &e);
+        free(hidx);
+        np = nh;
+    } else {
+        rc = dc_load_points_file(tf, &targets, &np, &e);
+    }
+    if (rc)
+        return ctl_usage_error(ctx, cmd, e.msg);
+    m.n_targets = (uint32_t)np;
+    m.targets = targets;
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c) {
+        free(targets);
+        return CTL_EXIT_SERVER;
+    }
+    df_msg_move_result r;
+    memset(&r, 0, sizeof r);
+    rc = ctl_session_id(c, a->pos[0], &m.session_id, &e);
+    if (rc == DF_OK)
+        rc = df_client_handles_move(c, &m, &r, &e);
+    free(targets);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json) {
+        printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 ",\"status\":\"%s\",\"iterations\":%u,"
+               "\"residual\":", r.session_id, r.version, status_name(r.status), r.iterations);
+        ctl_json_num(stdout, r.residual);
+        printf(",\"objective\":");
+        ctl_json_num(stdout, r.objective);
+        printf(",\"elapsed_ms\":");
+        ctl_json_num(stdout, r.elapsed_ms);
+        printf("}\n");
+    } else {
+        printf("iterations %u residual %.6g objective %.12g (%s, version %" PRIu64 ", %.1f ms)\n",
+               r.iterations, r.residual, r.objective, status_name(r.status), r.version,
+               r.elapsed_ms);
+    }
+    df_client_close(c);
+    return r.status == DF_MOVE_FAILED ? CTL_EXIT_SERVER : CTL_EXIT_OK;
+}
+
+const ctl_cmd ctl_cmds_handles[] = {
+    {"handles",
+     "handles SESSION --energy arap|acap|neohookean|cloth|polyline --handles FILE [--w W]\n"
+     "       [--s S] [--rho RHO] [--iters N] [--tol T]",
+     "Define the session's handle set for SC-L1 local deformation (ADMM).", HANDLES_OPTS, H_COUNT,
+     1, run_handles},
+    {"move",
+     "move SESSION --targets FILE [--handles FILE] [--max-iters N] [--max-ms MS]\n"
+     "       [--progress-every N]",
+     "Move the handles to their targets; waits for the final iterate and prints iterations, "
+     "residual, objective.",
+     MOVE_OPTS, M_COUNT, 1, run_move},
+    {NULL, NULL, NULL, NULL, 0, 0, NULL},
+};

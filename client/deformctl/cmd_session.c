@@ -1,0 +1,303 @@
+/* cmd_session.c — deformctl commands about the daemon and its sessions: ping, load, list,
+ * stats, watch. */
+#include <inttypes.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "client/deformctl/ctl.h"
+
+static const char *kind_name(unsigned k)
+{
+    return k == 1 ? "polyline" : k == 2 ? "triangle" : k == 3 ? "tet" : "unknown";
+}
+
+/* ---- ping ---------------------------------------------------------------------------- */
+static int run_ping(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    (void)a;
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c)
+        return CTL_EXIT_SERVER;
+    df_error e;
+    double rtt = 0;
+    int rc = df_client_ping(c, "deformctl-ping", 14, &rtt, &e);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    const df_msg_hello_reply *s = df_client_server_info(c);
+    if (ctx->json) {
+        printf("{\"ok\":true,\"rtt_us\":%.1f,\"protocol\":%u,\"server\":", rtt, s->version);
+        ctl_json_str(stdout, s->server_name);
+        printf(",\"features\":%u}\n", s->features);
+    } else {
+        printf("pong from %s (protocol %u): %.1f us\n", s->server_name, s->version, rtt);
+    }
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+/* ---- load ---------------------------------------------------------------------------- */
+static int run_load(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    const char *file = a->pos[0], *name = a->val[3];
+    if (access(file, R_OK) != 0) {
+        char m[600];
+        snprintf(m, sizeof m, "cannot read %s", file);
+        return ctl_usage_error(ctx, cmd, m);
+    }
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c)
+        return CTL_EXIT_SERVER;
+    df_error e;
+    df_msg_session_info info;
+    int rc = df_client_load_mesh_file(c, file, name, &info, &e);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json) {
+        printf("{\"session\":%" PRIu64 ",\"name\":", info.session_id);
+        ctl_json_str(stdout, info.name);
+        printf(",\"kind\":\"%s\",\"nv\":%u,\"ne\":%u,\"version\":%" PRIu64 "}\n",
+               kind_name(info.kind), info.nv, info.ne, info.version);
+    } else {
+        printf("%" PRIu64 "\n", info.session_id);
+    }
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+/* ---- list ---------------------------------------------------------------------------- */
+static int run_list(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    (void)a;
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c)
+        return CTL_EXIT_SERVER;
+    df_error e;
+    df_msg_session_list l;
+    int rc = df_client_list_sessions(c, &l, &e);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json)
+        printf("{\"sessions\":[");
+    else
+        printf("%-6s %-24s %-8s %9s %9s %8s %4s\n", "ID", "NAME", "KIND", "VERTICES", "ELEMENTS",
+               "VERSION", "SUBS");
+    for (uint32_t i = 0; i < l.count; i++) {
+        const df_msg_session_info *s = &l.items[i];
+        if (ctx->json) {
+            printf("%s{\"session\":%" PRIu64 ",\"name\":", i ? "," : "", s->session_id);
+            ctl_json_str(stdout, s->name);
+            printf(",\"kind\":\"%s\",\"nv\":%u,\"ne\":%u,\"version\":%" PRIu64
+                   ",\"subscribers\":%u,\"undo_depth\":%u,\"redo_depth\":%u}",
+                   kind_name(s->kind), s->nv, s->ne, s->version, s->subscribers, s->undo_depth,
+                   s->redo_depth);
+        } else {
+            printf("%-6" PRIu64 " %-24s %-8s %9u %9u %8" PRIu64 " %4u\n", s->session_id,
+                   s->name[0] ? s->name : "-", kind_name(s->kind), s->nv, s->ne, s->version,
+                   s->subscribers);
+        }
+    }
+    if (ctx->json)
+        printf("]}\n");
+    df_msg_session_list_free(&l);
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+/* ---- stats --------------------------------------------------------------------------- */
+static int run_stats(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c)
+        return CTL_EXIT_SERVER;
+    df_error e;
+    uint64_t sid = 0;
+    int rc = a->val[3] ? ctl_session_id(c, a->val[3], &sid, &e) : DF_OK;
+    df_msg_stats st;
+    memset(&st, 0, sizeof st);
+    if (rc == DF_OK)
+        rc = df_client_stats(c, sid, &st, &e);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json)
+        printf("{");
+    for (uint32_t i = 0; i < st.count; i++) {
+        if (ctx->json) {
+            printf("%s", i ? "," : "");
+            ctl_json_str(stdout, st.items[i].key);
+            printf(":");
+            ctl_json_num(stdout, st.items[i].value);
+        } else {
+            printf("%-40s %.17g\n", st.items[i].key, st.items[i].value);
+        }
+    }
+    if (ctx->json)
+        printf("}\n");
+    df_msg_stats_free(&st);
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+/* ---- watch --------------------------------------------------------------------------- */
+typedef struct watch_state {
+    const ctl_ctx *ctx;
+    uint64_t session;
+    uint64_t rows;       /* rows of the version being received (sum over chunks) */
+    long printed;        /* complete versions printed */
+    int closed;          /* session closed event seen */
+    int bad;             /* a malformed event was received */
+} watch_state;
+
+static void watch_line(watch_state *w, const df_msg_disp *d, const df_msg_progress *p)
+{
+    const ctl_ctx *ctx = w->ctx;
+    if (ctx->json) {
+        printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 ",\"kind\":\"%s\",\"vertices\":%"
+               PRIu64 ",\"encoding\":\"%s\"", d->session_id, d->version, ctl_change_name(d->kind),
+               w->rows, d->encoding == DF_DISP_SPARSE ? "sparse" : "dense");
+        if (p) {
+            printf(",\"iteration\":%u,\"residual\":", p->iteration);
+            ctl_json_num(stdout, p->residual);
+            printf(",\"objective\":");
+            ctl_json_num(stdout, p->objective);
+            printf(",\"final\":%s", p->final ? "true" : "false");
+        }
+        printf("}\n");
+    } else {
+        printf("version %" PRIu64 " %s %" PRIu64 " vertices", d->version, ctl_change_name(d->kind),
+               w->rows);
+        if (p)
+            printf(" iteration %u residual %.3g objective %.9g%s", p->iteration, p->residual,
+                   p->objective, p->final ? " final" : "");
+        printf("\n");
+    }
+    fflush(stdout);
+    w->printed++;
+}
+
+static void watch_event(void *user, const df_frame_header *h, const uint8_t *payload)
+{
+    watch_state *w = user;
+    int last = !(h->flags & DF_FLAG_MORE);
+    if (h->type == DF_MSG_SESSION_CLOSED) {
+        df_msg_session_ref r;
+        if (df_msg_session_ref_decode(payload, h->payload_len, &r, NULL) == DF_OK &&
+            r.session_id == w->session) {
+            w->closed = 1;
+            if (w->ctx->json)
+                printf("{\"session\":%" PRIu64 ",\"kind\":\"closed\"}\n", r.session_id);
+            else
+                printf("session %" PRIu64 " closed\n", r.session_id);
+            fflush(stdout);
+        }
+    } else if (h->type == DF_MSG_DISPLACEMENT) {
+        df_msg_disp d;
+        if (df_msg_disp_decode(payload, h->payload_len, &d, NULL) != DF_OK) {
+            w->bad = 1;
+            return;
+        }
+        if (d.session_id == w->session) {
+            w->rows += d.count;
+            if (last) {
+                watch_line(w, &d, NULL);
+                w->rows = 0;
+            }
+        }
+        df_msg_disp_free(&d);
+    } else if (h->type == DF_MSG_PROGRESS) {
+        df_msg_progress p;
+        if (df_msg_progress_decode(payload, h->payload_len, &p, NULL) != DF_OK) {
+            w->bad = 1;
+            return;
+        }
+        if (p.disp.session_id == w->session) {
+            w->rows += p.disp.count;
+            if (last) {
+                watch_line(w, &p.disp, &p);
+                w->rows = 0;
+            }
+        }
+        df_msg_progress_free(&p);
+    }
+}
+
+static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    long long count = 0;
+    df_error e;
+    if (a->val[3] && dc_cli_int(a->val[3], "--count", 1, 1000000000, &count, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c)
+        return CTL_EXIT_SERVER;
+    watch_state w = {ctx, 0, 0, 0, 0, 0};
+    df_msg_session_info info;
+    int rc = ctl_session_id(c, a->pos[0], &w.session, &e);
+    if (rc == DF_OK) {
+        df_client_set_event_callback(c, watch_event, &w);
+        rc = df_client_subscribe(c, w.session, 0, &info, &e);
+    }
+    if (rc == DF_OK && !ctx->json) {
+        printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "\n", w.session,
+               info.name[0] ? info.name : "-", info.version);
+        fflush(stdout);
+    }
+    while (rc == DF_OK && !w.closed && !w.bad && (count == 0 || w.printed < count)) {
+        int n = df_client_pump(c, -1, &e);
+        if (n < 0)
+            rc = n;
+    }
+    if (rc == DF_OK && w.bad)
+        rc = df_error_set(&e, DF_EFORMAT, "malformed event from the server");
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+static const dc_cli_opt PLAIN_OPTS[] = {CTL_GLOBAL_OPTS};
+static const dc_cli_opt LOAD_OPTS[] = {
+    CTL_GLOBAL_OPTS,
+    {"name", 1, "--name NAME        session name (default: chosen by the daemon)"},
+};
+static const dc_cli_opt STATS_OPTS[] = {
+    CTL_GLOBAL_OPTS,
+    {"session", 1, "--session SESSION  stats of one session (id or name) instead of the daemon"},
+};
+static const dc_cli_opt WATCH_OPTS[] = {
+    CTL_GLOBAL_OPTS,
+    {"count", 1, "--count N          exit after N versions (default: until the session closes)"},
+};
+#define N(x) ((int)(sizeof x / sizeof x[0]))
+
+const ctl_cmd ctl_cmds_session[] = {
+    {"ping", "ping", "Check that the daemon answers; prints the round trip.", PLAIN_OPTS,
+     N(PLAIN_OPTS), 0, run_ping},
+    {"load", "load FILE [--name NAME]",
+     "Upload a mesh (.obj .off .ply .mesh, or X.node with X.ele); prints the new session id.",
+     LOAD_OPTS, N(LOAD_OPTS), 1, run_load},
+    {"list", "list", "List the sessions: id, name, kind, sizes, version, subscribers.", PLAIN_OPTS,
+     N(PLAIN_OPTS), 0, run_list},
+    {"stats", "stats [--session SESSION]",
+     "Print the daemon's (or one session's) counters, one 'key value' per line.", STATS_OPTS,
+     N(STATS_OPTS), 0, run_stats},
+    {"watch", "watch SESSION [--count N]",
+     "Subscribe to a session and print one line per version: version, kind, vertices changed.",
+     WATCH_OPTS, N(WATCH_OPTS), 1, run_watch},
+    {NULL, NULL, NULL, NULL, 0, 0, NULL},
+};

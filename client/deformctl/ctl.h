@@ -1,0 +1,77 @@
+/* ctl.h — deformctl internals shared by the command files: the global options, connecting,
+ * exit codes, error reporting and JSON output helpers. */
+#ifndef DF_DEFORMCTL_CTL_H
+#define DF_DEFORMCTL_CTL_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "client/dc_cli.h"
+#include "client/deformclient.h"
+
+/* Exit codes. */
+#define CTL_EXIT_OK 0
+#define CTL_EXIT_SERVER 1   /* the daemon refused the request, or the connection failed */
+#define CTL_EXIT_USAGE 2    /* bad command line or unreadable/malformed input file */
+
+/* The global options, accepted before the command or among its options. */
+#define CTL_GLOBAL_OPTS                                                              \
+    {"socket", 1, "--socket PATH      daemon Unix socket (default: $DEFORMD_SOCKET, " \
+                  "$XDG_RUNTIME_DIR/deformd.sock, /run/deformd/deformd.sock)"},      \
+    {"tcp", 1, "--tcp HOST:PORT    connect over TCP instead"},                         \
+    {"json", 0, "--json             machine-readable JSON output on stdout"}
+#define CTL_NGLOBAL 3
+
+typedef struct ctl_ctx {
+    const char *socket;   /* --socket, NULL for the default */
+    const char *tcp;      /* --tcp HOST:PORT or NULL */
+    int json;
+    const char *prog;     /* "deformctl" */
+} ctl_ctx;
+
+/* One command: name, one-line synopsis, the option table (globals first) and its handler. */
+typedef struct ctl_cmd {
+    const char *name;
+    const char *synopsis;  /* e.g. "load FILE [--name NAME]" */
+    const char *summary;   /* one line of what it does */
+    const dc_cli_opt *opts;
+    int nopts;
+    int npos;              /* positional arguments it requires */
+    int (*run)(ctl_ctx *ctx, const struct ctl_cmd *cmd, const dc_cli_args *a);
+} ctl_cmd;
+
+/* Command tables of each group (cmd_*.c). */
+extern const ctl_cmd ctl_cmds_session[];   /* ping load list stats watch */
+extern const ctl_cmd ctl_cmds_brush[];     /* brush */
+extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
+extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
+
+/* Prints `cmd`'s usage to `f`. */
+void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd);
+
+/* Prints "deformctl CMD: MESSAGE" plus "try --help" on stderr and returns CTL_EXIT_USAGE. */
+int ctl_usage_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *msg);
+
+/* Reports a failed client call on stderr ("deformctl CMD: server: ENOTFOUND: no session 7")
+ * and maps it to an exit code: CTL_EXIT_SERVER for server and connection errors,
+ * CTL_EXIT_USAGE when `c`'s last call was refused locally as invalid (DF_EINVAL/DF_ELIMIT from
+ * a message encoder: e.g. --radius 0). `c` may be NULL (connection errors). */
+int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const df_error *e);
+
+/* Connects per the global options; on failure prints the error and returns NULL. */
+df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd);
+
+/* Resolves SESSION (a decimal id, or else a session name looked up with open session) into
+ * *id. Returns DF_OK or an error (printed by the caller via ctl_fail). */
+int ctl_session_id(df_client *c, const char *arg, uint64_t *id, df_error *err);
+
+/* Writes `s` as a JSON string literal (quotes and escapes) to `f`. */
+void ctl_json_str(FILE *f, const char *s);
+
+/* Writes a double as JSON (finite: %.17g; non-finite as null). */
+void ctl_json_num(FILE *f, double v);
+
+/* Name of a change kind ("brush", "undo", ...) for output. */
+const char *ctl_change_name(unsigned kind);
+
+#endif

@@ -1,0 +1,147 @@
+/* main.c — deformctl: command-line client of the deformd daemon (built on libdeformclient).
+ *
+ *   deformctl [--socket PATH | --tcp HOST:PORT] [--json] COMMAND [ARGS] [--help]
+ *
+ * Exit codes: 0 ok, 1 the daemon reported an error (or could not be reached), 2 usage error.
+ * Results go to stdout (one JSON object with --json); diagnostics to stderr. */
+#include <inttypes.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "client/deformctl/ctl.h"
+
+static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
+                                        ctl_cmds_mesh};
+
+static void usage_top(FILE *f)
+{
+    fprintf(f,
+            "usage: deformctl [--socket PATH | --tcp HOST:PORT] [--json] COMMAND [ARGS]\n"
+            "\nControl a running deformd daemon.\n\nCommands:\n");
+    for (size_t g = 0; g < sizeof GROUPS / sizeof GROUPS[0]; g++)
+        for (const ctl_cmd *c = GROUPS[g]; c->name; c++)
+            fprintf(f, "  %-11s %s\n", c->name, c->summary);
+    fprintf(f,
+            "\nGlobal options (before or after the command):\n"
+            "  --socket PATH      daemon Unix socket (default: $DEFORMD_SOCKET, else\n"
+            "                     $XDG_RUNTIME_DIR/deformd.sock, else /run/deformd/deformd.sock)\n"
+            "  --tcp HOST:PORT    connect over TCP instead of the Unix socket\n"
+            "  --json             machine-readable JSON output on stdout\n"
+            "  --help             this text; `deformctl COMMAND --help` for a command\n"
+            "\nExit status: 0 success, 1 error reported by the daemon or connection failure,\n"
+            "2 usage error (bad options or input files).\n");
+}
+
+void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd)
+{
+    fprintf(f, "usage: %s %s\n\n%s\n\nOptions:\n", prog, cmd->synopsis, cmd->summary);
+    for (int i = CTL_NGLOBAL; i < cmd->nopts; i++)
+        fprintf(f, "  %s\n", cmd->opts[i].help);
+    fprintf(f, "  --help             this text\nGlobal options:\n");
+    for (int i = 0; i < CTL_NGLOBAL; i++)
+        fprintf(f, "  %s\n", cmd->opts[i].help);
+}
+
+int ctl_usage_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *msg)
+{
+    if (cmd)
+        fprintf(stderr, "%s %s: %s\nTry '%s %s --help'.\n", ctx->prog, cmd->name, msg, ctx->prog,
+                cmd->name);
+    else
+        fprintf(stderr, "%s: %s\nTry '%s --help'.\n", ctx->prog, msg, ctx->prog);
+    return CTL_EXIT_USAGE;
+}
+
+static const ctl_cmd *find_cmd(const char *name)
+{
+    for (size_t g = 0; g < sizeof GROUPS / sizeof GROUPS[0]; g++)
+        for (const ctl_cmd *c = GROUPS[g]; c->name; c++)
+            if (strcmp(c->name, name) == 0)
+                return c;
+    return NULL;
+}
+
+/* Consumes global options before the command; returns the index of the command word, or -1
+ * after printing the top-level help (exit 0), or -2 on a usage error. */
+static int parse_globals(int argc, char **argv, ctl_ctx *ctx)
+{
+    int i = 1;
+    while (i < argc && argv[i][0] == '-') {
+        const char *a = argv[i];
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            usage_top(stdout);
+            return -1;
+        }
+        if (strcmp(a, "--json") == 0) {
+            ctx->json = 1;
+            i++;
+            continue;
+        }
+        const char **dst = strncmp(a, "--socket", 8) == 0 ? &ctx->socket
+                           : strncmp(a, "--tcp", 5) == 0  ? &ctx->tcp
+                                                          : NULL;
+        size_t nl = dst == &ctx->socket ? 8 : 5;
+        if (!dst || (a[nl] != '\0' && a[nl] != '=')) {
+            char m[300];
+            snprintf(m, sizeof m, "unknown global option '%s'", a);
+            ctl_usage_error(ctx, NULL, m);
+            return -2;
+        }
+        if (a[nl] == '=') {
+            *dst = a + nl + 1;
+            i++;
+        } else if (i + 1 < argc) {
+            *dst = argv[i + 1];
+            i += 2;
+        } else {
+            char m[300];
+            snprintf(m, sizeof m, "option '%s' needs a value", a);
+            ctl_usage_error(ctx, NULL, m);
+            return -2;
+        }
+    }
+    return i;
+}
+
+int main(int argc, char **argv)
+{
+    ctl_ctx ctx = {NULL, NULL, 0, "deformctl"};
+    int i = parse_globals(argc, argv, &ctx);
+    if (i == -1)
+        return CTL_EXIT_OK;
+    if (i < 0)
+        return CTL_EXIT_USAGE;
+    if (i >= argc)
+        return ctl_usage_error(&ctx, NULL, "missing command");
+    const ctl_cmd *cmd = find_cmd(argv[i]);
+    if (!cmd) {
+        char m[300];
+        snprintf(m, sizeof m, "unknown command '%s'", argv[i]);
+        return ctl_usage_error(&ctx, NULL, m);
+    }
+    dc_cli_args a;
+    df_error e;
+    df_error_clear(&e);
+    if (dc_cli_parse(argc - i - 1, argv + i + 1, cmd->opts, cmd->nopts, DC_CLI_MAX_POS, &a, &e))
+        return ctl_usage_error(&ctx, cmd, e.msg);
+    if (a.help) {
+        ctl_usage_cmd(stdout, ctx.prog, cmd);
+        return CTL_EXIT_OK;
+    }
+    if (a.val[0])
+        ctx.socket = a.val[0];
+    if (a.val[1])
+        ctx.tcp = a.val[1];
+    if (a.val[2])
+        ctx.json = 1;
+    if (ctx.socket && ctx.tcp)
+        return ctl_usage_error(&ctx, cmd, "--socket and --tcp are exclusive");
+    if (a.npos < cmd->npos)
+        return ctl_usage_error(&ctx, cmd, "missing argument (see the synopsis)");
+    if (a.npos > cmd->npos) {
+        char m[300];
+        snprintf(m, sizeof m, "unexpected argument '%s'", a.pos[cmd->npos]);
+        return ctl_usage_error(&ctx, cmd, m);
+    }
+    return cmd->run(&ctx, cmd, &a);
+}

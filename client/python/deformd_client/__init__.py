@@ -1,0 +1,23 @@
+"""deformd_client — standard-library Python client of the deformd mesh deformation daemon.
+
+    from deformd_client import Client, Brush, MeshState
+    c = Client.connect_unix(path)            # or Client.connect_tcp(host, port)
+    info = c.load_file("spot.obj")
+    c.stroke(info.session_id, Brush(type="grab", center=(0, 0, 0), move=(0, 0.1, 0)))
+    mesh = c.get_mesh(info.session_id)       # positions: array('f'), 3 per vertex
+
+Errors from the daemon raise DeformdError(code, name, message).
+"""
+from .client import Client, MeshData, SessionClosed
+from .errors import ConnectionClosed, DeformdError, error_name
+from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
+from .mesh_state import MeshState, OutOfSync
+from .messages import AffineSet, Brush, Disp, MoveResult, Progress, ProtocolError, SessionInfo
+
+__all__ = [
+    "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "error_name",
+    "Frame", "FrameDecoder", "FrameError", "encode_frame", "encode_header", "MeshState",
+    "OutOfSync", "AffineSet", "Brush", "Disp", "MoveResult", "Progress", "ProtocolError",
+    "SessionInfo",
+]
+__version__ = "0.1.0"

@@ -1,0 +1,383 @@
+"""Blocking client of deformd: one socket, one request at a time, events queued meanwhile.
+
+    with Client.connect_unix("/run/user/1000/deformd.sock") as c:
+        sid = c.load_mesh(path_or_bytes).session_id
+        c.subscribe(sid)
+        c.stroke(sid, Brush(type="grab", center=(0, 0, 0), move=(0, 0.1, 0), radius=0.5))
+        for ev in c.events(timeout=1.0):
+            print(ev.version, ev.kind_name, ev.count)
+
+Replies are matched to requests by request id; stream frames (displacements, progress, session
+closed) that arrive while waiting are assembled from their chunks and queued for events().
+Error replies raise DeformdError(code, name, message).
+"""
+import os
+import socket
+import time
+from array import array
+from collections import deque
+from dataclasses import dataclass
+from typing import Deque, Dict, Iterator, List, Optional, Sequence, Tuple, Union
+
+from . import frame as fr
+from . import messages as m
+from .errors import ConnectionClosed, DeformdError, error_name
+
+DEFAULT_TIMEOUT_S = 60.0
+RECV_BYTES = 1 << 20
+
+
+@dataclass
+class SessionClosed:
+    """Event: the session was destroyed (closed by a client or evicted)."""
+    session_id: int
+    kind_name: str = "session_closed"
+
+
+@dataclass
+class MeshData:
+    """A get-mesh reply: float32 positions (3*nv), element indices (elem_size*ne, u32), optional
+    boundary faces of a tet mesh (3*nf) and, when asked, rest and base positions."""
+    session_id: int
+    version: int
+    kind: int
+    planar: int
+    nv: int
+    ne: int
+    nf: int
+    positions: array
+    elements: array
+    faces: array
+    rest: Optional[array] = None
+    base: Optional[array] = None
+
+    @property
+    def elem_size(self) -> int:
+        return m.ELEM_SIZE.get(self.kind, 0)
+
+
+Event = Union[m.Disp, m.Progress, SessionClosed]
+
+
+class Client:
+    """A connection to deformd. Not thread-safe: use one Client per thread."""
+
+    def __init__(self, sock: socket.socket, timeout: float = DEFAULT_TIMEOUT_S,
+                 hello: bool = True, name: str = "deformd-python") -> None:
+        self.sock = sock
+        self.timeout = timeout
+        self._decoder = fr.FrameDecoder()
+        self._frames: Deque[fr.Frame] = deque()   # received, not yet consumed
+        self._events: Deque[Event] = deque()      # complete events, oldest first
+        self._partial: Dict[Tuple[int, int], List] = {}  # (type, rid/session+version) -> chunks
+        self._next_id = 1
+        self._closed = False
+        self.server: Optional[m.HelloReply] = None
+        if hello:
+            self.server = self.hello(name)
+
+    # ------------------------------------------------------------------ connection
+    @classmethod
+    def connect_unix(cls, path: str, timeout: float = DEFAULT_TIMEOUT_S, hello: bool = True,
+                     name: str = "deformd-python") -> "Client":
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        s.settimeout(timeout)
+        try:
+            s.connect(path)
+        except OSError:
+            s.close()
+            raise
+        return cls(s, timeout, hello, name)
+
+    @classmethod
+    def connect_tcp(cls, host: str, port: int, timeout: float = DEFAULT_TIMEOUT_S,
+                    hello: bool = True, name: str = "deformd-python") -> "Client":
+        s = socket.create_connection((host, port), timeout=timeout)
+        s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return cls(s, timeout, hello, name)
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.sock.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ framing
+    def send(self, msg_type: int, payload: bytes = b"", flags: int = 0,
+             request_id: Optional[int] = None) -> int:
+        """Sends one frame; returns its request id (a fresh one unless given)."""
+        if request_id is None:
+            request_id = self._next_id
+            self._next_id += 1
+        self.sock.sendall(fr.encode_frame(msg_type, payload, request_id, flags))
+        return request_id
+
+    def _read_more(self, deadline: Optional[float]) -> bool:
+        """Reads from the socket into the frame queue. False on timeout."""
+        if deadline is not None:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            self.sock.settimeout(left)
+        else:
+            self.sock.settimeout(None)
+        try:
+            data = self.sock.recv(RECV_BYTES)
+        except socket.timeout:
+            return False
+        except ConnectionResetError as e:
+            raise ConnectionClosed("connection reset by deformd") from e
+        if not data:
+            raise ConnectionClosed("deformd closed the connection")
+        self._frames.extend(self._decoder.feed(data))
+        return True
+
+    def recv_frame(self, timeout: Optional[float] = None) -> Optional[fr.Frame]:
+        """Next raw frame (None on timeout). Bypasses reply matching and event assembly."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while not self._frames:
+            if not self._read_more(deadline):
+                return None
+        return self._frames.popleft()
+
+    # ------------------------------------------------------------------ events
+    def _take_event_frame(self, f: fr.Frame) -> None:
+        """Assembles stream chunks; completed events go to the event queue."""
+        if f.type == m.SESSION_CLOSED:
+            self._events.append(SessionClosed(m.decode_session_ref(f.payload)))
+            return
+        if f.type == m.DISPLACEMENT:
+            d = m.decode_disp(f.payload)
+            key = (f.type, d.session_id, d.version)
+            chunks = self._partial.setdefault(key, [])
+            chunks.append(d)
+            if not f.more:
+                del self._partial[key]
+                self._events.append(m.join_disp(chunks))
+            return
+        if f.type == m.PROGRESS:
+            p = m.decode_progress(f.payload)
+            key = (f.type, p.disp.session_id, p.disp.version)
+            chunks = self._partial.setdefault(key, [])
+            chunks.append(p)
+            if not f.more:
+                del self._partial[key]
+                p0 = chunks[0]
+                p0.disp = m.join_disp([c.disp for c in chunks])
+                self._events.append(p0)
+            return
+        if f.is_error:
+            code, msg = m.decode_error(f.payload)
+            raise DeformdError(code, error_name(code), msg)
+        raise m.ProtocolError("unexpected event type 0x%x" % f.type)
+
+    def events(self, timeout: float = 1.0, max_events: Optional[int] = None) -> Iterator[Event]:
+        """Yields queued and arriving events (Disp, Progress, SessionClosed) until none arrives
+        for `timeout` seconds (or max_events were yielded). Replies arriving meanwhile for
+        requests nobody waits for are dropped."""
+        n = 0
+        while max_events is None or n < max_events:
+            if self._events:
+                n += 1
+                yield self._events.popleft()
+                continue
+            f = self.recv_frame(timeout)
+            if f is None:
+                return
+            if f.is_event or (f.type == m.ERROR and f.request_id == 0):
+                self._take_event_frame(f)
+
+    def next_event(self, timeout: float = 1.0) -> Optional[Event]:
+        """The next event, or None when none arrives within `timeout` seconds."""
+        for ev in self.events(timeout, max_events=1):
+            return ev
+        return None
+
+    def pending_events(self) -> int:
+        return len(self._events)
+
+    # ------------------------------------------------------------------ requests
+    def wait_reply(self, rid: int, timeout: Optional[float] = None) -> List[fr.Frame]:
+        """Frames of the reply to request `rid` (several when chunked with FLAG_MORE). Events
+        arriving meanwhile are queued. Raises DeformdError on an error reply, TimeoutError,
+        ConnectionClosed."""
+        timeout = self.timeout if timeout is None else timeout
+        deadline = time.monotonic() + timeout
+        parts: List[fr.Frame] = []
+        while True:
+            while not self._frames:
+                if not self._read_more(deadline):
+                    raise TimeoutError("no reply to request %d within %.1f s" % (rid, timeout))
+            f = self._frames.popleft()
+            if f.is_event or (f.type == m.ERROR and f.request_id == 0 and not f.is_reply):
+                if f.type == m.ERROR:
+                    code, msg = m.decode_error(f.payload)
+                    raise DeformdError(code, error_name(code), msg)
+                self._take_event_frame(f)
+                continue
+            if f.request_id != rid:
+                continue  # a late reply to an abandoned request
+            if f.is_error:
+                code, msg = m.decode_error(f.payload)
+                raise DeformdError(code, error_name(code), msg)
+            parts.append(f)
+            if not f.more:
+                return parts
+
+    def request(self, msg_type: int, payload: bytes = b"",
+                timeout: Optional[float] = None) -> List[fr.Frame]:
+        return self.wait_reply(self.send(msg_type, payload), timeout)
+
+    def _one(self, msg_type: int, payload: bytes = b"") -> bytes:
+        parts = self.request(msg_type, payload)
+        return b"".join(p.payload for p in parts)
+
+    # ------------------------------------------------------------------ handshake
+    def hello(self, name: str = "deformd-python") -> m.HelloReply:
+        self.server = m.decode_hello_reply(
+            self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, 0, name)))
+        return self.server
+
+    def auth(self, method: int, token: bytes) -> None:
+        self._one(m.AUTH, m.encode_auth(method, token))
+
+    def ping(self, data: bytes = b"") -> bytes:
+        """Echo; returns the bytes the daemon sent back."""
+        return self._one(m.PING, bytes(data))
+
+    # ------------------------------------------------------------------ sessions
+    def load_mesh(self, data: Optional[bytes] = None, path: Optional[str] = None,
+                  fmt: Union[int, str] = m.FMT_AUTO, name: str = "",
+                  ele: Optional[bytes] = None) -> m.SessionInfo:
+        """Creates a session from inline file bytes (`data`; for TetGen pass the .node bytes as
+        data and the .ele bytes as ele) or from a server-side `path`. fmt: a FMT_* value or a
+        file extension (".obj")."""
+        if isinstance(fmt, str):
+            fmt = m.FORMAT_BY_EXT[fmt.lower()]
+        if path is not None:
+            return m.decode_session_info(self._one(m.LOAD_MESH, m.encode_load_mesh(
+                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"")))
+        if data is None:
+            raise ValueError("load_mesh needs data or path")
+        part2 = 0
+        if ele is not None:
+            part2 = len(data)
+            data = bytes(data) + bytes(ele)
+            fmt = m.FMT_TETGEN
+        total = len(data)
+        rid = self._next_id
+        self._next_id += 1
+        off = 0
+        while True:
+            chunk = data[off:off + m.LOAD_CHUNK_BYTES]
+            last = off + len(chunk) >= total
+            self.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, fmt, name, "", total, part2,
+                                                      off, chunk),
+                      0 if last else fr.FLAG_MORE, rid)
+            off += len(chunk)
+            if last:
+                break
+        parts = self.wait_reply(rid)
+        return m.decode_session_info(b"".join(p.payload for p in parts))
+
+    def load_file(self, filename: str, name: str = "") -> m.SessionInfo:
+        """Reads a local mesh file and uploads it inline (a .node brings its .ele along)."""
+        ext = os.path.splitext(filename)[1].lower()
+        with open(filename, "rb") as f:
+            data = f.read()
+        if ext == ".node":
+            with open(filename[:-5] + ".ele", "rb") as f:
+                return self.load_mesh(data, ele=f.read(), name=name)
+        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT.get(ext, m.FMT_AUTO), name=name)
+
+    def list_sessions(self) -> List[m.SessionInfo]:
+        return m.decode_session_list(self._one(m.LIST_SESSIONS))
+
+    def open_session(self, session_id: int = 0, name: str = "") -> m.SessionInfo:
+        return m.decode_session_info(self._one(m.OPEN_SESSION,
+                                               m.encode_open_session(session_id, name)))
+
+    def close_session(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.CLOSE_SESSION, m.encode_session_ref(session_id)))
+
+    def subscribe(self, session_id: int, snapshot: bool = False) -> m.SessionInfo:
+        """Subscribes to the displacement stream; with snapshot=True a dense snapshot event of
+        the current version comes first."""
+        return m.decode_session_info(self._one(
+            m.SUBSCRIBE, m.encode_subscribe(session_id, m.SUBSCRIBE_SNAPSHOT if snapshot else 0)))
+
+    def unsubscribe(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.UNSUBSCRIBE, m.encode_session_ref(session_id)))
+
+    # ------------------------------------------------------------------ brush
+    def brush_begin(self, session_id: int, brush: m.Brush) -> m.Ack:
+        return m.decode_ack(self._one(m.BRUSH_BEGIN, m.encode_brush(session_id, brush)))
+
+    def brush_update(self, session_id: int, move=None, twist=None, scale: float = 0.0,
+                     matrix=None) -> m.Ack:
+        """Cumulative load since the stroke began (same meaning as in Brush)."""
+        return m.decode_ack(self._one(m.BRUSH_UPDATE,
+                                      m.encode_brush_update(session_id, move, twist, scale, matrix)))
+
+    def brush_end(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.BRUSH_END, m.encode_session_ref(session_id)))
+
+    def brush_cancel(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.BRUSH_CANCEL, m.encode_session_ref(session_id)))
+
+    def stroke(self, session_id: int, brush: m.Brush) -> m.Ack:
+        """One whole stroke: begin with the brush's load, update with the same load, end."""
+        self.brush_begin(session_id, brush)
+        self.brush_update(session_id, brush.move, brush.twist, brush.scale, brush.matrix)
+        return self.brush_end(session_id)
+
+    def set_brush_param(self, session_id: int, param: str, value: float) -> m.Ack:
+        """param: radius | nu | strength | falloff | ratio."""
+        return m.decode_ack(self._one(m.SET_BRUSH_PARAM,
+                                      m.encode_brush_param(session_id, param, value)))
+
+    # ------------------------------------------------------------------ handles
+    def set_handles(self, session_id: int, handles: Sequence[int], energy: str = "arap",
+                    w: float = 1e4, s: float = 0.01, rho: float = 0.1, tol: float = 1e-11,
+                    max_iters: int = 500, affine: Sequence[m.AffineSet] = ()) -> m.Ack:
+        return m.decode_ack(self._one(m.HANDLES_SET, m.encode_handles(
+            session_id, energy, handles, w, s, rho, tol, max_iters, affine)))
+
+    def move_handles(self, session_id: int, targets: Sequence[Sequence[float]],
+                     max_iters: int = 0, max_ms: int = 0, progress_every: int = 0,
+                     timeout: Optional[float] = None) -> m.MoveResult:
+        """Moves the handles to `targets` (one xyz per handle) and waits for the final result;
+        progress iterates (and displacement frames) are queued as events."""
+        rid = self.send(m.HANDLES_MOVE, m.encode_handle_move(session_id, targets, max_iters,
+                                                             max_ms, progress_every))
+        parts = self.wait_reply(rid, timeout)
+        return m.decode_move_result(b"".join(p.payload for p in parts))
+
+    def reset_rest(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.RESET_REST, m.encode_session_ref(session_id)))
+
+    def undo(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.UNDO, m.encode_session_ref(session_id)))
+
+    def redo(self, session_id: int) -> m.Ack:
+        return m.decode_ack(self._one(m.REDO, m.encode_session_ref(session_id)))
+
+    # ------------------------------------------------------------------ reads
+    def get_mesh(self, session_id: int, rest: bool = False, base: bool = False) -> MeshData:
+        flags = (m.GET_MESH_REST if rest else 0) | (m.GET_MESH_BASE if base else 0)
+        parts = self.request(m.GET_MESH, m.encode_get_mesh(session_id, flags))
+        return m.assemble_mesh([m.decode_mesh_chunk(p.payload) for p in parts], MeshData)
+
+    def snapshot(self, session_id: int, version: int = 0) -> m.Disp:
+        """Dense displacements of `version` (0: current) for a resync."""
+        parts = self.request(m.SNAPSHOT, m.encode_snapshot_req(session_id, version))
+        return m.join_disp([m.decode_disp(p.payload) for p in parts])
+
+    def stats(self, session_id: int = 0) -> Dict[str, float]:
+        """Daemon-wide (0) or one session's counters, key -> value."""
+        return m.decode_stats(self._one(m.STATS, m.encode_stats_req(session_id)))

@@ -1,0 +1,55 @@
+"""Error codes of deformd (core/common/df_error.h, proto/wire_error.h) and the client's exceptions."""
+
+OK = 0
+EINVAL = -1
+ENOMEM = -2
+ESINGULAR = -3
+EIO = -4
+EFORMAT = -5
+ELIMIT = -6
+ENOTFOUND = -7
+ESTATE = -8
+EUNSUPPORTED = -9
+EINTERNAL = -10
+# protocol codes (proto/wire_error.h)
+EPROTO_BADMAGIC = -100
+EPROTO_BADVERSION = -101
+EPROTO_BADTYPE = -102
+EPROTO_TOOLARGE = -103
+EPROTO_TRUNCATED = -104
+EPROTO_TRAILING = -105
+EPROTO_BADFLAGS = -106
+EPROTO_RESERVED = -107
+EPROTO_BUSY = -108
+EPROTO_AUTH = -109
+EPROTO_CHUNK = -110
+
+ERROR_NAMES = {
+    OK: "OK", EINVAL: "EINVAL", ENOMEM: "ENOMEM", ESINGULAR: "ESINGULAR", EIO: "EIO",
+    EFORMAT: "EFORMAT", ELIMIT: "ELIMIT", ENOTFOUND: "ENOTFOUND", ESTATE: "ESTATE",
+    EUNSUPPORTED: "EUNSUPPORTED", EINTERNAL: "EINTERNAL",
+    EPROTO_BADMAGIC: "EPROTO_BADMAGIC", EPROTO_BADVERSION: "EPROTO_BADVERSION",
+    EPROTO_BADTYPE: "EPROTO_BADTYPE", EPROTO_TOOLARGE: "EPROTO_TOOLARGE",
+    EPROTO_TRUNCATED: "EPROTO_TRUNCATED", EPROTO_TRAILING: "EPROTO_TRAILING",
+    EPROTO_BADFLAGS: "EPROTO_BADFLAGS", EPROTO_RESERVED: "EPROTO_RESERVED",
+    EPROTO_BUSY: "EPROTO_BUSY", EPROTO_AUTH: "EPROTO_AUTH", EPROTO_CHUNK: "EPROTO_CHUNK",
+}
+
+
+def error_name(code: int) -> str:
+    """Stable short name of a DF_E* code ("EINVAL"), "EUNKNOWN" for anything else."""
+    return ERROR_NAMES.get(code, "EUNKNOWN")
+
+
+class DeformdError(Exception):
+    """An error reply from the daemon: code (negative DF_E*), its stable name and the message."""
+
+    def __init__(self, code: int, name: str, message: str) -> None:
+        super().__init__("%s (%d): %s" % (name, code, message))
+        self.code = code
+        self.name = name
+        self.message = message
+
+
+class ConnectionClosed(ConnectionError):
+    """The daemon closed the connection (or it broke) before the expected reply arrived."""

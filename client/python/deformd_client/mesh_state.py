@@ -1,0 +1,80 @@
+"""Client-side replica of a session's positions, kept in sync by the displacement stream.
+
+Every stream frame carries float32 displacements u_i = x_i - X_i from the session's base
+(load-time) positions X; a replica computes x_i = X_i + u_i in float32, so every client that
+applies the same versions holds byte-identical positions (positions.tobytes()).
+"""
+from array import array
+from typing import Optional
+
+from . import messages as m
+
+
+class OutOfSync(RuntimeError):
+    """A frame's base_version is not the replica's version: resync with a snapshot."""
+
+
+class MeshState:
+    """base: array('f') of 3*nv base positions (get_mesh(..., base=True).base); version: the
+    version those displacements describe (0 for the base itself)."""
+
+    def __init__(self, base: array, version: int = 0, disp: Optional[array] = None) -> None:
+        if len(base) % 3:
+            raise ValueError("base has %d floats, not a multiple of 3" % len(base))
+        self.nv = len(base) // 3
+        self.base = array("f", base)
+        self.disp = array("f", bytes(4 * len(base))) if disp is None else array("f", disp)
+        self.positions = array("f", self.base)
+        if disp is not None:
+            for k in range(len(base)):
+                self.positions[k] = self.base[k] + self.disp[k]
+        self.version = version
+        self.applied = 0
+
+    @classmethod
+    def sync(cls, client, session_id: int) -> "MeshState":
+        """A replica at the session's current version: base positions from get_mesh(base=True)
+        plus the exact displacements of a dense snapshot."""
+        mesh = client.get_mesh(session_id, base=True)
+        st = cls(mesh.base, 0)
+        st.apply(client.snapshot(session_id))
+        return st
+
+    def apply(self, d: m.Disp) -> bool:
+        """Applies one whole version (a joined Disp or a Progress's disp). Returns False (and
+        changes nothing) for a version already applied or for another session's frame; raises
+        OutOfSync when frames were missed. A SNAPSHOT frame (dense) always applies."""
+        if d.nv != self.nv:
+            raise ValueError("frame for %d vertices, replica has %d" % (d.nv, self.nv))
+        if d.kind != m.CHANGE_SNAPSHOT:
+            if d.version <= self.version:
+                return False
+            if d.base_version != self.version:
+                raise OutOfSync("frame %d applies to version %d, replica is at %d"
+                                % (d.version, d.base_version, self.version))
+        elif d.encoding != m.DISP_DENSE or d.count != self.nv:
+            raise ValueError("a snapshot must be dense and complete")
+        u, x, base = self.disp, self.positions, self.base
+        if d.encoding == m.DISP_DENSE:
+            if d.offset == 0 and d.count == self.nv:
+                u[:] = d.xyz
+                for k in range(3 * self.nv):
+                    x[k] = base[k] + u[k]
+            else:
+                o = 3 * d.offset
+                for k in range(3 * d.count):
+                    u[o + k] = d.xyz[k]
+                    x[o + k] = base[o + k] + d.xyz[k]
+        else:
+            xyz = d.xyz
+            for j, i in enumerate(d.idx):
+                for c in range(3):
+                    v = xyz[3 * j + c]
+                    u[3 * i + c] = v
+                    x[3 * i + c] = base[3 * i + c] + v
+        self.version = d.version
+        self.applied += 1
+        return True
+
+    def tobytes(self) -> bytes:
+        return self.positions.tobytes()

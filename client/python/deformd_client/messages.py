@@ -1,0 +1,601 @@
+"""Message types and body codecs of the deformd protocol (proto/messages.h, proto/msg_*.c).
+
+Encoders return the payload bytes (no frame header); decoders take one whole payload and return
+a plain object (a dataclass), raising ProtocolError on a short, long or inconsistent body.
+Wire: little-endian; strings are u16 length + UTF-8 bytes; positions/displacements float32,
+parameters float64; vertex indices u32.
+"""
+import math
+import struct
+from array import array
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+# ------------------------------------------------------------------ message types
+HELLO = 0x0001
+AUTH = 0x0002
+PING = 0x0003
+LOAD_MESH = 0x0010
+LIST_SESSIONS = 0x0011
+OPEN_SESSION = 0x0012
+CLOSE_SESSION = 0x0013
+SUBSCRIBE = 0x0014
+UNSUBSCRIBE = 0x0015
+BRUSH_BEGIN = 0x0020
+BRUSH_UPDATE = 0x0021
+BRUSH_END = 0x0022
+BRUSH_CANCEL = 0x0023
+SET_BRUSH_PARAM = 0x0024
+HANDLES_SET = 0x0030
+HANDLES_MOVE = 0x0031
+RESET_REST = 0x0032
+UNDO = 0x0033
+REDO = 0x0034
+GET_MESH = 0x0040
+SNAPSHOT = 0x0041
+STATS = 0x0042
+DISPLACEMENT = 0x0080
+PROGRESS = 0x0081
+SESSION_CLOSED = 0x0082
+ERROR = 0x00FF
+
+TYPE_NAMES = {v: k.lower() for k, v in dict(globals()).items()
+              if k.isupper() and isinstance(v, int) and 0 < v <= 0xFF}
+
+# ------------------------------------------------------------------ limits (messages.h)
+MAX_MESH_VERTICES = 8 << 20
+MAX_MESH_ELEMENTS = 32 << 20
+MAX_MESH_BYTES = 1 << 30
+MAX_PENDING_REQUESTS = 64
+MAX_NAME_LEN = 255
+MAX_PATH_LEN = 4095
+MAX_PING_BYTES = 65536
+MAX_PINNED_POINTS = 1024
+MAX_BRUSH_STEPS = 1000
+MAX_FALLOFF = 3
+STREAM_CHUNK_BYTES = 16 << 20
+LOAD_CHUNK_BYTES = 8 << 20     # bytes of mesh data per load chunk this client sends
+
+# ------------------------------------------------------------------ enums
+FEAT_KELVINLET, FEAT_ADMM, FEAT_PATH_LOAD, FEAT_AUTH = 1, 2, 4, 8
+FEAT_SPARSE_STREAM, FEAT_TCP, FEAT_HID = 16, 32, 64
+
+FMT_AUTO, FMT_OBJ, FMT_OFF, FMT_PLY, FMT_MEDIT, FMT_TETGEN = range(6)
+FORMAT_BY_EXT = {".obj": FMT_OBJ, ".off": FMT_OFF, ".ply": FMT_PLY, ".mesh": FMT_MEDIT,
+                 ".node": FMT_TETGEN}
+LOAD_INLINE, LOAD_PATH = 0, 1
+
+BRUSH_TYPES = {"grab": 1, "twist": 2, "scale": 3, "pinch": 4, "affine": 5}
+INTEGRATORS = {"euler": 1, "rk4": 2}
+BRUSH_PARAMS = {"radius": 1, "nu": 2, "strength": 3, "falloff": 4, "ratio": 5}
+ENERGIES = {"arap": 1, "acap": 2, "neohookean": 3, "cloth": 4, "polyline": 5}
+
+CHANGE_BRUSH, CHANGE_BRUSH_CANCEL, CHANGE_HANDLE_MOVE = 1, 2, 3
+CHANGE_UNDO, CHANGE_REDO, CHANGE_RESET_REST, CHANGE_SNAPSHOT = 4, 5, 6, 7
+CHANGE_NAMES = {1: "brush", 2: "brush_cancel", 3: "handle_move", 4: "undo", 5: "redo",
+                6: "reset_rest", 7: "snapshot"}
+DISP_DENSE, DISP_SPARSE = 1, 2
+MOVE_RUNNING, MOVE_CONVERGED, MOVE_BUDGET, MOVE_SUPERSEDED, MOVE_FAILED = range(5)
+MOVE_STATUS_NAMES = {0: "running", 1: "converged", 2: "budget", 3: "superseded", 4: "failed"}
+SECTION_POSITIONS, SECTION_BASE, SECTION_REST, SECTION_ELEMENTS, SECTION_FACES = 1, 2, 3, 4, 5
+GET_MESH_REST, GET_MESH_BASE = 1, 2
+SUBSCRIBE_SNAPSHOT = 1
+ELEM_SIZE = {1: 2, 2: 3, 3: 4}
+
+
+class ProtocolError(ValueError):
+    """A payload that does not decode (truncated, trailing bytes, bad value)."""
+
+
+# ------------------------------------------------------------------ cursor helpers
+class _Rd:
+    def __init__(self, p: bytes, what: str) -> None:
+        self.p = memoryview(p)
+        self.off = 0
+        self.what = what
+
+    def take(self, fmt: str):
+        st = struct.Struct("<" + fmt)
+        if self.off + st.size > len(self.p):
+            raise ProtocolError("%s: truncated at byte %d" % (self.what, self.off))
+        v = st.unpack_from(self.p, self.off)
+        self.off += st.size
+        return v if len(v) > 1 else v[0]
+
+    def raw(self, n: int) -> bytes:
+        if self.off + n > len(self.p):
+            raise ProtocolError("%s: truncated at byte %d (need %d)" % (self.what, self.off, n))
+        b = bytes(self.p[self.off:self.off + n])
+        self.off += n
+        return b
+
+    def str(self) -> str:
+        n = self.take("H")
+        return self.raw(n).decode("utf-8", "replace")
+
+    def farray(self, typecode: str, count: int) -> array:
+        a = array(typecode)
+        a.frombytes(self.raw(count * a.itemsize))
+        return a
+
+    def end(self) -> None:
+        if self.off != len(self.p):
+            raise ProtocolError("%s: %d trailing bytes" % (self.what, len(self.p) - self.off))
+
+
+def _str(s: str) -> bytes:
+    b = s.encode("utf-8")
+    if len(b) > 0xFFFF:
+        raise ValueError("string of %d bytes too long" % len(b))
+    return struct.pack("<H", len(b)) + b
+
+
+def _vec(v: Optional[Sequence[float]], n: int, what: str) -> List[float]:
+    if v is None:
+        return [0.0] * n
+    v = [float(x) for x in v]
+    if len(v) != n:
+        raise ValueError("%s needs %d numbers, got %d" % (what, n, len(v)))
+    return v
+
+
+def _u32_array(values: Sequence[int]) -> bytes:
+    a = array("I", (int(x) for x in values))
+    assert a.itemsize == 4
+    return a.tobytes()
+
+
+def _f64_rows(rows: Sequence[Sequence[float]], what: str) -> bytes:
+    flat: List[float] = []
+    for r in rows:
+        flat += _vec(r, 3, what)
+    return struct.pack("<%dd" % len(flat), *flat)
+
+
+# ------------------------------------------------------------------ bodies
+@dataclass
+class HelloReply:
+    version: int
+    server_max_version: int
+    features: int
+    max_frame_payload: int
+    max_mesh_vertices: int
+    max_mesh_elements: int
+    max_pending_requests: int
+    max_sessions: int
+    max_mesh_bytes: int
+    max_client_queue_bytes: int
+    auth_required: int
+    server_name: str
+
+
+def encode_hello(min_version: int = 1, max_version: int = 1, features: int = 0,
+                 client_name: str = "") -> bytes:
+    return struct.pack("<HHI", min_version, max_version, features) + _str(client_name)
+
+
+def decode_hello_reply(p: bytes) -> HelloReply:
+    r = _Rd(p, "hello_reply")
+    v = r.take("HHIIIIIIQQBB")
+    name = r.str()
+    r.end()
+    return HelloReply(*v[:11], server_name=name)
+
+
+def encode_auth(method: int, token: bytes) -> bytes:
+    return struct.pack("<HHI", method, 0, len(token)) + bytes(token)
+
+
+def decode_error(p: bytes):
+    """Returns (code, message)."""
+    r = _Rd(p, "error")
+    code = r.take("i")
+    msg = r.str()
+    r.end()
+    return code, msg
+
+
+def encode_load_mesh(source: int, fmt: int, name: str, path: str, total_size: int,
+                     part2_offset: int, offset: int, data: bytes) -> bytes:
+    return (struct.pack("<BBHQQQ", source, fmt, 0, total_size, part2_offset, offset)
+            + _str(name) + _str(path) + struct.pack("<I", len(data)) + bytes(data))
+
+
+def encode_session_ref(session_id: int) -> bytes:
+    return struct.pack("<Q", session_id)
+
+
+def decode_session_ref(p: bytes) -> int:
+    r = _Rd(p, "session_ref")
+    sid = r.take("Q")
+    r.end()
+    return sid
+
+
+def encode_open_session(session_id: int = 0, name: str = "") -> bytes:
+    return struct.pack("<Q", session_id) + _str(name)
+
+
+def encode_subscribe(session_id: int, flags: int = 0) -> bytes:
+    return struct.pack("<QI", session_id, flags)
+
+
+@dataclass
+class SessionInfo:
+    session_id: int
+    version: int
+    kind: int
+    planar: int
+    subscribers: int
+    nv: int
+    ne: int
+    undo_depth: int
+    redo_depth: int
+    name: str
+
+
+def _read_session_info(r: _Rd) -> SessionInfo:
+    v = r.take("QQBBHIIII")
+    return SessionInfo(*v, name=r.str())
+
+
+def decode_session_info(p: bytes) -> SessionInfo:
+    r = _Rd(p, "session_info")
+    s = _read_session_info(r)
+    r.end()
+    return s
+
+
+def decode_session_list(p: bytes) -> List[SessionInfo]:
+    r = _Rd(p, "session_list")
+    n = r.take("I")
+    out = [_read_session_info(r) for _ in range(n)]
+    r.end()
+    return out
+
+
+@dataclass
+class Ack:
+    session_id: int
+    version: int
+
+
+def decode_ack(p: bytes) -> Ack:
+    r = _Rd(p, "ack")
+    v = r.take("QQ")
+    r.end()
+    return Ack(*v)
+
+
+@dataclass
+class Brush:
+    """Every Kelvinlet brush parameter of a stroke (proto/messages.h df_msg_brush)."""
+    type: str = "grab"
+    center: Sequence[float] = (0.0, 0.0, 0.0)
+    move: Optional[Sequence[float]] = None
+    twist: Optional[Sequence[float]] = None
+    scale: float = 0.0
+    matrix: Optional[Sequence[float]] = None
+    radius: float = 1.0
+    nu: float = 0.5
+    strength: float = 1.0
+    falloff: int = 1
+    ratio: float = 1.1
+    dim: int = 3
+    integrator: str = "euler"
+    steps: int = 1
+    moving: bool = False
+    mirror: Optional[Sequence[float]] = None   # (px, py, pz, nx, ny, nz)
+    pinned: Sequence[Sequence[float]] = field(default_factory=list)
+
+
+BRUSH_STRUCT = struct.Struct("<QBBBBHBB4d3d3d3dd9d3d3dI")
+assert BRUSH_STRUCT.size == 252
+
+
+def encode_brush(session_id: int, b: Brush) -> bytes:
+    if b.type not in BRUSH_TYPES:
+        raise ValueError("brush type %r not one of %s" % (b.type, sorted(BRUSH_TYPES)))
+    if b.integrator not in INTEGRATORS:
+        raise ValueError("integrator %r not one of %s" % (b.integrator, sorted(INTEGRATORS)))
+    mirror = _vec(b.mirror, 6, "mirror") if b.mirror is not None else [0.0] * 6
+    head = BRUSH_STRUCT.pack(
+        session_id, BRUSH_TYPES[b.type], b.dim, b.falloff, INTEGRATORS[b.integrator], b.steps,
+        1 if b.moving else 0, 1 if b.mirror is not None else 0,
+        float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
+        *_vec(b.center, 3, "center"), *_vec(b.move, 3, "move"), *_vec(b.twist, 3, "twist"),
+        float(b.scale), *_vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned))
+    return head + _f64_rows(b.pinned, "pinned point")
+
+
+def encode_brush_update(session_id: int, move=None, twist=None, scale: float = 0.0,
+                        matrix=None) -> bytes:
+    return struct.pack("<Q3d3dd9d", session_id, *_vec(move, 3, "move"), *_vec(twist, 3, "twist"),
+                       float(scale), *_vec(matrix, 9, "matrix"))
+
+
+def encode_brush_param(session_id: int, param: str, value: float) -> bytes:
+    if param not in BRUSH_PARAMS:
+        raise ValueError("brush parameter %r not one of %s" % (param, sorted(BRUSH_PARAMS)))
+    return struct.pack("<QBd", session_id, BRUSH_PARAMS[param], float(value))
+
+
+@dataclass
+class AffineSet:
+    """Rows of A V_t = b for every vertex t in indices (1..3 rows of 3 numbers)."""
+    A: Sequence[Sequence[float]]
+    b: Sequence[float]
+    indices: Sequence[int]
+
+
+def encode_handles(session_id: int, energy: str, handles: Sequence[int], w: float, s: float,
+                   rho: float, tol: float, max_iters: int,
+                   affine: Sequence[AffineSet] = ()) -> bytes:
+    if energy not in ENERGIES:
+        raise ValueError("energy %r not one of %s" % (energy, sorted(ENERGIES)))
+    out = [struct.pack("<QB4dII", session_id, ENERGIES[energy], float(w), float(s), float(rho),
+                       float(tol), max_iters, len(handles)), _u32_array(handles),
+           struct.pack("<I", len(affine))]
+    for a in affine:
+        rows = len(a.A)
+        if len(a.b) != rows:
+            raise ValueError("affine set: %d rows of A but %d entries of b" % (rows, len(a.b)))
+        out.append(struct.pack("<B", rows) + _f64_rows(a.A, "affine row")
+                   + struct.pack("<%dd" % rows, *[float(x) for x in a.b])
+                   + struct.pack("<I", len(a.indices)) + _u32_array(a.indices))
+    return b"".join(out)
+
+
+def encode_handle_move(session_id: int, targets: Sequence[Sequence[float]], max_iters: int = 0,
+                       max_ms: int = 0, progress_every: int = 0) -> bytes:
+    return (struct.pack("<QIIII", session_id, max_iters, max_ms, progress_every, len(targets))
+            + _f64_rows(targets, "target"))
+
+
+@dataclass
+class MoveResult:
+    session_id: int
+    version: int
+    status: int
+    iterations: int
+    objective: float
+    residual: float
+    elapsed_ms: float
+
+    @property
+    def status_name(self) -> str:
+        return MOVE_STATUS_NAMES.get(self.status, "unknown")
+
+
+def decode_move_result(p: bytes) -> MoveResult:
+    r = _Rd(p, "move_result")
+    v = r.take("QQBIddd")
+    r.end()
+    return MoveResult(*v)
+
+
+def encode_get_mesh(session_id: int, flags: int = 0) -> bytes:
+    return struct.pack("<QI", session_id, flags)
+
+
+def encode_snapshot_req(session_id: int, version: int = 0) -> bytes:
+    return struct.pack("<QQ", session_id, version)
+
+
+def encode_stats_req(session_id: int = 0) -> bytes:
+    return struct.pack("<Q", session_id)
+
+
+def finite(*values: float) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
+def lookup(table: Dict[str, int], code: int) -> str:
+    for k, v in table.items():
+        if v == code:
+            return k
+    return "unknown"
+
+
+# ------------------------------------------------------------------ displacement stream
+@dataclass
+class Disp:
+    """One session version (or one chunk of it): float32 displacements u_i = x_i - X_i from the
+    session's base positions X. DENSE: rows offset..offset+count-1; SPARSE: rows idx[k]."""
+    session_id: int
+    version: int
+    base_version: int
+    kind: int
+    encoding: int
+    nv: int
+    total: int
+    offset: int
+    count: int
+    idx: Optional[array]   # array('I') of count vertex indices (SPARSE), else None
+    xyz: array             # array('f') of 3*count displacement components
+
+    @property
+    def kind_name(self) -> str:
+        return CHANGE_NAMES.get(self.kind, "unknown")
+
+    def vertices(self) -> Sequence[int]:
+        """Vertex index of every row."""
+        if self.idx is not None:
+            return self.idx
+        return range(self.offset, self.offset + self.count)
+
+
+DISP_STRUCT = struct.Struct("<QQQBBHIIII")
+assert DISP_STRUCT.size == 44
+
+
+def _read_disp(r: _Rd) -> Disp:
+    sid, ver, base, kind, enc, res, nv, total, offset, count = r.take("QQQBBHIIII")
+    if res != 0:
+        raise ProtocolError("disp: reserved field %d" % res)
+    if enc == DISP_DENSE:
+        xyz = r.farray("f", 3 * count)
+        idx = None
+    elif enc == DISP_SPARSE:
+        raw = r.raw(16 * count)
+        words = array("I")
+        words.frombytes(raw)
+        floats = array("f")
+        floats.frombytes(raw)
+        idx = words[0::4]
+        xyz = array("f", bytes(12 * count))
+        xyz[0::3] = floats[1::4]
+        xyz[1::3] = floats[2::4]
+        xyz[2::3] = floats[3::4]
+    else:
+        raise ProtocolError("disp: encoding %d" % enc)
+    if offset + count > total or (enc == DISP_DENSE and total != nv):
+        raise ProtocolError("disp: rows [%d, +%d) of %d (nv %d)" % (offset, count, total, nv))
+    return Disp(sid, ver, base, kind, enc, nv, total, offset, count, idx, xyz)
+
+
+def encode_disp(d: Disp) -> bytes:
+    """Body of one disp chunk (used by tests to forge stream frames)."""
+    head = DISP_STRUCT.pack(d.session_id, d.version, d.base_version, d.kind, d.encoding, 0, d.nv,
+                            d.total, d.offset, d.count)
+    if d.encoding == DISP_DENSE:
+        return head + d.xyz.tobytes()
+    rows = bytearray()
+    for k in range(d.count):
+        rows += struct.pack("<I3f", d.idx[k], *d.xyz[3 * k:3 * k + 3])
+    return head + bytes(rows)
+
+
+def decode_disp(p: bytes) -> Disp:
+    r = _Rd(p, "disp")
+    d = _read_disp(r)
+    r.end()
+    return d
+
+
+@dataclass
+class Progress:
+    """One ADMM iterate of a handle move; `disp` is the iterate as a session version."""
+    status: int
+    final: int
+    iteration: int
+    objective: float
+    residual: float
+    elapsed_ms: float
+    disp: Disp
+
+
+def decode_progress(p: bytes) -> Progress:
+    r = _Rd(p, "progress")
+    status, final, res, it, obj, resid, ms = r.take("BBHIddd")
+    if res != 0:
+        raise ProtocolError("progress: reserved field %d" % res)
+    d = _read_disp(r)
+    r.end()
+    return Progress(status, final, it, obj, resid, ms, d)
+
+
+def join_disp(chunks: List[Disp]) -> Disp:
+    """Concatenates the chunks of one version (in arrival order) into one Disp of all rows."""
+    if len(chunks) == 1 and chunks[0].count == chunks[0].total:
+        return chunks[0]
+    first = chunks[0]
+    xyz = array("f")
+    idx = array("I") if first.encoding == DISP_SPARSE else None
+    expect = 0
+    for c in chunks:
+        if (c.session_id, c.version, c.encoding, c.total) != \
+                (first.session_id, first.version, first.encoding, first.total):
+            raise ProtocolError("disp chunks of different versions mixed")
+        if c.offset != expect:
+            raise ProtocolError("disp chunk at row %d, expected %d" % (c.offset, expect))
+        expect += c.count
+        xyz += c.xyz
+        if idx is not None:
+            idx += c.idx
+    if expect != first.total:
+        raise ProtocolError("disp chunks hold %d of %d rows" % (expect, first.total))
+    return Disp(first.session_id, first.version, first.base_version, first.kind, first.encoding,
+                first.nv, first.total, 0, expect, idx, xyz)
+
+
+# ------------------------------------------------------------------ get mesh, stats
+@dataclass
+class MeshChunk:
+    session_id: int
+    version: int
+    kind: int
+    planar: int
+    section: int
+    nv: int
+    ne: int
+    nf: int
+    offset: int
+    count: int
+    data: array   # array('f') 3*count (xyz sections) or array('I') rows*width (index sections)
+
+
+def _section_rows(c) -> int:
+    return {SECTION_POSITIONS: c.nv, SECTION_BASE: c.nv, SECTION_REST: c.nv,
+            SECTION_ELEMENTS: c.ne, SECTION_FACES: c.nf}[c.section]
+
+
+def decode_mesh_chunk(p: bytes) -> MeshChunk:
+    r = _Rd(p, "mesh_chunk")
+    sid, ver, kind, planar, section, res, nv, ne, nf, off, count = r.take("QQBBBBIIIII")
+    if res != 0:
+        raise ProtocolError("mesh_chunk: reserved field %d" % res)
+    if kind not in ELEM_SIZE or section not in (1, 2, 3, 4, 5):
+        raise ProtocolError("mesh_chunk: kind %d section %d" % (kind, section))
+    if section in (SECTION_POSITIONS, SECTION_BASE, SECTION_REST):
+        data = r.farray("f", 3 * count)
+    else:
+        width = ELEM_SIZE[kind] if section == SECTION_ELEMENTS else 3
+        data = r.farray("I", width * count)
+    r.end()
+    c = MeshChunk(sid, ver, kind, planar, section, nv, ne, nf, off, count, data)
+    if off + count > _section_rows(c):
+        raise ProtocolError("mesh_chunk: rows [%d, +%d) beyond section %d" % (off, count, section))
+    return c
+
+
+def assemble_mesh(chunks: List[MeshChunk], cls):
+    """Joins the chunks of a get-mesh reply into cls(session_id, version, kind, planar, nv, ne,
+    nf, positions, elements, faces, rest, base)."""
+    if not chunks:
+        raise ProtocolError("get_mesh: empty reply")
+    c0 = chunks[0]
+    sections: Dict[int, array] = {}
+    rows: Dict[int, int] = {}
+    for c in chunks:
+        if (c.session_id, c.version, c.kind, c.nv, c.ne, c.nf) != \
+                (c0.session_id, c0.version, c0.kind, c0.nv, c0.ne, c0.nf):
+            raise ProtocolError("get_mesh: chunks disagree on the mesh header")
+        have = rows.get(c.section, 0)
+        if c.offset != have:
+            raise ProtocolError("get_mesh: section %d chunk at row %d, expected %d"
+                                % (c.section, c.offset, have))
+        sections.setdefault(c.section, array(c.data.typecode)).extend(c.data)
+        rows[c.section] = have + c.count
+    for sec, n in rows.items():
+        full = c0.nv if sec in (1, 2, 3) else c0.ne if sec == 4 else c0.nf
+        if n != full:
+            raise ProtocolError("get_mesh: section %d has %d of %d rows" % (sec, n, full))
+    if SECTION_POSITIONS not in sections and c0.nv:
+        raise ProtocolError("get_mesh: no positions")
+    return cls(c0.session_id, c0.version, c0.kind, c0.planar, c0.nv, c0.ne, c0.nf,
+               sections.get(SECTION_POSITIONS, array("f")),
+               sections.get(SECTION_ELEMENTS, array("I")),
+               sections.get(SECTION_FACES, array("I")),
+               sections.get(SECTION_REST), sections.get(SECTION_BASE))
+
+
+def decode_stats(p: bytes) -> Dict[str, float]:
+    r = _Rd(p, "stats")
+    n = r.take("I")
+    out: Dict[str, float] = {}
+    for _ in range(n):
+        k = r.str()
+        out[k] = r.take("d")
+    r.end()
+    return out

@@ -1,0 +1,127 @@
+/* admm_internal.h — private state of the SC-L1 ADMM solver shared by the files of core/admm.
+ * Not part of the public API (see admm.h). */
+#ifndef DF_ADMM_INTERNAL_H
+#define DF_ADMM_INTERNAL_H
+
+#include <cholmod.h>
+#include <stdint.h>
+
+#include "core/admm/admm.h"
+
+enum { ADMM_FAM_VERTEX = 1, ADMM_FAM_ELEMENT = 2 };
+
+/* Anderson acceleration history (Walker & Ni type II, Zhang et al. 2019 safeguard). */
+typedef struct admm_anderson {
+    int m, count, head;      /* capacity, stored columns, next slot */
+    int64_t n;               /* state length */
+    double *dF, *dG;         /* m columns of length n: differences of f = G(x) - x and of G(x) */
+    double *f_prev, *g_prev; /* last accepted f and G(x) */
+    double *gram;            /* m x m dF^T dF (symmetric, slot-indexed) */
+    double *g_fallback;      /* plain ADMM iterate to revert to when a step is rejected */
+    double r_prev;           /* |f| of the last accepted iterate, +inf when none */
+    int have_prev, pending;  /* pending: the current state is an extrapolated (unverified) one */
+} admm_anderson;
+
+struct df_admm {
+    df_admm_params p;
+    df_mesh_kind kind;
+    int planar;
+    int32_t nv, ne, esz;
+    int32_t *E;              /* ne x esz */
+    double *Vrest;           /* nv x 3 */
+    int64_t n_state;         /* 6 nv (+ 9 ne for the element family) */
+    double *state;           /* V | U | W (W only for the element family) */
+    double *V, *U, *W;       /* views into state */
+    double *Vout;            /* positions produced by the last global step (reported) */
+    double *Z;               /* nv x 3 */
+    double *a;               /* nv locality weights a_i */
+    double max_a;
+    int family;
+    /* element family */
+    int q;                   /* columns of F_e: 3 (tets), 2 (cloth triangles) */
+    double *grad;            /* ne x esz x 3: g_{e,a}, F_e = sum_a V_a g_{e,a}^T (first q used) */
+    double *vol;             /* ne rest measures */
+    double *gam;             /* ne element penalty weights */
+    double *RX;              /* ne x 9: R_e X_e (3 x q, row stride 3) */
+    double mu, lambda;
+    int32_t *ve_ptr, *ve_ent;/* vertex -> (element * esz + corner) incidence */
+    /* vertex family (spokes and rims) */
+    int32_t *sr_ptr;         /* nv + 1: entries of vertex i's cell */
+    int32_t *sr_a, *sr_b;    /* edge endpoints (d = V_b - V_a) */
+    int32_t *sr_own;         /* entry -> vertex whose cell holds it */
+    double *sr_w;            /* weights */
+    double *sr_d;            /* rest edge vectors, 3 per entry */
+    double *Rv;              /* nv x 9: s_i R_i of the last local step */
+    int32_t *in_ptr, *in_ent;/* vertex -> signed entries (+(t+1): vertex is b, -(t+1): is a) */
+    /* cloth bending: rows of the cotangent Laplacian at interior vertices, scaled by M^-1/2 */
+    int32_t *bl_ptr, *bl_idx;
+    double *bl_val;
+    /* handles */
+    int32_t nh;
+    int32_t *hidx;
+    double *target;          /* nh x 3 */
+    int32_t nfree;
+    int32_t *fidx;           /* nv -> free index or -1 */
+    int32_t *fvert;          /* nfree -> vertex */
+    int64_t ncpl;            /* K_fh entries */
+    int32_t *cpl_f, *cpl_h;
+    double *cpl_v;
+    double *KfhP;            /* nfree x 3 (column-major like the RHS) */
+    /* CHOLMOD */
+    cholmod_common cc;
+    int cc_started;
+    cholmod_factor *L;
+    cholmod_dense *rhs;      /* nfree x 3 column-major */
+    /* affine constraints: Schur complement on top of the factorization */
+    int n_arows;             /* scalar rows M */
+    int32_t *ar_col;         /* row -> column of Y (distinct constrained vertex) */
+    double *ar_A, *ar_b;     /* M x 3, M */
+    int n_ycols;
+    int32_t *yc_free;        /* Y column -> free index */
+    double *Y;               /* nfree x n_ycols column-major: K_ff^-1 e_t */
+    double *Sch;             /* M x M Cholesky factor (lower, column-major) */
+    double *lam;             /* M work */
+    df_admm_affine *aff;     /* copies of the affine sets (own verts arrays) */
+    int naff;
+    df_admm_stats st;
+    double E_last;           /* objective of Vout, NAN when unknown */
+    admm_anderson aa;
+};
+
+/* admm_setup.c: operators for the current Vrest (element gradients, spokes and rims, a_i,
+ * bending rows, incidence). Frees previous ones. */
+int admm_build_operators(df_admm *s, df_error *err);
+void admm_free_operators(df_admm *s);
+
+/* admm_system.c: assembles K, eliminates handles, analyzes + factorizes, affine Schur.
+ * admm_solve: rhs (nfree x 3, already holding B + rho(...)) -> V (free rows, affine corrected). */
+int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df_error *err);
+void admm_free_system(df_admm *s);
+void admm_update_kfhp(df_admm *s);
+int admm_global_solve(df_admm *s, df_error *err);
+
+/* admm_local.c: local steps and the global right-hand side. */
+void admm_local_x(df_admm *s);
+void admm_local_z(df_admm *s);
+void admm_assemble_rhs(df_admm *s);
+void admm_dual_update(df_admm *s);
+
+/* admm_energy.c: objective pieces at positions V; elastic is +inf for inverted NH elements.
+ * admm_fit_vertex: best s_i R_i (row-major 3x3) of vertex i's cell at V (ACAP: s_i analytic). */
+void admm_fit_vertex(const df_admm *s, const double *V, int32_t i, double SR[9]);
+double admm_elastic(const df_admm *s, const double *V);
+double admm_locality(const df_admm *s, const double *V);
+
+/* admm_anderson.c */
+int admm_aa_init(admm_anderson *aa, int m, int64_t n);
+void admm_aa_free(admm_anderson *aa);
+void admm_aa_reset(admm_anderson *aa);
+int admm_aa_step(admm_anderson *aa, const double *x_before, double *state);
+
+/* admm_params.c */
+int admm_validate_params(const df_admm_params *p, df_error *err);
+
+/* helpers */
+double admm_now(void);
+
+#endif

@@ -1,0 +1,186 @@
+/* admm_local.c — the per-iteration kernels of the three-block ADMM: local step 1 (per-element
+ * X_e with the polar rotation, or per-vertex rotations), local step 2 (SC-L1 prox on Z), the global
+ * right-hand side (gathered per vertex, no atomics) and the dual updates. OpenMP over elements and
+ * vertices. */
+#include <math.h>
+#include <string.h>
+
+#include "core/admm/admm_internal.h"
+#include "core/admm/nh_prox.h"
+#include "core/admm/scl1.h"
+#include "core/admm/svd3.h"
+
+/* F = sum_a V_a g_a^T (3 x q, row stride 3) */
+static inline void element_F(const df_admm *s, const double *V, int32_t e, double F[9])
+{
+    const int32_t *el = s->E + (size_t)e * s->esz;
+    const double *g = s->grad + (size_t)e * s->esz * 3;
+    memset(F, 0, 9 * sizeof(double));
+    for (int a = 0; a < s->esz; a++) {
+        const double *x = V + 3 * (size_t)el[a];
+        const double *ga = g + 3 * a;
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * ga[c];
+    }
+}
+
+static void local_x_element(df_admm *s)
+{
+    const df_admm_energy en = s->p.energy;
+    #pragma omp parallel for schedule(static)
+    for (int32_t e = 0; e < s->ne; e++) {
+        double G[9], *W = s->W + 9 * (size_t)e, *RX = s->RX + 9 * (size_t)e;
+        element_F(s, s->V, e, G);
+        for (int k = 0; k < 9; k++) G[k] += W[k];
+        double vol = s->vol[e], gam = s->gam[e];
+        if (s->q == 2) {
+            double Fc[6] = {G[0], G[1], G[3], G[4], G[6], G[7]}, U[6], sg[2], Vm[4];
+            df_admm_svd32(Fc, U, sg, Vm);
+            for (int i = 0; i < 2; i++) {
+                double x = (vol + gam * sg[i]) / (vol + gam);
+                sg[i] = x < s->p.strain_min ? s->p.strain_min : x > s->p.strain_max ? s->p.strain_max : x;
+            }
+            memset(RX, 0, 9 * sizeof(double));
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 2; c++)
+                    RX[3 * r + c] = U[2 * r] * sg[0] * Vm[2 * c] + U[2 * r + 1] * sg[1] * Vm[2 * c + 1];
+            continue;
+        }
+        if (en != DF_ADMM_NEOHOOKEAN) {
+            /* ARAP: R X = (vol R + gam G) / (vol + gam); ACAP: R X = (1 - f) (tr S / 3) R + f G,
+             * f = gam / (vol + gam); only the polar rotation R and tr S are needed */
+            double R[9], tS;
+            if (df_admm_polar3(G, R) == 0) {
+                tS = 0;
+                for (int r = 0; r < 3; r++)
+                    for (int c = 0; c < 3; c++) tS += R[3 * r + c] * G[3 * r + c];
+            } else {
+                double U[9], sg[3], Vm[9];
+                df_admm_svd3(G, U, sg, Vm);
+                for (int r = 0; r < 3; r++)
+                    for (int c = 0; c < 3; c++)
+                        R[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
+                tS = sg[0] + sg[1] + sg[2];
+            }
+            double f = gam / (vol + gam);
+            double cr = en == DF_ADMM_ARAP ? 1.0 - f : (1.0 - f) * tS / 3.0;
+            for (int k = 0; k < 9; k++) RX[k] = cr * R[k] + f * G[k];
+            continue;
+        }
+        double U[9], sg[3], Vm[9];
+        df_admm_svd3(G, U, sg, Vm);
+        double x[3];
+        if (df_admm_nh_prox(sg, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = 1.0; }
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++)
+                RX[3 * r + c] = U[3 * r] * x[0] * Vm[3 * c] + U[3 * r + 1] * x[1] * Vm[3 * c + 1] +
+                                U[3 * r + 2] * x[2] * Vm[3 * c + 2];
+    }
+}
+
+void admm_fit_vertex(const df_admm *s, const double *V, int32_t i, double SR[9])
+{
+    double M[9] = {0}, den = 0;
+    for (int32_t t = s->sr_ptr[i]; t < s->sr_ptr[i + 1]; t++) {
+        const double *xa = V + 3 * (size_t)s->sr_a[t], *xb = V + 3 * (size_t)s->sr_b[t];
+        const double *dr = s->sr_d + 3 * (size_t)t;
+        double w = s->sr_w[t], d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++) M[3 * r + c] += w * d[r] * dr[c];
+        den += w * (dr[0] * dr[0] + dr[1] * dr[1] + dr[2] * dr[2]);
+    }
+    double tr;
+    memset(SR, 0, 9 * sizeof(double));
+    if (s->planar) {
+        double a = M[0] + M[4], b = M[3] - M[1], n = sqrt(a * a + b * b);
+        double c = n > 0 ? a / n : 1.0, sn = n > 0 ? b / n : 0.0;
+        SR[0] = c; SR[1] = -sn; SR[3] = sn; SR[4] = c; SR[8] = 1.0;
+        tr = n;
+    } else {
+        double U[9], sg[3], Vm[9];
+        df_admm_svd3(M, U, sg, Vm);
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++)
+                SR[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
+        tr = sg[0] + sg[1] + sg[2];
+    }
+    if (s->p.energy == DF_ADMM_ACAP && den > 0) {
+        double sc = tr / den;
+        for (int k = 0; k < 9; k++) SR[k] *= sc;
+    }
+}
+
+void admm_local_x(df_admm *s)
+{
+    if (s->family == ADMM_FAM_ELEMENT) {
+        local_x_element(s);
+        return;
+    }
+    #pragma omp parallel for schedule(static)
+    for (int32_t i = 0; i < s->nv; i++) admm_fit_vertex(s, s->V, i, s->Rv + 9 * (size_t)i);
+}
+
+void admm_local_z(df_admm *s)
+{
+    const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
+    #pragma omp parallel for schedule(static)
+    for (int32_t i = 0; i < s->nv; i++) {
+        double x[3];
+        for (int k = 0; k < 3; k++) x[k] = s->V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k] + s->U[3 * (size_t)i + k];
+        df_admm_scl1_prox(x, w * s->a[i], sth, rho, s->Z + 3 * (size_t)i);
+    }
+}
+
+void admm_assemble_rhs(df_admm *s)
+{
+    const int32_t nf = s->nfree;
+    double *rhs = s->rhs->x;
+    const double rho = s->p.rho;
+    #pragma omp parallel for schedule(static)
+    for (int32_t f = 0; f < nf; f++) {
+        int32_t v = s->fvert[f];
+        double b[3] = {0, 0, 0};
+        if (s->family == ADMM_FAM_ELEMENT) {
+            for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
+                int32_t ent = s->ve_ent[p], e = ent / s->esz;
+                const double *RX = s->RX + 9 * (size_t)e, *W = s->W + 9 * (size_t)e;
+                const double *g = s->grad + 3 * (size_t)ent;
+                double gam = s->gam[e];
+                for (int r = 0; r < 3; r++) {
+                    double acc = 0;
+                    for (int c = 0; c < s->q; c++) acc += (RX[3 * r + c] - W[3 * r + c]) * g[c];
+                    b[r] += gam * acc;
+                }
+            }
+        } else {
+            for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
+                int32_t se = s->in_ent[p];
+                int32_t t = (se > 0 ? se : -se) - 1;
+                double sign = se > 0 ? 1.0 : -1.0;
+                const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
+                double w = sign * s->sr_w[t];
+                for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
+            }
+        }
+        for (int k = 0; k < 3; k++) {
+            size_t o = 3 * (size_t)v + k;
+            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - s->KfhP[f + (size_t)k * nf];
+        }
+    }
+}
+
+void admm_dual_update(df_admm *s)
+{
+    if (s->family == ADMM_FAM_ELEMENT) {
+        #pragma omp parallel for schedule(static)
+        for (int32_t e = 0; e < s->ne; e++) {
+            double F[9];
+            element_F(s, s->V, e, F);
+            double *W = s->W + 9 * (size_t)e;
+            const double *RX = s->RX + 9 * (size_t)e;
+            for (int k = 0; k < 9; k++) W[k] += F[k] - RX[k];
+        }
+    }
+    #pragma omp parallel for schedule(static)
+    for (int64_t o = 0; o < 3 * (int64_t)s->nv; o++) s->U[o] += s->V[o] - s->Vrest[o] - s->Z[o];
+}

@@ -1,0 +1,250 @@
+/* admm_system.c — the global step's linear system: assembly of K = sum_e gamma_e D_e^T D_e
+ * (+ spokes-and-rims Laplacian, + cloth bending) + rho I, elimination of the handle DoFs, one
+ * CHOLMOD analysis + factorization per (mesh, weights, rho, handle set), the affine constraints as a
+ * dense Schur complement on top of the factorization, and the n_free x 3 solve. */
+#include <lapacke.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/admm/admm_internal.h"
+
+typedef struct trip {
+    int64_t n, cap;
+    int32_t *i, *j;
+    double *v;
+} trip;
+
+static int trip_push(trip *t, int32_t i, int32_t j, double v)
+{
+    if (t->n == t->cap) {
+        int64_t nc = t->cap ? 2 * t->cap : 1024;
+        int32_t *ni = realloc(t->i, (size_t)nc * sizeof(int32_t));
+        if (ni) t->i = ni;
+        int32_t *nj = realloc(t->j, (size_t)nc * sizeof(int32_t));
+        if (nj) t->j = nj;
+        double *nvv = realloc(t->v, (size_t)nc * sizeof(double));
+        if (nvv) t->v = nvv;
+        if (!ni || !nj || !nvv) return -1;
+        t->cap = nc;
+    }
+    t->i[t->n] = i; t->j[t->n] = j; t->v[t->n] = v; t->n++;
+    return 0;
+}
+
+static void trip_free(trip *t) { free(t->i); free(t->j); free(t->v); memset(t, 0, sizeof(*t)); }
+
+void admm_free_system(df_admm *s)
+{
+    if (s->cc_started) {
+        if (s->L) cholmod_free_factor(&s->L, &s->cc);
+        if (s->rhs) cholmod_free_dense(&s->rhs, &s->cc);
+    }
+    free(s->fidx); free(s->fvert); free(s->cpl_f); free(s->cpl_h); free(s->cpl_v); free(s->KfhP);
+    free(s->ar_col); free(s->ar_A); free(s->ar_b); free(s->yc_free); free(s->Y); free(s->Sch); free(s->lam);
+    s->fidx = s->fvert = s->cpl_f = s->cpl_h = s->ar_col = s->yc_free = NULL;
+    s->cpl_v = s->KfhP = s->ar_A = s->ar_b = s->Y = s->Sch = s->lam = NULL;
+    s->ncpl = 0;
+    s->n_ycols = 0;
+}
+
+/* emits K entries (both triangles of the symmetric matrix) into the free/coupling containers */
+static int emit(df_admm *s, trip *kff, trip *cpl, const int32_t *hmap, int32_t i, int32_t j, double v)
+{
+    int32_t fi = s->fidx[i], fj = s->fidx[j];
+    if (fi >= 0 && fj >= 0) return fi <= fj ? trip_push(kff, fi, fj, v) : 0;
+    if (fi >= 0 && fj < 0) return trip_push(cpl, fi, hmap[j], v);
+    return 0;
+}
+
+static int assemble(df_admm *s, trip *kff, trip *cpl, const int32_t *hmap)
+{
+    int rc = 0;
+    if (s->family == ADMM_FAM_ELEMENT) {
+        for (int32_t e = 0; e < s->ne && !rc; e++) {
+            const int32_t *el = s->E + (size_t)e * s->esz;
+            const double *g = s->grad + (size_t)e * s->esz * 3;
+            for (int a = 0; a < s->esz; a++)
+                for (int b = 0; b < s->esz; b++) {
+                    double d = 0;
+                    for (int k = 0; k < s->q; k++) d += g[3 * a + k] * g[3 * b + k];
+                    rc |= emit(s, kff, cpl, hmap, el[a], el[b], s->gam[e] * d);
+                }
+        }
+    } else {
+        for (int64_t t = 0; t < s->sr_ptr[s->nv] && !rc; t++) {
+            int32_t a = s->sr_a[t], b = s->sr_b[t];
+            double w = s->sr_w[t];
+            rc |= emit(s, kff, cpl, hmap, a, a, w);
+            rc |= emit(s, kff, cpl, hmap, b, b, w);
+            rc |= emit(s, kff, cpl, hmap, a, b, -w);
+            rc |= emit(s, kff, cpl, hmap, b, a, -w);
+        }
+    }
+    if (s->bl_ptr) {
+        double kb = s->p.bending;
+        for (int32_t k = 0; k < s->nv && !rc; k++)
+            for (int32_t p = s->bl_ptr[k]; p < s->bl_ptr[k + 1]; p++)
+                for (int32_t q = s->bl_ptr[k]; q < s->bl_ptr[k + 1]; q++)
+                    rc |= emit(s, kff, cpl, hmap, s->bl_idx[p], s->bl_idx[q], kb * s->bl_val[p] * s->bl_val[q]);
+    }
+    for (int32_t i = 0; i < s->nv && !rc; i++) rc |= emit(s, kff, cpl, hmap, i, i, s->p.rho);
+    return rc;
+}
+
+void admm_update_kfhp(df_admm *s)
+{
+    int32_t nf = s->nfree;
+    memset(s->KfhP, 0, (size_t)nf * 3 * sizeof(double));
+    for (int64_t t = 0; t < s->ncpl; t++) {
+        const double *p = s->target + 3 * (size_t)s->cpl_h[t];
+        for (int k = 0; k < 3; k++) s->KfhP[s->cpl_f[t] + (size_t)k * nf] += s->cpl_v[t] * p[k];
+    }
+}
+
+/* affine constraints: Y = K^-1 E_T (one multi-column solve) and the Cholesky of the Schur
+ * complement S = C K^-1 C^T */
+static int build_affine(df_admm *s, const df_admm_affine *aff, int naff, df_error *err)
+{
+    int M = 0;
+    for (int k = 0; k < naff; k++) M += aff[k].n * aff[k].m;
+    s->n_arows = M;
+    if (M == 0) return DF_OK;
+    int32_t *col_of = malloc((size_t)s->nv * sizeof(int32_t));
+    s->ar_col = malloc((size_t)M * sizeof(int32_t));
+    s->ar_A = malloc((size_t)M * 3 * sizeof(double));
+    s->ar_b = malloc((size_t)M * sizeof(double));
+    s->yc_free = malloc((size_t)M * sizeof(int32_t));
+    s->lam = malloc((size_t)M * sizeof(double));
+    if (!col_of || !s->ar_col || !s->ar_A || !s->ar_b || !s->yc_free || !s->lam) {
+        free(col_of);
+        return df_error_set(err, DF_ENOMEM, "admm: out of memory");
+    }
+    for (int32_t i = 0; i < s->nv; i++) col_of[i] = -1;
+    int r = 0;
+    s->n_ycols = 0;
+    for (int k = 0; k < naff; k++)
+        for (int32_t t = 0; t < aff[k].n; t++) {
+            int32_t v = aff[k].verts[t];
+            if (col_of[v] < 0) { col_of[v] = s->n_ycols; s->yc_free[s->n_ycols++] = s->fidx[v]; }
+            for (int m = 0; m < aff[k].m; m++, r++) {
+                s->ar_col[r] = col_of[v];
+                memcpy(s->ar_A + 3 * (size_t)r, aff[k].A + 3 * m, 3 * sizeof(double));
+                s->ar_b[r] = aff[k].b[m];
+            }
+        }
+    free(col_of);
+    int32_t nf = s->nfree, nc = s->n_ycols;
+    cholmod_dense *Eb = cholmod_zeros(nf, nc, CHOLMOD_REAL, &s->cc);
+    if (!Eb) return df_error_set(err, DF_ENOMEM, "admm: out of memory (affine)");
+    for (int c = 0; c < nc; c++) ((double *)Eb->x)[(size_t)c * nf + s->yc_free[c]] = 1.0;
+    cholmod_dense *Yd = cholmod_solve(CHOLMOD_A, s->L, Eb, &s->cc);
+    cholmod_free_dense(&Eb, &s->cc);
+    s->st.solves++;
+    if (!Yd) return df_error_set(err, DF_EINTERNAL, "admm: CHOLMOD solve failed (affine)");
+    s->Y = malloc((size_t)nf * nc * sizeof(double));
+    s->Sch = malloc((size_t)M * M * sizeof(double));
+    if (!s->Y || !s->Sch) { cholmod_free_dense(&Yd, &s->cc); return df_error_set(err, DF_ENOMEM, "admm: out of memory (affine)"); }
+    memcpy(s->Y, Yd->x, (size_t)nf * nc * sizeof(double));
+    cholmod_free_dense(&Yd, &s->cc);
+    for (int i = 0; i < M; i++)
+        for (int j = 0; j < M; j++) {
+            const double *ai = s->ar_A + 3 * (size_t)i, *aj = s->ar_A + 3 * (size_t)j;
+            double kij = s->Y[(size_t)s->ar_col[j] * nf + s->yc_free[s->ar_col[i]]];
+            s->Sch[(size_t)j * M + i] = (ai[0] * aj[0] + ai[1] * aj[1] + ai[2] * aj[2]) * kij;
+        }
+    lapack_int info = LAPACKE_dpotrf(LAPACK_COL_MAJOR, 'L', M, s->Sch, M);
+    if (info != 0)
+        return df_error_set(err, DF_ESINGULAR,
+                            "admm: affine constraints are linearly dependent or contradictory (Schur pivot %d)", (int)info);
+    return DF_OK;
+}
+
+int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df_error *err)
+{
+    admm_free_system(s);
+    if (!s->cc_started) {
+        cholmod_start(&s->cc);
+        s->cc.print = 0;
+        s->cc_started = 1;
+    }
+    int32_t nv = s->nv;
+    s->fidx = malloc((size_t)nv * sizeof(int32_t));
+    int32_t *hmap = malloc((size_t)nv * sizeof(int32_t));
+    if (!s->fidx || !hmap) { free(hmap); return df_error_set(err, DF_ENOMEM, "admm: out of memory"); }
+    for (int32_t i = 0; i < nv; i++) hmap[i] = -1;
+    for (int32_t h = 0; h < s->nh; h++) hmap[s->hidx[h]] = h;
+    s->nfree = 0;
+    for (int32_t i = 0; i < nv; i++) s->fidx[i] = hmap[i] >= 0 ? -1 : s->nfree++;
+    int32_t nf = s->nfree;
+    if (nf == 0) { free(hmap); return df_error_set(err, DF_EINVAL, "admm: every vertex is a handle"); }
+    s->fvert = malloc((size_t)nf * sizeof(int32_t));
+    s->KfhP = malloc((size_t)nf * 3 * sizeof(double));
+    if (!s->fvert || !s->KfhP) { free(hmap); return df_error_set(err, DF_ENOMEM, "admm: out of memory"); }
+    for (int32_t i = 0; i < nv; i++) if (s->fidx[i] >= 0) s->fvert[s->fidx[i]] = i;
+    trip kff = {0}, cpl = {0};
+    if (assemble(s, &kff, &cpl, hmap)) {
+        free(hmap); trip_free(&kff); trip_free(&cpl);
+        return df_error_set(err, DF_ENOMEM, "admm: out of memory (assembly)");
+    }
+    free(hmap);
+    s->ncpl = cpl.n;
+    s->cpl_f = cpl.i; s->cpl_h = cpl.j; s->cpl_v = cpl.v;
+    cholmod_triplet *T = cholmod_allocate_triplet(nf, nf, (size_t)kff.n, 1, CHOLMOD_REAL, &s->cc);
+    if (!T) { trip_free(&kff); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
+    memcpy(T->i, kff.i, (size_t)kff.n * sizeof(int32_t));
+    memcpy(T->j, kff.j, (size_t)kff.n * sizeof(int32_t));
+    memcpy(T->x, kff.v, (size_t)kff.n * sizeof(double));
+    T->nnz = (size_t)kff.n;
+    trip_free(&kff);
+    cholmod_sparse *K = cholmod_triplet_to_sparse(T, (size_t)T->nnz, &s->cc);
+    cholmod_free_triplet(&T, &s->cc);
+    if (!K) return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory");
+    s->L = cholmod_analyze(K, &s->cc);
+    s->st.analyses++;
+    if (!s->L) { cholmod_free_sparse(&K, &s->cc); return df_error_set(err, DF_EINTERNAL, "admm: cholmod_analyze failed (status %d)", s->cc.status); }
+    int ok = cholmod_factorize(K, s->L, &s->cc);
+    s->st.factorizations++;
+    cholmod_free_sparse(&K, &s->cc);
+    if (!ok || s->cc.status == CHOLMOD_NOT_POSDEF || s->L->minor < s->L->n)
+        return df_error_set(err, DF_ESINGULAR, "admm: global matrix is not positive definite (pivot %d of %d)",
+                            (int)s->L->minor, (int)nf);
+    s->rhs = cholmod_zeros(nf, 3, CHOLMOD_REAL, &s->cc);
+    if (!s->rhs) return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory");
+    admm_update_kfhp(s);
+    return build_affine(s, aff, naff, err);
+}
+
+int admm_global_solve(df_admm *s, df_error *err)
+{
+    cholmod_dense *X = cholmod_solve(CHOLMOD_A, s->L, s->rhs, &s->cc);
+    s->st.solves++;
+    if (!X) return df_error_set(err, DF_EINTERNAL, "admm: cholmod_solve failed (status %d)", s->cc.status);
+    int32_t nf = s->nfree;
+    double *x = X->x;
+    if (s->n_arows > 0) {
+        int M = s->n_arows;
+        for (int r = 0; r < M; r++) {
+            const double *A = s->ar_A + 3 * (size_t)r;
+            size_t f = (size_t)s->yc_free[s->ar_col[r]];
+            s->lam[r] = A[0] * x[f] + A[1] * x[f + nf] + A[2] * x[f + 2 * (size_t)nf] - s->ar_b[r];
+        }
+        LAPACKE_dpotrs(LAPACK_COL_MAJOR, 'L', M, 1, s->Sch, M, s->lam, M);
+        for (int k = 0; k < 3; k++) {
+            double *xk = x + (size_t)k * nf;
+            for (int r = 0; r < M; r++) {
+                double c = s->lam[r] * s->ar_A[3 * (size_t)r + k];
+                if (c == 0.0) continue;
+                const double *y = s->Y + (size_t)s->ar_col[r] * nf;
+                for (int32_t i = 0; i < nf; i++) xk[i] -= c * y[i];
+            }
+        }
+    }
+    for (int32_t f = 0; f < nf; f++) {
+        double *v = s->V + 3 * (size_t)s->fvert[f];
+        v[0] = x[f]; v[1] = x[f + nf]; v[2] = x[f + 2 * (size_t)nf];
+    }
+    for (int32_t h = 0; h < s->nh; h++) memcpy(s->V + 3 * (size_t)s->hidx[h], s->target + 3 * (size_t)h, 3 * sizeof(double));
+    cholmod_free_dense(&X, &s->cc);
+    return DF_OK;
+}

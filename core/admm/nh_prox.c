@@ -1,0 +1,103 @@
+/* nh_prox.c — Neo-Hookean singular-value proximal operator (see nh_prox.h). */
+#include "core/admm/nh_prox.h"
+
+#include <math.h>
+
+void df_admm_lame(double youngs, double poisson, double *mu, double *lambda)
+{
+    *mu = youngs / (2.0 * (1.0 + poisson));
+    *lambda = youngs * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson));
+}
+
+double df_admm_nh_psi(const double sig[3], double mu, double lambda)
+{
+    double J = sig[0] * sig[1] * sig[2];
+    if (!(J > 0.0) || sig[0] <= 0.0 || sig[1] <= 0.0 || sig[2] <= 0.0) return INFINITY;
+    double L = log(sig[0]) + log(sig[1]) + log(sig[2]);
+    return 0.5 * mu * (sig[0] * sig[0] + sig[1] * sig[1] + sig[2] * sig[2] - 3.0) - mu * L +
+           0.5 * lambda * L * L;
+}
+
+static double prox_obj(const double x[3], const double sig[3], double vol, double mu, double lambda,
+                       double gamma)
+{
+    double d0 = x[0] - sig[0], d1 = x[1] - sig[1], d2 = x[2] - sig[2];
+    return vol * df_admm_nh_psi(x, mu, lambda) + 0.5 * gamma * (d0 * d0 + d1 * d1 + d2 * d2);
+}
+
+/* solves the SPD 3x3 system H d = -g by Cholesky; returns 0, or -1 when H is not PD */
+static int chol_solve3(const double H[9], const double g[3], double d[3])
+{
+    double l00 = H[0];
+    if (!(l00 > 0)) return -1;
+    l00 = sqrt(l00);
+    double l10 = H[3] / l00, l20 = H[6] / l00;
+    double l11 = H[4] - l10 * l10;
+    if (!(l11 > 0)) return -1;
+    l11 = sqrt(l11);
+    double l21 = (H[7] - l20 * l10) / l11;
+    double l22 = H[8] - l20 * l20 - l21 * l21;
+    if (!(l22 > 0)) return -1;
+    l22 = sqrt(l22);
+    double y0 = -g[0] / l00, y1 = (-g[1] - l10 * y0) / l11, y2 = (-g[2] - l20 * y0 - l21 * y1) / l22;
+    d[2] = y2 / l22;
+    d[1] = (y1 - l21 * d[2]) / l11;
+    d[0] = (y0 - l10 * d[1] - l20 * d[2]) / l00;
+    return 0;
+}
+
+int df_admm_nh_prox(const double sig[3], double vol, double mu, double lambda, double gamma,
+                    double out[3])
+{
+    if (!(vol > 0) || !(gamma > 0) || !(mu > 0) || !(lambda >= 0) || !isfinite(sig[0]) ||
+        !isfinite(sig[1]) || !isfinite(sig[2]) || !isfinite(vol * mu) || !isfinite(gamma))
+        return -1;
+    double x[3];
+    double m = (fabs(sig[0]) + fabs(sig[1]) + fabs(sig[2])) / 3.0;
+    double floor_ = 0.03 * (m < 1.0 ? 1.0 : m) + 1e-3;
+    for (int i = 0; i < 3; i++) x[i] = fabs(sig[i]) > floor_ ? fabs(sig[i]) : floor_;
+    double scale = vol * mu + gamma;
+    int it;
+    double f = prox_obj(x, sig, vol, mu, lambda, gamma);
+    for (it = 0; it < DF_ADMM_NH_MAX_NEWTON; it++) {
+        double L = log(x[0]) + log(x[1]) + log(x[2]);
+        double g[3], H[9];
+        for (int i = 0; i < 3; i++)
+            g[i] = vol * (mu * x[i] - mu / x[i] + lambda * L / x[i]) + gamma * (x[i] - sig[i]);
+        double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        double xn = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+        if (gn <= 1e-13 * scale * (1.0 + xn)) break;
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                H[3 * i + j] = (i == j)
+                    ? vol * (mu + mu / (x[i] * x[i]) + lambda * (1.0 - L) / (x[i] * x[i])) + gamma
+                    : vol * lambda / (x[i] * x[j]);
+        double d[3];
+        double shift = 0.0;
+        while (chol_solve3(H, g, d) != 0) { /* not PD: shift the diagonal until it is */
+            double add = shift == 0.0 ? 1e-8 * scale : shift;
+            shift += add;
+            H[0] += add; H[4] += add; H[8] += add;
+            if (shift > 1e12 * scale) { d[0] = -g[0] / scale; d[1] = -g[1] / scale; d[2] = -g[2] / scale; break; }
+        }
+        /* fraction to boundary: keep every x_i > 0 */
+        double t = 1.0;
+        for (int i = 0; i < 3; i++)
+            if (d[i] < 0 && x[i] + t * d[i] <= 0.0) t = 0.9 * x[i] / -d[i];
+        double slope = g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
+        double xt[3], ft = INFINITY;
+        for (int ls = 0; ls < 40; ls++) {
+            for (int i = 0; i < 3; i++) xt[i] = x[i] + t * d[i];
+            ft = prox_obj(xt, sig, vol, mu, lambda, gamma);
+            if (ft <= f + 1e-4 * t * slope || fabs(ft - f) <= 1e-15 * fabs(f)) break;
+            t *= 0.5;
+        }
+        if (!(ft <= f) && !(fabs(ft - f) <= 1e-15 * fabs(f))) break;
+        x[0] = xt[0]; x[1] = xt[1]; x[2] = xt[2];
+        f = ft;
+    }
+    out[0] = x[0];
+    out[1] = x[1];
+    out[2] = x[2];
+    return it;
+}

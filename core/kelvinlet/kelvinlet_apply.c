@@ -1,0 +1,441 @@
+/* kelvinlet_apply.c — the float32 evaluation path: SoA blocks of BLOCK points, one fused
+ * SIMD loop per load (orders 1-3 specialized at compile time so the scale loop unrolls),
+ * Euler / RK4 per block, OpenMP over blocks.
+ *
+ * SIMD: the block integrator carries __attribute__((target_clones("arch=x86-64-v3",
+ * "default"))): gcc emits an AVX2 clone (8 floats per op) next to the portable x86-64-v2
+ * (SSE4.2, 4 floats) build and an ifunc picks one at load time. No FMA contraction happens
+ * (-ffp-contract=off is global), so both clones round identically per operation.
+ * 1/sqrt is computed as the bit-level estimate plus three Newton steps (relative error at
+ * float rounding level): plain C that vectorizes, where sqrtf would not (errno semantics). */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/kelvinlet/kelvinlet_internal.h"
+
+#define BLOCK 256                 /* points per SoA block (fits L1 with all temporaries) */
+#define PAR_MIN_BLOCKS 4          /* below this many blocks run on one thread            */
+#define MO DF_KELVINLET_MAX_ORDER
+
+typedef struct fsrc {
+    int dim, order, affine;
+    float c[3], f[3], F[9], S[9];
+    float e2[MO];          /* eps_i^2                                                   */
+    float del[MO];         /* eps_i^2 - eps_1^2                                         */
+    float w[MO], wd[MO];   /* w_i and w_i (eps_i^2 - eps_1^2)                           */
+    float kA1, kA3, kB;    /* grab:   A = kA1 sum w ir + kA3 sum w x ir^3, B = kB sum w ir^3 */
+    float kC1, kC1b, kC2, kC3; /* affine: C1 = kC1 sum w ir^3 + kC1b sum w x ir^5, ...    */
+    float lcoef;           /* 2D: (b - a) sum_i w_i ln(s + eps_i^2)                     */
+} fsrc;
+
+typedef struct fplan {
+    size_t n;
+    fsrc *s;
+} fplan;
+
+/* ---- plan construction --------------------------------------------------------------- */
+
+static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *src, double h,
+                      fsrc *o)
+{
+    memset(o, 0, sizeof *o);
+    o->dim = k->dim;
+    o->order = k->order;
+    o->affine = src->affine;
+    double a = k->a, b = k->b, x0 = k->eps[0] * k->eps[0];
+    for (int i = 0; i < 3; i++) {
+        o->c[i] = (float)src->centre[i];
+        o->f[i] = (float)(h * (i < k->dim ? src->f[i] : 0.0));
+    }
+    double F[9];
+    for (int i = 0; i < 9; i++)
+        F[i] = (i / 3 < k->dim && i % 3 < k->dim) ? h * src->F[i] : 0.0;
+    double tr = F[0] + F[4] + F[8];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            o->F[3 * i + j] = (float)F[3 * i + j];
+            o->S[3 * i + j] = (float)(F[3 * i + j] + F[3 * j + i]
+                                      + (i == j && i < k->dim ? tr : 0.0));
+        }
+    for (int i = 0; i < k->order; i++) {
+        double e2 = k->eps[i] * k->eps[i];
+        o->e2[i] = (float)e2;
+        o->del[i] = (float)(e2 - x0);
+        o->w[i] = (float)k->w[i];
+        o->wd[i] = (float)(k->w[i] * (e2 - x0));
+    }
+    if (k->dim == 3) {
+        o->kA1 = (float)(a - b);
+        o->kA3 = (float)(0.5 * a);
+        o->kB = (float)b;
+        o->kC1 = (float)(-a);
+        o->kC1b = (float)(-1.5 * a);
+        o->kC2 = (float)b;
+        o->kC3 = (float)(-3.0 * b);
+    } else {
+        o->kA3 = (float)a;            /* A = lcoef L + a sum w x q, B = 2b sum w q          */
+        o->kB = (float)(2.0 * b);
+        o->kC1 = (float)(-2.0 * a);   /* C1 = -2a (sum w q + sum w x q^2), C2 = 2b sum w q  */
+        o->kC2 = (float)(2.0 * b);
+        o->kC3 = (float)(-4.0 * b);   /* C3 = -4b sum w q^2                                  */
+    }
+    o->lcoef = (float)(b - a);
+}
+
+static int build_plan(const df_kelvinlet_prepared *p, double h, fplan *pl, df_error *err)
+{
+    pl->n = p->nsrc;
+    pl->s = malloc(p->nsrc * sizeof *pl->s);
+    if (!pl->s)
+        return df_error_set(err, DF_ENOMEM, "kelvinlet: out of memory for %zu loads", p->nsrc);
+    const df_kelvinlet_source *s = dfk_sources(p);
+    for (size_t i = 0; i < p->nsrc; i++)
+        build_src(&p->kernel[s[i].kernel], &s[i], h, &pl->s[i]);
+    return DF_OK;
+}
+
+/* ---- SIMD kernels ---------------------------------------------------------------------- */
+
+static inline __attribute__((always_inline)) float rsq(float x)
+{
+    int32_t i;
+    float y, hx = 0.5f * x;
+    memcpy(&i, &x, sizeof i);
+    i = 0x5f375a86 - (i >> 1);
+    memcpy(&y, &i, sizeof y);
+    y = y * (1.5f - hx * y * y);
+    y = y * (1.5f - hx * y * y);
+    y = y * (1.5f - hx * y * y);
+    return y;
+}
+
+typedef float blk[BLOCK];
+
+/* Multi-scale sums of one point, cancellation-aware. With ir_i = (s + eps_i^2)^-1/2:
+ *   s1 = sum w_i ir_i, s3 = sum w_i ir_i^3, s5 = sum w_i ir_i^5,
+ *   x3 = sum w_i eps_i^2 ir_i^3, x5 = sum w_i eps_i^2 ir_i^5.
+ * For order >= 2 the weights sum to 0, so sum w_i f_i = sum_{i>=2} w_i (f_i - f_1) with the
+ * differences in closed form (ir_i - ir_1 = -del_i ir_1 ir_i / (rho_1 + rho_i)); for order
+ * >= 3 also sum w_i del_i = 0, used the same way for the eps^2-weighted sums. This keeps the
+ * float result accurate where the plain weighted sum would lose ~6 bits (tri-scale, 1.1). */
+static inline __attribute__((always_inline)) void scale_sums3(const fsrc *S, const int order,
+                                                              const int want5, float s,
+                                                              float *o1, float *o3, float *o5,
+                                                              float *ox3, float *ox5)
+{
+    float s1p = s + S->e2[0];
+    float i1 = rsq(s1p), i1s = i1 * i1, i13 = i1s * i1, i15 = i13 * i1s, rho1 = s1p * i1;
+    float x1 = S->e2[0];
+    if (order == 1) {
+        *o1 = i1;
+        *o3 = i13;
+        *ox3 = x1 * i13;
+        if (want5) {
+            *o5 = i15;
+            *ox5 = x1 * i15;
+        }
+        return;
+    }
+    float s1 = 0.0f, s3 = 0.0f, s5 = 0.0f, t3 = 0.0f, t5 = 0.0f;
+    for (int i = 1; i < order; i++) {
+        float sp = s + S->e2[i];
+        float ii = rsq(sp), iis = ii * ii, ii3 = iis * ii;
+        float d1 = -S->del[i] * i1 * ii / (rho1 + sp * ii);        /* ir_i - ir_1 */
+        float d3 = d1 * (iis + ii * i1 + i1s);                     /* ir_i^3 - ir_1^3 */
+        s1 += S->w[i] * d1;
+        s3 += S->w[i] * d3;
+        t3 += S->wd[i] * (order >= 3 ? d3 : ii3);
+        if (want5) {
+            float d5 = d1 * (iis * iis + ii3 * i1 + iis * i1s + ii * i13 + i1s * i1s);
+            s5 += S->w[i] * d5;
+            t5 += S->wd[i] * (order >= 3 ? d5 : ii3 * iis);
+        }
+    }
+    *o1 = s1;
+    *o3 = s3;
+    *ox3 = x1 * s3 + t3;
+    if (want5) {
+        *o5 = s5;
+        *ox5 = x1 * s5 + t5;
+    }
+}
+
+static inline __attribute__((always_inline)) void grab3(const fsrc *S, const int order,
+                                                        blk *restrict p, blk *restrict u)
+{
+    const float cx = S->c[0], cy = S->c[1], cz = S->c[2];
+    const float fx = S->f[0], fy = S->f[1], fz = S->f[2];
+#pragma omp simd
+    for (int j = 0; j < BLOCK; j++) {
+        float rx = p[0][j] - cx, ry = p[1][j] - cy, rz = p[2][j] - cz;
+        float s = rx * rx + ry * ry + rz * rz, s1, s3, s5, x3, x5;
+        scale_sums3(S, order, 0, s, &s1, &s3, &s5, &x3, &x5);
+        float A = S->kA1 * s1 + S->kA3 * x3;
+        float rf = S->kB * s3 * (rx * fx + ry * fy + rz * fz);
+        u[0][j] += A * fx + rf * rx;
+        u[1][j] += A * fy + rf * ry;
+        u[2][j] += A * fz + rf * rz;
+    }
+}
+
+static inline __attribute__((always_inline)) void affine3(const fsrc *S, const int order,
+                                                          blk *restrict p, blk *restrict u)
+{
+    const float cx = S->c[0], cy = S->c[1], cz = S->c[2];
+    const float *F = S->F, *M = S->S;
+#pragma omp simd
+    for (int j = 0; j < BLOCK; j++) {
+        float rx = p[0][j] - cx, ry = p[1][j] - cy, rz = p[2][j] - cz;
+        float s = rx * rx + ry * ry + rz * rz, s1, s3, s5, x3, x5;
+        scale_sums3(S, order, 1, s, &s1, &s3, &s5, &x3, &x5);
+        float C1 = S->kC1 * s3 + S->kC1b * x5, C2 = S->kC2 * s3, C3 = S->kC3 * s5;
+        float Frx = F[0] * rx + F[1] * ry + F[2] * rz;
+        float Fry = F[3] * rx + F[4] * ry + F[5] * rz;
+        float Frz = F[6] * rx + F[7] * ry + F[8] * rz;
+        float Srx = M[0] * rx + M[1] * ry + M[2] * rz;
+        float Sry = M[3] * rx + M[4] * ry + M[5] * rz;
+        float Srz = M[6] * rx + M[7] * ry + M[8] * rz;
+        float q = C3 * (rx * Frx + ry * Fry + rz * Frz);
+        u[0][j] += C1 * Frx + C2 * Srx + q * rx;
+        u[1][j] += C1 * Fry + C2 * Sry + q * ry;
+        u[2][j] += C1 * Frz + C2 * Srz + q * rz;
+    }
+}
+
+/* 2D loads (z untouched): generic order, scalar logf / log1pf for the log term; the same
+ * difference trick with q_i = 1/(s + eps_i^2): q_i - q_1 = -del_i q_i q_1. */
+static inline __attribute__((always_inline)) void load2(const fsrc *S, blk *restrict p,
+                                                        blk *restrict u)
+{
+    const float cx = S->c[0], cy = S->c[1], x1 = S->e2[0];
+    const int order = S->order;
+    for (int j = 0; j < BLOCK; j++) {
+        float rx = p[0][j] - cx, ry = p[1][j] - cy, s = rx * rx + ry * ry;
+        float q1 = 1.0f / (s + x1), sq, sq2, xq, xq2, lg = 0.0f;
+        if (order == 1) {
+            sq = q1;
+            sq2 = q1 * q1;
+            xq = x1 * q1;
+            xq2 = x1 * sq2;
+            lg = logf(s + x1);
+        } else {
+            float a1 = 0.0f, a2 = 0.0f, t1 = 0.0f, t2 = 0.0f;
+            for (int i = 1; i < order; i++) {
+                float qi = 1.0f / (s + S->e2[i]);
+                float d1 = -S->del[i] * qi * q1, d2 = d1 * (qi + q1);
+                a1 += S->w[i] * d1;
+                a2 += S->w[i] * d2;
+                t1 += S->wd[i] * (order >= 3 ? d1 : qi);
+                t2 += S->wd[i] * (order >= 3 ? d2 : qi * qi);
+                lg += S->w[i] * log1pf(S->del[i] * q1);
+            }
+            sq = a1;
+            sq2 = a2;
+            xq = x1 * a1 + t1;
+            xq2 = x1 * a2 + t2;
+        }
+        if (!S->affine) {
+            float A = S->lcoef * lg + S->kA3 * xq;
+            float rf = S->kB * sq * (rx * S->f[0] + ry * S->f[1]);
+            u[0][j] += A * S->f[0] + rf * rx;
+            u[1][j] += A * S->f[1] + rf * ry;
+        } else {
+            float C1 = S->kC1 * (sq + xq2), C2 = S->kC2 * sq, C3 = S->kC3 * sq2;
+            const float *F = S->F, *M = S->S;
+            float Frx = F[0] * rx + F[1] * ry, Fry = F[3] * rx + F[4] * ry;
+            float Srx = M[0] * rx + M[1] * ry, Sry = M[3] * rx + M[4] * ry;
+            float q = C3 * (rx * Frx + ry * Fry);
+            u[0][j] += C1 * Frx + C2 * Srx + q * rx;
+            u[1][j] += C1 * Fry + C2 * Sry + q * ry;
+        }
+    }
+}
+
+static inline __attribute__((always_inline)) void eval_block(const fplan *pl, blk *restrict p,
+                                                             blk *restrict u)
+{
+    for (int c = 0; c < 3; c++)
+        memset(u[c], 0, sizeof u[c]);
+    for (size_t k = 0; k < pl->n; k++) {
+        const fsrc *S = &pl->s[k];
+        if (S->dim == 2) {
+            load2(S, p, u);
+            continue;
+        }
+        if (!S->affine) {
+            switch (S->order) {
+            case 1: grab3(S, 1, p, u); break;
+            case 2: grab3(S, 2, p, u); break;
+            case 3: grab3(S, 3, p, u); break;
+            default: grab3(S, S->order, p, u); break;
+            }
+        } else {
+            switch (S->order) {
+            case 1: affine3(S, 1, p, u); break;
+            case 2: affine3(S, 2, p, u); break;
+            case 3: affine3(S, 3, p, u); break;
+            default: affine3(S, S->order, p, u); break;
+            }
+        }
+    }
+}
+
+/* pos = x0 + d + c * k (k == NULL: pos = x0 + d) */
+static inline __attribute__((always_inline)) void stage(blk *restrict pos, blk *restrict x0,
+                                                        blk *restrict d, blk *restrict k,
+                                                        float c)
+{
+    for (int a = 0; a < 3; a++) {
+        if (!k) {
+#pragma omp simd
+            for (int j = 0; j < BLOCK; j++)
+                pos[a][j] = x0[a][j] + d[a][j];
+        } else {
+#pragma omp simd
+            for (int j = 0; j < BLOCK; j++)
+                pos[a][j] = x0[a][j] + d[a][j] + c * k[a][j];
+        }
+    }
+}
+
+/* Integrates one block of cnt <= BLOCK points (xyz interleaved) and writes positions
+ * (want_disp = 0) or displacements (want_disp = 1) to out. plans[nplans]: one per step when
+ * moving, else one reused for every step. */
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+static void integrate_block(const fplan *plans, int moving, int steps, int rk4, const float *in,
+                            int cnt, float *out, int want_disp)
+{
+    blk x0[3] __attribute__((aligned(64))), d[3] __attribute__((aligned(64)));
+    blk pos[3] __attribute__((aligned(64))), k[3] __attribute__((aligned(64)));
+    blk acc[3] __attribute__((aligned(64)));
+    for (int j = 0; j < BLOCK; j++) {
+        int jj = j < cnt ? j : cnt - 1;     /* pad with the last point */
+        for (int a = 0; a < 3; a++) {
+            x0[a][j] = in[3 * jj + a];
+            d[a][j] = 0.0f;
+        }
+    }
+    for (int st = 0; st < steps; st++) {
+        const fplan *pl = moving ? &plans[st] : &plans[0];
+        if (!rk4) {
+            stage(pos, x0, d, NULL, 0.0f);
+            eval_block(pl, pos, k);
+            for (int a = 0; a < 3; a++) {
+#pragma omp simd
+                for (int j = 0; j < BLOCK; j++)
+                    d[a][j] += k[a][j];
+            }
+            continue;
+        }
+        static const float cst[4] = {0.0f, 0.5f, 0.5f, 1.0f};
+        static const float wgt[4] = {1.0f, 2.0f, 2.0f, 1.0f};
+        for (int sg = 0; sg < 4; sg++) {
+            stage(pos, x0, d, sg ? k : NULL, cst[sg]);   /* k: the previous stage */
+            eval_block(pl, pos, k);
+            for (int a = 0; a < 3; a++) {
+                float wv = wgt[sg];
+                if (sg == 0) {
+#pragma omp simd
+                    for (int j = 0; j < BLOCK; j++)
+                        acc[a][j] = k[a][j];
+                } else {
+#pragma omp simd
+                    for (int j = 0; j < BLOCK; j++)
+                        acc[a][j] += wv * k[a][j];
+                }
+            }
+        }
+        for (int a = 0; a < 3; a++) {
+#pragma omp simd
+            for (int j = 0; j < BLOCK; j++)
+                d[a][j] += acc[a][j] * (1.0f / 6.0f);
+        }
+    }
+    for (int j = 0; j < cnt; j++)
+        for (int a = 0; a < 3; a++)
+            out[3 * j + a] = want_disp ? d[a][j] : x0[a][j] + d[a][j];
+}
+
+/* ---- drivers ---------------------------------------------------------------------------- */
+
+int dfk_points_ok_f(const float *xyz, size_t n, size_t *bad)
+{
+    const size_t m = 3 * n, chunk = 4096;
+    const size_t nc = (m + chunk - 1) / chunk;
+    const float lim = (float)DF_KELVINLET_MAX_VALUE;
+    int any = 0;
+#pragma omp parallel for reduction(| : any) schedule(static) if (nc >= 16)
+    for (size_t c = 0; c < nc; c++) {
+        size_t lo = c * chunk, hi = lo + chunk < m ? lo + chunk : m;
+        int flag = 0;
+#pragma omp simd reduction(| : flag)
+        for (size_t i = lo; i < hi; i++)
+            flag |= !(fabsf(xyz[i]) <= lim);          /* true for NaN, +-Inf, too large */
+        any |= flag;
+    }
+    if (!any)
+        return 1;
+    for (size_t i = 0; i < m; i++)
+        if (!(fabsf(xyz[i]) <= lim)) {
+            if (bad)
+                *bad = i / 3;
+            break;
+        }
+    return 0;
+}
+
+static int run(const df_kelvinlet_prepared *p, const float *in, size_t n, float *out,
+               int want_disp, df_error *err)
+{
+    int rc = dfk_check_prepared(p, err);
+    if (rc != DF_OK)
+        return rc;
+    if (n == 0)
+        return DF_OK;
+    if (!in || !out)
+        return df_error_set(err, DF_EINVAL, "kelvinlet apply: NULL points or output");
+    size_t bad;
+    if (!dfk_points_ok_f(in, n, &bad))
+        return df_error_set(err, DF_EINVAL, "kelvinlet apply: point %zu not finite or beyond %g",
+                            bad, DF_KELVINLET_MAX_VALUE);
+    df_kelvinlet_prepared *mv;
+    rc = dfk_moving_substeps(p, &mv, err);
+    if (rc != DF_OK)
+        return rc;
+    int steps = p->brush.steps, nplans = mv ? steps : 1;
+    fplan *plans = calloc((size_t)nplans, sizeof *plans);
+    if (!plans) {
+        free(mv);
+        return df_error_set(err, DF_ENOMEM, "kelvinlet: out of memory for plans");
+    }
+    for (int i = 0; i < nplans && rc == DF_OK; i++)
+        rc = build_plan(mv ? &mv[i] : p, mv ? 1.0 : 1.0 / steps, &plans[i], err);
+    if (rc == DF_OK) {
+        int rk4 = p->brush.integrator == DF_KELVINLET_RK4, moving = mv != NULL;
+        size_t nb = (n + BLOCK - 1) / BLOCK;
+#pragma omp parallel for schedule(static) if (nb >= PAR_MIN_BLOCKS)
+        for (size_t b = 0; b < nb; b++) {
+            size_t lo = b * BLOCK, cnt = n - lo < BLOCK ? n - lo : BLOCK;
+            integrate_block(plans, moving, steps, rk4, in + 3 * lo, (int)cnt, out + 3 * lo,
+                            want_disp);
+        }
+    }
+    for (int i = 0; i < nplans; i++)
+        free(plans[i].s);
+    free(plans);
+    free(mv);
+    return rc;
+}
+
+int df_kelvinlet_apply(const df_kelvinlet_prepared *p, float *xyz, size_t n, df_error *err)
+{
+    return run(p, xyz, n, xyz, 0, err);
+}
+
+int df_kelvinlet_displacements(const df_kelvinlet_prepared *p, const float *xyz, size_t n,
+                               float *out, df_error *err)
+{
+    return run(p, xyz, n, out, 1, err);
+}

@@ -1,0 +1,85 @@
+/* codec_util.h — internal helpers shared by the message codecs (not part of the public API).
+ *
+ * df_rd is a bounds-checked little-endian cursor over one payload. The first failure is sticky:
+ * it records DF_EPROTO_TRUNCATED (or the validation code) in `rc` and `err`, and every later
+ * read returns 0, so a decoder can read all fields and test `r.rc` once. Messages are prefixed
+ * with the message name given at df_rd_init ("brush: radius: ..."). */
+#ifndef DF_PROTO_CODEC_UTIL_H
+#define DF_PROTO_CODEC_UTIL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "proto/buf.h"
+
+typedef struct df_rd {
+    const uint8_t *p;  /* payload */
+    size_t n;          /* payload bytes */
+    size_t off;        /* read position */
+    const char *msg;   /* message name for error text */
+    df_error *err;     /* may be NULL */
+    int rc;            /* DF_OK until the first failure */
+} df_rd;
+
+/* Starts reading payload p[0 .. n) of message `msg`. */
+void df_rd_init(df_rd *r, const uint8_t *p, size_t n, const char *msg, df_error *err);
+
+/* Records a failure (first one wins) with a "msg: field: ..." text; returns r->rc. */
+int df_rd_fail(df_rd *r, int code, const char *field, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* 1 when `k` more bytes are present, else records DF_EPROTO_TRUNCATED and returns 0. */
+int df_rd_need(df_rd *r, size_t k, const char *field);
+
+/* 1 when at least `count` rows of `row_bytes` remain (checked without overflow) so arrays can be
+ * allocated safely; else records DF_EPROTO_TRUNCATED naming the count. */
+int df_rd_need_rows(df_rd *r, uint64_t count, size_t row_bytes, const char *field);
+
+uint8_t df_rd_u8(df_rd *r, const char *field);
+uint16_t df_rd_u16(df_rd *r, const char *field);
+uint32_t df_rd_u32(df_rd *r, const char *field);
+uint64_t df_rd_u64(df_rd *r, const char *field);
+float df_rd_f32(df_rd *r, const char *field);
+double df_rd_f64(df_rd *r, const char *field);
+
+/* Reads a u16 reserved field and fails with DF_EPROTO_RESERVED unless it is 0. */
+void df_rd_reserved16(df_rd *r, const char *field);
+void df_rd_reserved8(df_rd *r, const char *field);
+
+/* Reads `n` doubles into out[] and fails with DF_EINVAL if any is NaN or +-Inf. */
+void df_rd_f64_finite(df_rd *r, double *out, size_t n, const char *field);
+
+/* Reads a u16-length string of at most `max` bytes without NUL bytes into dst (cap max + 1). */
+void df_rd_str(df_rd *r, char *dst, size_t max, const char *field);
+
+/* Reads a u16-length string of at most `max` bytes into a malloc'd NUL-terminated copy
+ * (*dst = NULL for length 0). */
+void df_rd_str_alloc(df_rd *r, char **dst, size_t max, const char *field);
+
+/* Returns a pointer to the next `k` bytes (NULL and failure if short) and skips them. */
+const uint8_t *df_rd_bytes(df_rd *r, size_t k, const char *field);
+
+/* Finishes: DF_EPROTO_TRAILING when bytes remain; returns r->rc. */
+int df_rd_end(df_rd *r);
+
+/* Reads `count` u32 vertex indices into a malloc'd int32 array (*dst), each < `bound`;
+ * count must have been checked against the payload with df_rd_need_rows. */
+void df_rd_indices(df_rd *r, int32_t **dst, uint32_t count, uint32_t bound, const char *field);
+
+/* Wire size of a string (u16 length + bytes); writes one (capacity reserved). */
+size_t df_str_size(const char *s);
+void df_put_str(df_buf *b, const char *s);
+
+/* Encoder-side validation helpers: DF_EINVAL with "msg: field ..." unless the check holds. */
+int df_check_finite(const double *v, size_t n, const char *msg, const char *field, df_error *err);
+int df_check_str(const char *s, size_t max, const char *msg, const char *field, df_error *err);
+
+/* malloc(count * size) with overflow check; returns NULL for count 0 (not an error). Records
+ * DF_ENOMEM in r when allocation fails. */
+void *df_rd_alloc(df_rd *r, size_t count, size_t size, const char *field);
+
+/* Reserves `size` bytes in out and returns rc (shared encoder prologue). */
+int df_enc_reserve(df_buf *out, size_t size, const char *msg, df_error *err);
+
+#endif

@@ -1,0 +1,544 @@
+/* messages.h — every message body of the deformd wire protocol: types, limits, wire error codes,
+ * one C struct per body and its pure encode/decode functions (no I/O). Spec: proto/PROTOCOL.md.
+ *
+ * Conventions shared by every function below:
+ *  - Encoders `df_msg_X_encode(const df_msg_X *m, df_buf *out, df_error *err)` validate `m`
+ *    exactly like the decoder would, then APPEND the payload (no frame header) to `out`.
+ *    Return DF_OK, DF_EINVAL (bad field, message names it), DF_ELIMIT (count over a limit) or
+ *    DF_ENOMEM; `out` is unchanged on error. Wrap the payload in a frame with df_frame_begin /
+ *    df_frame_end (proto/frame_codec.h).
+ *  - Decoders `df_msg_X_decode(const uint8_t *p, size_t n, df_msg_X *m, df_error *err)` parse a
+ *    whole payload of `n` bytes. They check every length, count against the bytes present, enum
+ *    range, index range, NaN/Inf, and reject trailing bytes. Return DF_OK or
+ *    DF_EPROTO_TRUNCATED / DF_EPROTO_TRAILING / DF_EINVAL / DF_ELIMIT / DF_ENOMEM, with `*m`
+ *    untouched on error (nothing to free).
+ *  - Decoded arrays and strings: strings up to DF_MAX_NAME_LEN are copied into fixed char arrays
+ *    (NUL-terminated). Everything else declared as a non-const pointer (`float *xyz`, `char
+ *    *path`, ...) is malloc'd by the decoder and released by that message's df_msg_X_free (which
+ *    also accepts a zeroed struct). Fields declared `const uint8_t *` (raw byte blobs: mesh file
+ *    bytes, auth token, ping data) POINT INTO THE PAYLOAD `p` and are valid only while it is.
+ *  - On the encode side every pointer field is only read; NULL is fine when its count is 0.
+ *  - Vertex indices are int32_t in memory (as in core/mesh/mesh.h) and u32 on the wire, always
+ *    < DF_MAX_MESH_VERTICES (so < 2^31). Wire floats: IEEE-754 little-endian; positions and
+ *    displacements float32, parameters float64.
+ */
+#ifndef DF_PROTO_MESSAGES_H
+#define DF_PROTO_MESSAGES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "proto/buf.h"
+#include "proto/frame.h"
+#include "proto/frame_codec.h"
+#include "proto/wire_error.h"
+
+/* ---------------------------------------------------------------- limits (reported in hello) */
+#define DF_MAX_MESH_VERTICES (8u << 20)       /* 8,388,608 vertices per mesh */
+#define DF_MAX_MESH_ELEMENTS (32u << 20)      /* 33,554,432 elements per mesh */
+#define DF_MAX_MESH_BYTES (1ull << 30)        /* 1 GiB: largest inline mesh upload (all chunks) */
+#define DF_MAX_PENDING_REQUESTS 64u           /* unanswered requests per client; more -> EBUSY */
+#define DF_MAX_SESSIONS 1024u                 /* sessions per daemon (and per list reply) */
+#define DF_MAX_NAME_LEN 255u                  /* bytes of a session / client / server name */
+#define DF_MAX_PATH_LEN 4095u                 /* bytes of a server-side path */
+#define DF_MAX_ERROR_MSG_LEN (DF_ERROR_MSG_MAX - 1) /* 255 bytes of error message on the wire */
+#define DF_MAX_AUTH_TOKEN 4096u               /* bytes of an auth token */
+#define DF_MAX_PING_BYTES 65536u              /* bytes echoed by ping */
+#define DF_MAX_PINNED_POINTS 1024u            /* pinned points of one brush stroke */
+#define DF_MAX_BRUSH_STEPS 1000u              /* integrator steps of one brush update */
+#define DF_MAX_FALLOFF 3u                     /* falloff order: 1 single, 2 bi, 3 tri-scale */
+#define DF_MAX_HANDLES (1u << 20)             /* handle vertices of one handle set */
+#define DF_MAX_AFFINE_SETS 64u                /* affine constraint sets of one handle set */
+#define DF_MAX_MOVE_ITERS 1000000u            /* ADMM iteration budget of one move */
+#define DF_MAX_STATS_ENTRIES 1024u            /* key/value pairs in one stats reply */
+#define DF_MAX_STATS_KEY_LEN 63u              /* bytes of a stats key */
+#define DF_STREAM_CHUNK_BYTES (16u << 20)     /* recommended payload bound of a stream chunk */
+
+/* -------------------------------------------------------------------------- message types
+ * Requests are sent by clients (flags 0, or DF_FLAG_MORE on all but the last chunk of a load).
+ * The reply reuses the request's type with DF_FLAG_REPLY (| DF_FLAG_ERROR with an error body).
+ * Events are sent by the server with DF_FLAG_EVENT. Request body / reply body per type: */
+typedef enum df_msg_type {
+    DF_MSG_HELLO = 0x0001,          /* df_msg_hello            -> df_msg_hello_reply */
+    DF_MSG_AUTH = 0x0002,           /* df_msg_auth             -> empty (or error EUNSUPPORTED) */
+    DF_MSG_PING = 0x0003,           /* df_msg_ping             -> df_msg_ping (same bytes) */
+    DF_MSG_LOAD_MESH = 0x0010,      /* df_msg_load_mesh chunks -> df_msg_session_info */
+    DF_MSG_LIST_SESSIONS = 0x0011,  /* empty                   -> df_msg_session_list */
+    DF_MSG_OPEN_SESSION = 0x0012,   /* df_msg_session_ref      -> df_msg_session_info */
+    DF_MSG_CLOSE_SESSION = 0x0013,  /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_SUBSCRIBE = 0x0014,      /* df_msg_subscribe        -> df_msg_session_info */
+    DF_MSG_UNSUBSCRIBE = 0x0015,    /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_BRUSH_BEGIN = 0x0020,    /* df_msg_brush            -> df_msg_ack */
+    DF_MSG_BRUSH_UPDATE = 0x0021,   /* df_msg_brush_update     -> df_msg_ack */
+    DF_MSG_BRUSH_END = 0x0022,      /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_BRUSH_CANCEL = 0x0023,   /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_SET_BRUSH_PARAM = 0x0024,/* df_msg_brush_param      -> df_msg_ack */
+    DF_MSG_HANDLES_SET = 0x0030,    /* df_msg_handles          -> df_msg_ack */
+    DF_MSG_HANDLES_MOVE = 0x0031,   /* df_msg_handle_move      -> df_msg_move_result (at the end) */
+    DF_MSG_RESET_REST = 0x0032,     /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_UNDO = 0x0033,           /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_REDO = 0x0034,           /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_GET_MESH = 0x0040,       /* df_msg_get_mesh         -> df_msg_mesh_chunk chunks */
+    DF_MSG_SNAPSHOT = 0x0041,       /* df_msg_snapshot_req     -> df_msg_disp chunks (dense) */
+    DF_MSG_STATS = 0x0042,          /* df_msg_stats_req        -> df_msg_stats */
+    DF_MSG_DISPLACEMENT = 0x0080,   /* event: df_msg_disp chunks (one session version) */
+    DF_MSG_PROGRESS = 0x0081,       /* event: df_msg_progress chunks (one iterate = one version) */
+    DF_MSG_SESSION_CLOSED = 0x0082, /* event: df_msg_session_ref (session destroyed) */
+    DF_MSG_ERROR = 0x00FF           /* error body not tied to a request type (framing errors) */
+} df_msg_type;
+
+/* 1 if `type` is one of the values above, else 0. */
+int df_msg_type_valid(uint16_t type);
+
+/* Stable lower-case name ("brush_begin"), "unknown" for anything else. */
+const char *df_msg_type_name(uint16_t type);
+
+/* ------------------------------------------------------------------------------ enums */
+typedef enum df_feature {            /* hello reply `features` bits */
+    DF_FEAT_KELVINLET = 1u << 0,     /* brush messages supported */
+    DF_FEAT_ADMM = 1u << 1,          /* handle set / move supported */
+    DF_FEAT_PATH_LOAD = 1u << 2,     /* load mesh from a server-side path allowed by config */
+    DF_FEAT_AUTH = 1u << 3,          /* auth is implemented (and may be required) */
+    DF_FEAT_SPARSE_STREAM = 1u << 4, /* server sends sparse displacement frames */
+    DF_FEAT_TCP = 1u << 5,           /* the daemon also listens on TCP */
+    DF_FEAT_HID = 1u << 6            /* the daemon drives HID knob devices */
+} df_feature;
+#define DF_FEAT_ALL 0x7Fu
+
+typedef enum df_mesh_format {  /* load mesh: format of the inline bytes / file */
+    DF_FMT_AUTO = 0,           /* sniff content (inline) or extension (path) */
+    DF_FMT_OBJ = 1,
+    DF_FMT_OFF = 2,
+    DF_FMT_PLY = 3,
+    DF_FMT_MEDIT = 4,          /* .mesh */
+    DF_FMT_TETGEN = 5          /* .node + .ele: inline data is node bytes then ele bytes */
+} df_mesh_format;
+#define DF_FMT_MAX 5
+
+typedef enum df_load_source {
+    DF_LOAD_INLINE = 0,        /* file bytes are in the message(s) */
+    DF_LOAD_PATH = 1           /* server reads `path` (only with DF_FEAT_PATH_LOAD) */
+} df_load_source;
+
+typedef enum df_brush_type {
+    DF_BRUSH_GRAB = 1,         /* uses move[] (tip displacement) */
+    DF_BRUSH_TWIST = 2,        /* uses twist[] (rotation vector: centre vorticity) */
+    DF_BRUSH_SCALE = 3,        /* uses scale (centre dilation) */
+    DF_BRUSH_PINCH = 4,        /* uses matrix[] (symmetric, traceless centre gradient) */
+    DF_BRUSH_AFFINE = 5        /* uses matrix[] (general centre gradient) */
+} df_brush_type;
+#define DF_BRUSH_TYPE_MAX 5
+
+typedef enum df_integrator {
+    DF_INTEG_EULER = 1,        /* forward Euler along the displacement field */
+    DF_INTEG_RK4 = 2           /* classic 4th-order Runge-Kutta */
+} df_integrator;
+
+typedef enum df_brush_param_id { /* set brush parameter */
+    DF_BP_RADIUS = 1,          /* value > 0, finite, mesh units */
+    DF_BP_NU = 2,              /* Poisson ratio, not NaN; +-inf allowed */
+    DF_BP_STRENGTH = 3,        /* multiplier on the load, finite */
+    DF_BP_FALLOFF = 4,         /* integer 1..DF_MAX_FALLOFF */
+    DF_BP_RATIO = 5            /* multi-scale radius ratio, finite, > 1 */
+} df_brush_param_id;
+#define DF_BP_MAX 5
+
+typedef enum df_energy {         /* handle set elastic energy */
+    DF_ENERGY_ARAP = 1,
+    DF_ENERGY_ACAP = 2,
+    DF_ENERGY_NEOHOOKEAN = 3,
+    DF_ENERGY_CLOTH = 4,
+    DF_ENERGY_POLYLINE = 5
+} df_energy;
+#define DF_ENERGY_MAX 5
+
+typedef enum df_change_kind {    /* what produced a session version (displacement stream) */
+    DF_CHANGE_BRUSH = 1,         /* a brush begin/update of a stroke */
+    DF_CHANGE_BRUSH_CANCEL = 2,  /* a stroke cancelled: back to its start */
+    DF_CHANGE_HANDLE_MOVE = 3,   /* an ADMM iterate (progress events) */
+    DF_CHANGE_UNDO = 4,
+    DF_CHANGE_REDO = 5,
+    DF_CHANGE_RESET_REST = 6,    /* rest shape := current positions; positions unchanged */
+    DF_CHANGE_SNAPSHOT = 7       /* full resync (snapshot reply / subscribe snapshot) */
+} df_change_kind;
+#define DF_CHANGE_MAX 7
+
+typedef enum df_disp_encoding {
+    DF_DISP_DENSE = 1,           /* rows are vertices offset .. offset+count-1: f32 x,y,z each */
+    DF_DISP_SPARSE = 2           /* rows are (u32 vertex index, f32 x,y,z) */
+} df_disp_encoding;
+
+typedef enum df_move_status {
+    DF_MOVE_RUNNING = 0,         /* more iterates follow */
+    DF_MOVE_CONVERGED = 1,       /* residual <= tol */
+    DF_MOVE_BUDGET = 2,          /* stopped by max_iters or max_ms */
+    DF_MOVE_SUPERSEDED = 3,      /* a newer move on the same session replaced it */
+    DF_MOVE_FAILED = 4           /* solver error (see stats / log) */
+} df_move_status;
+#define DF_MOVE_STATUS_MAX 4
+
+typedef enum df_mesh_section {   /* get mesh reply chunk contents */
+    DF_SECTION_POSITIONS = 1,    /* current positions, nv rows of f32 x,y,z */
+    DF_SECTION_BASE = 2,         /* base (load-time) positions: the stream's reference, nv rows */
+    DF_SECTION_REST = 3,         /* current rest shape, nv rows of f32 x,y,z */
+    DF_SECTION_ELEMENTS = 4,     /* ne rows of elem_size u32 indices */
+    DF_SECTION_FACES = 5         /* nf rows of 3 u32 indices (tet boundary), may be absent */
+} df_mesh_section;
+#define DF_SECTION_MAX 5
+
+enum { DF_GET_MESH_REST = 1u << 0, DF_GET_MESH_BASE = 1u << 1 };  /* df_msg_get_mesh.flags */
+enum { DF_SUBSCRIBE_SNAPSHOT = 1u << 0 };                          /* df_msg_subscribe.flags */
+
+/* ------------------------------------------------------------------------------ bodies */
+
+typedef struct df_msg_hello {          /* client -> server, first message on a connection */
+    uint16_t min_version;              /* oldest protocol version the client speaks, >= 1 */
+    uint16_t max_version;              /* newest, >= min_version */
+    uint32_t features;                 /* DF_FEAT_* bits the client can use (informative) */
+    char client_name[DF_MAX_NAME_LEN + 1]; /* UTF-8, may be "" */
+} df_msg_hello;
+
+typedef struct df_msg_hello_reply {
+    uint16_t version;                  /* chosen version: max common version */
+    uint16_t server_max_version;       /* newest version the server speaks */
+    uint32_t features;                 /* DF_FEAT_* bits of this server */
+    uint32_t max_frame_payload;        /* effective limits of this server (<= the constants) */
+    uint32_t max_mesh_vertices;
+    uint32_t max_mesh_elements;
+    uint32_t max_pending_requests;
+    uint32_t max_sessions;
+    uint64_t max_mesh_bytes;
+    uint64_t max_client_queue_bytes;   /* output queue bound; a client beyond it is dropped */
+    uint8_t auth_required;             /* 1: requests other than hello/auth/ping get EPROTO_AUTH */
+    char server_name[DF_MAX_NAME_LEN + 1]; /* e.g. "deformd 0.1" */
+} df_msg_hello_reply;
+
+typedef struct df_msg_auth {           /* placeholder: answered EUNSUPPORTED until implemented */
+    uint16_t method;                   /* 0 .. 0xFFFF, meaning defined by the auth issue */
+    uint32_t token_len;                /* <= DF_MAX_AUTH_TOKEN */
+    const uint8_t *token;              /* points into the payload (decode) */
+} df_msg_auth;
+
+typedef struct df_msg_ping {
+    uint32_t len;                      /* <= DF_MAX_PING_BYTES */
+    const uint8_t *data;               /* points into the payload (decode) */
+} df_msg_ping;
+
+typedef struct df_msg_load_mesh {      /* one chunk of a mesh upload (or a path request) */
+    uint8_t source;                    /* df_load_source */
+    uint8_t format;                    /* df_mesh_format */
+    char name[DF_MAX_NAME_LEN + 1];    /* session name, may be "" (server picks one) */
+    char *path;                        /* PATH: NUL-terminated, 1..DF_MAX_PATH_LEN bytes; INLINE: NULL */
+    uint64_t total_size;               /* INLINE: bytes of the whole upload, 1..DF_MAX_MESH_BYTES; PATH: 0 */
+    uint64_t part2_offset;             /* TETGEN inline: byte where the .ele file starts
+                                        * (0 < part2_offset < total_size); otherwise 0 */
+    uint64_t offset;                   /* byte offset of this chunk in the upload; PATH: 0 */
+    uint32_t data_len;                 /* bytes in this chunk; offset + data_len <= total_size */
+    const uint8_t *data;               /* points into the payload (decode) */
+} df_msg_load_mesh;
+
+typedef struct df_msg_session_ref {    /* any request/event that names just a session */
+    uint64_t session_id;               /* != 0 */
+} df_msg_session_ref;
+
+typedef struct df_msg_open_session {   /* open: by id, or by name when session_id == 0 */
+    uint64_t session_id;
+    char name[DF_MAX_NAME_LEN + 1];    /* used only when session_id == 0; then non-empty */
+} df_msg_open_session;
+
+typedef struct df_msg_subscribe {
+    uint64_t session_id;               /* != 0 */
+    uint32_t flags;                    /* DF_SUBSCRIBE_SNAPSHOT: send a dense snapshot first */
+} df_msg_subscribe;
+
+typedef struct df_msg_session_info {
+    uint64_t session_id;               /* != 0 */
+    uint64_t version;                  /* current version (0 right after load) */
+    uint8_t kind;                      /* df_mesh_kind: 1 polyline, 2 triangle, 3 tet */
+    uint8_t planar;                    /* 0/1 */
+    uint16_t subscribers;              /* current subscriber count */
+    uint32_t nv;                       /* vertices, 1..DF_MAX_MESH_VERTICES */
+    uint32_t ne;                       /* elements, 0..DF_MAX_MESH_ELEMENTS */
+    uint32_t undo_depth;               /* changes that undo can revert */
+    uint32_t redo_depth;               /* changes that redo can re-apply */
+    char name[DF_MAX_NAME_LEN + 1];
+} df_msg_session_info;
+
+typedef struct df_msg_session_list {
+    uint32_t count;                    /* 0..DF_MAX_SESSIONS */
+    df_msg_session_info *items;        /* count entries, malloc'd on decode */
+} df_msg_session_list;
+
+typedef struct df_msg_ack {            /* generic reply to a session change */
+    uint64_t session_id;
+    uint64_t version;                  /* session version after the request was applied */
+} df_msg_ack;
+
+typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet parameter */
+    uint64_t session_id;               /* != 0 */
+    uint8_t type;                      /* df_brush_type */
+    uint8_t dim;                       /* 2 (planar Kelvinlet, z untouched) or 3 */
+    uint8_t falloff;                   /* multi-scale order 1..DF_MAX_FALLOFF */
+    uint8_t integrator;                /* df_integrator, used when moving != 0 or steps > 1 */
+    uint16_t steps;                    /* integration steps per update, 1..DF_MAX_BRUSH_STEPS */
+    uint8_t moving;                    /* 0: centre stays at `center`; 1: centre follows the load */
+    uint8_t has_mirror;                /* 0/1: also apply the brush mirrored across the plane */
+    double radius;                     /* regularization radius eps, > 0, mesh units */
+    double ratio;                      /* multi-scale radius ratio, > 1 (ignored if falloff 1) */
+    double nu;                         /* Poisson ratio, not NaN, +-inf allowed (plain falloff) */
+    double strength;                   /* load multiplier, finite (1 = as given) */
+    double center[3];                  /* brush centre x0, finite */
+    double move[3];                    /* GRAB: tip displacement at the centre, finite */
+    double twist[3];                   /* TWIST: rotation vector (radians about its axis) */
+    double scale;                      /* SCALE: centre dilation s, finite */
+    double matrix[9];                  /* PINCH/AFFINE: centre gradient, row-major 3x3 */
+    double mirror_point[3];            /* plane point, finite (when has_mirror) */
+    double mirror_normal[3];           /* plane normal, finite, non-zero (when has_mirror) */
+    uint32_t n_pinned;                 /* 0..DF_MAX_PINNED_POINTS */
+    double *pinned;                    /* n_pinned x 3 positions held at zero displacement,
+                                        * malloc'd on decode */
+} df_msg_brush;
+
+typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */
+    uint64_t session_id;               /* != 0 */
+    double move[3];                    /* same meaning and units as in df_msg_brush, finite */
+    double twist[3];
+    double scale;
+    double matrix[9];
+} df_msg_brush_update;
+
+typedef struct df_msg_brush_param {    /* HID knobs: change one parameter of this client's brush */
+    uint64_t session_id;               /* != 0 */
+    uint8_t param;                     /* df_brush_param_id */
+    double value;                      /* range per df_brush_param_id */
+} df_msg_brush_param;
+
+typedef struct df_msg_affine_set {     /* A V_t = b for every vertex t of the set (paper eq. 2c) */
+    uint8_t rows;                      /* 1..3 constraint rows */
+    double A[9];                       /* rows x 3, row-major; unused rows 0 */
+    double b[3];                       /* rows entries; unused 0 */
+    uint32_t n_indices;                /* 1..DF_MAX_HANDLES */
+    int32_t *indices;                  /* vertex indices, malloc'd on decode */
+} df_msg_affine_set;
+
+typedef struct df_msg_handles {        /* define the session's handle set (replaces any previous) */
+    uint64_t session_id;               /* != 0 */
+    uint8_t energy;                    /* df_energy */
+    double w;                          /* SC-L1 locality weight, finite, >= 0 */
+    double s;                          /* SC-L1 threshold, finite, > 0, mesh units */
+    double rho;                        /* ADMM penalty, finite, > 0 */
+    double tol;                        /* residual tolerance, finite, >= 0 */
+    uint32_t max_iters;                /* default budget, 1..DF_MAX_MOVE_ITERS */
+    uint32_t n_handles;                /* 1..DF_MAX_HANDLES */
+    int32_t *handles;                  /* handle vertex indices, malloc'd on decode */
+    uint32_t n_affine;                 /* 0..DF_MAX_AFFINE_SETS */
+    df_msg_affine_set *affine;         /* malloc'd on decode */
+} df_msg_handles;
+
+typedef struct df_msg_handle_move {    /* move the handles; supersedes a running move */
+    uint64_t session_id;               /* != 0 */
+    uint32_t max_iters;                /* 0: the handle set's max_iters; else 1..DF_MAX_MOVE_ITERS */
+    uint32_t max_ms;                   /* wall-clock budget in ms, 0 = none */
+    uint32_t progress_every;           /* progress event every N iterations, 0 = final only */
+    uint32_t n_targets;                /* must equal the handle set's n_handles (server checks) */
+    double *targets;                   /* n_targets x 3 target positions, finite, malloc'd on decode */
+} df_msg_handle_move;
+
+typedef struct df_msg_move_result {    /* final reply of a handle move */
+    uint64_t session_id;
+    uint64_t version;                  /* version of the last iterate published */
+    uint8_t status;                    /* df_move_status (not RUNNING) */
+    uint32_t iterations;               /* ADMM iterations run */
+    double objective;                  /* final energy, finite */
+    double residual;                   /* |E_k - E_k-1| / (E_k + 1), finite, >= 0 */
+    double elapsed_ms;                 /* solve wall time, finite, >= 0 */
+} df_msg_move_result;
+
+typedef struct df_msg_get_mesh {
+    uint64_t session_id;               /* != 0 */
+    uint32_t flags;                    /* DF_GET_MESH_REST / DF_GET_MESH_BASE: extra sections */
+} df_msg_get_mesh;
+
+typedef struct df_msg_mesh_chunk {     /* one chunk of a get-mesh reply */
+    uint64_t session_id;
+    uint64_t version;                  /* version the positions belong to */
+    uint8_t kind;                      /* df_mesh_kind 1..3 */
+    uint8_t planar;                    /* 0/1 */
+    uint8_t section;                   /* df_mesh_section */
+    uint32_t nv, ne, nf;               /* mesh counts (same in every chunk) */
+    uint32_t offset;                   /* first row of the section in this chunk */
+    uint32_t count;                    /* rows in this chunk; offset + count <= section rows */
+    float *xyz;                        /* POSITIONS/BASE/REST: count x 3, malloc'd on decode */
+    int32_t *idx;                      /* ELEMENTS: count x elem_size; FACES: count x 3; each
+                                        * index < nv; malloc'd on decode */
+} df_msg_mesh_chunk;
+
+typedef struct df_msg_snapshot_req {
+    uint64_t session_id;               /* != 0 */
+    uint64_t version;                  /* 0: current; else a retained version (ENOTFOUND if not) */
+} df_msg_snapshot_req;
+
+/* One chunk of one session version. Values are float32 displacements u_i = x_i - X_i from the
+ * session's BASE positions X (load-time, never change); a client computes x_i = X_i + u_i in
+ * float32. A frame lists every vertex whose u changed since base_version (dense: all of them). */
+typedef struct df_msg_disp {
+    uint64_t session_id;               /* != 0 */
+    uint64_t version;                  /* the version this change produces, > base_version */
+    uint64_t base_version;             /* version the change applies to (SNAPSHOT: 0) */
+    uint8_t kind;                      /* df_change_kind */
+    uint8_t encoding;                  /* df_disp_encoding */
+    uint32_t nv;                       /* mesh vertex count, 1..DF_MAX_MESH_VERTICES */
+    uint32_t total;                    /* rows of the whole (unchunked) message: DENSE == nv,
+                                        * SPARSE <= nv */
+    uint32_t offset;                   /* first row of this chunk, offset + count <= total */
+    uint32_t count;                    /* rows in this chunk */
+    int32_t *idx;                      /* SPARSE: count vertex indices (< nv, strictly
+                                        * increasing within a chunk); DENSE: NULL. malloc'd */
+    float *xyz;                        /* count x 3 displacements, finite, malloc'd on decode */
+} df_msg_disp;
+
+typedef struct df_msg_progress {       /* one ADMM iterate of a handle move (a session version) */
+    uint8_t status;                    /* df_move_status; != RUNNING on the final frame */
+    uint8_t final;                     /* 1 on the last iterate of this move */
+    uint32_t iteration;                /* 1-based iteration count */
+    double objective;                  /* finite */
+    double residual;                   /* finite, >= 0 */
+    double elapsed_ms;                 /* finite, >= 0 */
+    df_msg_disp disp;                  /* the iterate (kind DF_CHANGE_HANDLE_MOVE) */
+} df_msg_progress;
+
+typedef struct df_msg_stats_req {
+    uint64_t session_id;               /* 0: daemon-wide stats; else that session's */
+} df_msg_stats_req;
+
+typedef struct df_msg_stat {
+    char key[DF_MAX_STATS_KEY_LEN + 1];/* non-empty [a-z0-9_.] e.g. "cache.kelvinlet_lu.hits" */
+    double value;                      /* finite */
+} df_msg_stat;
+
+typedef struct df_msg_stats {
+    uint32_t count;                    /* 0..DF_MAX_STATS_ENTRIES */
+    df_msg_stat *items;                /* malloc'd on decode */
+} df_msg_stats;
+
+/* ------------------------------------------------------------------------------ functions */
+#define DF_MSG_CODEC(T)                                                                \
+    int df_msg_##T##_encode(const df_msg_##T *m, df_buf *out, df_error *err);          \
+    int df_msg_##T##_decode(const uint8_t *p, size_t n, df_msg_##T *m, df_error *err);
+
+DF_MSG_CODEC(hello)
+DF_MSG_CODEC(hello_reply)
+DF_MSG_CODEC(auth)
+DF_MSG_CODEC(ping)
+DF_MSG_CODEC(load_mesh)
+DF_MSG_CODEC(session_ref)
+DF_MSG_CODEC(open_session)
+DF_MSG_CODEC(subscribe)
+DF_MSG_CODEC(session_info)
+DF_MSG_CODEC(session_list)
+DF_MSG_CODEC(ack)
+DF_MSG_CODEC(brush)
+DF_MSG_CODEC(brush_update)
+DF_MSG_CODEC(brush_param)
+DF_MSG_CODEC(handles)
+DF_MSG_CODEC(handle_move)
+DF_MSG_CODEC(move_result)
+DF_MSG_CODEC(get_mesh)
+DF_MSG_CODEC(mesh_chunk)
+DF_MSG_CODEC(snapshot_req)
+DF_MSG_CODEC(disp)
+DF_MSG_CODEC(progress)
+DF_MSG_CODEC(stats_req)
+DF_MSG_CODEC(stats)
+#undef DF_MSG_CODEC
+
+/* Frees what the decoder allocated and zeroes the pointer/count fields; NULL-safe. */
+void df_msg_load_mesh_free(df_msg_load_mesh *m);
+void df_msg_session_list_free(df_msg_session_list *m);
+void df_msg_brush_free(df_msg_brush *m);
+void df_msg_handles_free(df_msg_handles *m);
+void df_msg_handle_move_free(df_msg_handle_move *m);
+void df_msg_mesh_chunk_free(df_msg_mesh_chunk *m);
+void df_msg_disp_free(df_msg_disp *m);
+void df_msg_progress_free(df_msg_progress *m);
+void df_msg_stats_free(df_msg_stats *m);
+
+/* Empty bodies (list sessions request, auth success reply): DF_OK for n == 0, else
+ * DF_EPROTO_TRAILING. */
+int df_msg_empty_decode(const uint8_t *p, size_t n, df_error *err);
+
+/* Error body: i32 code (a valid wire code), u16 length, message bytes (<= DF_MAX_ERROR_MSG_LEN,
+ * no NUL). Encode writes e->code and e->msg (truncated to the limit); decode fills `*out`. */
+int df_msg_error_encode(const df_error *e, df_buf *out, df_error *err);
+int df_msg_error_decode(const uint8_t *p, size_t n, df_error *out, df_error *err);
+
+/* Convenience for servers: appends a whole error frame (type = request type, or DF_MSG_ERROR;
+ * flags REPLY|ERROR, or just ERROR when request_id == 0 and type == DF_MSG_ERROR) carrying
+ * `code` and the printf-style message. DF_OK or DF_ENOMEM. */
+int df_msg_error_frame(df_buf *out, uint16_t type, uint64_t request_id, int code,
+                       df_error *err, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
+
+/* Stream helpers.
+ * df_msg_disp_row_bytes: wire bytes per row (12 dense, 16 sparse; 0 for a bad encoding).
+ * df_msg_disp_rows_per_chunk: rows that fit in a payload of `max_payload` bytes (>= 1).
+ * df_msg_disp_choose: DF_DISP_SPARSE when `changed` rows are cheaper sparse than all `nv`
+ * dense, else DF_DISP_DENSE. */
+size_t df_msg_disp_row_bytes(uint8_t encoding);
+uint32_t df_msg_disp_rows_per_chunk(uint8_t encoding, size_t max_payload);
+uint8_t df_msg_disp_choose(uint32_t changed, uint32_t nv);
+
+/* Generic decode for tools, fuzzers and logging: decodes the body selected by (type, flags)
+ * as listed on df_msg_type. `which` tells the caller which member of the union is valid. */
+typedef enum df_body_kind {
+    DF_BODY_EMPTY = 0, DF_BODY_ERROR, DF_BODY_HELLO, DF_BODY_HELLO_REPLY, DF_BODY_AUTH,
+    DF_BODY_PING, DF_BODY_LOAD_MESH, DF_BODY_SESSION_REF, DF_BODY_OPEN_SESSION,
+    DF_BODY_SUBSCRIBE, DF_BODY_SESSION_INFO, DF_BODY_SESSION_LIST, DF_BODY_ACK, DF_BODY_BRUSH,
+    DF_BODY_BRUSH_UPDATE, DF_BODY_BRUSH_PARAM, DF_BODY_HANDLES, DF_BODY_HANDLE_MOVE,
+    DF_BODY_MOVE_RESULT, DF_BODY_GET_MESH, DF_BODY_MESH_CHUNK, DF_BODY_SNAPSHOT_REQ,
+    DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS
+} df_body_kind;
+
+typedef struct df_msg_any {
+    df_body_kind which;
+    union {
+        df_error error;
+        df_msg_hello hello;
+        df_msg_hello_reply hello_reply;
+        df_msg_auth auth;
+        df_msg_ping ping;
+        df_msg_load_mesh load_mesh;
+        df_msg_session_ref session_ref;
+        df_msg_open_session open_session;
+        df_msg_subscribe subscribe;
+        df_msg_session_info session_info;
+        df_msg_session_list session_list;
+        df_msg_ack ack;
+        df_msg_brush brush;
+        df_msg_brush_update brush_update;
+        df_msg_brush_param brush_param;
+        df_msg_handles handles;
+        df_msg_handle_move handle_move;
+        df_msg_move_result move_result;
+        df_msg_get_mesh get_mesh;
+        df_msg_mesh_chunk mesh_chunk;
+        df_msg_snapshot_req snapshot_req;
+        df_msg_disp disp;
+        df_msg_progress progress;
+        df_msg_stats_req stats_req;
+        df_msg_stats stats;
+    } u;
+} df_msg_any;
+
+/* Body kind of (type, flags): DF_FLAG_ERROR -> DF_BODY_ERROR; DF_FLAG_REPLY -> the reply body;
+ * DF_FLAG_EVENT -> the event body; none -> the request body. DF_EPROTO_BADTYPE when the
+ * combination is not defined (e.g. a request of type DF_MSG_DISPLACEMENT). */
+int df_msg_body_kind(uint16_t type, uint16_t flags, df_body_kind *out, df_error *err);
+
+/* Decodes payload `p` of `n` bytes for (type, flags) into `*m` (see df_msg_body_kind).
+ * Release with df_msg_any_free. */
+int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n, df_msg_any *m,
+                      df_error *err);
+void df_msg_any_free(df_msg_any *m);
+
+#endif

@@ -1,0 +1,77 @@
+/* msg_any.c — generic decode of any body selected by (type, flags) (messages.h). */
+#include <string.h>
+
+#include "proto/messages.h"
+
+int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n, df_msg_any *m,
+                      df_error *err)
+{
+    df_body_kind k;
+    int rc = df_msg_body_kind(type, flags, &k, err);
+    if (rc)
+        return rc;
+    df_msg_any t;
+    memset(&t, 0, sizeof t);
+    t.which = k;
+    switch (k) {
+    case DF_BODY_EMPTY: rc = df_msg_empty_decode(p, n, err); break;
+    case DF_BODY_ERROR: rc = df_msg_error_decode(p, n, &t.u.error, err); break;
+    case DF_BODY_HELLO: rc = df_msg_hello_decode(p, n, &t.u.hello, err); break;
+    case DF_BODY_HELLO_REPLY: rc = df_msg_hello_reply_decode(p, n, &t.u.hello_reply, err); break;
+    case DF_BODY_AUTH: rc = df_msg_auth_decode(p, n, &t.u.auth, err); break;
+    case DF_BODY_PING: rc = df_msg_ping_decode(p, n, &t.u.ping, err); break;
+    case DF_BODY_LOAD_MESH: rc = df_msg_load_mesh_decode(p, n, &t.u.load_mesh, err); break;
+    case DF_BODY_SESSION_REF: rc = df_msg_session_ref_decode(p, n, &t.u.session_ref, err); break;
+    case DF_BODY_OPEN_SESSION:
+        rc = df_msg_open_session_decode(p, n, &t.u.open_session, err);
+        break;
+    case DF_BODY_SUBSCRIBE: rc = df_msg_subscribe_decode(p, n, &t.u.subscribe, err); break;
+    case DF_BODY_SESSION_INFO:
+        rc = df_msg_session_info_decode(p, n, &t.u.session_info, err);
+        break;
+    case DF_BODY_SESSION_LIST:
+        rc = df_msg_session_list_decode(p, n, &t.u.session_list, err);
+        break;
+    case DF_BODY_ACK: rc = df_msg_ack_decode(p, n, &t.u.ack, err); break;
+    case DF_BODY_BRUSH: rc = df_msg_brush_decode(p, n, &t.u.brush, err); break;
+    case DF_BODY_BRUSH_UPDATE:
+        rc = df_msg_brush_update_decode(p, n, &t.u.brush_update, err);
+        break;
+    case DF_BODY_BRUSH_PARAM: rc = df_msg_brush_param_decode(p, n, &t.u.brush_param, err); break;
+    case DF_BODY_HANDLES: rc = df_msg_handles_decode(p, n, &t.u.handles, err); break;
+    case DF_BODY_HANDLE_MOVE: rc = df_msg_handle_move_decode(p, n, &t.u.handle_move, err); break;
+    case DF_BODY_MOVE_RESULT: rc = df_msg_move_result_decode(p, n, &t.u.move_result, err); break;
+    case DF_BODY_GET_MESH: rc = df_msg_get_mesh_decode(p, n, &t.u.get_mesh, err); break;
+    case DF_BODY_MESH_CHUNK: rc = df_msg_mesh_chunk_decode(p, n, &t.u.mesh_chunk, err); break;
+    case DF_BODY_SNAPSHOT_REQ:
+        rc = df_msg_snapshot_req_decode(p, n, &t.u.snapshot_req, err);
+        break;
+    case DF_BODY_DISP: rc = df_msg_disp_decode(p, n, &t.u.disp, err); break;
+    case DF_BODY_PROGRESS: rc = df_msg_progress_decode(p, n, &t.u.progress, err); break;
+    case DF_BODY_STATS_REQ: rc = df_msg_stats_req_decode(p, n, &t.u.stats_req, err); break;
+    case DF_BODY_STATS: rc = df_msg_stats_decode(p, n, &t.u.stats, err); break;
+    default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
+    }
+    if (rc)
+        return rc;
+    *m = t;
+    return DF_OK;
+}
+
+void df_msg_any_free(df_msg_any *m)
+{
+    if (!m)
+        return;
+    switch (m->which) {
+    case DF_BODY_LOAD_MESH: df_msg_load_mesh_free(&m->u.load_mesh); break;
+    case DF_BODY_SESSION_LIST: df_msg_session_list_free(&m->u.session_list); break;
+    case DF_BODY_BRUSH: df_msg_brush_free(&m->u.brush); break;
+    case DF_BODY_HANDLES: df_msg_handles_free(&m->u.handles); break;
+    case DF_BODY_HANDLE_MOVE: df_msg_handle_move_free(&m->u.handle_move); break;
+    case DF_BODY_MESH_CHUNK: df_msg_mesh_chunk_free(&m->u.mesh_chunk); break;
+    case DF_BODY_DISP: df_msg_disp_free(&m->u.disp); break;
+    case DF_BODY_PROGRESS: df_msg_progress_free(&m->u.progress); break;
+    case DF_BODY_STATS: df_msg_stats_free(&m->u.stats); break;
+    default: break;
+    }
+}

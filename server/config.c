@@ -1,0 +1,380 @@
+/* config.c — defaults, config file and command line of deformd (see config.h). */
+#include "server/config.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "server/log.h"
+
+void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
+{
+    memset(cfg, 0, sizeof *cfg);
+    if (xdg_runtime_dir && xdg_runtime_dir[0] &&
+        strlen(xdg_runtime_dir) + sizeof "/deformd.sock" <= DF_CONFIG_SOCKET_MAX)
+        snprintf(cfg->socket_path, sizeof cfg->socket_path, "%s/deformd.sock", xdg_runtime_dir);
+    else
+        snprintf(cfg->socket_path, sizeof cfg->socket_path, "/run/deformd/deformd.sock");
+    cfg->max_clients = DF_CONFIG_DEFAULT_MAX_CLIENTS;
+    cfg->output_queue_limit = DF_CONFIG_DEFAULT_QUEUE_LIMIT;
+    cfg->cache_memory_mb = DF_CONFIG_DEFAULT_CACHE_MB;
+    cfg->log_level = DF_LOG_INFO;
+    cfg->max_mesh_vertices = DF_CONFIG_DEFAULT_MAX_VERTICES;
+    cfg->max_sessions = DF_CONFIG_DEFAULT_MAX_SESSIONS;
+    cfg->threads = DF_CONFIG_DEFAULT_THREADS;
+}
+
+/* Parses a non-negative integer with an optional k/m/g (binary) suffix, <= max. */
+static int parse_size(const char *s, unsigned long long max, unsigned long long *out)
+{
+    if (!s || !isdigit((unsigned char)s[0])) return DF_EINVAL;
+    errno = 0;
+    char *end = NULL;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno) return DF_EINVAL;
+    unsigned shift = 0;
+    if (*end == 'k' || *end == 'K') shift = 10, end++;
+    else if (*end == 'm' || *end == 'M') shift = 20, end++;
+    else if (*end == 'g' || *end == 'G') shift = 30, end++;
+    if (*end == 'b' || *end == 'B') end++;
+    if (*end != '\0') return DF_EINVAL;
+    if (shift && v > (max >> shift)) return DF_EINVAL;
+    v <<= shift;
+    if (v > max) return DF_EINVAL;
+    *out = v;
+    return DF_OK;
+}
+
+static int set_tcp(df_server_config *cfg, const char *value, df_error *err)
+{
+    if (value[0] == '\0' || strcmp(value, "none") == 0 || strcmp(value, "off") == 0) {
+        cfg->tcp_host[0] = '\0';
+        cfg->tcp_port = 0;
+        return DF_OK;
+    }
+    const char *colon = strrchr(value, ':');
+    if (!colon || colon == value)
+        return df_error_set(err, DF_EINVAL, "tcp: expected HOST:PORT, got '%s'", value);
+    size_t hl = (size_t)(colon - value);
+    const char *h = value;
+    if (hl >= 2 && h[0] == '[' && h[hl - 1] == ']') h++, hl -= 2; /* [::1]:port */
+    if (hl == 0 || hl >= sizeof cfg->tcp_host)
+        return df_error_set(err, DF_EINVAL, "tcp: bad host in '%s'", value);
+    unsigned long long port;
+    if (parse_size(colon + 1, 65535, &port) != DF_OK || strpbrk(colon + 1, "kKmMgGbB"))
+        return df_error_set(err, DF_EINVAL, "tcp: bad port in '%s' (0..65535)", value);
+    memcpy(cfg->tcp_host, h, hl);
+    cfg->tcp_host[hl] = '\0';
+    cfg->tcp_port = (int)port;
+    return DF_OK;
+}
+
+static int add_allow(df_server_config *cfg, const char *value, df_error *err)
+{
+    char item[DF_CONFIG_PATH_MAX];
+    const char *p = value;
+    int n = cfg->n_allow;
+    char tmp[DF_CONFIG_MAX_ALLOW][DF_CONFIG_PATH_MAX];
+    while (*p) {
+        size_t l = strcspn(p, ":,");
+        while (l && isspace((unsigned char)*p)) p++, l--;
+        while (l && isspace((unsigned char)p[l - 1])) l--;
+        if (l) {
+            if (l >= sizeof item)
+                return df_error_set(err, DF_EINVAL, "allow_paths: entry too long");
+            memcpy(item, p, l);
+            item[l] = '\0';
+            if (item[0] != '/')
+                return df_error_set(err, DF_EINVAL, "allow_paths: '%s' is not absolute", item);
+            char *real = realpath(item, NULL);
+            const char *use = real ? real : item;
+            size_t ul = strlen(use);
+            while (ul > 1 && use[ul - 1] == '/') ul--;
+            if (n >= DF_CONFIG_MAX_ALLOW) {
+                free(real);
+                return df_error_set(err, DF_ELIMIT, "allow_paths: more than %d entries",
+                                    DF_CONFIG_MAX_ALLOW);
+            }
+            memcpy(tmp[n - cfg->n_allow], use, ul);
+            tmp[n - cfg->n_allow][ul] = '\0';
+            n++;
+            free(real);
+        }
+        p += strcspn(p, ":,");
+        if (*p) p++;
+    }
+    for (int i = cfg->n_allow; i < n; i++) strcpy(cfg->allow_paths[i], tmp[i - cfg->n_allow]);
+    cfg->n_allow = n;
+    return DF_OK;
+}
+
+int df_config_set(df_server_config *cfg, const char *key, const char *value, df_error *err)
+{
+    unsigned long long v;
+    if (!cfg || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    if (strcmp(key, "socket") == 0) {
+        if (strcmp(value, "none") == 0 || value[0] == '\0') {
+            cfg->socket_path[0] = '\0';
+            return DF_OK;
+        }
+        if (strlen(value) >= sizeof cfg->socket_path)
+            return df_error_set(err, DF_EINVAL, "socket: path longer than %d bytes",
+                                DF_CONFIG_SOCKET_MAX - 1);
+        strcpy(cfg->socket_path, value);
+        return DF_OK;
+    }
+    if (strcmp(key, "tcp") == 0) return set_tcp(cfg, value, err);
+    if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
+    if (strcmp(key, "log_level") == 0) {
+        int l;
+        if (df_log_parse_level(value, &l) != DF_OK)
+            return df_error_set(err, DF_EINVAL, "log_level: '%s' is not error|warn|info|debug",
+                                value);
+        cfg->log_level = l;
+        return DF_OK;
+    }
+    if (strcmp(key, "max_clients") == 0) {
+        if (parse_size(value, DF_CONFIG_MAX_CLIENTS_LIMIT, &v) || v < 1)
+            return df_error_set(err, DF_EINVAL, "max_clients: '%s' not in 1..%d", value,
+                                DF_CONFIG_MAX_CLIENTS_LIMIT);
+        cfg->max_clients = (int)v;
+        return DF_OK;
+    }
+    if (strcmp(key, "output_queue_limit") == 0) {
+        if (parse_size(value, (unsigned long long)1 << 40, &v) || v < 4096)
+            return df_error_set(err, DF_EINVAL, "output_queue_limit: '%s' not in 4096..1T",
+                                value);
+        cfg->output_queue_limit = (size_t)v;
+        return DF_OK;
+    }
+    if (strcmp(key, "cache_memory_mb") == 0) {
+        if (parse_size(value, (unsigned long long)1 << 30, &v))
+            return df_error_set(err, DF_EINVAL, "cache_memory_mb: '%s' is not a size", value);
+        cfg->cache_memory_mb = (size_t)v;
+        return DF_OK;
+    }
+    if (strcmp(key, "max_mesh_vertices") == 0) {
+        if (parse_size(value, INT32_MAX / 3, &v) || v < 1)
+            return df_error_set(err, DF_EINVAL, "max_mesh_vertices: '%s' not in 1..%d", value,
+                                INT32_MAX / 3);
+        cfg->max_mesh_vertices = (int32_t)v;
+        return DF_OK;
+    }
+    if (strcmp(key, "max_sessions") == 0) {
+        if (parse_size(value, 1u << 20, &v) || v < 1)
+            return df_error_set(err, DF_EINVAL, "max_sessions: '%s' not in 1..%u", value,
+                                1u << 20);
+        cfg->max_sessions = (int)v;
+        return DF_OK;
+    }
+    if (strcmp(key, "threads") == 0) {
+        if (parse_size(value, DF_CONFIG_MAX_THREADS, &v) || v < 1)
+            return df_error_set(err, DF_EINVAL, "threads: '%s' not in 1..%d", value,
+                                DF_CONFIG_MAX_THREADS);
+        cfg->threads = (int)v;
+        return DF_OK;
+    }
+    return df_error_set(err, DF_EINVAL, "unknown config key '%s'", key);
+}
+
+int df_config_parse(df_server_config *cfg, const char *text, size_t len, const char *name,
+                    df_error *err)
+{
+    if (!cfg || (!text && len)) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    if (!name) name = "config";
+    df_server_config *tmp = malloc(sizeof *tmp);
+    char *line = malloc(DF_CONFIG_LINE_MAX);
+    if (!tmp || !line) {
+        free(tmp);
+        free(line);
+        return df_error_set(err, DF_ENOMEM, "config: out of memory");
+    }
+    *tmp = *cfg;
+    int rc = DF_OK, lineno = 0;
+    size_t pos = 0;
+    while (pos < len && rc == DF_OK) {
+        size_t end = pos;
+        while (end < len && text[end] != '\n') end++;
+        lineno++;
+        size_t l = end - pos;
+        if (l >= DF_CONFIG_LINE_MAX) {
+            rc = df_error_set(err, DF_EFORMAT, "%s:%d: line longer than %d bytes", name, lineno,
+                              DF_CONFIG_LINE_MAX - 1);
+            break;
+        }
+        memcpy(line, text + pos, l);
+        line[l] = '\0';
+        pos = end + 1;
+        if (memchr(line, '\0', l)) {
+            rc = df_error_set(err, DF_EFORMAT, "%s:%d: NUL byte", name, lineno);
+            break;
+        }
+        char *hash = strchr(line, '#');
+        if (hash) *hash = '\0';
+        char *s = line;
+        while (isspace((unsigned char)*s)) s++;
+        char *e = s + strlen(s);
+        while (e > s && isspace((unsigned char)e[-1])) *--e = '\0';
+        if (*s == '\0') continue;
+        char *eq = strchr(s, '=');
+        if (!eq) {
+            rc = df_error_set(err, DF_EFORMAT, "%s:%d: expected 'key = value'", name, lineno);
+            break;
+        }
+        char *k = s, *ke = eq;
+        while (ke > k && isspace((unsigned char)ke[-1])) ke--;
+        *ke = '\0';
+        char *val = eq + 1;
+        while (isspace((unsigned char)*val)) val++;
+        if (*k == '\0') {
+            rc = df_error_set(err, DF_EFORMAT, "%s:%d: empty key", name, lineno);
+            break;
+        }
+        df_error e2;
+        rc = df_config_set(tmp, k, val, &e2);
+        if (rc != DF_OK) df_error_set(err, rc, "%s:%d: %s", name, lineno, e2.msg);
+    }
+    if (rc == DF_OK) *cfg = *tmp;
+    free(tmp);
+    free(line);
+    return rc;
+}
+
+int df_config_load(df_server_config *cfg, const char *path, df_error *err)
+{
+    if (!cfg || !path) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    FILE *f = fopen(path, "rb");
+    if (!f) return df_error_set(err, DF_EIO, "%s: %s", path, strerror(errno));
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    int rc = DF_OK;
+    while (buf) {
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (n < cap) break;
+        if (cap >= ((size_t)1 << 24)) {
+            rc = df_error_set(err, DF_ELIMIT, "%s: larger than 16 MiB", path);
+            break;
+        }
+        char *nb = realloc(buf, cap * 2);
+        if (!nb) {
+            free(buf);
+            buf = NULL;
+            break;
+        }
+        buf = nb;
+        cap *= 2;
+    }
+    int ioerr = ferror(f);
+    fclose(f);
+    if (!buf) return df_error_set(err, DF_ENOMEM, "%s: out of memory", path);
+    if (rc == DF_OK && ioerr) rc = df_error_set(err, DF_EIO, "%s: read error", path);
+    if (rc == DF_OK) {
+        rc = df_config_parse(cfg, buf, n, path, err);
+        if (rc == DF_OK) snprintf(cfg->config_path, sizeof cfg->config_path, "%s", path);
+    }
+    free(buf);
+    return rc;
+}
+
+static const char k_usage[] =
+    "usage: deformd [options]\n"
+    "Interactive mesh deformation daemon (regularized Kelvinlet brushes, SC-L1 handle moves).\n"
+    "\n"
+    "  --socket PATH       Unix socket to listen on (default $XDG_RUNTIME_DIR/deformd.sock,\n"
+    "                      else /run/deformd/deformd.sock); 'none' disables it\n"
+    "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port)\n"
+    "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
+    "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
+    "                      max_sessions, threads); command-line options override the file\n"
+    "  --foreground        do not daemonize (use under systemd and in tests)\n"
+    "  --log-level LEVEL   error | warn | info | debug (default info)\n"
+    "  -h, --help          print this help and exit\n"
+    "\n"
+    "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
+    "When ready it prints 'deformd: listening on ...' to stderr.\n";
+
+const char *df_config_usage(void) { return k_usage; }
+
+/* Matches "--opt VALUE" or "--opt=VALUE"; advances *i; *val set. 1 match, 0 no, -1 missing. */
+static int opt_value(int argc, char **argv, int *i, const char *opt, const char **val)
+{
+    const char *a = argv[*i];
+    size_t ol = strlen(opt);
+    if (strncmp(a, opt, ol) != 0) return 0;
+    if (a[ol] == '=') {
+        *val = a + ol + 1;
+        return 1;
+    }
+    if (a[ol] != '\0') return 0;
+    if (*i + 1 >= argc) return -1;
+    *val = argv[++*i];
+    return 1;
+}
+
+int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char *xdg_runtime_dir,
+                        df_cli_action *action, df_error *err)
+{
+    if (!cfg || !action || (argc > 0 && !argv))
+        return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    df_server_config *tmp = malloc(sizeof *tmp);
+    if (!tmp) return df_error_set(err, DF_ENOMEM, "config: out of memory");
+    df_config_defaults(tmp, xdg_runtime_dir);
+    *action = DF_CLI_RUN;
+    int rc = DF_OK;
+    /* Pass 1: --help and --config. */
+    for (int i = 1; i < argc && rc == DF_OK; i++) {
+        const char *v = NULL;
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            *action = DF_CLI_HELP;
+            free(tmp);
+            return DF_OK;
+        }
+        int m = opt_value(argc, argv, &i, "--config", &v);
+        if (m < 0) rc = df_error_set(err, DF_EINVAL, "--config needs a FILE");
+        else if (m > 0) rc = df_config_load(tmp, v, err);
+    }
+    /* Pass 2: everything else on top. */
+    for (int i = 1; i < argc && rc == DF_OK; i++) {
+        const char *v = NULL;
+        int m;
+        if ((m = opt_value(argc, argv, &i, "--config", &v)) != 0) continue;
+        if (strcmp(argv[i], "--foreground") == 0 || strcmp(argv[i], "-f") == 0) {
+            tmp->foreground = 1;
+            continue;
+        }
+        static const char *const map[][2] = {
+            {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"}};
+        int done = 0;
+        for (int k = 0; k < 3 && !done && rc == DF_OK; k++) {
+            m = opt_value(argc, argv, &i, map[k][0], &v);
+            if (m < 0) rc = df_error_set(err, DF_EINVAL, "%s needs a value", map[k][0]);
+            else if (m > 0) {
+                df_error e2;
+                rc = df_config_set(tmp, map[k][1], v, &e2);
+                if (rc != DF_OK) df_error_set(err, rc, "%s: %s", map[k][0], e2.msg);
+                done = 1;
+            }
+        }
+        if (!done && rc == DF_OK)
+            rc = df_error_set(err, DF_EINVAL, "unknown option '%s' (try --help)", argv[i]);
+    }
+    if (rc == DF_OK) *cfg = *tmp;
+    free(tmp);
+    return rc;
+}
+
+int df_config_path_allowed(const df_server_config *cfg, const char *path)
+{
+    if (!cfg || !path || path[0] != '/') return 0;
+    for (int i = 0; i < cfg->n_allow; i++) {
+        const char *a = cfg->allow_paths[i];
+        size_t l = strlen(a);
+        if (l == 1 && a[0] == '/') return 1;
+        if (strncmp(path, a, l) == 0 && path[l] == '/') return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,93 @@
+/* config.h — deformd settings: defaults, the `key = value` config file and the command line.
+ *
+ * Config file syntax: one `key = value` per line; `#` starts a comment; blank lines ignored.
+ * Keys (all optional):
+ *   socket             Unix socket path (default $XDG_RUNTIME_DIR/deformd.sock else
+ *                      /run/deformd/deformd.sock); "none" disables the Unix listener
+ *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it
+ *   allow_paths        directories whose files may be loaded by server-side path; a
+ *                      colon- or comma-separated list; repeated lines append
+ *   max_clients        simultaneous connections (1 .. DF_CONFIG_MAX_CLIENTS_LIMIT)
+ *   output_queue_limit bytes a client may have queued before it is dropped (suffix k/m/g ok)
+ *   cache_memory_mb    memory cap of cached factorizations across sessions, MiB (0 = no caching
+ *                      beyond the running job)
+ *   log_level          error | warn | info | debug
+ *   max_mesh_vertices  largest mesh accepted (vertices)
+ *   max_sessions       sessions alive at once
+ *   threads            worker threads of the compute pool (1 .. DF_CONFIG_MAX_THREADS)
+ * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
+ * --log-level LEVEL, --help. */
+#ifndef DF_SERVER_CONFIG_H
+#define DF_SERVER_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+
+#define DF_CONFIG_PATH_MAX 4096
+#define DF_CONFIG_SOCKET_MAX 108          /* sizeof(sockaddr_un.sun_path) */
+#define DF_CONFIG_MAX_ALLOW 16            /* allow_paths entries */
+#define DF_CONFIG_LINE_MAX 8192
+#define DF_CONFIG_MAX_CLIENTS_LIMIT 100000
+#define DF_CONFIG_MAX_THREADS 64
+
+#define DF_CONFIG_DEFAULT_MAX_CLIENTS 256
+#define DF_CONFIG_DEFAULT_QUEUE_LIMIT ((size_t)256 << 20) /* 256 MiB per client */
+#define DF_CONFIG_DEFAULT_CACHE_MB 1024
+#define DF_CONFIG_DEFAULT_MAX_VERTICES 4000000
+#define DF_CONFIG_DEFAULT_MAX_SESSIONS 64
+#define DF_CONFIG_DEFAULT_THREADS 4
+
+typedef struct df_server_config {
+    char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
+    char tcp_host[256];                     /* "" = no TCP listener */
+    int tcp_port;                           /* 0 with a host = any free port */
+    int n_allow;
+    char allow_paths[DF_CONFIG_MAX_ALLOW][DF_CONFIG_PATH_MAX]; /* normalized, no trailing '/' */
+    int max_clients;
+    size_t output_queue_limit;   /* bytes */
+    size_t cache_memory_mb;
+    int log_level;               /* DF_LOG_* */
+    int32_t max_mesh_vertices;
+    int max_sessions;
+    int threads;
+    int foreground;              /* 1: do not daemonize */
+    char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
+} df_server_config;
+
+/* Fills `cfg` with the defaults; the socket path comes from `xdg_runtime_dir` (may be NULL or "",
+ * then /run/deformd/deformd.sock). Never fails. */
+void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir);
+
+/* Applies one setting `key` = `value` (both NUL-terminated, already trimmed) to `cfg`.
+ * Errors: DF_EINVAL for an unknown key or a bad value (message names the key); cfg untouched. */
+int df_config_set(df_server_config *cfg, const char *key, const char *value, df_error *err);
+
+/* Parses the text of a config file (`len` bytes, need not be NUL-terminated) into `cfg`.
+ * `name` is used in messages ("deformd.conf:3: ..."). On error `cfg` is left untouched
+ * (all-or-nothing). Errors: DF_EINVAL / DF_EFORMAT with the line number. */
+int df_config_parse(df_server_config *cfg, const char *text, size_t len, const char *name,
+                    df_error *err);
+
+/* Reads and parses the file at `path` (see df_config_parse). Errors: DF_EIO when unreadable. */
+int df_config_load(df_server_config *cfg, const char *path, df_error *err);
+
+/* What the command line asks for. */
+typedef enum df_cli_action { DF_CLI_RUN = 0, DF_CLI_HELP = 1 } df_cli_action;
+
+/* Parses argv (argc entries, argv[0] is the program name) into `cfg`, starting from the defaults
+ * (computed from `xdg_runtime_dir`): first loads --config FILE when given, then applies the other
+ * options on top. Sets *action to DF_CLI_HELP for --help/-h (cfg then unspecified).
+ * Errors: DF_EINVAL for an unknown option or a missing/bad value, DF_EIO/DF_EFORMAT from the file. */
+int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char *xdg_runtime_dir,
+                        df_cli_action *action, df_error *err);
+
+/* The --help text (static string). */
+const char *df_config_usage(void);
+
+/* 1 when `path` (absolute, already resolved by realpath) lies inside one of cfg->allow_paths,
+ * else 0. */
+int df_config_path_allowed(const df_server_config *cfg, const char *path);
+
+#endif

@@ -1,0 +1,251 @@
+/* conn.c — client connections: read/frame, bounded output queue, close (see conn.h). */
+#include "server/conn.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "proto/buf.h"
+#include "proto/frame_codec.h"
+#include "proto/messages.h"
+#include "server/dispatch.h"
+#include "server/handlers.h"
+#include "server/log.h"
+#include "server/reply.h"
+#include "server/session.h"
+
+static void kick_write(df_conn *c);
+
+void df_conn_ref(df_conn *c) { c->refs++; }
+
+void df_conn_unref(df_conn *c)
+{
+    if (--c->refs == 0) {
+        df_upload_free(c->upload);
+        df_outq_clear(&c->outq);
+        free(c->rbuf);
+        free(c);
+    }
+}
+
+static void on_closed(uv_handle_t *h)
+{
+    df_conn *c = h->data;
+    df_server *srv = c->srv;
+    if (c->prev) c->prev->next = c->next;
+    else srv->conns = c->next;
+    if (c->next) c->next->prev = c->prev;
+    srv->n_conns--;
+    df_outq_clear(&c->outq);
+    df_conn_unref(c);
+}
+
+void df_conn_close(df_conn *c, const char *why, int warn)
+{
+    if (c->closing) return;
+    c->closing = 1;
+    df_log(warn ? DF_LOG_WARN : DF_LOG_INFO, "client %llu closed: %s", (unsigned long long)c->id,
+           why ? why : "closed");
+    df_session_forget_conn(c->srv, c);
+    uv_read_stop(&c->h.stream);
+    uv_close((uv_handle_t *)&c->h.stream, on_closed);
+}
+
+void df_conn_close_after_flush(df_conn *c, const char *why)
+{
+    if (c->closing || c->flush_close) return;
+    c->flush_close = 1;
+    c->flush_why = why;
+    uv_read_stop(&c->h.stream);
+    if (c->wcount == 0 && c->outq.count == 0) df_conn_close(c, why, 1);
+}
+
+static void on_written(uv_write_t *req, int status)
+{
+    df_conn *c = req->data;
+    size_t n = c->wcount;
+    size_t bytes = c->outq.bytes;
+    df_outq_complete(&c->outq, n);
+    c->srv->stats.bytes_out += bytes - c->outq.bytes;
+    c->srv->stats.frames_out += n;
+    c->wcount = 0;
+    if (c->closing) {
+        df_conn_unref(c);
+        return;
+    }
+    if (status < 0) {
+        df_conn_close(c, uv_strerror(status), 0);
+    } else if (c->outq.count > 0) {
+        kick_write(c);
+    } else if (c->flush_close) {
+        df_conn_close(c, c->flush_why, 1);
+    }
+    df_conn_unref(c);
+}
+
+static void kick_write(df_conn *c)
+{
+    if (c->wcount || c->closing) return;
+    df_sbuf *items[DF_OUTQ_MAX_BATCH];
+    size_t n = df_outq_take(&c->outq, items, DF_OUTQ_MAX_BATCH);
+    if (n == 0) return;
+    for (size_t i = 0; i < n; i++) c->wbufs[i] = uv_buf_init((char *)items[i]->data,
+                                                              (unsigned)items[i]->len);
+    c->wcount = n;
+    c->wreq.data = c;
+    df_conn_ref(c);
+    int rc = uv_write(&c->wreq, &c->h.stream, c->wbufs, (unsigned)n, on_written);
+    if (rc < 0) {
+        c->wcount = 0;
+        df_outq_complete(&c->outq, n);
+        df_conn_unref(c);
+        df_conn_close(c, uv_strerror(rc), 0);
+    }
+}
+
+int df_conn_send(df_conn *c, df_sbuf *frame)
+{
+    if (c->closing) return DF_ESTATE;
+    int rc = df_outq_push(&c->outq, frame);
+    if (rc != DF_OK) {
+        char why[160];
+        snprintf(why, sizeof why,
+                 "dropped: output queue full (%zu bytes queued + %zu > limit %zu); client not "
+                 "reading",
+                 c->outq.bytes, frame->len, c->outq.limit);
+        c->srv->stats.clients_dropped++;
+        df_conn_close(c, why, 1);
+        return DF_ELIMIT;
+    }
+    kick_write(c);
+    return DF_OK;
+}
+
+static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
+{
+    (void)suggested;
+    df_conn *c = h->data;
+    size_t want = c->rlen + DF_CONN_READ_CHUNK;
+    /* A frame in progress: make room for all of it at once to avoid repeated growth. */
+    if (c->rlen >= DF_FRAME_HEADER_SIZE) {
+        uint32_t pl = df_le32_load(c->rbuf + 20);
+        if (pl <= DF_MAX_FRAME_PAYLOAD && DF_FRAME_HEADER_SIZE + (size_t)pl > want)
+            want = DF_FRAME_HEADER_SIZE + (size_t)pl;
+    }
+    if (want > c->rcap) {
+        size_t ncap = c->rcap ? c->rcap : DF_CONN_READ_CHUNK;
+        while (ncap < want) ncap *= 2;
+        uint8_t *n = realloc(c->rbuf, ncap);
+        if (!n) {
+            *buf = uv_buf_init(NULL, 0);
+            return;
+        }
+        c->rbuf = n;
+        c->rcap = ncap;
+    }
+    *buf = uv_buf_init((char *)c->rbuf + c->rlen, (unsigned)(c->rcap - c->rlen));
+}
+
+static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
+{
+    (void)buf;
+    df_conn *c = s->data;
+    if (nread == UV_ENOBUFS) {
+        df_conn_close(c, "out of memory for the read buffer", 1);
+        return;
+    }
+    if (nread < 0) {
+        df_conn_close(c, nread == UV_EOF ? "end of stream" : uv_strerror((int)nread), 0);
+        return;
+    }
+    if (nread == 0) return;
+    c->rlen += (size_t)nread;
+    c->bytes_in += (size_t)nread;
+    c->srv->stats.bytes_in += (size_t)nread;
+    size_t off = 0;
+    df_conn_ref(c); /* dispatch may close c */
+    while (!c->closing && !c->flush_close && c->rlen - off >= DF_FRAME_HEADER_SIZE) {
+        df_frame_header h;
+        df_error err;
+        memset(&h, 0, sizeof h);
+        int hrc = df_frame_header_decode(c->rbuf + off, c->rlen - off, &h, &err);
+        if (hrc != DF_OK && (df_frame_error_is_fatal(hrc) || hrc == DF_EPROTO_TRUNCATED)) {
+            df_log(DF_LOG_WARN, "client %llu: framing error: %s", (unsigned long long)c->id,
+                   err.msg);
+            df_reply_error(c, DF_MSG_ERROR, hrc == DF_EPROTO_BADMAGIC ? 0 : h.request_id, hrc,
+                           "%s", err.msg);
+            c->srv->stats.clients_dropped++;
+            df_conn_close_after_flush(c, "framing error");
+            break;
+        }
+        size_t total = DF_FRAME_HEADER_SIZE + (size_t)h.payload_len;
+        if (c->rlen - off < total) break;
+        if (hrc != DF_OK) { /* answerable header error: reply, skip the payload */
+            df_reply_error(c, df_msg_type_valid(h.type) ? h.type : DF_MSG_ERROR, h.request_id,
+                           hrc, "%s", err.msg);
+            c->srv->stats.requests_failed++;
+            off += total;
+            continue;
+        }
+        c->srv->stats.frames_in++;
+        df_dispatch_frame(c, &h, c->rbuf + off + DF_FRAME_HEADER_SIZE);
+        off += total;
+    }
+    if (!c->closing && off > 0) {
+        memmove(c->rbuf, c->rbuf + off, c->rlen - off);
+        c->rlen -= off;
+    }
+    /* Give back memory after a large frame. */
+    if (!c->closing && c->rcap > 4 * DF_CONN_READ_CHUNK && c->rlen < DF_CONN_READ_CHUNK) {
+        uint8_t *n = realloc(c->rbuf, 2 * DF_CONN_READ_CHUNK);
+        if (n) {
+            c->rbuf = n;
+            c->rcap = 2 * DF_CONN_READ_CHUNK;
+        }
+    }
+    df_conn_unref(c);
+}
+
+void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
+{
+    df_conn *c = calloc(1, sizeof *c);
+    if (!c) {
+        df_log(DF_LOG_ERROR, "out of memory accepting a client");
+        return;
+    }
+    int rc = is_tcp ? uv_tcp_init(srv->loop, &c->h.tcp) : uv_pipe_init(srv->loop, &c->h.pipe, 0);
+    if (rc < 0) {
+        free(c);
+        return;
+    }
+    c->srv = srv;
+    c->refs = 1;
+    c->is_tcp = is_tcp;
+    c->h.stream.data = c;
+    c->id = ++srv->next_conn_id;
+    df_outq_init(&c->outq, srv->cfg.output_queue_limit);
+    df_brush_defaults_init(&c->brush);
+    c->next = srv->conns;
+    if (srv->conns) srv->conns->prev = c;
+    srv->conns = c;
+    srv->n_conns++;
+    rc = uv_accept(listener, &c->h.stream);
+    if (rc < 0) {
+        df_conn_close(c, uv_strerror(rc), 1);
+        return;
+    }
+    if (srv->stopping) {
+        df_conn_close(c, "server shutting down", 0);
+        return;
+    }
+    if (srv->n_conns > srv->cfg.max_clients) {
+        srv->stats.clients_refused++;
+        df_conn_close(c, "refused: max_clients reached", 1);
+        return;
+    }
+    if (is_tcp) uv_tcp_nodelay(&c->h.tcp, 1);
+    srv->stats.clients_total++;
+    df_log(DF_LOG_DEBUG, "client %llu connected (%s)", (unsigned long long)c->id,
+           is_tcp ? "tcp" : "unix");
+    rc = uv_read_start(&c->h.stream, on_alloc, on_read);
+    if (rc < 0) df_conn_close(c, uv_strerror(rc), 1);
+}

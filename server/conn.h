@@ -1,0 +1,35 @@
+/* conn.h — one client connection: reading and framing, the bounded output queue, closing.
+ *
+ * Reads: bytes accumulate in rbuf; every complete frame (24-byte header + payload) is handed to
+ * df_dispatch_frame. A header that breaks framing (bad magic or version, nonzero reserved,
+ * payload_len > DF_MAX_FRAME_PAYLOAD) gets one error frame and the connection is closed after it
+ * is flushed. Writes: df_conn_send pushes a shared frame buffer into the output queue and starts
+ * a uv_write when none is running; a client whose queue would exceed output_queue_limit is
+ * dropped with a log line. All functions run on the loop thread. */
+#ifndef DF_SERVER_CONN_H
+#define DF_SERVER_CONN_H
+
+#include "server/sbuf.h"
+#include "server/server.h"
+
+/* Accepts one pending connection on `listener` (is_tcp: 1 for TCP) and starts reading.
+ * Refuses (accepts then closes) when max_clients are connected. */
+void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
+
+/* Queues `frame` (a reference is taken) for sending. Returns DF_OK, or DF_ELIMIT after dropping
+ * the client (queue over the limit), or DF_ESTATE when the connection is closing (frame ignored). */
+int df_conn_send(df_conn *c, df_sbuf *frame);
+
+/* Closes the connection now (pending output is discarded). `why` is logged at info level
+ * (warn when `warn` is 1). Idempotent. */
+void df_conn_close(df_conn *c, const char *why, int warn);
+
+/* Stops reading and closes the connection once its output queue is flushed. */
+void df_conn_close_after_flush(df_conn *c, const char *why);
+
+/* Reference counting: jobs hold a reference so that the struct outlives the socket; the memory is
+ * released when the handle is closed and the last reference is dropped. */
+void df_conn_ref(df_conn *c);
+void df_conn_unref(df_conn *c);
+
+#endif

@@ -1,0 +1,76 @@
+/* dispatch.c — message type -> handler (see dispatch.h). */
+#include "server/dispatch.h"
+
+#include "server/conn.h"
+#include "server/handlers.h"
+#include "server/log.h"
+#include "server/reply.h"
+
+typedef void (*df_handler_fn)(df_conn *c, const df_frame_header *h, const uint8_t *p);
+
+static const struct {
+    uint16_t type;
+    df_handler_fn fn;
+} k_routes[] = {
+    {DF_MSG_HELLO, df_h_hello},
+    {DF_MSG_AUTH, df_h_auth},
+    {DF_MSG_PING, df_h_ping},
+    {DF_MSG_LOAD_MESH, df_h_load_mesh},
+    {DF_MSG_LIST_SESSIONS, df_h_list_sessions},
+    {DF_MSG_OPEN_SESSION, df_h_open_session},
+    {DF_MSG_CLOSE_SESSION, df_h_close_session},
+    {DF_MSG_SUBSCRIBE, df_h_subscribe},
+    {DF_MSG_UNSUBSCRIBE, df_h_unsubscribe},
+    {DF_MSG_BRUSH_BEGIN, df_h_brush_begin},
+    {DF_MSG_BRUSH_UPDATE, df_h_brush_update},
+    {DF_MSG_BRUSH_END, df_h_brush_end},
+    {DF_MSG_BRUSH_CANCEL, df_h_brush_cancel},
+    {DF_MSG_SET_BRUSH_PARAM, df_h_set_brush_param},
+    {DF_MSG_HANDLES_SET, df_h_handles_set},
+    {DF_MSG_HANDLES_MOVE, df_h_handles_move},
+    {DF_MSG_RESET_REST, df_h_reset_rest},
+    {DF_MSG_UNDO, df_h_undo},
+    {DF_MSG_REDO, df_h_redo},
+    {DF_MSG_GET_MESH, df_h_get_mesh},
+    {DF_MSG_SNAPSHOT, df_h_snapshot},
+    {DF_MSG_STATS, df_h_stats},
+};
+
+void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payload)
+{
+    df_handler_fn fn = NULL;
+    for (size_t i = 0; i < sizeof k_routes / sizeof k_routes[0]; i++)
+        if (k_routes[i].type == h->type) fn = k_routes[i].fn;
+    if (!fn || (h->flags & (DF_FLAG_REPLY | DF_FLAG_EVENT | DF_FLAG_ERROR))) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, df_msg_type_valid(h->type) ? h->type : DF_MSG_ERROR, h->request_id,
+                       DF_EPROTO_BADTYPE, "%s 0x%04x (flags 0x%04x) is not a request",
+                       df_msg_type_valid(h->type) ? df_msg_type_name(h->type) : "message type",
+                       (unsigned)h->type, (unsigned)h->flags);
+        return;
+    }
+    if ((h->flags & DF_FLAG_MORE) && h->type != DF_MSG_LOAD_MESH) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_EPROTO_BADFLAGS,
+                       "%s: only load_mesh requests may be chunked (MORE flag)",
+                       df_msg_type_name(h->type));
+        return;
+    }
+    if (c->pending >= (int)DF_MAX_PENDING_REQUESTS) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_EPROTO_BUSY,
+                       "more than %u unanswered requests; wait for replies",
+                       (unsigned)DF_MAX_PENDING_REQUESTS);
+        return;
+    }
+    if (c->srv->stopping) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_ESTATE, "server shutting down");
+        return;
+    }
+    c->pending++;
+    df_log(DF_LOG_DEBUG, "client %llu: %s #%llu (%u bytes)", (unsigned long long)c->id,
+           df_msg_type_name(h->type), (unsigned long long)h->request_id,
+           (unsigned)h->payload_len);
+    fn(c, h, payload);
+}

@@ -1,0 +1,332 @@
+/* h_brush.c — Kelvinlet brush strokes: begin / update / end / cancel (see handlers.h).
+ *
+ * Stroke semantics. A stroke belongs to one client on one session. begin fixes every brush
+ * parameter and the material points: the field is always evaluated at the positions the mesh
+ * had when the stroke began (fl32). begin and each update carry the CUMULATIVE load since begin
+ * (grab tip, twist vector, scale, centre gradient; multiplied by strength); the server computes
+ * the displacement d_k of that load and sets positions = base + d_k, where base is the shape
+ * without this stroke's contribution. So an update replaces the previous one (dropped updates
+ * lose nothing) and the result of a stroke does not depend on how many updates were sent. With
+ * `moving` the brush centre is advected along the load over `steps` substeps (paper sec. 9,
+ * df_kelvinlet_brush.moving): still relative to the stroke start. When another change (another
+ * client's stroke, a move) lands between two updates of a stroke, base is rebased to
+ * current - d_(k-1) first, so concurrent strokes add up instead of overwriting each other.
+ * end commits the stroke as one undo step (no new version); cancel sets positions = base (one
+ * version of kind BRUSH_CANCEL). Each begin/update is one version (kind BRUSH).
+ * Knobs (set brush parameter) override the begin message's radius / nu / strength / falloff /
+ * ratio for this client and change an open stroke from its next update on. Pinned points use the
+ * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
+ * change. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/cache.h"
+#include "server/handlers.h"
+#include "server/job.h"
+#include "server/log.h"
+#include "server/reply.h"
+#include "server/stream.h"
+
+typedef struct brush_req {
+    df_msg_brush begin;          /* begin: the message (owns `pinned`) */
+    double load[16];             /* move[3] twist[3] scale matrix[9] */
+    df_stroke *created;          /* begin: the new stroke, linked in done */
+    int kc_used, kc_hit;         /* pinned-point solver used / reused without refactoring */
+    uint32_t kc_pins;            /* its number of pins */
+    df_frames frames;
+} brush_req;
+
+static void req_free(df_job *j)
+{
+    brush_req *r = j->body;
+    df_msg_brush_free(&r->begin);
+    if (r->created) {
+        free(r->created->pins);
+        free(r->created->base);
+        free(r->created->startf);
+        free(r->created->applied);
+        free(r->created);
+    }
+    df_frames_clear(&r->frames);
+    free(r);
+}
+
+static const df_kelvinlet_type k_types[] = {DF_KELVINLET_GRAB, DF_KELVINLET_GRAB,
+                                            DF_KELVINLET_TWIST, DF_KELVINLET_SCALE,
+                                            DF_KELVINLET_PINCH, DF_KELVINLET_AFFINE};
+
+/* Computes the displacement of the stroke's brush under `load` at st->startf into disp. */
+static int stroke_field(df_session *s, df_stroke *st, const double *load, float *disp,
+                        brush_req *r, df_error *err)
+{
+    df_kelvinlet_brush b = st->brush;
+    double k = st->strength;
+    for (int i = 0; i < 3; i++) {
+        b.tip[i] = k * load[i];
+        b.omega[i] = k * load[3 + i];
+    }
+    b.s = k * load[6];
+    for (int i = 0; i < 9; i++) b.grad[i] = k * load[7 + i];
+    df_kelvinlet_prepared prep;
+    int rc;
+    if (st->n_pins) {
+        df_kelvinlet_pins pins = {.n = st->n_pins, .points = st->pins,
+                                  .flags = DF_KELVINLET_PIN_DISPLACEMENT, .radius = b.radius,
+                                  .ratio = b.ratio, .nu = b.nu, .order = b.order};
+        if (!s->kc) {
+            rc = df_kelvinlet_constraints_create(&pins, &s->kc, err);
+            r->kc_hit = 0;
+        } else {
+            unsigned long before = df_kelvinlet_constraints_factorizations(s->kc);
+            rc = df_kelvinlet_constraints_update(s->kc, &pins, err);
+            r->kc_hit = df_kelvinlet_constraints_factorizations(s->kc) == before;
+        }
+        if (rc != DF_OK) return rc;
+        r->kc_used = 1;
+        r->kc_pins = st->n_pins;
+        rc = df_kelvinlet_constraints_solve(s->kc, &b, &prep, err);
+    } else {
+        rc = df_kelvinlet_prepare(&b, &prep, err);
+    }
+    if (rc != DF_OK) return rc;
+    rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
+    df_kelvinlet_prepared_free(&prep);
+    return rc;
+}
+
+/* Publishes base + disp as the next version; on success the stroke contributes disp. */
+static int stroke_publish(df_session *s, df_stroke *st, float *disp, uint8_t kind, brush_req *r,
+                          df_error *err)
+{
+    size_t n = 3 * (size_t)s->nv;
+    if (atomic_load(&s->version) != st->last_version) /* someone else changed the mesh */
+        for (size_t i = 0; i < n; i++) st->base[i] = s->cur[i] - (double)st->applied[i];
+    double *pos = malloc(n * sizeof *pos);
+    if (!pos) return df_error_set(err, DF_ENOMEM, "out of memory");
+    for (size_t i = 0; i < n; i++) pos[i] = st->base[i] + (double)disp[i];
+    int rc = df_stream_publish(s, pos, kind, NULL, 0, &r->frames, NULL, err);
+    if (rc == DF_OK) {
+        memcpy(s->cur, pos, n * sizeof *pos);
+        memcpy(st->applied, disp, n * sizeof *disp);
+        st->last_version = atomic_load(&s->version);
+    }
+    free(pos);
+    return rc;
+}
+
+static void begin_work(df_job *j)
+{
+    brush_req *r = j->body;
+    df_session *s = j->s;
+    if (df_session_stroke(s, j->conn_id)) {
+        j->rc = df_error_set(&j->err, DF_ESTATE,
+                             "brush_begin: this client already has an open stroke on session "
+                             "%llu (end or cancel it first)", (unsigned long long)s->id);
+        return;
+    }
+    size_t n = 3 * (size_t)s->nv;
+    df_stroke *st = calloc(1, sizeof *st);
+    float *disp = malloc(n * sizeof *disp);
+    if (st) {
+        st->base = malloc(n * sizeof *st->base);
+        st->startf = malloc(n * sizeof *st->startf);
+        st->applied = calloc(n, sizeof *st->applied);
+        if (r->begin.n_pinned) st->pins = malloc(3 * (size_t)r->begin.n_pinned * sizeof(double));
+    }
+    r->created = st;
+    if (!st || !disp || !st->base || !st->startf || !st->applied ||
+        (r->begin.n_pinned && !st->pins)) {
+        free(disp);
+        j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
+        return;
+    }
+    const df_msg_brush *m = &r->begin;
+    df_kelvinlet_brush *b = &st->brush;
+    df_kelvinlet_brush_defaults(b);
+    b->type = k_types[m->type];
+    b->dim = m->dim;
+    b->order = m->falloff;
+    b->ratio = m->ratio;
+    b->radius = m->radius;
+    b->nu = m->nu;
+    memcpy(b->centre, m->center, sizeof b->centre);
+    b->mirror = m->has_mirror;
+    memcpy(b->mirror_point, m->mirror_point, sizeof b->mirror_point);
+    memcpy(b->mirror_normal, m->mirror_normal, sizeof b->mirror_normal);
+    b->integrator = m->integrator == DF_INTEG_RK4 ? DF_KELVINLET_RK4 : DF_KELVINLET_EULER;
+    b->steps = m->steps;
+    b->moving = m->moving;
+    st->strength = m->strength;
+    st->conn_id = j->conn_id;
+    st->n_pins = m->n_pinned;
+    if (m->n_pinned) memcpy(st->pins, m->pinned, 3 * (size_t)m->n_pinned * sizeof(double));
+    memcpy(st->base, s->cur, n * sizeof *st->base);
+    for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
+    st->last_version = atomic_load(&s->version);
+    j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
+    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH, r, &j->err);
+    free(disp);
+}
+
+static void update_work(df_job *j)
+{
+    brush_req *r = j->body;
+    df_session *s = j->s;
+    df_stroke *st = df_session_stroke(s, j->conn_id);
+    if (!st) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "%s: no open stroke on session %llu",
+                             df_msg_type_name(j->type), (unsigned long long)s->id);
+        return;
+    }
+    size_t n = 3 * (size_t)s->nv;
+    float *disp = malloc(n * sizeof *disp);
+    if (!disp) {
+        j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
+        return;
+    }
+    if (j->type == DF_MSG_BRUSH_CANCEL) {
+        memset(disp, 0, n * sizeof *disp);
+        j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
+    } else {
+        j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH, r, &j->err);
+    }
+    free(disp);
+}
+
+static void brush_done(df_job *j)
+{
+    brush_req *r = j->body;
+    df_session *s = j->s;
+    df_server *srv = j->srv;
+    if (r->kc_used) {
+        if (r->kc_hit) srv->stats.kelvin_lu_hits++;
+        else srv->stats.kelvin_lu_misses++;
+        if (s->kc) {
+            srv->cache_bytes -= s->kc_bytes <= srv->cache_bytes ? s->kc_bytes : srv->cache_bytes;
+            df_cache_install_kelvinlet(srv, s, df_cache_estimate_kelvinlet(r->kc_pins));
+        }
+    }
+    if (df_job_failed(j)) return;
+    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
+    srv->stats.versions++;
+    if (r->created) { /* link the new stroke */
+        r->created->next = s->strokes;
+        s->strokes = r->created;
+        r->created = NULL;
+    }
+    if (j->type == DF_MSG_BRUSH_CANCEL) df_session_drop_stroke(s, j->conn_id);
+    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
+    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_cache_enforce(srv);
+}
+
+static df_job *new_job(df_conn *c, const df_frame_header *h, df_session *s, df_job_fn work,
+                       df_job_fn done)
+{
+    brush_req *r = calloc(1, sizeof *r);
+    df_job *j = r ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
+    if (!j) {
+        free(r);
+        df_error e;
+        df_error_set(&e, DF_ENOMEM, "out of memory");
+        df_reply_fail(c, h->type, h->request_id, &e);
+        return NULL;
+    }
+    j->body = r;
+    j->cleanup = req_free;
+    return j;
+}
+
+void df_h_brush_begin(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_brush m;
+    df_error err;
+    if (df_msg_brush_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, begin_work, brush_done) : NULL;
+    if (!j) {
+        df_msg_brush_free(&m);
+        return;
+    }
+    brush_req *r = j->body;
+    /* Knob overrides of this client. */
+    if (c->brush_set & (1u << DF_BP_RADIUS)) m.radius = c->brush.radius;
+    if (c->brush_set & (1u << DF_BP_NU)) m.nu = c->brush.nu;
+    if (c->brush_set & (1u << DF_BP_STRENGTH)) m.strength = c->brush.strength;
+    if (c->brush_set & (1u << DF_BP_FALLOFF)) m.falloff = (uint8_t)c->brush.falloff;
+    if (c->brush_set & (1u << DF_BP_RATIO)) m.ratio = c->brush.ratio;
+    memcpy(r->load, m.move, 3 * sizeof(double));
+    memcpy(r->load + 3, m.twist, 3 * sizeof(double));
+    r->load[6] = m.scale;
+    memcpy(r->load + 7, m.matrix, 9 * sizeof(double));
+    r->begin = m;
+    df_job_submit(j);
+}
+
+void df_h_brush_update(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_brush_update m;
+    df_error err;
+    if (df_msg_brush_update_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, update_work, brush_done) : NULL;
+    if (!j) return;
+    brush_req *r = j->body;
+    memcpy(r->load, m.move, 3 * sizeof(double));
+    memcpy(r->load + 3, m.twist, 3 * sizeof(double));
+    r->load[6] = m.scale;
+    memcpy(r->load + 7, m.matrix, 9 * sizeof(double));
+    df_job_submit(j);
+}
+
+static void end_done(df_job *j)
+{
+    if (df_job_failed(j)) return;
+    df_session *s = j->s;
+    if (!df_session_stroke(s, j->conn_id)) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "brush_end: no open stroke on session %llu",
+                             (unsigned long long)s->id);
+        df_job_failed(j);
+        return;
+    }
+    if (df_history_commit(&s->hist, s->cur, &j->err) != DF_OK) {
+        j->rc = j->err.code;
+        df_job_failed(j);
+        return;
+    }
+    df_session_drop_stroke(s, j->conn_id);
+    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
+    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+}
+
+static void ref_request(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn work,
+                        df_job_fn done)
+{
+    df_msg_session_ref m;
+    df_error err;
+    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, work, done) : NULL;
+    if (j) df_job_submit(j);
+}
+
+void df_h_brush_end(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    ref_request(c, h, p, NULL, end_done);
+}
+
+void df_h_brush_cancel(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    ref_request(c, h, p, update_work, brush_done);
+}

@@ -1,0 +1,332 @@
+/* h_handles.c — handle sets (ADMM solver creation, cached) and handle moves (warm-started,
+ * streaming progress, superseded by newer moves), reset-rest (see handlers.h).
+ *
+ * The solver's rest shape is the session's REST positions; a move's iterates replace the current
+ * positions. reset-rest makes the current positions the rest shape and drops the cached solver
+ * (the next move rebuilds it against the new rest: one analysis + factorization). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/cache.h"
+#include "server/handlers.h"
+#include "server/job.h"
+#include "server/log.h"
+#include "server/reply.h"
+#include "server/stream.h"
+
+typedef struct hs_req {
+    df_msg_handles m;          /* handles_set: the message */
+    df_handleset *hs;          /* handles_set: the new set (installed in done) */
+    df_msg_handle_move mv;     /* move: the message */
+    int superseded;            /* move dropped from the queue by a newer move */
+    int created, hit;          /* move: solver rebuilt / reused */
+    df_admm_result res;
+    uint8_t status;
+    uint64_t progress_every;
+    uint64_t t0;
+    df_frames frames;          /* final frame(s) */
+} hs_req;
+
+static void req_free(df_job *j)
+{
+    hs_req *r = j->body;
+    df_msg_handles_free(&r->m);
+    df_msg_handle_move_free(&r->mv);
+    if (r->hs) df_handleset_free(j->srv, r->hs);
+    df_frames_clear(&r->frames);
+    free(r);
+}
+
+/* Builds the solver of `hs` against the session's rest shape. */
+static int build_solver(df_session *s, df_handleset *hs, df_error *err)
+{
+    df_mesh m = s->mesh;
+    m.V = s->rest;
+    return df_admm_create(&m, &hs->params, hs->handles, hs->nh, hs->affine, hs->n_affine,
+                          &hs->solver, err);
+}
+
+static void set_work(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    const df_msg_handles *m = &r->m;
+    for (uint32_t i = 0; i < m->n_handles; i++)
+        if (m->handles[i] < 0 || m->handles[i] >= s->nv) {
+            j->rc = df_error_set(&j->err, DF_EINVAL, "handles_set: handle %u is vertex %d, "
+                                 "out of range (%d vertices)", i, m->handles[i], s->nv);
+            return;
+        }
+    df_handleset *hs = calloc(1, sizeof *hs);
+    if (!hs) {
+        j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
+        return;
+    }
+    r->hs = hs;
+    df_admm_params_default(&hs->params, (df_admm_energy)m->energy);
+    hs->params.w = m->w;
+    hs->params.s = m->s;
+    hs->params.rho = m->rho;
+    hs->params.tol = m->tol;
+    hs->params.max_iters = (int)m->max_iters;
+    hs->max_iters = (int)m->max_iters;
+    hs->nh = (int32_t)m->n_handles;
+    hs->handles = malloc((size_t)hs->nh * sizeof *hs->handles);
+    hs->affine = m->n_affine ? calloc(m->n_affine, sizeof *hs->affine) : NULL;
+    if (!hs->handles || (m->n_affine && !hs->affine)) {
+        j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
+        return;
+    }
+    memcpy(hs->handles, m->handles, (size_t)hs->nh * sizeof *hs->handles);
+    for (uint32_t k = 0; k < m->n_affine; k++) {
+        const df_msg_affine_set *a = &m->affine[k];
+        int32_t *v = malloc(a->n_indices * sizeof *v);
+        if (!v) {
+            j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
+            return;
+        }
+        memcpy(v, a->indices, a->n_indices * sizeof *v);
+        hs->affine[k].verts = v;
+        hs->affine[k].n = (int32_t)a->n_indices;
+        hs->affine[k].m = a->rows;
+        memcpy(hs->affine[k].A, a->A, sizeof a->A);
+        memcpy(hs->affine[k].b, a->b, sizeof a->b);
+        hs->n_affine++;
+    }
+    j->rc = build_solver(s, hs, &j->err);
+}
+
+static void set_done(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    if (df_job_failed(j)) return;
+    df_handleset_free(j->srv, s->hs);
+    s->hs = r->hs;
+    r->hs = NULL;
+    j->srv->stats.admm_misses++;
+    df_cache_install_solver(j->srv, s->hs, df_cache_estimate_admm(s->nv, s->mesh.ne));
+    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
+    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_cache_enforce(j->srv);
+}
+
+static df_job *new_job(df_conn *c, const df_frame_header *h, df_session *s, df_job_fn work,
+                       df_job_fn done)
+{
+    hs_req *r = calloc(1, sizeof *r);
+    df_job *j = r ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
+    if (!j) {
+        free(r);
+        df_error e;
+        df_error_set(&e, DF_ENOMEM, "out of memory");
+        df_reply_fail(c, h->type, h->request_id, &e);
+        return NULL;
+    }
+    j->body = r;
+    j->cleanup = req_free;
+    return j;
+}
+
+void df_h_handles_set(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_handles m;
+    df_error err;
+    if (df_msg_handles_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, set_work, set_done) : NULL;
+    if (!j) {
+        df_msg_handles_free(&m);
+        return;
+    }
+    ((hs_req *)j->body)->m = m;
+    df_job_submit(j);
+}
+
+static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }
+
+/* Publishes the iterate V as the next version in progress frames. */
+static int publish_iterate(df_job *j, const double *V, int iteration, double objective,
+                           double residual, uint8_t status, int final, df_frames *out)
+{
+    hs_req *r = j->body;
+    df_msg_progress pr;
+    memset(&pr, 0, sizeof pr);
+    pr.status = status;
+    pr.final = (uint8_t)final;
+    pr.iteration = (uint32_t)(iteration > 0 ? iteration : 0);
+    pr.objective = finite_or(objective, DBL_MAX);
+    pr.residual = finite_or(residual, DBL_MAX);
+    if (pr.residual < 0) pr.residual = 0;
+    pr.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, out, NULL, &j->err);
+    if (rc == DF_OK) memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
+    return rc;
+}
+
+static int on_progress(void *user, const df_admm_progress *p)
+{
+    df_job *j = user;
+    hs_req *r = j->body;
+    if (atomic_load(&j->cancel)) return 1;
+    if (r->progress_every && p->iteration % (int)r->progress_every == 0) {
+        df_frames f = {0};
+        if (publish_iterate(j, p->V, p->iteration, p->objective, p->residual, DF_MOVE_RUNNING, 0,
+                            &f) == DF_OK) {
+            uint64_t v = atomic_load(&j->s->version);
+            for (size_t i = 0; i < f.n; i++) {
+                df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
+                f.v[i] = NULL;
+            }
+            f.n = 0;
+        }
+        df_frames_clear(&f);
+    }
+    return 0;
+}
+
+static void move_work(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    df_handleset *hs = s->hs;
+    r->t0 = uv_hrtime();
+    if (!hs) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "handles_move: session %llu has no handle set "
+                             "(send handles_set first)", (unsigned long long)s->id);
+        return;
+    }
+    if ((int32_t)r->mv.n_targets != hs->nh) {
+        j->rc = df_error_set(&j->err, DF_EINVAL, "handles_move: %u targets for %d handles",
+                             r->mv.n_targets, hs->nh);
+        return;
+    }
+    if (!hs->solver) {
+        if ((j->rc = build_solver(s, hs, &j->err)) != DF_OK) return;
+        r->created = 1;
+    } else {
+        r->hit = 1;
+    }
+    if ((j->rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err)) != DF_OK) return;
+    r->progress_every = r->mv.progress_every;
+    df_admm_budget b = {.max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs->max_iters,
+                        .max_ms = r->mv.max_ms,
+                        .progress_every = r->mv.progress_every ? (int)r->mv.progress_every : 1,
+                        .progress = on_progress,
+                        .user = j};
+    int rc = df_admm_run(hs->solver, &b, &r->res, &j->err);
+    if (rc != DF_OK) r->status = DF_MOVE_FAILED;
+    else if (r->res.converged) r->status = DF_MOVE_CONVERGED;
+    else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
+    else r->status = DF_MOVE_BUDGET;
+    int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
+                              r->res.objective, r->res.residual, r->status, 1, &r->frames);
+    j->rc = rc != DF_OK ? rc : prc;
+}
+
+static void move_done(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    df_server *srv = j->srv;
+    if (r->created) {
+        srv->stats.admm_misses++;
+        df_cache_install_solver(srv, s->hs, df_cache_estimate_admm(s->nv, s->mesh.ne));
+    } else if (r->hit) {
+        srv->stats.admm_hits++;
+        df_cache_touch_solver(srv, s->hs);
+    }
+    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
+    if (r->frames.n) srv->stats.versions++;
+    df_msg_move_result res;
+    memset(&res, 0, sizeof res);
+    res.session_id = s->id;
+    res.version = atomic_load(&s->version);
+    if (r->superseded) {
+        res.status = DF_MOVE_SUPERSEDED;
+        if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
+        return;
+    }
+    if (r->frames.n && df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
+               (unsigned long long)s->id);
+    if (df_job_failed(j)) return;
+    res.status = r->status;
+    res.iterations = (uint32_t)r->res.iterations;
+    res.objective = finite_or(r->res.objective, DBL_MAX);
+    res.residual = finite_or(r->res.residual, DBL_MAX);
+    res.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+    if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
+    df_cache_enforce(srv);
+}
+
+static int pred_move(const df_job *j, void *arg)
+{
+    (void)arg;
+    if (j->type != DF_MSG_HANDLES_MOVE) return 0;
+    ((hs_req *)j->body)->superseded = 1;
+    return 1;
+}
+
+void df_h_handles_move(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_handle_move m;
+    df_error err;
+    if (df_msg_handle_move_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, move_work, move_done) : NULL;
+    if (!j) {
+        df_msg_handle_move_free(&m);
+        return;
+    }
+    ((hs_req *)j->body)->mv = m;
+    /* A newer move supersedes the running one and any queued ones. */
+    if (s->running && s->running->type == DF_MSG_HANDLES_MOVE) {
+        atomic_store(&s->running->cancel, 1);
+        c->srv->stats.jobs_superseded++;
+    }
+    c->srv->stats.jobs_superseded +=
+        (uint64_t)df_job_drop_queued(s, pred_move, NULL, "superseded by a newer move");
+    df_job_submit(j);
+}
+
+static void reset_work(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    j->rc = df_stream_publish(s, s->cur, DF_CHANGE_RESET_REST, NULL, 0, &r->frames, NULL, &j->err);
+    if (j->rc == DF_OK) memcpy(s->rest, s->cur, 3 * (size_t)s->nv * sizeof(double));
+}
+
+static void reset_done(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    if (df_job_failed(j)) return;
+    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
+    j->srv->stats.versions++;
+    if (s->hs) df_cache_drop_solver(j->srv, s->hs); /* rebuilt against the new rest */
+    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
+    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+}
+
+void df_h_reset_rest(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_session_ref m;
+    df_error err;
+    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, reset_work, reset_done) : NULL;
+    if (j) df_job_submit(j);
+}

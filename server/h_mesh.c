@@ -1,0 +1,225 @@
+/* h_mesh.c — undo / redo, get-mesh (chunked) and snapshot (see handlers.h).
+ *
+ * Undo / redo restore the previous / next committed state (stroke end, handle move) and publish
+ * it as a NEW version (kind UNDO / REDO), so the stream stays append-only. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/conn.h"
+#include "server/handlers.h"
+#include "server/job.h"
+#include "server/reply.h"
+#include "server/stream.h"
+
+typedef struct mesh_req {
+    uint64_t version;          /* snapshot: requested version (0 = current) */
+    uint32_t flags;            /* get-mesh flags */
+    df_frames frames;
+} mesh_req;
+
+static void req_free(df_job *j)
+{
+    mesh_req *r = j->body;
+    df_frames_clear(&r->frames);
+    free(r);
+}
+
+static df_job *new_job(df_conn *c, const df_frame_header *h, uint64_t session_id,
+                       df_job_fn work, df_job_fn done)
+{
+    df_session *s = df_h_session(c, h, session_id);
+    if (!s) return NULL;
+    mesh_req *r = calloc(1, sizeof *r);
+    df_job *j = r ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
+    if (!j) {
+        free(r);
+        df_error e;
+        df_error_set(&e, DF_ENOMEM, "out of memory");
+        df_reply_fail(c, h->type, h->request_id, &e);
+        return NULL;
+    }
+    j->body = r;
+    j->cleanup = req_free;
+    return j;
+}
+
+/* Sends the job's frames to the requester only: a multi-frame reply. */
+static void reply_frames(df_job *j)
+{
+    mesh_req *r = j->body;
+    if (!j->c) return;
+    if (j->c->pending > 0) j->c->pending--;
+    j->srv->stats.requests_ok++;
+    for (size_t i = 0; i < r->frames.n; i++) df_conn_send(j->c, r->frames.v[i]);
+}
+
+/* ---- undo / redo ---- */
+
+static void history_work(df_job *j)
+{
+    mesh_req *r = j->body;
+    df_session *s = j->s;
+    int undo = j->type == DF_MSG_UNDO;
+    if (undo ? !df_history_can_undo(&s->hist) : !df_history_can_redo(&s->hist)) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "%s: nothing to %s on session %llu",
+                             undo ? "undo" : "redo", undo ? "undo" : "redo",
+                             (unsigned long long)s->id);
+        return;
+    }
+    const double *state = s->hist.states[s->hist.cur + (undo ? -1 : 1)];
+    j->rc = df_stream_publish(s, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL, 0,
+                              &r->frames, NULL, &j->err);
+    if (j->rc == DF_OK) memcpy(s->cur, state, 3 * (size_t)s->nv * sizeof(double));
+}
+
+static void history_done(df_job *j)
+{
+    mesh_req *r = j->body;
+    df_session *s = j->s;
+    if (df_job_failed(j)) return;
+    if (j->type == DF_MSG_UNDO) df_history_undo(&s->hist, NULL);
+    else df_history_redo(&s->hist, NULL);
+    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
+    j->srv->stats.versions++;
+    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
+    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+}
+
+static void history_request(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_session_ref m;
+    df_error err;
+    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_job *j = new_job(c, h, m.session_id, history_work, history_done);
+    if (j) df_job_submit(j);
+}
+
+void df_h_undo(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    history_request(c, h, p);
+}
+
+void df_h_redo(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    history_request(c, h, p);
+}
+
+/* ---- get mesh ---- */
+
+/* Appends the chunks of one section (rows of `width` values: floats or int32). */
+static int add_section(df_job *j, uint8_t section, uint32_t rows, int width, const float *xyz,
+                       const int32_t *idx, int last_section)
+{
+    mesh_req *r = j->body;
+    df_session *s = j->s;
+    size_t row_bytes = (size_t)width * 4;
+    uint32_t per = (uint32_t)(DF_STREAM_CHUNK_BYTES / row_bytes);
+    uint32_t off = 0;
+    do {
+        uint32_t cnt = rows - off < per ? rows - off : per;
+        df_msg_mesh_chunk m;
+        memset(&m, 0, sizeof m);
+        m.session_id = s->id;
+        m.version = atomic_load(&s->version);
+        m.kind = (uint8_t)s->mesh.kind;
+        m.planar = (uint8_t)(s->mesh.planar != 0);
+        m.section = section;
+        m.nv = (uint32_t)s->nv;
+        m.ne = (uint32_t)s->mesh.ne;
+        m.nf = (uint32_t)s->mesh.nf;
+        m.offset = off;
+        m.count = cnt;
+        if (xyz) m.xyz = (float *)(xyz + (size_t)off * 3);
+        if (idx) m.idx = (int32_t *)(idx + (size_t)off * width);
+        int last = last_section && off + cnt >= rows;
+        df_sbuf *f = df_out_mesh_chunk(j->type, (uint16_t)(DF_FLAG_REPLY | (last ? 0 : DF_FLAG_MORE)),
+                                       j->req_id, &m, &j->err);
+        if (!f) return j->err.code;
+        if (df_frames_push(&r->frames, f) != DF_OK)
+            return df_error_set(&j->err, DF_ENOMEM, "out of memory");
+        off += cnt;
+    } while (off < rows);
+    return DF_OK;
+}
+
+static void get_mesh_work(df_job *j)
+{
+    mesh_req *r = j->body;
+    df_session *s = j->s;
+    size_t n = 3 * (size_t)s->nv;
+    float *buf = malloc(n * sizeof *buf);
+    if (!buf) {
+        j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
+        return;
+    }
+    int es = df_mesh_elem_size(s->mesh.kind);
+    int has_faces = s->mesh.nf > 0;
+    df_stream_positions(s, buf);
+    int rc = add_section(j, DF_SECTION_POSITIONS, (uint32_t)s->nv, 3, buf, NULL, 0);
+    if (rc == DF_OK && (r->flags & DF_GET_MESH_BASE))
+        rc = add_section(j, DF_SECTION_BASE, (uint32_t)s->nv, 3, s->basef, NULL, 0);
+    if (rc == DF_OK && (r->flags & DF_GET_MESH_REST)) {
+        for (size_t i = 0; i < n; i++) buf[i] = (float)s->rest[i];
+        rc = add_section(j, DF_SECTION_REST, (uint32_t)s->nv, 3, buf, NULL, 0);
+    }
+    if (rc == DF_OK)
+        rc = add_section(j, DF_SECTION_ELEMENTS, (uint32_t)s->mesh.ne, es, NULL, s->mesh.E,
+                         !has_faces);
+    if (rc == DF_OK && has_faces)
+        rc = add_section(j, DF_SECTION_FACES, (uint32_t)s->mesh.nf, 3, NULL, s->mesh.F, 1);
+    free(buf);
+    j->rc = rc;
+}
+
+static void frames_done(df_job *j)
+{
+    if (df_job_failed(j)) return;
+    reply_frames(j);
+}
+
+void df_h_get_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_get_mesh m;
+    df_error err;
+    if (df_msg_get_mesh_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_job *j = new_job(c, h, m.session_id, get_mesh_work, frames_done);
+    if (!j) return;
+    ((mesh_req *)j->body)->flags = m.flags;
+    df_job_submit(j);
+}
+
+/* ---- snapshot ---- */
+
+static void snapshot_work(df_job *j)
+{
+    mesh_req *r = j->body;
+    df_session *s = j->s;
+    uint64_t v = atomic_load(&s->version);
+    if (r->version != 0 && r->version != v) {
+        j->rc = df_error_set(&j->err, DF_ENOTFOUND,
+                             "snapshot: version %llu is not retained (current %llu; ask for 0)",
+                             (unsigned long long)r->version, (unsigned long long)v);
+        return;
+    }
+    j->rc = df_stream_snapshot(s, DF_MSG_SNAPSHOT, j->req_id, &r->frames, &j->err);
+}
+
+void df_h_snapshot(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_snapshot_req m;
+    df_error err;
+    if (df_msg_snapshot_req_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_job *j = new_job(c, h, m.session_id, snapshot_work, frames_done);
+    if (!j) return;
+    ((mesh_req *)j->body)->version = m.version;
+    df_job_submit(j);
+}

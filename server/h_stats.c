@@ -1,0 +1,76 @@
+/* h_stats.c — the stats request: daemon-wide or per-session counters (see handlers.h). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/handlers.h"
+#include "server/reply.h"
+
+#define DF_STATS_MAX 64 /* entries this server reports */
+
+static void put(df_msg_stats *st, const char *key, double v)
+{
+    if (st->count >= DF_STATS_MAX) return;
+    snprintf(st->items[st->count].key, sizeof st->items[st->count].key, "%s", key);
+    st->items[st->count].value = v;
+    st->count++;
+}
+
+void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_stats_req m;
+    df_error err;
+    if (df_msg_stats_req_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_server *srv = c->srv;
+    df_session *s = NULL;
+    if (m.session_id && !(s = df_h_session(c, h, m.session_id))) return;
+    df_msg_stat items[DF_STATS_MAX];
+    df_msg_stats st = {0, items};
+    const df_stats *x = &srv->stats;
+    if (!s) {
+        put(&st, "uptime_s", (double)(uv_hrtime() - x->start_ns) / 1e9);
+        put(&st, "sessions", srv->n_sessions);
+        put(&st, "clients", srv->n_conns);
+        put(&st, "clients.total", (double)x->clients_total);
+        put(&st, "clients.dropped", (double)x->clients_dropped);
+        put(&st, "clients.refused", (double)x->clients_refused);
+        put(&st, "frames.in", (double)x->frames_in);
+        put(&st, "frames.out", (double)x->frames_out);
+        put(&st, "bytes.in", (double)x->bytes_in);
+        put(&st, "bytes.out", (double)x->bytes_out);
+        put(&st, "requests.ok", (double)x->requests_ok);
+        put(&st, "requests.failed", (double)x->requests_failed);
+        put(&st, "jobs.submitted", (double)x->jobs_submitted);
+        put(&st, "jobs.completed", (double)x->jobs_completed);
+        put(&st, "jobs.running", srv->jobs_running);
+        put(&st, "jobs.superseded", (double)x->jobs_superseded);
+        put(&st, "versions", (double)x->versions);
+        put(&st, "cache.bytes", (double)srv->cache_bytes);
+        put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));
+        put(&st, "cache.kelvinlet_lu.hits", (double)x->kelvin_lu_hits);
+        put(&st, "cache.kelvinlet_lu.misses", (double)x->kelvin_lu_misses);
+        put(&st, "cache.admm.hits", (double)x->admm_hits);
+        put(&st, "cache.admm.misses", (double)x->admm_misses);
+        put(&st, "cache.lru_evictions", (double)x->lru_evictions);
+    } else {
+        int strokes = 0;
+        for (df_stroke *k = s->strokes; k; k = k->next) strokes++;
+        put(&st, "session.version", (double)atomic_load(&s->version));
+        put(&st, "session.vertices", s->nv);
+        put(&st, "session.elements", s->mesh.ne);
+        put(&st, "session.subscribers", s->nsubs);
+        put(&st, "session.undo_depth", df_history_can_undo(&s->hist));
+        put(&st, "session.redo_depth", df_history_can_redo(&s->hist));
+        put(&st, "session.history_bytes", (double)df_history_bytes(&s->hist));
+        put(&st, "session.open_strokes", strokes);
+        put(&st, "session.job_running", s->running != NULL);
+        put(&st, "session.handles", s->hs ? s->hs->nh : 0);
+        put(&st, "session.admm_cached", s->hs && s->hs->solver);
+        put(&st, "session.kelvinlet_lu_cached", s->kc != NULL);
+        put(&st, "cache.bytes", (double)((s->hs ? s->hs->solver_bytes : 0) + s->kc_bytes));
+    }
+    df_reply_stats(c, h->type, h->request_id, &st, 1);
+}

@@ -1,0 +1,186 @@
+/* job.c — per-session FIFO of jobs on the libuv pool (see job.h). */
+#include "server/job.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/conn.h"
+#include "server/log.h"
+#include "server/reply.h"
+
+void df_server_drain_mail(df_server *srv);
+
+df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
+                   df_job_fn work, df_job_fn done)
+{
+    df_job *j = calloc(1, sizeof *j);
+    if (!j) return NULL;
+    j->srv = srv;
+    j->s = s;
+    j->c = c;
+    if (c) {
+        df_conn_ref(c);
+        j->conn_id = c->id;
+    }
+    j->type = type;
+    j->req_id = req_id;
+    j->work = work;
+    j->done = done;
+    atomic_init(&j->cancel, 0);
+    return j;
+}
+
+static void job_free(df_job *j)
+{
+    if (j->cleanup) j->cleanup(j);
+    for (size_t i = 0; i < j->nframes; i++) df_sbuf_unref(j->frames[i]);
+    free(j->frames);
+    if (j->c) df_conn_unref(j->c);
+    free(j);
+}
+
+int df_job_add_frame(df_job *j, df_sbuf *frame)
+{
+    if (j->nframes == j->capframes) {
+        size_t nc = j->capframes ? 2 * j->capframes : 4;
+        df_sbuf **n = realloc(j->frames, nc * sizeof *n);
+        if (!n) {
+            df_sbuf_unref(frame);
+            return DF_ENOMEM;
+        }
+        j->frames = n;
+        j->capframes = nc;
+    }
+    j->frames[j->nframes++] = frame;
+    return DF_OK;
+}
+
+void df_job_publish(df_job *j)
+{
+    for (size_t i = 0; i < j->nframes; i++) {
+        if (j->s) df_session_broadcast(j->s, j->frames[i]);
+        df_sbuf_unref(j->frames[i]);
+    }
+    j->nframes = 0;
+}
+
+static void pump(df_session *s);
+
+/* Runs `done`, frees the job and clears the session's running slot (loop thread). */
+static void finish(df_job *j)
+{
+    df_server *srv = j->srv;
+    df_session *s = j->s;
+    j->done(j);
+    job_free(j);
+    srv->stats.jobs_completed++;
+    if (s) s->running = NULL;
+}
+
+static void work_cb(uv_work_t *w)
+{
+    df_job *j = w->data;
+    j->work(j);
+}
+
+static void after_cb(uv_work_t *w, int status)
+{
+    df_job *j = w->data;
+    df_server *srv = j->srv;
+    df_session *s = j->s;
+    srv->jobs_running--;
+    /* Progress frames the worker posted must go out before the job's final frames. */
+    df_server_drain_mail(srv);
+    if (status == UV_ECANCELED) {
+        j->canceled = 1;
+        j->rc = df_error_set(&j->err, DF_ESTATE, "server shutting down");
+    }
+    finish(j);
+    if (s) pump(s);
+}
+
+/* Starts queued jobs until one is running on the pool or the FIFO is empty; frees a closed
+ * session once it is idle. */
+static void pump(df_session *s)
+{
+    while (!s->running && s->jhead) {
+        df_job *j = s->jhead;
+        s->jhead = j->next;
+        if (!s->jhead) s->jtail = NULL;
+        j->next = NULL;
+        s->running = j;
+        if (j->work) {
+            j->w.data = j;
+            j->srv->jobs_running++;
+            int rc = uv_queue_work(j->srv->loop, &j->w, work_cb, after_cb);
+            if (rc == 0) return;
+            j->srv->jobs_running--;
+            j->rc = df_error_set(&j->err, DF_EINTERNAL, "uv_queue_work: %s", uv_strerror(rc));
+        }
+        finish(j);
+    }
+    if (s->closed && !s->running && !s->jhead) df_session_destroy(s);
+}
+
+void df_job_pump(df_session *s) { pump(s); }
+
+void df_job_submit(df_job *j)
+{
+    j->srv->stats.jobs_submitted++;
+    df_session *s = j->s;
+    if (!s) {
+        j->w.data = j;
+        j->srv->jobs_running++;
+        int rc = j->work ? uv_queue_work(j->srv->loop, &j->w, work_cb, after_cb) : -1;
+        if (rc != 0) {
+            j->srv->jobs_running--;
+            if (j->work)
+                j->rc = df_error_set(&j->err, DF_EINTERNAL, "uv_queue_work: %s", uv_strerror(rc));
+            finish(j);
+        }
+        return;
+    }
+    if (s->jtail) s->jtail->next = j;
+    else s->jhead = j;
+    s->jtail = j;
+    if (!s->running) pump(s);
+}
+
+int df_job_drop_queued(df_session *s, int (*pred)(const df_job *j, void *arg), void *arg,
+                       const char *why)
+{
+    int n = 0;
+    df_job **pp = &s->jhead, *last = NULL;
+    while (*pp) {
+        df_job *j = *pp;
+        if (pred(j, arg)) {
+            *pp = j->next;
+            j->next = NULL;
+            j->rc = df_error_set(&j->err, DF_ESTATE, "%s", why);
+            j->work = NULL;
+            j->done(j);
+            job_free(j);
+            s->srv->stats.jobs_completed++;
+            n++;
+        } else {
+            last = j;
+            pp = &j->next;
+        }
+    }
+    s->jtail = last;
+    return n;
+}
+
+int df_job_pred_all(const df_job *j, void *arg)
+{
+    (void)j;
+    (void)arg;
+    return 1;
+}
+
+int df_job_failed(df_job *j)
+{
+    if (j->rc == DF_OK) return 0;
+    if (j->c) df_reply_fail(j->c, j->type, j->req_id, &j->err);
+    return 1;
+}

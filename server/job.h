@@ -1,0 +1,77 @@
+/* job.h — requests as jobs: per-session FIFO, compute on the libuv thread pool.
+ *
+ * A job has an optional `work` (runs on a worker thread, touches only the job's own data and its
+ * session's compute state) and a `done` (runs on the loop thread afterwards: publishes frames,
+ * replies). Jobs of one session run strictly one after another in submission order; jobs of
+ * different sessions run in parallel (uv_queue_work). A job without `work` runs `done` directly
+ * on the loop thread when it reaches the head of its FIFO. Jobs without a session (mesh loads)
+ * go straight to the pool. */
+#ifndef DF_SERVER_JOB_H
+#define DF_SERVER_JOB_H
+
+#include <stdatomic.h>
+#include <stdint.h>
+#include <uv.h>
+
+#include "core/common/df_error.h"
+#include "server/sbuf.h"
+#include "server/server.h"
+#include "server/session.h"
+
+typedef struct df_job df_job;
+typedef void (*df_job_fn)(df_job *j);
+
+struct df_job {
+    df_server *srv;
+    df_session *s;            /* NULL for session-less jobs */
+    df_conn *c;               /* requester (a reference is held), or NULL */
+    uint64_t conn_id;
+    uint16_t type;            /* request message type */
+    uint64_t req_id;
+    df_job_fn work;           /* worker thread, may be NULL */
+    df_job_fn done;           /* loop thread, required */
+    df_job_fn cleanup;        /* frees `body`, may be NULL */
+    void *body;               /* request data owned by the job */
+    int rc;                   /* result of work (DF_OK or DF_E*) */
+    df_error err;
+    atomic_int cancel;        /* set by the loop thread to supersede a running move */
+    int canceled;             /* the pool refused/cancelled the job (shutdown) */
+    uv_work_t w;
+    df_sbuf **frames;         /* frames produced by work, broadcast in done */
+    size_t nframes, capframes;
+    uint64_t version;         /* version after the job (for the ack) */
+    struct df_job *next;
+};
+
+/* A new job for request (type, req_id) of connection `c` (may be NULL) on session `s` (may be
+ * NULL). Takes a reference on c. NULL when out of memory. */
+df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
+                   df_job_fn work, df_job_fn done);
+
+/* Queues the job (FIFO of j->s, or the pool when s is NULL). The job is freed after `done`. */
+void df_job_submit(df_job *j);
+
+/* Starts the session's next queued job when none is running; frees the session when it is
+ * closed and idle (loop thread). */
+void df_job_pump(df_session *s);
+
+/* Appends a frame (reference moved in) to j->frames; worker or loop thread. DF_ENOMEM when the
+ * list cannot grow (the frame is then released). */
+int df_job_add_frame(df_job *j, df_sbuf *frame);
+
+/* Broadcasts j->frames in order to the session's subscribers and releases them (loop thread). */
+void df_job_publish(df_job *j);
+
+/* Removes queued (not started) jobs of session `s` for which pred(j, arg) is 1, running their
+ * `done` with rc = DF_ESTATE and the given message first. Returns how many. */
+int df_job_drop_queued(df_session *s, int (*pred)(const df_job *j, void *arg), void *arg,
+                       const char *why);
+
+/* When j->rc is an error: answers the requester (if any) with j->err and returns 1; else 0.
+ * Every `done` starts with `if (df_job_failed(j)) return;` unless it needs to clean up. */
+int df_job_failed(df_job *j);
+
+/* Predicate matching every job (for df_job_drop_queued at shutdown). */
+int df_job_pred_all(const df_job *j, void *arg);
+
+#endif

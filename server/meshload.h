@@ -1,0 +1,28 @@
+/* meshload.h — the server's use of core/mesh I/O, behind an interface that needs only mesh.h
+ * (proto/messages.h and core/mesh/mesh_io.h both define `df_mesh_format`, so no translation unit
+ * may include both; format numbers are the same on the wire and in mesh_io: 0 auto, 1 obj, 2 off,
+ * 3 ply, 4 medit, 5 tetgen). Pure functions, safe on worker threads. */
+#ifndef DF_SERVER_MESHLOAD_H
+#define DF_SERVER_MESHLOAD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "core/mesh/mesh.h"
+
+/* Parses an inline upload: `len` bytes at `data` in wire format `fmt` (0..5); for TetGen (5)
+ * bytes [0, part2) are the .node file and [part2, len) the .ele file. Refuses more than
+ * `max_vertices` vertices (DF_ELIMIT). On success *out holds a new mesh.
+ * Errors: those of df_mesh_read_memory / df_mesh_read_tetgen_memory; DF_EINVAL for a bad fmt. */
+int df_meshload_memory(const uint8_t *data, size_t len, int fmt, size_t part2,
+                       int32_t max_vertices, const char *name, df_mesh *out, df_error *err);
+
+/* Reads a server-side file (format 0 = from the extension). Errors as df_mesh_read_file. */
+int df_meshload_file(const char *path, int fmt, int32_t max_vertices, df_mesh *out,
+                     df_error *err);
+
+/* df_mesh_free. */
+void df_meshload_free(df_mesh *m);
+
+#endif

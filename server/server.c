@@ -1,0 +1,152 @@
+/* server.c — start/stop of the daemon, signals, the worker -> loop mailbox (see server.h). */
+#include "server/server.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/cache.h"
+#include "server/conn.h"
+#include "server/job.h"
+#include "server/listener.h"
+#include "server/log.h"
+#include "server/sd.h"
+#include "server/session.h"
+
+void df_server_drain_mail(df_server *srv)
+{
+    pthread_mutex_lock(&srv->mailbox_lock);
+    df_mail *m = srv->mail_head;
+    srv->mail_head = srv->mail_tail = NULL;
+    pthread_mutex_unlock(&srv->mailbox_lock);
+    while (m) {
+        df_mail *next = m->next;
+        if (m->job && m->job->s) df_session_broadcast(m->job->s, m->frame);
+        if (m->version) srv->stats.versions++;
+        df_sbuf_unref(m->frame);
+        free(m);
+        m = next;
+    }
+}
+
+void df_server_post(df_server *srv, struct df_job *job, df_sbuf *frame, uint64_t version)
+{
+    df_mail *m = malloc(sizeof *m);
+    if (!m) {
+        df_sbuf_unref(frame);
+        df_log(DF_LOG_ERROR, "out of memory posting a progress frame");
+        return;
+    }
+    m->job = job;
+    m->frame = frame;
+    m->version = version;
+    m->next = NULL;
+    pthread_mutex_lock(&srv->mailbox_lock);
+    if (srv->mail_tail) srv->mail_tail->next = m;
+    else srv->mail_head = m;
+    srv->mail_tail = m;
+    pthread_mutex_unlock(&srv->mailbox_lock);
+    uv_async_send(&srv->mailbox);
+}
+
+static void on_mail(uv_async_t *a) { df_server_drain_mail(a->data); }
+
+static void on_signal(uv_signal_t *h, int signum)
+{
+    df_server *srv = h->data;
+    df_log(DF_LOG_INFO, "received %s, shutting down", signum == SIGINT ? "SIGINT" : "SIGTERM");
+    df_server_stop(srv);
+}
+
+int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg, df_error *err)
+{
+    memset(srv, 0, sizeof *srv);
+    srv->loop = loop;
+    srv->cfg = *cfg;
+    srv->stats.start_ns = uv_hrtime();
+    pthread_mutex_init(&srv->mailbox_lock, NULL);
+    uv_async_init(loop, &srv->mailbox, on_mail);
+    srv->mailbox.data = srv;
+    uv_signal_init(loop, &srv->sig_int);
+    uv_signal_init(loop, &srv->sig_term);
+    srv->sig_int.data = srv->sig_term.data = srv;
+    uv_signal_start(&srv->sig_int, on_signal, SIGINT);
+    uv_signal_start(&srv->sig_term, on_signal, SIGTERM);
+    int rc = df_listener_open(srv, err);
+    if (rc != DF_OK) {
+        srv->stopping = 1;
+        uv_close((uv_handle_t *)&srv->mailbox, NULL);
+        uv_close((uv_handle_t *)&srv->sig_int, NULL);
+        uv_close((uv_handle_t *)&srv->sig_term, NULL);
+        return rc;
+    }
+    return DF_OK;
+}
+
+void df_server_describe(const df_server *srv, char *buf, size_t cap)
+{
+    size_t n = 0;
+    buf[0] = '\0';
+    if (srv->have_unix)
+        n += (size_t)snprintf(buf + n, cap - n, "unix:%s", srv->cfg.socket_path);
+    if (srv->have_tcp && n < cap)
+        n += (size_t)snprintf(buf + n, cap - n, "%stcp:%s:%d", n ? " " : "", srv->cfg.tcp_host,
+                              srv->tcp_port_bound);
+}
+
+#define DF_SERVER_STOP_POLL_MS 10
+
+/* Shutdown continues here until no job runs any more. */
+static void on_stop_timer(uv_timer_t *h)
+{
+    df_server *srv = h->data;
+    if (srv->jobs_running > 0) return;
+    uv_timer_stop(h);
+    uv_close((uv_handle_t *)h, (uv_close_cb)free);
+    df_server_drain_mail(srv);
+    /* Sessions: every FIFO is drained (queued jobs were answered or dropped). */
+    while (srv->sessions) {
+        df_session *s = srv->sessions;
+        df_job_drop_queued(s, df_job_pred_all, NULL, "server shutting down");
+        df_session_destroy(s);
+    }
+    for (df_conn *c = srv->conns; c; c = c->next) df_conn_close(c, "server shutting down", 0);
+    uv_close((uv_handle_t *)&srv->mailbox, NULL);
+    df_sd_notify("STOPPING=1");
+}
+
+void df_server_stop(df_server *srv)
+{
+    if (srv->stopping) return;
+    srv->stopping = 1;
+    df_sd_notify("STOPPING=1");
+    df_listener_close(srv);
+    uv_signal_stop(&srv->sig_int);
+    uv_signal_stop(&srv->sig_term);
+    uv_close((uv_handle_t *)&srv->sig_int, NULL);
+    uv_close((uv_handle_t *)&srv->sig_term, NULL);
+    /* Stop reading; supersede running moves so that they end at their next iteration. */
+    for (df_conn *c = srv->conns; c; c = c->next)
+        if (!c->closing) uv_read_stop(&c->h.stream);
+    for (df_session *s = srv->sessions; s; s = s->next)
+        if (s->running) atomic_store(&s->running->cancel, 1);
+    uv_timer_t *t = malloc(sizeof *t);
+    if (!t) return;
+    uv_timer_init(srv->loop, t);
+    t->data = srv;
+    uv_timer_start(t, on_stop_timer, 0, DF_SERVER_STOP_POLL_MS);
+}
+
+void df_server_free(df_server *srv)
+{
+    while (srv->sessions) df_session_destroy(srv->sessions);
+    df_mail *m = srv->mail_head;
+    while (m) {
+        df_mail *n = m->next;
+        df_sbuf_unref(m->frame);
+        free(m);
+        m = n;
+    }
+    srv->mail_head = srv->mail_tail = NULL;
+    pthread_mutex_destroy(&srv->mailbox_lock);
+}

@@ -1,0 +1,116 @@
+/* server.h — deformd's central state: the server, its connections and sessions.
+ *
+ * Threading (see README-internals in main.c): everything in these structs is owned by the loop
+ * thread, except what a session's running job (df_job) reads while it runs on a worker. */
+#ifndef DF_SERVER_SERVER_H
+#define DF_SERVER_SERVER_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <uv.h>
+
+#include "proto/frame.h"
+#include "server/config.h"
+#include "server/outq.h"
+#include "server/stats.h"
+
+struct df_session;
+struct df_job;
+
+/* Per-connection brush defaults set by "set brush parameter" (what HID knobs send). */
+typedef struct df_brush_defaults {
+    double radius;    /* regularization radius epsilon, mesh units */
+    double ratio;     /* multi-scale radius ratio (> 1) */
+    double nu;        /* Poisson ratio (may be +inf in the wire sense: incompressible limit) */
+    double strength;  /* multiplies the stroke's displacement / gradients */
+    int falloff;      /* falloff order (1 = single Kelvinlet, 2 = bi-scale, 3 = tri-scale) */
+} df_brush_defaults;
+
+/* Fills `b` with the defaults (radius 1, ratio 1.1, nu 0.5, strength 1, falloff 1). */
+void df_brush_defaults_init(df_brush_defaults *b);
+
+#define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
+#define DF_CONN_MAX_SUBS 64            /* sessions one connection may subscribe to */
+
+typedef struct df_conn {
+    union {
+        uv_stream_t stream;
+        uv_pipe_t pipe;
+        uv_tcp_t tcp;
+    } h;
+    struct df_server *srv;
+    uint64_t id;
+    int is_tcp;
+    int closing;             /* uv_close called (or about to be) */
+    int flush_close;         /* close once the output queue is flushed; reading stopped */
+    const char *flush_why;   /* static reason logged at that close */
+    int refs;                /* 1 for the open handle + 1 per job/reference held */
+    uint8_t *rbuf;           /* bytes received, not yet framed */
+    size_t rlen, rcap;
+    df_outq outq;
+    uv_write_t wreq;
+    size_t wcount;           /* buffers in the current uv_write, 0 when idle */
+    uv_buf_t wbufs[DF_OUTQ_MAX_BATCH];
+    int pending;             /* requests accepted and not yet answered */
+    df_brush_defaults brush; /* knob values (set brush parameter) */
+    unsigned brush_set;      /* bit (1 << param id) set when that knob value was sent */
+    struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
+    uint64_t bytes_in;
+    struct df_conn *prev, *next;
+} df_conn;
+
+typedef struct df_server {
+    uv_loop_t *loop;
+    df_server_config cfg;
+    uv_pipe_t unix_srv;
+    uv_tcp_t tcp_srv;
+    int have_unix, have_tcp;
+    int unix_owned;          /* 1 when we created the socket file (unlink on exit) */
+    int tcp_port_bound;      /* actual TCP port (after binding port 0) */
+    uv_signal_t sig_int, sig_term;
+    uv_async_t mailbox;      /* workers -> loop: progress frames */
+    pthread_mutex_t mailbox_lock;
+    struct df_mail *mail_head, *mail_tail;
+    df_conn *conns;          /* doubly linked list */
+    int n_conns;
+    uint64_t next_conn_id;
+    struct df_session *sessions; /* singly linked, newest first */
+    int n_sessions;
+    uint64_t next_session_id;
+    int jobs_running;        /* jobs submitted to the thread pool and not completed */
+    int stopping;
+    size_t cache_bytes;      /* bytes of cached factorizations over all sessions */
+    uint64_t lru_clock;
+    df_stats stats;
+} df_server;
+
+/* A message from a worker to the loop thread: a frame to broadcast to a session's subscribers. */
+typedef struct df_mail {
+    struct df_job *job;      /* the running job (kept alive until its completion) */
+    struct df_sbuf *frame;
+    uint64_t version;        /* version the frame carries (0 = not a version) */
+    struct df_mail *next;
+} df_mail;
+
+/* Initializes `srv` on `loop` with `cfg` (copied): opens the listeners (socket-activated fds
+ * first, then cfg->socket_path and cfg->tcp_*), installs SIGINT/SIGTERM handlers and the worker
+ * mailbox. Errors: DF_EIO (bind/listen failed, message names the address), DF_EINVAL. On error
+ * everything opened so far is closed again (run the loop once to finish closing handles). */
+int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg, df_error *err);
+
+/* Begins a clean shutdown: stops accepting, closes connections, cancels running handle moves;
+ * the loop ends once the running jobs have completed and every handle is closed. Idempotent. */
+void df_server_stop(df_server *srv);
+
+/* Frees what remains after the loop has ended (sessions, caches). */
+void df_server_free(df_server *srv);
+
+/* Writes "unix:PATH" / "tcp:HOST:PORT" descriptions of the listeners into buf. */
+void df_server_describe(const df_server *srv, char *buf, size_t cap);
+
+/* Posts a frame from a worker thread to the loop (thread-safe); the loop broadcasts it to the
+ * job's session subscribers. Takes ownership of one reference of `frame`. */
+void df_server_post(df_server *srv, struct df_job *job, struct df_sbuf *frame, uint64_t version);
+
+#endif

@@ -1,0 +1,224 @@
+/* session.c — session registry, subscribers, strokes (see session.h). */
+#include "server/session.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/cache.h"
+#include "server/conn.h"
+#include "server/job.h"
+#include "server/log.h"
+#include "server/meshload.h"
+#include "server/reply.h"
+
+int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
+                      df_error *err)
+{
+    if (srv->n_sessions >= srv->cfg.max_sessions) {
+        df_meshload_free(mesh);
+        return df_error_set(err, DF_ELIMIT, "too many sessions (max_sessions = %d)",
+                            srv->cfg.max_sessions);
+    }
+    df_session *s = calloc(1, sizeof *s);
+    size_t n = (size_t)mesh->nv * 3;
+    if (s) {
+        s->rest = malloc(n * sizeof *s->rest);
+        s->cur = malloc(n * sizeof *s->cur);
+        s->basef = malloc(n * sizeof *s->basef);
+        s->uf = calloc(n, sizeof *s->uf);
+    }
+    if (!s || !s->rest || !s->cur || !s->basef || !s->uf ||
+        df_history_init(&s->hist, mesh->V, n, DF_SESSION_HISTORY_MAX, err) != DF_OK) {
+        if (s) {
+            free(s->rest);
+            free(s->cur);
+            free(s->basef);
+            free(s->uf);
+            free(s);
+        }
+        df_meshload_free(mesh);
+        return df_error_set(err, DF_ENOMEM, "out of memory creating a session (%d vertices)",
+                            mesh->nv);
+    }
+    s->srv = srv;
+    s->mesh = *mesh;
+    memset(mesh, 0, sizeof *mesh);
+    s->nv = s->mesh.nv;
+    memcpy(s->rest, s->mesh.V, n * sizeof(double));
+    memcpy(s->cur, s->mesh.V, n * sizeof(double));
+    for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
+    atomic_init(&s->version, 0);
+    s->id = ++srv->next_session_id;
+    if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
+    else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
+    s->next = srv->sessions;
+    srv->sessions = s;
+    srv->n_sessions++;
+    *out = s;
+    return DF_OK;
+}
+
+df_session *df_session_find(df_server *srv, uint64_t id)
+{
+    for (df_session *s = srv->sessions; s; s = s->next)
+        if (s->id == id && !s->closed) return s;
+    return NULL;
+}
+
+df_session *df_session_find_name(df_server *srv, const char *name)
+{
+    for (df_session *s = srv->sessions; s; s = s->next)
+        if (!s->closed && strcmp(s->name, name) == 0) return s;
+    return NULL;
+}
+
+static void free_stroke(df_stroke *st)
+{
+    free(st->pins);
+    free(st->base);
+    free(st->startf);
+    free(st->applied);
+    free(st);
+}
+
+void df_handleset_free(df_server *srv, df_handleset *hs)
+{
+    if (!hs) return;
+    df_cache_drop_solver(srv, hs);
+    free(hs->handles);
+    for (int i = 0; i < hs->n_affine; i++) free((void *)hs->affine[i].verts);
+    free(hs->affine);
+    free(hs);
+}
+
+void df_session_destroy(df_session *s)
+{
+    df_server *srv = s->srv;
+    for (df_session **pp = &srv->sessions; *pp; pp = &(*pp)->next)
+        if (*pp == s) {
+            *pp = s->next;
+            break;
+        }
+    srv->n_sessions--;
+    for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
+    free(s->subs);
+    while (s->strokes) {
+        df_stroke *st = s->strokes;
+        s->strokes = st->next;
+        free_stroke(st);
+    }
+    df_handleset_free(srv, s->hs);
+    df_cache_drop_kelvinlet(srv, s);
+    df_history_free(&s->hist);
+    df_meshload_free(&s->mesh);
+    free(s->rest);
+    free(s->cur);
+    free(s->basef);
+    free(s->uf);
+    df_log(DF_LOG_INFO, "session %llu closed", (unsigned long long)s->id);
+    free(s);
+}
+
+void df_session_close(df_session *s)
+{
+    if (s->closed) return;
+    s->closed = 1;
+    df_msg_session_ref m = {.session_id = s->id};
+    df_error err;
+    df_sbuf *f = df_out_session_ref(DF_MSG_SESSION_CLOSED, DF_FLAG_EVENT, 0, &m, &err);
+    if (f) {
+        df_session_broadcast(s, f);
+        df_sbuf_unref(f);
+    }
+    for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
+    s->nsubs = 0;
+    df_job_pump(s); /* destroys it when idle */
+}
+
+int df_session_subscribe(df_session *s, df_conn *c, df_error *err)
+{
+    for (int i = 0; i < s->nsubs; i++)
+        if (s->subs[i] == c) return DF_OK;
+    if (s->nsubs >= s->srv->cfg.max_clients)
+        return df_error_set(err, DF_ELIMIT, "session %llu has too many subscribers",
+                            (unsigned long long)s->id);
+    if (s->nsubs == s->capsubs) {
+        int nc = s->capsubs ? 2 * s->capsubs : 8;
+        df_conn **n = realloc(s->subs, (size_t)nc * sizeof *n);
+        if (!n) return df_error_set(err, DF_ENOMEM, "out of memory");
+        s->subs = n;
+        s->capsubs = nc;
+    }
+    df_conn_ref(c);
+    s->subs[s->nsubs++] = c;
+    return DF_OK;
+}
+
+int df_session_unsubscribe(df_session *s, df_conn *c)
+{
+    for (int i = 0; i < s->nsubs; i++)
+        if (s->subs[i] == c) {
+            memmove(s->subs + i, s->subs + i + 1, (size_t)(s->nsubs - i - 1) * sizeof *s->subs);
+            s->nsubs--;
+            df_conn_unref(c);
+            return 1;
+        }
+    return 0;
+}
+
+static void drop_stroke_done(df_job *j) { df_session_drop_stroke(j->s, j->conn_id); }
+
+void df_session_forget_conn(df_server *srv, df_conn *c)
+{
+    for (df_session *s = srv->sessions; s; s = s->next) {
+        df_session_unsubscribe(s, c);
+        if (!df_session_stroke(s, c->id)) continue;
+        if (!s->running) {
+            df_session_drop_stroke(s, c->id);
+            continue;
+        }
+        /* A worker may be reading the stroke: drop it in FIFO order instead. */
+        df_job *j = df_job_new(srv, s, NULL, 0, 0, NULL, drop_stroke_done);
+        if (j) {
+            j->conn_id = c->id;
+            df_job_submit(j);
+        }
+    }
+}
+
+void df_session_broadcast(df_session *s, df_sbuf *frame)
+{
+    /* df_conn_send may drop a subscriber (closing it unsubscribes it): iterate over a copy. */
+    df_conn *local[64];
+    df_conn **subs = s->nsubs <= 64 ? local : malloc((size_t)s->nsubs * sizeof *subs);
+    if (!subs) return;
+    int n = s->nsubs;
+    for (int i = 0; i < n; i++) {
+        subs[i] = s->subs[i];
+        df_conn_ref(subs[i]);
+    }
+    for (int i = 0; i < n; i++) {
+        if (!subs[i]->closing) df_conn_send(subs[i], frame);
+        df_conn_unref(subs[i]);
+    }
+    if (subs != local) free(subs);
+}
+
+df_stroke *df_session_stroke(df_session *s, uint64_t conn_id)
+{
+    for (df_stroke *st = s->strokes; st; st = st->next)
+        if (st->conn_id == conn_id) return st;
+    return NULL;
+}
+
+void df_session_drop_stroke(df_session *s, uint64_t conn_id)
+{
+    for (df_stroke **pp = &s->strokes; *pp; pp = &(*pp)->next)
+        if ((*pp)->conn_id == conn_id) {
+            df_stroke *st = *pp;
+            *pp = st->next;
+            free_stroke(st);
+            return;
+        }
+}

@@ -1,0 +1,117 @@
+/* session.h — the session registry and a session's state.
+ *
+ * A session is one loaded mesh: its topology and BASE positions (load-time, the displacement
+ * stream's reference), the REST shape (ADMM reference; reset-rest replaces it by the current
+ * positions), the CURRENT positions (double), the published float32 displacements `uf`
+ * (u = fl32(cur - base): what every subscriber holds after applying the stream), the version
+ * counter, the undo/redo history, the subscribers, the open strokes, the handle set and the
+ * cached factorizations.
+ *
+ * Ordering: every request that reads or changes a session is a df_job on the session's FIFO
+ * (job.h). Only the head job runs; while its `work` runs on a worker thread it owns the compute
+ * state (cur, uf, rest, version, strokes, handle set, caches) and the loop thread does not touch
+ * it; `done` then runs on the loop thread. Subscribers, name and the FIFO are loop-thread only. */
+#ifndef DF_SERVER_SESSION_H
+#define DF_SERVER_SESSION_H
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include "core/admm/admm.h"
+#include "core/kelvinlet/kelvinlet.h"
+#include "core/mesh/mesh.h"
+#include "server/history.h"
+#include "server/server.h"
+
+#define DF_SESSION_NAME_MAX 256
+#define DF_SESSION_HISTORY_MAX 64   /* committed states kept for undo/redo */
+
+/* An open brush stroke of one client (begin .. end/cancel). */
+typedef struct df_stroke {
+    uint64_t conn_id;
+    df_kelvinlet_brush brush;    /* from begin (with the client's knob overrides) */
+    double strength;
+    uint32_t n_pins;
+    double *pins;                /* n_pins x 3, NULL when none */
+    double *base;                /* positions without this stroke's contribution, nv x 3 */
+    float *startf;               /* fl32(positions at begin): the points the field is evaluated at */
+    float *applied;              /* displacement this stroke currently contributes, nv x 3 */
+    uint64_t last_version;       /* session version this stroke produced last */
+    struct df_stroke *next;
+} df_stroke;
+
+/* The session's handle set (one at a time) and its cached ADMM solver. */
+typedef struct df_handleset {
+    df_admm_params params;
+    int32_t nh;
+    int32_t *handles;
+    int n_affine;
+    df_admm_affine *affine;      /* verts arrays owned (malloc'd) */
+    int max_iters;
+    df_admm *solver;             /* cached factorization; NULL when evicted (re-created on use) */
+    size_t solver_bytes;         /* estimate charged to the cache */
+    uint64_t lru;                /* srv->lru_clock at last use */
+} df_handleset;
+
+typedef struct df_session {
+    struct df_server *srv;
+    uint64_t id;
+    char name[DF_SESSION_NAME_MAX];
+    df_mesh mesh;                /* topology; mesh.V = BASE positions */
+    int32_t nv;
+    double *rest, *cur;          /* nv x 3 */
+    float *basef;                /* fl32(base), nv x 3 */
+    float *uf;                   /* published displacements, nv x 3 */
+    atomic_uint_fast64_t version;
+    df_history hist;
+    df_conn **subs;              /* subscribers (each holds a conn reference) */
+    int nsubs, capsubs;
+    struct df_job *jhead, *jtail;/* queued jobs, not started */
+    struct df_job *running;      /* the head job while it runs (or NULL) */
+    df_stroke *strokes;
+    df_handleset *hs;
+    df_kelvinlet_constraints *kc;/* cached K_pp LU of the last pinned set; NULL when none */
+    size_t kc_bytes;
+    uint64_t kc_lru;
+    int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
+    struct df_session *next;
+} df_session;
+
+/* Creates a session owning `mesh` (moved in: the caller's struct is zeroed) named `name`
+ * ("" -> "session-<id>") and links it into srv. Errors: DF_ELIMIT (max_sessions), DF_ENOMEM.
+ * On error the mesh is freed. */
+int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
+                      df_error *err);
+
+/* Finds a live (not closed) session by id / by name; NULL when absent. */
+df_session *df_session_find(df_server *srv, uint64_t id);
+df_session *df_session_find_name(df_server *srv, const char *name);
+
+/* Marks the session closed, tells subscribers (SESSION_CLOSED event), drops them, and frees it
+ * once its FIFO is empty (immediately when idle). */
+void df_session_close(df_session *s);
+
+/* Frees a session that has no running job (unlinks it from srv). */
+void df_session_destroy(df_session *s);
+
+/* Adds / removes a subscriber. add: DF_OK (also when already subscribed), DF_ELIMIT. */
+int df_session_subscribe(df_session *s, df_conn *c, df_error *err);
+int df_session_unsubscribe(df_session *s, df_conn *c);
+
+/* Called when a connection closes: unsubscribes it everywhere and drops its open strokes in
+ * idle sessions (strokes of busy sessions are dropped by their next job). */
+void df_session_forget_conn(df_server *srv, df_conn *c);
+
+/* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for. */
+void df_session_broadcast(df_session *s, df_sbuf *frame);
+
+/* Open stroke of connection `conn_id`, or NULL. */
+df_stroke *df_session_stroke(df_session *s, uint64_t conn_id);
+
+/* Unlinks and frees the stroke of `conn_id` (no-op when none). */
+void df_session_drop_stroke(df_session *s, uint64_t conn_id);
+
+/* Frees the handle set (and its solver, uncharging the cache). NULL-safe. */
+void df_handleset_free(df_server *srv, df_handleset *hs);
+
+#endif

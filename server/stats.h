@@ -1,0 +1,22 @@
+/* stats.h — counters reported by the stats request (loop thread only). */
+#ifndef DF_SERVER_STATS_H
+#define DF_SERVER_STATS_H
+
+#include <stdint.h>
+
+typedef struct df_stats {
+    uint64_t start_ns;            /* uv_hrtime() at start */
+    uint64_t clients_total;       /* connections accepted */
+    uint64_t clients_dropped;     /* dropped for backpressure or framing errors */
+    uint64_t clients_refused;     /* refused at max_clients */
+    uint64_t frames_in, bytes_in;
+    uint64_t frames_out, bytes_out;
+    uint64_t requests_ok, requests_failed;
+    uint64_t jobs_submitted, jobs_completed, jobs_superseded;
+    uint64_t versions;            /* versions broadcast, all sessions */
+    uint64_t kelvin_lu_hits, kelvin_lu_misses;
+    uint64_t admm_hits, admm_misses;
+    uint64_t lru_evictions;
+} df_stats;
+
+#endif

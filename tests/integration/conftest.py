@@ -1,0 +1,174 @@
+"""Fixtures of the deformd integration suite.
+
+`daemon` (session scope) starts the real $BUILD/bin/deformd (BUILD defaults to "build", relative
+to the repo root) in the foreground on a temporary Unix socket and a free loopback TCP port, waits
+until it answers a ping on both, and on teardown stops it with SIGTERM and checks it exits with
+status 0. `make_daemon` starts extra daemons with their own config (e.g. a small output queue).
+Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent.
+"""
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "client", "python"))
+sys.path.insert(0, os.path.dirname(__file__))
+
+from deformd_client import Client, DeformdError  # noqa: E402
+
+BUILD = os.path.join(ROOT, os.environ.get("BUILD", "build"))
+DEFORMD = os.path.join(BUILD, "bin", "deformd")
+DEFORMCTL = os.path.join(BUILD, "bin", "deformctl")
+MESHES = os.environ.get("MESHES") or os.path.join(ROOT, "..", "shared", "meshes")
+
+READY_TIMEOUT_S = 15.0
+STOP_TIMEOUT_S = 15.0
+
+
+def free_tcp_port() -> int:
+    """A loopback port that was free a moment ago (bound to 0 then released)."""
+    s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+class Daemon:
+    """One running deformd: its socket path, TCP port, process and log file."""
+
+    def __init__(self, tmpdir: str, extra_config: str = "", tcp: bool = True) -> None:
+        self.dir = tmpdir
+        self.socket_path = os.path.join(tmpdir, "deformd.sock")
+        self.tcp_port = free_tcp_port() if tcp else 0
+        self.log_path = os.path.join(tmpdir, "deformd.log")
+        self.config_path = os.path.join(tmpdir, "deformd.conf")
+        with open(self.config_path, "w") as f:
+            f.write("# written by tests/integration/conftest.py\n")
+            f.write("log_level = info\n")
+            if os.path.isdir(MESHES):
+                f.write("allow_paths = %s\n" % os.path.realpath(MESHES))
+            f.write(extra_config)
+        args = [DEFORMD, "--foreground", "--config", self.config_path,
+                "--socket", self.socket_path]
+        if tcp:
+            args += ["--tcp", "127.0.0.1:%d" % self.tcp_port]
+        self._log = open(self.log_path, "wb")
+        env = dict(os.environ)
+        env["XDG_RUNTIME_DIR"] = tmpdir
+        self.proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=self._log,
+                                     stderr=subprocess.STDOUT, env=env, cwd=tmpdir)
+        self._wait_ready()
+
+    def log(self) -> str:
+        self._log.flush()
+        with open(self.log_path, "rb") as f:
+            return f.read().decode("utf-8", "replace")
+
+    def _wait_ready(self) -> None:
+        deadline = time.monotonic() + READY_TIMEOUT_S
+        last = None
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                raise RuntimeError("deformd exited with status %d before it was ready:\n%s"
+                                   % (self.proc.returncode, self.log()))
+            try:
+                with self.unix_client() as c:
+                    c.ping(b"ready")
+                if self.tcp_port:
+                    with self.tcp_client() as c:
+                        c.ping(b"ready")
+                return
+            except (OSError, DeformdError) as e:
+                last = e
+                time.sleep(0.05)
+        self.proc.kill()
+        raise RuntimeError("deformd not ready after %.0f s (last error: %r):\n%s"
+                           % (READY_TIMEOUT_S, last, self.log()))
+
+    def unix_client(self, timeout: float = 30.0, hello: bool = True) -> Client:
+        return Client.connect_unix(self.socket_path, timeout=timeout, hello=hello)
+
+    def tcp_client(self, timeout: float = 30.0, hello: bool = True) -> Client:
+        return Client.connect_tcp("127.0.0.1", self.tcp_port, timeout=timeout, hello=hello)
+
+    def raw_unix(self, timeout: float = 5.0) -> socket.socket:
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        s.settimeout(timeout)
+        s.connect(self.socket_path)
+        return s
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self) -> int:
+        """SIGTERM, wait; returns the exit status (kills and returns -9 on a hang)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(STOP_TIMEOUT_S)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+                self._log.close()
+                return -9
+        self._log.close()
+        return self.proc.returncode
+
+
+def _require_binary() -> None:
+    if not os.access(DEFORMD, os.X_OK):
+        pytest.fail("%s is missing: build it first (make -j2)" % DEFORMD, pytrace=False)
+
+
+@pytest.fixture(scope="session")
+def daemon():
+    _require_binary()
+    with tempfile.TemporaryDirectory(prefix="deformd-it-") as tmp:
+        d = Daemon(tmp)
+        yield d
+        rc = d.stop()
+        assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, d.log()[-4000:])
+
+
+@pytest.fixture
+def make_daemon():
+    """Factory: make_daemon(extra_config) -> Daemon, stopped (and checked) after the test."""
+    _require_binary()
+    made = []
+    tmps = []
+
+    def make(extra_config: str = "", tcp: bool = False) -> Daemon:
+        tmp = tempfile.TemporaryDirectory(prefix="deformd-it-")
+        tmps.append(tmp)
+        d = Daemon(tmp.name, extra_config, tcp)
+        made.append(d)
+        return d
+
+    yield make
+    for d in made:
+        rc = d.stop()
+        assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, d.log()[-4000:])
+    for t in tmps:
+        t.cleanup()
+
+
+@pytest.fixture(scope="session")
+def meshes() -> str:
+    """The shared mesh folder; skips the test (with the reason) when it is absent."""
+    if not os.path.isdir(MESHES):
+        pytest.skip("shared meshes not found at %s (set MESHES)" % MESHES)
+    return MESHES
+
+
+@pytest.fixture
+def client(daemon):
+    c = daemon.unix_client()
+    yield c
+    c.close()

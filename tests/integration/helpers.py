@@ -1,0 +1,142 @@
+"""Shared helpers of the integration suite: generated meshes, a reference Kelvinlet grab
+(de Goes & James 2017, eqs. 6-7), small file readers for what deformctl writes."""
+import math
+import os
+from array import array
+from typing import List, Sequence, Tuple
+
+
+def grid_obj(n: int, m: int, size: float = 1.0) -> bytes:
+    """An n x m vertex grid in the z = 0.1 * sin plane (not planar), two triangles per cell,
+    as OBJ text."""
+    lines = ["# deformd test grid %dx%d" % (n, m)]
+    for j in range(m):
+        for i in range(n):
+            x = size * i / (n - 1)
+            y = size * j / (m - 1)
+            lines.append("v %.6f %.6f %.6f" % (x, y, 0.1 * math.sin(3 * x + 2 * y)))
+    for j in range(m - 1):
+        for i in range(n - 1):
+            a = j * n + i + 1
+            lines.append("f %d %d %d" % (a, a + 1, a + n + 1))
+            lines.append("f %d %d %d" % (a, a + n + 1, a + n))
+    return ("\n".join(lines) + "\n").encode()
+
+
+def obj_bytes_positions(data: bytes) -> array:
+    """The `v x y z` rows of OBJ text as float32 xyz (how the daemon stores positions)."""
+    out = array("f")
+    for line in data.decode().splitlines():
+        t = line.split()
+        if t and t[0] == "v":
+            out.extend((float(t[1]), float(t[2]), float(t[3])))
+    return out
+
+
+def grab_displacement(x: Sequence[float], center: Sequence[float], tip: Sequence[float],
+                      radius: float, nu: float) -> Tuple[float, float, float]:
+    """Single-scale regularized Kelvinlet grab, eq. (6) with the force from eq. (7):
+    u(r) = c eps K_eps(r) tip, K_eps(r) = (a-b)/r_e I + b/r_e^3 r r^T + a eps^2/(2 r_e^3) I,
+    r = x - center, r_e = sqrt(|r|^2 + eps^2), a = 1 (mu drops out), b = a / (4 (1 - nu))
+    (0 for nu = +-inf), c = 2 / (3a - 2b)."""
+    a = 1.0
+    b = 0.0 if math.isinf(nu) else a / (4.0 * (1.0 - nu))
+    c = 2.0 / (3.0 * a - 2.0 * b)
+    eps = radius
+    r = [x[k] - center[k] for k in range(3)]
+    re = math.sqrt(sum(v * v for v in r) + eps * eps)
+    diag = (a - b) / re + a * eps * eps / (2.0 * re ** 3)
+    rt = sum(r[k] * tip[k] for k in range(3))
+    return tuple(c * eps * (diag * tip[k] + b / re ** 3 * r[k] * rt) for k in range(3))
+
+
+def read_obj_positions(path: str) -> Tuple[List[Tuple[float, float, float]], int]:
+    """Vertices of an OBJ file and its face count."""
+    verts, faces = [], 0
+    with open(path) as f:
+        for line in f:
+            t = line.split()
+            if not t:
+                continue
+            if t[0] == "v":
+                verts.append((float(t[1]), float(t[2]), float(t[3])))
+            elif t[0] == "f":
+                faces += 1
+    return verts, faces
+
+
+def read_off_positions(path: str) -> Tuple[List[Tuple[float, float, float]], int]:
+    with open(path) as f:
+        tokens = [t for line in f for t in line.split("#")[0].split()]
+    assert tokens[0] == "OFF"
+    nv, nf = int(tokens[1]), int(tokens[2])
+    vals = tokens[4:4 + 3 * nv]
+    verts = [(float(vals[3 * i]), float(vals[3 * i + 1]), float(vals[3 * i + 2]))
+             for i in range(nv)]
+    return verts, nf
+
+
+def read_node_positions(path: str) -> List[Tuple[float, float, float]]:
+    with open(path) as f:
+        rows = [line.split("#")[0].split() for line in f]
+    rows = [r for r in rows if r]
+    n = int(rows[0][0])
+    return [(float(r[1]), float(r[2]), float(r[3])) for r in rows[1:1 + n]]
+
+
+def read_indices(path: str) -> List[int]:
+    with open(path) as f:
+        return [int(line.split()[0]) for line in f if line.strip()]
+
+
+def mesh_path(meshes: str, name: str) -> str:
+    return os.path.join(meshes, name)
+
+
+def max_abs_diff(a: Sequence[float], b: Sequence[float]) -> float:
+    assert len(a) == len(b)
+    return max((abs(x - y) for x, y in zip(a, b)), default=0.0)
+
+
+def tet_grid(n: int, size: float = 1.0):
+    """An n x n x n vertex cube split into 6 positively oriented tets per cell (Kuhn).
+    Returns (positions [(x, y, z)], tets [(a, b, c, d)] 0-based)."""
+    def vid(i, j, k):
+        return (k * n + j) * n + i
+    pts = [(size * i / (n - 1), size * j / (n - 1), size * k / (n - 1))
+           for k in range(n) for j in range(n) for i in range(n)]
+    perms = [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
+    tets = []
+    for k in range(n - 1):
+        for j in range(n - 1):
+            for i in range(n - 1):
+                for p in perms:
+                    c = [i, j, k]
+                    path = [vid(*c)]
+                    for ax in p:
+                        c[ax] += 1
+                        path.append(vid(*c))
+                    a, b, cc, d = path
+                    if _signed_volume(pts[a], pts[b], pts[cc], pts[d]) < 0:
+                        b, cc = cc, b
+                    tets.append((a, b, cc, d))
+    return pts, tets
+
+
+def _signed_volume(a, b, c, d) -> float:
+    u = [b[k] - a[k] for k in range(3)]
+    v = [c[k] - a[k] for k in range(3)]
+    w = [d[k] - a[k] for k in range(3)]
+    return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+            + u[2] * (v[0] * w[1] - v[1] * w[0])) / 6.0
+
+
+def tet_grid_medit(n: int, size: float = 1.0) -> bytes:
+    """tet_grid(n) as a MEDIT .mesh file (1-based indices, reference 0 on every row)."""
+    pts, tets = tet_grid(n, size)
+    out = ["MeshVersionFormatted 1", "Dimension 3", "Vertices", str(len(pts))]
+    out += ["%.6f %.6f %.6f 0" % p for p in pts]
+    out += ["Tetrahedra", str(len(tets))]
+    out += ["%d %d %d %d 0" % tuple(v + 1 for v in t) for t in tets]
+    out.append("End")
+    return ("\n".join(out) + "\n").encode()

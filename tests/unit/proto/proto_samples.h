@@ -1,0 +1,203 @@
+/* proto_samples.h — valid sample messages shared by the proto unit tests (header-only: the
+ * Makefile builds one binary per tests/unit/<area>/test_*.c, so helpers live in a header). */
+#ifndef DF_TEST_PROTO_SAMPLES_H
+#define DF_TEST_PROTO_SAMPLES_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "proto/messages.h"
+
+typedef struct sample {
+    const char *name;
+    uint16_t type, flags;
+    df_buf payload;
+} sample;
+
+enum { N_SAMPLES = 27 };
+
+static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
+static int32_t sample_handles[4] = {0, 17, 4095, 8000000};
+static int32_t sample_aff_idx[3] = {5, 6, 7};
+static double sample_targets[12] = {1, 2, 3, 4, 5, 6, 7, 8, 9, -1, -2, -3.25};
+static float sample_dense[15] = {0.5f, 0, 0, 1, 2, 3, -4, -5, -6, 1e-7f, 0, 0, 0, 0, 1e30f};
+static int32_t sample_sparse_idx[3] = {2, 40, 99};
+static float sample_sparse_xyz[9] = {0.25f, -0.5f, 1, 0, 0, 0, 3, 2, 1};
+static float sample_mesh_xyz[6] = {0, 0, 0, 1, 0.5f, -0.5f};
+static int32_t sample_tets[8] = {0, 1, 2, 3, 3, 2, 1, 4};
+
+static inline df_msg_brush sample_brush(void)
+{
+    df_msg_brush m;
+    memset(&m, 0, sizeof m);
+    m.session_id = 42;
+    m.type = DF_BRUSH_AFFINE;
+    m.dim = 3;
+    m.falloff = 2;
+    m.integrator = DF_INTEG_RK4;
+    m.steps = 8;
+    m.moving = 1;
+    m.has_mirror = 1;
+    m.radius = 0.25;
+    m.ratio = 2.5;
+    m.nu = 0.45;
+    m.strength = 1.5;
+    for (int i = 0; i < 3; i++) {
+        m.center[i] = 0.1 * (i + 1);
+        m.move[i] = -0.01 * (i + 1);
+        m.twist[i] = 0.3 * i;
+        m.mirror_point[i] = 0;
+        m.mirror_normal[i] = i == 0;
+    }
+    m.scale = 0.2;
+    for (int i = 0; i < 9; i++)
+        m.matrix[i] = i % 4 == 0 ? 0.1 : 0.01 * i;
+    m.n_pinned = 2;
+    m.pinned = sample_pinned;
+    return m;
+}
+
+static inline df_msg_handles sample_handles_msg(df_msg_affine_set *aff)
+{
+    df_msg_handles m;
+    memset(&m, 0, sizeof m);
+    m.session_id = 7;
+    m.energy = DF_ENERGY_NEOHOOKEAN;
+    m.w = 1e4;
+    m.s = 0.01;
+    m.rho = 5e5;
+    m.tol = 1e-11;
+    m.max_iters = 500;
+    m.n_handles = 4;
+    m.handles = sample_handles;
+    memset(aff, 0, sizeof *aff);
+    aff->rows = 2;
+    aff->A[0] = 1;
+    aff->A[4] = 1;
+    aff->b[0] = 0.5;
+    aff->b[1] = -0.5;
+    aff->n_indices = 3;
+    aff->indices = sample_aff_idx;
+    m.n_affine = 1;
+    m.affine = aff;
+    return m;
+}
+
+static inline df_msg_disp sample_disp_sparse(void)
+{
+    df_msg_disp d = {.session_id = 3, .version = 11, .base_version = 10,
+                     .kind = DF_CHANGE_BRUSH, .encoding = DF_DISP_SPARSE, .nv = 100, .total = 5,
+                     .offset = 2, .count = 3, .idx = sample_sparse_idx, .xyz = sample_sparse_xyz};
+    return d;
+}
+
+static inline df_msg_disp sample_disp_dense(void)
+{
+    df_msg_disp d = {.session_id = 3, .version = 12, .base_version = 11, .kind = DF_CHANGE_UNDO,
+                     .encoding = DF_DISP_DENSE, .nv = 5, .total = 5, .offset = 0, .count = 5,
+                     .idx = NULL, .xyz = sample_dense};
+    return d;
+}
+
+/* Fills s[0 .. N_SAMPLES) with one valid encoded payload per body kind and direction. */
+static inline void build_samples(sample *s)
+{
+    df_error e;
+    int k = 0, rc = 0;
+#define ADD(nm, ty, fl, call)                                                                    \
+    do {                                                                                         \
+        s[k].name = nm;                                                                          \
+        s[k].type = ty;                                                                          \
+        s[k].flags = fl;                                                                         \
+        df_buf_init(&s[k].payload);                                                              \
+        df_buf *out = &s[k].payload;                                                             \
+        rc = (call);                                                                             \
+        if (rc) {                                                                                \
+            fprintf(stderr, "sample %s: %s\n", nm, e.msg);                                       \
+            abort();                                                                             \
+        }                                                                                        \
+        k++;                                                                                     \
+    } while (0)
+    df_msg_hello hello = {1, 3, DF_FEAT_KELVINLET, "deformctl"};
+    ADD("hello", DF_MSG_HELLO, 0, df_msg_hello_encode(&hello, out, &e));
+    df_msg_hello_reply hr = {1, 1, DF_FEAT_KELVINLET | DF_FEAT_ADMM, DF_MAX_FRAME_PAYLOAD,
+                             DF_MAX_MESH_VERTICES, DF_MAX_MESH_ELEMENTS, 64, 16,
+                             DF_MAX_MESH_BYTES, 256u << 20, 0, "deformd 0.1"};
+    ADD("hello_reply", DF_MSG_HELLO, DF_FLAG_REPLY, df_msg_hello_reply_encode(&hr, out, &e));
+    const uint8_t tok[4] = {9, 8, 7, 6};
+    df_msg_auth auth = {2, 4, tok};
+    ADD("auth", DF_MSG_AUTH, 0, df_msg_auth_encode(&auth, out, &e));
+    df_msg_ping ping = {3, tok};
+    ADD("ping", DF_MSG_PING, 0, df_msg_ping_encode(&ping, out, &e));
+    df_msg_load_mesh lm = {DF_LOAD_INLINE, DF_FMT_OFF, "tri", NULL, sizeof sample_blob - 1, 0,
+                           0, sizeof sample_blob - 1, sample_blob};
+    ADD("load_mesh", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lm, out, &e));
+    char path[] = "/work/shared/meshes/spot.obj";
+    df_msg_load_mesh lp = {DF_LOAD_PATH, DF_FMT_AUTO, "spot", path, 0, 0, 0, 0, NULL};
+    ADD("load_path", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lp, out, &e));
+    df_msg_session_ref ref = {0x1122334455667788ull};
+    ADD("session_ref", DF_MSG_UNDO, 0, df_msg_session_ref_encode(&ref, out, &e));
+    df_msg_open_session os = {0, "bunny"};
+    ADD("open_session", DF_MSG_OPEN_SESSION, 0, df_msg_open_session_encode(&os, out, &e));
+    df_msg_subscribe sub = {5, DF_SUBSCRIBE_SNAPSHOT};
+    ADD("subscribe", DF_MSG_SUBSCRIBE, 0, df_msg_subscribe_encode(&sub, out, &e));
+    df_msg_session_info si = {5, 99, 3, 0, 2, 5433, 34055, 4, 1, "bunny"};
+    ADD("session_info", DF_MSG_OPEN_SESSION, DF_FLAG_REPLY, df_msg_session_info_encode(&si, out, &e));
+    df_msg_session_info items[2] = {si, {6, 0, 2, 1, 0, 694, 1267, 0, 0, "woody"}};
+    df_msg_session_list sl = {2, items};
+    ADD("session_list", DF_MSG_LIST_SESSIONS, DF_FLAG_REPLY,
+        df_msg_session_list_encode(&sl, out, &e));
+    df_msg_ack ack = {5, 100};
+    ADD("ack", DF_MSG_UNDO, DF_FLAG_REPLY, df_msg_ack_encode(&ack, out, &e));
+    df_msg_brush br = sample_brush();
+    ADD("brush", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&br, out, &e));
+    df_msg_brush_update bu = {42, {1, 2, 3}, {0, 0, 0.5}, -0.25, {1, 0, 0, 0, 1, 0, 0, 0, 1}};
+    ADD("brush_update", DF_MSG_BRUSH_UPDATE, 0, df_msg_brush_update_encode(&bu, out, &e));
+    df_msg_brush_param bp = {42, DF_BP_NU, -INFINITY};
+    ADD("brush_param", DF_MSG_SET_BRUSH_PARAM, 0, df_msg_brush_param_encode(&bp, out, &e));
+    df_msg_affine_set aff;
+    df_msg_handles hs = sample_handles_msg(&aff);
+    ADD("handles", DF_MSG_HANDLES_SET, 0, df_msg_handles_encode(&hs, out, &e));
+    df_msg_handle_move hm = {7, 0, 250, 10, 4, sample_targets};
+    ADD("handle_move", DF_MSG_HANDLES_MOVE, 0, df_msg_handle_move_encode(&hm, out, &e));
+    df_msg_move_result mr = {7, 60, DF_MOVE_CONVERGED, 123, 4.5, 1e-12, 37.5};
+    ADD("move_result", DF_MSG_HANDLES_MOVE, DF_FLAG_REPLY, df_msg_move_result_encode(&mr, out, &e));
+    df_msg_get_mesh gm = {5, DF_GET_MESH_BASE};
+    ADD("get_mesh", DF_MSG_GET_MESH, 0, df_msg_get_mesh_encode(&gm, out, &e));
+    df_msg_mesh_chunk mcx = {5, 9, 3, 0, DF_SECTION_POSITIONS, 5, 2, 0, 3, 2,
+                             sample_mesh_xyz, NULL};
+    ADD("mesh_chunk_xyz", DF_MSG_GET_MESH, DF_FLAG_REPLY | DF_FLAG_MORE,
+        df_msg_mesh_chunk_encode(&mcx, out, &e));
+    df_msg_mesh_chunk mce = {5, 9, 3, 0, DF_SECTION_ELEMENTS, 5, 2, 0, 0, 2, NULL, sample_tets};
+    ADD("mesh_chunk_elem", DF_MSG_GET_MESH, DF_FLAG_REPLY, df_msg_mesh_chunk_encode(&mce, out, &e));
+    df_msg_snapshot_req sr = {5, 0};
+    ADD("snapshot_req", DF_MSG_SNAPSHOT, 0, df_msg_snapshot_req_encode(&sr, out, &e));
+    df_msg_disp ds = sample_disp_sparse();
+    ADD("disp_sparse", DF_MSG_DISPLACEMENT, DF_FLAG_EVENT, df_msg_disp_encode(&ds, out, &e));
+    df_msg_disp dd = sample_disp_dense();
+    ADD("disp_dense", DF_MSG_DISPLACEMENT, DF_FLAG_EVENT, df_msg_disp_encode(&dd, out, &e));
+    df_msg_progress pr = {DF_MOVE_RUNNING, 0, 20, 3.25, 1e-4, 12.0, sample_disp_sparse()};
+    pr.disp.kind = DF_CHANGE_HANDLE_MOVE;
+    ADD("progress", DF_MSG_PROGRESS, DF_FLAG_EVENT, df_msg_progress_encode(&pr, out, &e));
+    df_msg_stats_req sq = {0};
+    ADD("stats_req", DF_MSG_STATS, 0, df_msg_stats_req_encode(&sq, out, &e));
+    df_msg_stat st[3] = {{"sessions", 2}, {"cache.kelvinlet_lu.hits", 17}, {"uptime_s", 0.5}};
+    df_msg_stats sts = {3, st};
+    ADD("stats", DF_MSG_STATS, DF_FLAG_REPLY, df_msg_stats_encode(&sts, out, &e));
+#undef ADD
+    if (k != N_SAMPLES) {
+        fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);
+        abort();
+    }
+}
+
+static inline void free_samples(sample *s)
+{
+    for (int i = 0; i < N_SAMPLES; i++)
+        df_buf_free(&s[i].payload);
+}
+
+#endif

@@ -1,0 +1,310 @@
+/* Unit tests for the request/reply bodies of proto/messages.h: byte-exact round trips of every
+ * body, explicit field values after decode, truncation at every byte offset, a trailing byte,
+ * and the (type, flags) -> body table. Malformed field values are in test_malformed.c. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "proto/messages.h"
+#include "tests/unit/proto/proto_samples.h"
+
+static int encode_any(const df_msg_any *m, df_buf *out, df_error *e)
+{
+    switch (m->which) {
+    case DF_BODY_EMPTY: return DF_OK;
+    case DF_BODY_ERROR: return df_msg_error_encode(&m->u.error, out, e);
+    case DF_BODY_HELLO: return df_msg_hello_encode(&m->u.hello, out, e);
+    case DF_BODY_HELLO_REPLY: return df_msg_hello_reply_encode(&m->u.hello_reply, out, e);
+    case DF_BODY_AUTH: return df_msg_auth_encode(&m->u.auth, out, e);
+    case DF_BODY_PING: return df_msg_ping_encode(&m->u.ping, out, e);
+    case DF_BODY_LOAD_MESH: return df_msg_load_mesh_encode(&m->u.load_mesh, out, e);
+    case DF_BODY_SESSION_REF: return df_msg_session_ref_encode(&m->u.session_ref, out, e);
+    case DF_BODY_OPEN_SESSION: return df_msg_open_session_encode(&m->u.open_session, out, e);
+    case DF_BODY_SUBSCRIBE: return df_msg_subscribe_encode(&m->u.subscribe, out, e);
+    case DF_BODY_SESSION_INFO: return df_msg_session_info_encode(&m->u.session_info, out, e);
+    case DF_BODY_SESSION_LIST: return df_msg_session_list_encode(&m->u.session_list, out, e);
+    case DF_BODY_ACK: return df_msg_ack_encode(&m->u.ack, out, e);
+    case DF_BODY_BRUSH: return df_msg_brush_encode(&m->u.brush, out, e);
+    case DF_BODY_BRUSH_UPDATE: return df_msg_brush_update_encode(&m->u.brush_update, out, e);
+    case DF_BODY_BRUSH_PARAM: return df_msg_brush_param_encode(&m->u.brush_param, out, e);
+    case DF_BODY_HANDLES: return df_msg_handles_encode(&m->u.handles, out, e);
+    case DF_BODY_HANDLE_MOVE: return df_msg_handle_move_encode(&m->u.handle_move, out, e);
+    case DF_BODY_MOVE_RESULT: return df_msg_move_result_encode(&m->u.move_result, out, e);
+    case DF_BODY_GET_MESH: return df_msg_get_mesh_encode(&m->u.get_mesh, out, e);
+    case DF_BODY_MESH_CHUNK: return df_msg_mesh_chunk_encode(&m->u.mesh_chunk, out, e);
+    case DF_BODY_SNAPSHOT_REQ: return df_msg_snapshot_req_encode(&m->u.snapshot_req, out, e);
+    case DF_BODY_DISP: return df_msg_disp_encode(&m->u.disp, out, e);
+    case DF_BODY_PROGRESS: return df_msg_progress_encode(&m->u.progress, out, e);
+    case DF_BODY_STATS_REQ: return df_msg_stats_req_encode(&m->u.stats_req, out, e);
+    case DF_BODY_STATS: return df_msg_stats_encode(&m->u.stats, out, e);
+    }
+    return DF_EINTERNAL;
+}
+
+/* Decodes a heap copy of exactly n bytes so that ASan sees any over-read. */
+static int decode_copy(const sample *s, size_t n, df_msg_any *m, df_error *e)
+{
+    uint8_t *p = malloc(n ? n : 1);
+    memcpy(p, s->payload.data, n);
+    int rc = df_msg_any_decode(s->type, s->flags, p, n, m, e);
+    if (rc == DF_OK)
+        df_msg_any_free(m);
+    free(p);
+    return rc;
+}
+
+static void test_reencode_is_byte_identical(void **state)
+{
+    (void)state;
+    sample s[N_SAMPLES];
+    build_samples(s);
+    for (int i = 0; i < N_SAMPLES; i++) {
+        df_msg_any m;
+        df_error e;
+        int rc = df_msg_any_decode(s[i].type, s[i].flags, s[i].payload.data, s[i].payload.len, &m,
+                                   &e);
+        if (rc)
+            fail_msg("%s: %s", s[i].name, e.msg);
+        df_buf again;
+        df_buf_init(&again);
+        assert_int_equal(encode_any(&m, &again, &e), DF_OK);
+        assert_int_equal(again.len, s[i].payload.len);
+        assert_memory_equal(again.data, s[i].payload.data, again.len);
+        df_buf_free(&again);
+        df_msg_any_free(&m);
+    }
+    free_samples(s);
+}
+
+static void test_truncation_at_every_offset(void **state)
+{
+    (void)state;
+    sample s[N_SAMPLES];
+    build_samples(s);
+    size_t checked = 0;
+    for (int i = 0; i < N_SAMPLES; i++) {
+        if (s[i].type == DF_MSG_PING)
+            continue; /* any byte string is a valid ping */
+        for (size_t n = 0; n < s[i].payload.len; n++) {
+            df_msg_any m;
+            df_error e = {0, ""};
+            int rc = decode_copy(&s[i], n, &m, &e);
+            if (rc != DF_EPROTO_TRUNCATED)
+                fail_msg("%s cut at %zu of %zu: rc %d (%s)", s[i].name, n, s[i].payload.len, rc,
+                         e.msg);
+            assert_int_equal(e.code, DF_EPROTO_TRUNCATED);
+            checked++;
+        }
+    }
+    assert_true(checked > 1500); /* every offset of every sample was cut */
+    free_samples(s);
+}
+
+static void test_trailing_byte_is_rejected(void **state)
+{
+    (void)state;
+    sample s[N_SAMPLES];
+    build_samples(s);
+    for (int i = 0; i < N_SAMPLES; i++) {
+        if (s[i].type == DF_MSG_PING)
+            continue;
+        df_error e;
+        assert_int_equal(df_buf_append(&s[i].payload, "\0", 1, &e), DF_OK);
+        df_msg_any m;
+        int rc = decode_copy(&s[i], s[i].payload.len, &m, &e);
+        if (rc != DF_EPROTO_TRAILING)
+            fail_msg("%s + 1 byte: rc %d (%s)", s[i].name, rc, e.msg);
+    }
+    free_samples(s);
+}
+
+static void test_brush_fields(void **state)
+{
+    (void)state;
+    df_msg_brush in = sample_brush(), out;
+    df_buf b;
+    df_buf_init(&b);
+    df_error e;
+    assert_int_equal(df_msg_brush_encode(&in, &b, &e), DF_OK);
+    assert_int_equal(b.len, 252 + 24 * 2);
+    /* spot-check documented offsets: radius at 16, nu at 32, n_pinned at 248 */
+    double radius, nu;
+    memcpy(&radius, b.data + 16, 8);
+    memcpy(&nu, b.data + 32, 8);
+    assert_true(radius == 0.25 && nu == 0.45);
+    assert_int_equal(df_le32_load(b.data + 248), 2);
+    assert_int_equal(df_msg_brush_decode(b.data, b.len, &out, &e), DF_OK);
+    assert_int_equal(out.session_id, 42);
+    assert_int_equal(out.type, DF_BRUSH_AFFINE);
+    assert_int_equal(out.dim, 3);
+    assert_int_equal(out.falloff, 2);
+    assert_int_equal(out.integrator, DF_INTEG_RK4);
+    assert_int_equal(out.steps, 8);
+    assert_int_equal(out.moving, 1);
+    assert_int_equal(out.has_mirror, 1);
+    assert_true(out.ratio == 2.5 && out.strength == 1.5 && out.scale == 0.2);
+    assert_true(out.center[2] == in.center[2] && out.move[1] == -0.02 && out.twist[2] == 0.6);
+    assert_true(out.matrix[4] == 0.1 && out.matrix[5] == 0.05);
+    assert_true(out.mirror_normal[0] == 1 && out.mirror_normal[1] == 0);
+    assert_int_equal(out.n_pinned, 2);
+    assert_true(out.pinned != sample_pinned);
+    assert_memory_equal(out.pinned, sample_pinned, sizeof sample_pinned);
+    df_msg_brush_free(&out);
+    assert_null(out.pinned);
+    /* nu = +inf is legal and survives */
+    in.nu = INFINITY;
+    in.n_pinned = 0;
+    df_buf_reset(&b);
+    assert_int_equal(df_msg_brush_encode(&in, &b, &e), DF_OK);
+    assert_int_equal(df_msg_brush_decode(b.data, b.len, &out, &e), DF_OK);
+    assert_true(isinf(out.nu) && out.nu > 0);
+    assert_null(out.pinned);
+    df_msg_brush_free(&out);
+    df_buf_free(&b);
+}
+
+static void test_handles_and_move_fields(void **state)
+{
+    (void)state;
+    df_msg_affine_set aff;
+    df_msg_handles in = sample_handles_msg(&aff), out;
+    df_buf b;
+    df_buf_init(&b);
+    df_error e;
+    assert_int_equal(df_msg_handles_encode(&in, &b, &e), DF_OK);
+    /* 49 fixed + 4 x 4 handles + 4 n_affine + (1 + 2*3*8 + 2*8 + 4 + 3*4) */
+    assert_int_equal(b.len, 49 + 16 + 4 + 1 + 48 + 16 + 4 + 12);
+    assert_int_equal(df_msg_handles_decode(b.data, b.len, &out, &e), DF_OK);
+    assert_int_equal(out.energy, DF_ENERGY_NEOHOOKEAN);
+    assert_true(out.w == 1e4 && out.s == 0.01 && out.rho == 5e5 && out.tol == 1e-11);
+    assert_int_equal(out.max_iters, 500);
+    assert_int_equal(out.n_handles, 4);
+    assert_int_equal(out.handles[3], 8000000);
+    assert_int_equal(out.n_affine, 1);
+    assert_int_equal(out.affine[0].rows, 2);
+    assert_true(out.affine[0].A[0] == 1 && out.affine[0].A[4] == 1 && out.affine[0].A[6] == 0);
+    assert_true(out.affine[0].b[1] == -0.5);
+    assert_int_equal(out.affine[0].n_indices, 3);
+    assert_int_equal(out.affine[0].indices[2], 7);
+    df_msg_handles_free(&out);
+    assert_null(out.handles);
+
+    df_msg_handle_move mv = {7, 0, 250, 10, 4, sample_targets}, mo;
+    df_buf_reset(&b);
+    assert_int_equal(df_msg_handle_move_encode(&mv, &b, &e), DF_OK);
+    assert_int_equal(b.len, 24 + 96);
+    assert_int_equal(df_msg_handle_move_decode(b.data, b.len, &mo, &e), DF_OK);
+    assert_int_equal(mo.max_ms, 250);
+    assert_int_equal(mo.progress_every, 10);
+    assert_true(mo.targets[11] == -3.25);
+    df_msg_handle_move_free(&mo);
+    df_buf_free(&b);
+}
+
+static void test_session_and_load_fields(void **state)
+{
+    (void)state;
+    sample s[N_SAMPLES];
+    build_samples(s);
+    df_msg_any m;
+    df_error e;
+    for (int i = 0; i < N_SAMPLES; i++) {
+        assert_int_equal(df_msg_any_decode(s[i].type, s[i].flags, s[i].payload.data,
+                                           s[i].payload.len, &m, &e), DF_OK);
+        if (!strcmp(s[i].name, "load_mesh")) {
+            assert_int_equal(m.u.load_mesh.format, DF_FMT_OFF);
+            assert_string_equal(m.u.load_mesh.name, "tri");
+            assert_null(m.u.load_mesh.path);
+            assert_int_equal(m.u.load_mesh.data_len, sizeof sample_blob - 1);
+            /* data points into the payload */
+            assert_ptr_equal(m.u.load_mesh.data, s[i].payload.data + s[i].payload.len -
+                                                     (sizeof sample_blob - 1));
+        } else if (!strcmp(s[i].name, "load_path")) {
+            assert_int_equal(m.u.load_mesh.source, DF_LOAD_PATH);
+            assert_string_equal(m.u.load_mesh.path, "/work/shared/meshes/spot.obj");
+            assert_null(m.u.load_mesh.data);
+        } else if (!strcmp(s[i].name, "session_list")) {
+            assert_int_equal(m.u.session_list.count, 2);
+            assert_string_equal(m.u.session_list.items[1].name, "woody");
+            assert_int_equal(m.u.session_list.items[1].nv, 694);
+            assert_int_equal(m.u.session_list.items[0].ne, 34055);
+            assert_true(m.u.session_list.items[0].version == 99);
+        } else if (!strcmp(s[i].name, "hello_reply")) {
+            assert_int_equal(m.u.hello_reply.max_pending_requests, 64);
+            assert_true(m.u.hello_reply.max_client_queue_bytes == 256u << 20);
+            assert_string_equal(m.u.hello_reply.server_name, "deformd 0.1");
+        } else if (!strcmp(s[i].name, "stats")) {
+            assert_int_equal(m.u.stats.count, 3);
+            assert_string_equal(m.u.stats.items[1].key, "cache.kelvinlet_lu.hits");
+            assert_true(m.u.stats.items[1].value == 17);
+        } else if (!strcmp(s[i].name, "session_ref")) {
+            assert_true(m.u.session_ref.session_id == 0x1122334455667788ull);
+            assert_memory_equal(s[i].payload.data, "\x88\x77\x66\x55\x44\x33\x22\x11", 8);
+        } else if (!strcmp(s[i].name, "auth")) {
+            assert_int_equal(m.u.auth.method, 2);
+            assert_int_equal(m.u.auth.token_len, 4);
+            assert_int_equal(m.u.auth.token[3], 6);
+        } else if (!strcmp(s[i].name, "brush_param")) {
+            assert_true(isinf(m.u.brush_param.value) && m.u.brush_param.value < 0);
+        } else if (!strcmp(s[i].name, "move_result")) {
+            assert_int_equal(s[i].payload.len, 45);
+            assert_int_equal(m.u.move_result.iterations, 123);
+            assert_true(m.u.move_result.elapsed_ms == 37.5);
+        }
+        df_msg_any_free(&m);
+    }
+    free_samples(s);
+}
+
+static void test_body_kind_table(void **state)
+{
+    (void)state;
+    df_body_kind k;
+    df_error e;
+    assert_int_equal(df_msg_body_kind(DF_MSG_HANDLES_MOVE, 0, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_HANDLE_MOVE);
+    assert_int_equal(df_msg_body_kind(DF_MSG_HANDLES_MOVE, DF_FLAG_REPLY, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_MOVE_RESULT);
+    assert_int_equal(df_msg_body_kind(DF_MSG_SNAPSHOT, DF_FLAG_REPLY | DF_FLAG_MORE, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_DISP);
+    assert_int_equal(df_msg_body_kind(DF_MSG_BRUSH_END, DF_FLAG_REPLY | DF_FLAG_ERROR, &k, &e),
+                     DF_OK);
+    assert_int_equal(k, DF_BODY_ERROR);
+    assert_int_equal(df_msg_body_kind(DF_MSG_DISPLACEMENT, 0, &k, &e), DF_EPROTO_BADTYPE);
+    assert_non_null(strstr(e.msg, "request"));
+    assert_int_equal(df_msg_body_kind(DF_MSG_SESSION_CLOSED, DF_FLAG_REPLY, &k, &e),
+                     DF_EPROTO_BADTYPE);
+    assert_int_equal(df_msg_body_kind(DF_MSG_UNDO, DF_FLAG_EVENT, &k, &e), DF_EPROTO_BADTYPE);
+    assert_int_equal(df_msg_body_kind(0x0777, 0, &k, &e), DF_EPROTO_BADTYPE);
+    assert_int_equal(df_msg_body_kind(DF_MSG_ERROR, 0, &k, &e), DF_EPROTO_BADTYPE);
+    /* list sessions request and auth success reply are empty bodies */
+    assert_int_equal(df_msg_body_kind(DF_MSG_LIST_SESSIONS, 0, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_EMPTY);
+    df_msg_any m;
+    assert_int_equal(df_msg_any_decode(DF_MSG_AUTH, DF_FLAG_REPLY, NULL, 0, &m, &e), DF_OK);
+    assert_int_equal(df_msg_any_decode(DF_MSG_LIST_SESSIONS, 0, (const uint8_t *)"x", 1, &m, &e),
+                     DF_EPROTO_TRAILING);
+    int known = 0;
+    for (unsigned t = 0; t <= 0xFFFF; t++)
+        known += df_msg_type_valid((uint16_t)t);
+    assert_int_equal(known, 26);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reencode_is_byte_identical),
+        cmocka_unit_test(test_truncation_at_every_offset),
+        cmocka_unit_test(test_trailing_byte_is_rejected),
+        cmocka_unit_test(test_brush_fields),
+        cmocka_unit_test(test_handles_and_move_fields),
+        cmocka_unit_test(test_session_and_load_fields),
+        cmocka_unit_test(test_body_kind_table),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
