@@ -1,6 +1,8 @@
 /* dc_files.c — index, point, TetGen .node and target files (see dc_files.h). */
 #include "client/dc_files.h"
 
+#include "core/mesh/mesh_io.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -145,60 +147,7 @@ int dc_parse_points_text(const char *text, const char *name, double **xyz, int32
 int dc_parse_node_text(const char *text, const char *name, double **xyz, int32_t *n,
                        df_error *err)
 {
-    line_cur c = {text, 0};
-    const char *s, *e;
-    double h[5];
-    if (!next_line(&c, &s, &e))
-        return df_error_set(err, DF_EFORMAT, "%s: empty .node file", name);
-    int hk = line_numbers(s, e, h, 5);
-    if (hk < 2 || hk > 4 || h[0] != floor(h[0]) || h[0] < 1 || h[0] > DC_FILES_MAX_ROWS ||
-        (h[1] != 2 && h[1] != 3))
-        return df_error_set(err, DF_EFORMAT, "%s:%ld: bad .node header (want 'n dim attrs markers')",
-                            name, c.lineno);
-    int32_t nn = (int32_t)h[0];
-    int dim = (int)h[1];
-    double *a = malloc((size_t)nn * 3 * sizeof *a);
-    if (!a)
-        return df_error_set(err, DF_ENOMEM, "%s: out of memory for %d nodes", name, nn);
-    long base = 0;
-    int32_t i = 0;
-    while (next_line(&c, &s, &e)) {
-        double v[8];
-        int k = line_numbers(s, e, v, 8);
-        if (i >= nn) {
-            free(a);
-            return df_error_set(err, DF_EFORMAT, "%s:%ld: more rows than the header's %d", name,
-                                c.lineno, nn);
-        }
-        if (k < 1 + dim || v[0] != floor(v[0])) {
-            free(a);
-            return df_error_set(err, DF_EFORMAT, "%s:%ld: expected 'id x y%s'", name, c.lineno,
-                                dim == 3 ? " z" : "");
-        }
-        if (i == 0) {
-            if (v[0] != 0 && v[0] != 1) {
-                free(a);
-                return df_error_set(err, DF_EFORMAT, "%s:%ld: first id %g is neither 0 nor 1", name,
-                                    c.lineno, v[0]);
-            }
-            base = (long)v[0];
-        } else if ((long)v[0] != base + i) {
-            free(a);
-            return df_error_set(err, DF_EFORMAT, "%s:%ld: id %g, expected %ld", name, c.lineno, v[0],
-                                base + i);
-        }
-        a[3 * (size_t)i] = v[1];
-        a[3 * (size_t)i + 1] = v[2];
-        a[3 * (size_t)i + 2] = dim == 3 ? v[3] : 0.0;
-        i++;
-    }
-    if (i != nn) {
-        free(a);
-        return df_error_set(err, DF_EFORMAT, "%s: %d rows, header says %d", name, i, nn);
-    }
-    *xyz = a;
-    *n = nn;
-    return DF_OK;
+    return df_mesh_read_tetgen_nodes_memory(text, strlen(text), name, xyz, n, err);
 }
 
 int dc_parse_targets_text(const char *text, const char *name, int is_node, const int32_t *handles,

@@ -28,8 +28,8 @@ int dc_parse_index_text(const char *text, const char *name, int32_t **idx, int32
 int dc_parse_points_text(const char *text, const char *name, double **xyz, int32_t *n,
                          df_error *err);
 
-/* Parses a TetGen .node text into *xyz (n x 3; 2D files get z = 0) and *n. Checks the header
- * count against the rows and the ids for consecutiveness from the detected base. */
+/* Parses a TetGen .node text into *xyz (n x 3; 2D files get z = 0) and *n: core/mesh's
+ * df_mesh_read_tetgen_nodes_memory (header count vs rows, consecutive ids from base 0 or 1). */
 int dc_parse_node_text(const char *text, const char *name, double **xyz, int32_t *n,
                        df_error *err);
 

@@ -143,7 +143,7 @@ int dc_net_write_all(int fd, const void *buf, size_t len, df_error *err)
 long dc_net_read_some(int fd, void *buf, size_t cap, int timeout_ms, df_error *err)
 {
     for (;;) {
-        ssize_t r = recv(fd, buf, cap, 0);
+        ssize_t r = recv(fd, buf, cap, MSG_DONTWAIT);
         if (r > 0)
             return (long)r;
         if (r == 0)

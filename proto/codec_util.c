@@ -11,7 +11,8 @@
 
 void df_rd_init(df_rd *r, const uint8_t *p, size_t n, const char *msg, df_error *err)
 {
-    r->p = p;
+    static const uint8_t none[1] = {0};
+    r->p = p ? p : none; /* never do arithmetic on a NULL payload */
     r->n = p ? n : 0;
     r->off = 0;
     r->msg = msg;
@@ -124,17 +125,6 @@ void df_rd_reserved8(df_rd *r, const char *field)
     uint8_t v = df_rd_u8(r, field);
     if (v)
         df_rd_fail(r, DF_EPROTO_RESERVED, field, "reserved field is %u, must be 0", v);
-}
-
-void df_rd_f64_finite(df_rd *r, double *out, size_t n, const char *field)
-{
-    for (size_t i = 0; i < n; i++) {
-        out[i] = df_rd_f64(r, field);
-        if (!r->rc && !isfinite(out[i])) {
-            df_rd_fail(r, DF_EINVAL, field, "component %zu is %g (must be finite)", i, out[i]);
-            out[i] = 0;
-        }
-    }
 }
 
 static size_t read_str_len(df_rd *r, size_t max, const char *field)

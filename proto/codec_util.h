@@ -47,9 +47,6 @@ double df_rd_f64(df_rd *r, const char *field);
 void df_rd_reserved16(df_rd *r, const char *field);
 void df_rd_reserved8(df_rd *r, const char *field);
 
-/* Reads `n` doubles into out[] and fails with DF_EINVAL if any is NaN or +-Inf. */
-void df_rd_f64_finite(df_rd *r, double *out, size_t n, const char *field);
-
 /* Reads a u16-length string of at most `max` bytes without NUL bytes into dst (cap max + 1). */
 void df_rd_str(df_rd *r, char *dst, size_t max, const char *field);
 

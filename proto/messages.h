@@ -29,6 +29,7 @@
 #include <stdint.h>
 
 #include "core/common/df_error.h"
+#include "core/mesh/mesh_io.h"
 #include "proto/buf.h"
 #include "proto/frame.h"
 #include "proto/frame_codec.h"
@@ -45,11 +46,12 @@
 #define DF_MAX_ERROR_MSG_LEN (DF_ERROR_MSG_MAX - 1) /* 255 bytes of error message on the wire */
 #define DF_MAX_AUTH_TOKEN 4096u               /* bytes of an auth token */
 #define DF_MAX_PING_BYTES 65536u              /* bytes echoed by ping */
-#define DF_MAX_PINNED_POINTS 1024u            /* pinned points of one brush stroke */
-#define DF_MAX_BRUSH_STEPS 1000u              /* integrator steps of one brush update */
-#define DF_MAX_FALLOFF 3u                     /* falloff order: 1 single, 2 bi, 3 tri-scale */
+#define DF_MAX_PINNED_POINTS 2048u            /* pinned points of one brush stroke */
+#define DF_MAX_BRUSH_STEPS 1024u              /* integrator steps of one brush update */
+#define DF_MAX_FALLOFF 8u                     /* falloff order: 1 single, 2 bi, 3 tri-scale, .. 8 */
 #define DF_MAX_HANDLES (1u << 20)             /* handle vertices of one handle set */
 #define DF_MAX_AFFINE_SETS 64u                /* affine constraint sets of one handle set */
+#define DF_MAX_ANDERSON 20u                   /* Anderson history length of accelerated ADMM */
 #define DF_MAX_MOVE_ITERS 1000000u            /* ADMM iteration budget of one move */
 #define DF_MAX_STATS_ENTRIES 1024u            /* key/value pairs in one stats reply */
 #define DF_MAX_STATS_KEY_LEN 63u              /* bytes of a stats key */
@@ -106,14 +108,10 @@ typedef enum df_feature {            /* hello reply `features` bits */
 } df_feature;
 #define DF_FEAT_ALL 0x7Fu
 
-typedef enum df_mesh_format {  /* load mesh: format of the inline bytes / file */
-    DF_FMT_AUTO = 0,           /* sniff content (inline) or extension (path) */
-    DF_FMT_OBJ = 1,
-    DF_FMT_OFF = 2,
-    DF_FMT_PLY = 3,
-    DF_FMT_MEDIT = 4,          /* .mesh */
-    DF_FMT_TETGEN = 5          /* .node + .ele: inline data is node bytes then ele bytes */
-} df_mesh_format;
+/* Load mesh `format`: the df_mesh_format values of core/mesh/mesh_io.h, 0..DF_FMT_MAX:
+ * DF_FMT_AUTO 0 (sniff content / extension), DF_FMT_OBJ 1, DF_FMT_OFF 2, DF_FMT_PLY 3 (ASCII or
+ * binary), DF_FMT_MEDIT 4 (.mesh), DF_FMT_TETGEN 5 (.node + .ele: inline data is the node bytes
+ * then the ele bytes). DF_FMT_PLY_BINARY (write-only) is not valid on the wire. */
 #define DF_FMT_MAX 5
 
 typedef enum df_load_source {
@@ -187,6 +185,8 @@ typedef enum df_mesh_section {   /* get mesh reply chunk contents */
 } df_mesh_section;
 #define DF_SECTION_MAX 5
 
+enum { DF_PIN_DISPLACEMENT = 1u << 0,   /* df_msg_brush.pin_flags: u = 0 at each pinned point */
+       DF_PIN_GRADIENT = 1u << 1 };     /* grad u = 0 at each pinned point */
 enum { DF_GET_MESH_REST = 1u << 0, DF_GET_MESH_BASE = 1u << 1 };  /* df_msg_get_mesh.flags */
 enum { DF_SUBSCRIBE_SNAPSHOT = 1u << 0 };                          /* df_msg_subscribe.flags */
 
@@ -296,8 +296,8 @@ typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet pa
     double mirror_point[3];            /* plane point, finite (when has_mirror) */
     double mirror_normal[3];           /* plane normal, finite, non-zero (when has_mirror) */
     uint32_t n_pinned;                 /* 0..DF_MAX_PINNED_POINTS */
-    double *pinned;                    /* n_pinned x 3 positions held at zero displacement,
-                                        * malloc'd on decode */
+    uint8_t pin_flags;                 /* n_pinned == 0: 0; else DF_PIN_* bits, 1..3 */
+    double *pinned;                    /* n_pinned x 3 pinned positions, malloc'd on decode */
 } df_msg_brush;
 
 typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */
@@ -322,13 +322,22 @@ typedef struct df_msg_affine_set {     /* A V_t = b for every vertex t of the se
     int32_t *indices;                  /* vertex indices, malloc'd on decode */
 } df_msg_affine_set;
 
-typedef struct df_msg_handles {        /* define the session's handle set (replaces any previous) */
+typedef struct df_msg_handles {        /* define the session's handle set (replaces any previous);
+                                        * start from df_msg_handles_defaults */
     uint64_t session_id;               /* != 0 */
     uint8_t energy;                    /* df_energy */
+    uint8_t area_weighting;            /* 0: a_i = 1 (paper code); 1: barycentric vertex measure */
+    uint8_t accelerate;                /* 0: plain ADMM; 1: Anderson-accelerated */
+    uint8_t anderson_m;                /* Anderson history, 1..DF_MAX_ANDERSON */
     double w;                          /* SC-L1 locality weight, finite, >= 0 */
     double s;                          /* SC-L1 threshold, finite, > 0, mesh units */
-    double rho;                        /* ADMM penalty, finite, > 0 */
+    double rho;                        /* ADMM penalty, finite, > 0 (engine: > w max(a_i) / s) */
     double tol;                        /* residual tolerance, finite, >= 0 */
+    double youngs;                     /* NEOHOOKEAN Young's modulus E in Pa, finite, > 0 */
+    double poisson;                    /* NEOHOOKEAN Poisson ratio, in (-1, 0.5) */
+    double strain_min;                 /* CLOTH stretch limits: 0 < strain_min <= 1 */
+    double strain_max;                 /*   1 <= strain_max, finite */
+    double bending;                    /* CLOTH bending stiffness, finite, >= 0 */
     uint32_t max_iters;                /* default budget, 1..DF_MAX_MOVE_ITERS */
     uint32_t n_handles;                /* 1..DF_MAX_HANDLES */
     int32_t *handles;                  /* handle vertex indices, malloc'd on decode */
@@ -452,6 +461,17 @@ DF_MSG_CODEC(progress)
 DF_MSG_CODEC(stats_req)
 DF_MSG_CODEC(stats)
 #undef DF_MSG_CODEC
+
+/* Fills `m` with the defaults clients should start from: GRAB, dim 3, falloff 1, ratio 1.1,
+ * radius 1, nu 0.5, strength 1, Euler 1 step, stationary, no mirror (normal (1,0,0)), loads 0,
+ * no pinned points; session_id 0 (set it). */
+void df_msg_brush_defaults(df_msg_brush *m);
+
+/* Fills `m` with the paper defaults for `energy` (df_energy; 0 or unknown -> ARAP): w 1e-4,
+ * s 0.01, rho 0.1, tol 1e-11, max_iters 500, E 1e7 Pa, Poisson 0.45, strain [0.9, 1.1],
+ * bending 1e-3, a_i = 1, no acceleration, Anderson m 5; NEOHOOKEAN: rho 5e5, w 500. No handles
+ * (set n_handles/handles), session_id 0. */
+void df_msg_handles_defaults(df_msg_handles *m, uint8_t energy);
 
 /* Frees what the decoder allocated and zeroes the pointer/count fields; NULL-safe. */
 void df_msg_load_mesh_free(df_msg_load_mesh *m);

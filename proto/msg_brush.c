@@ -1,17 +1,18 @@
 /* msg_brush.c — brush stroke bodies (messages.h).
  * brush (begin): u64 session_id, u8 type, u8 dim, u8 falloff, u8 integrator, u16 steps,
  *   u8 moving, u8 has_mirror, f64 radius, ratio, nu, strength, center[3], move[3], twist[3],
- *   scale, matrix[9], mirror_point[3], mirror_normal[3], u32 n_pinned, n_pinned x f64[3]
- *   (252 + 24 n_pinned bytes)
+ *   scale, matrix[9], mirror_point[3], mirror_normal[3], u32 n_pinned, u8 pin_flags,
+ *   n_pinned x f64[3]   (253 + 24 n_pinned bytes)
  * brush_update: u64 session_id, f64 move[3], twist[3], scale, matrix[9]   (136 bytes)
  * brush_param: u64 session_id, u8 param, f64 value                        (17 bytes) */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "proto/codec_util.h"
 #include "proto/messages.h"
 
-#define BRUSH_FIXED 252u
+#define BRUSH_FIXED 253u
 
 static int load_check(const double *move, const double *twist, double scale,
                       const double *matrix, const char *M, df_error *err)
@@ -71,6 +72,9 @@ static int brush_check(const df_msg_brush *m, df_error *err)
     if (m->n_pinned > DF_MAX_PINNED_POINTS)
         return df_error_set(err, DF_ELIMIT, "%s: %u pinned points exceed limit %u", M,
                             m->n_pinned, DF_MAX_PINNED_POINTS);
+    if (m->n_pinned ? (m->pin_flags < 1 || m->pin_flags > 3) : m->pin_flags != 0)
+        return df_error_set(err, DF_EINVAL, "%s: pin_flags %u invalid with %u pinned points "
+                            "(need 0 without pins, else 1..3)", M, m->pin_flags, m->n_pinned);
     if (m->n_pinned && !m->pinned)
         return df_error_set(err, DF_EINVAL, "%s: pinned is NULL with n_pinned %u", M,
                             m->n_pinned);
@@ -114,6 +118,7 @@ int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
     put_f64s(out, m->mirror_point, 3);
     put_f64s(out, m->mirror_normal, 3);
     df_buf_put_u32(out, m->n_pinned);
+    df_buf_put_u8(out, m->pin_flags);
     put_f64s(out, m->pinned, 3 * (size_t)m->n_pinned);
     return DF_OK;
 }
@@ -146,6 +151,7 @@ int df_msg_brush_decode(const uint8_t *p, size_t n, df_msg_brush *m, df_error *e
     if (!r.rc && t.n_pinned > DF_MAX_PINNED_POINTS)
         df_rd_fail(&r, DF_ELIMIT, "n_pinned", "%u pinned points exceed limit %u", t.n_pinned,
                    DF_MAX_PINNED_POINTS);
+    t.pin_flags = df_rd_u8(&r, "pin_flags");
     df_rd_need_rows(&r, t.n_pinned, 24, "n_pinned");
     t.pinned = df_rd_alloc(&r, 3 * (size_t)t.n_pinned, sizeof(double), "pinned");
     if (!r.rc)
@@ -262,4 +268,19 @@ int df_msg_brush_param_decode(const uint8_t *p, size_t n, df_msg_brush_param *m,
         return rc;
     *m = t;
     return DF_OK;
+}
+
+void df_msg_brush_defaults(df_msg_brush *m)
+{
+    memset(m, 0, sizeof *m);
+    m->type = DF_BRUSH_GRAB;
+    m->dim = 3;
+    m->falloff = 1;
+    m->integrator = DF_INTEG_EULER;
+    m->steps = 1;
+    m->radius = 1;
+    m->ratio = 1.1;
+    m->nu = 0.5;
+    m->strength = 1;
+    m->mirror_normal[0] = 1;
 }

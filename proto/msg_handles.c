@@ -1,6 +1,7 @@
 /* msg_handles.c — handle set, handle move and move result bodies (messages.h).
- * handles: u64 session_id, u8 energy, f64 w, s, rho, tol, u32 max_iters, u32 n_handles,
- *   n_handles x u32 index, u32 n_affine, n_affine x { u8 rows, rows x 3 f64 A (row-major),
+ * handles: u64 session_id, u8 energy, u8 area_weighting, u8 accelerate, u8 anderson_m, f64 w, s,
+ *   rho, tol, youngs, poisson, strain_min, strain_max, bending, u32 max_iters, u32 n_handles
+ *   (92 bytes), n_handles x u32 index, u32 n_affine, n_affine x { u8 rows, rows x 3 f64 A (row-major),
  *   rows x f64 b, u32 n_indices, n_indices x u32 index }
  * handle_move: u64 session_id, u32 max_iters, u32 max_ms, u32 progress_every, u32 n_targets,
  *   n_targets x f64[3]
@@ -8,6 +9,7 @@
  *   f64 residual, f64 elapsed_ms   (45 bytes) */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "proto/codec_util.h"
 #include "proto/messages.h"
@@ -40,6 +42,23 @@ static int handles_check(const df_msg_handles *m, df_error *err)
         return df_error_set(err, DF_EINVAL, "%s: rho %g must be finite and > 0", M, m->rho);
     if (!isfinite(m->tol) || m->tol < 0)
         return df_error_set(err, DF_EINVAL, "%s: tol %g must be finite and >= 0", M, m->tol);
+    if (!isfinite(m->youngs) || !(m->youngs > 0))
+        return df_error_set(err, DF_EINVAL, "%s: youngs %g must be finite and > 0", M, m->youngs);
+    if (!(m->poisson > -1 && m->poisson < 0.5))
+        return df_error_set(err, DF_EINVAL, "%s: poisson %g not in (-1, 0.5)", M, m->poisson);
+    if (!(m->strain_min > 0 && m->strain_min <= 1) || !isfinite(m->strain_max) ||
+        !(m->strain_max >= 1))
+        return df_error_set(err, DF_EINVAL, "%s: strain limits [%g, %g] need 0 < min <= 1 <= max",
+                            M, m->strain_min, m->strain_max);
+    if (!isfinite(m->bending) || m->bending < 0)
+        return df_error_set(err, DF_EINVAL, "%s: bending %g must be finite and >= 0", M,
+                            m->bending);
+    if (m->area_weighting > 1 || m->accelerate > 1)
+        return df_error_set(err, DF_EINVAL, "%s: area_weighting %u / accelerate %u not 0/1", M,
+                            m->area_weighting, m->accelerate);
+    if (m->anderson_m < 1 || m->anderson_m > DF_MAX_ANDERSON)
+        return df_error_set(err, DF_EINVAL, "%s: anderson_m %u not in 1..%u", M, m->anderson_m,
+                            DF_MAX_ANDERSON);
     if (m->max_iters < 1 || m->max_iters > DF_MAX_MOVE_ITERS)
         return df_error_set(err, DF_EINVAL, "%s: max_iters %u not in 1..%u", M, m->max_iters,
                             DF_MAX_MOVE_ITERS);
@@ -77,17 +96,25 @@ int df_msg_handles_encode(const df_msg_handles *m, df_buf *out, df_error *err)
     int rc = handles_check(m, err);
     if (rc)
         return rc;
-    size_t size = 49 + 4 * (size_t)m->n_handles + 4;
+    size_t size = 92 + 4 * (size_t)m->n_handles + 4;
     for (uint32_t k = 0; k < m->n_affine; k++)
         size += 1 + 32 * (size_t)m->affine[k].rows + 4 + 4 * (size_t)m->affine[k].n_indices;
     if ((rc = df_enc_reserve(out, size, "handles", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
     df_buf_put_u8(out, m->energy);
+    df_buf_put_u8(out, m->area_weighting);
+    df_buf_put_u8(out, m->accelerate);
+    df_buf_put_u8(out, m->anderson_m);
     df_buf_put_f64(out, m->w);
     df_buf_put_f64(out, m->s);
     df_buf_put_f64(out, m->rho);
     df_buf_put_f64(out, m->tol);
+    df_buf_put_f64(out, m->youngs);
+    df_buf_put_f64(out, m->poisson);
+    df_buf_put_f64(out, m->strain_min);
+    df_buf_put_f64(out, m->strain_max);
+    df_buf_put_f64(out, m->bending);
     df_buf_put_u32(out, m->max_iters);
     df_buf_put_u32(out, m->n_handles);
     for (uint32_t i = 0; i < m->n_handles; i++)
@@ -133,10 +160,18 @@ int df_msg_handles_decode(const uint8_t *p, size_t n, df_msg_handles *m, df_erro
     df_rd_init(&r, p, n, "handles", err);
     t.session_id = df_rd_u64(&r, "session_id");
     t.energy = df_rd_u8(&r, "energy");
+    t.area_weighting = df_rd_u8(&r, "area_weighting");
+    t.accelerate = df_rd_u8(&r, "accelerate");
+    t.anderson_m = df_rd_u8(&r, "anderson_m");
     t.w = df_rd_f64(&r, "w");
     t.s = df_rd_f64(&r, "s");
     t.rho = df_rd_f64(&r, "rho");
     t.tol = df_rd_f64(&r, "tol");
+    t.youngs = df_rd_f64(&r, "youngs");
+    t.poisson = df_rd_f64(&r, "poisson");
+    t.strain_min = df_rd_f64(&r, "strain_min");
+    t.strain_max = df_rd_f64(&r, "strain_max");
+    t.bending = df_rd_f64(&r, "bending");
     t.max_iters = df_rd_u32(&r, "max_iters");
     t.n_handles = df_rd_u32(&r, "n_handles");
     if (!r.rc && t.n_handles > DF_MAX_HANDLES)
@@ -293,4 +328,25 @@ int df_msg_move_result_decode(const uint8_t *p, size_t n, df_msg_move_result *m,
         return rc;
     *m = t;
     return DF_OK;
+}
+
+void df_msg_handles_defaults(df_msg_handles *m, uint8_t energy)
+{
+    memset(m, 0, sizeof *m);
+    m->energy = energy >= 1 && energy <= DF_ENERGY_MAX ? energy : DF_ENERGY_ARAP;
+    m->w = 1e-4;
+    m->s = 0.01;
+    m->rho = 0.1;
+    if (m->energy == DF_ENERGY_NEOHOOKEAN) {
+        m->w = 500;
+        m->rho = 5e5;
+    }
+    m->tol = 1e-11;
+    m->max_iters = 500;
+    m->youngs = 1e7;
+    m->poisson = 0.45;
+    m->strain_min = 0.9;
+    m->strain_max = 1.1;
+    m->bending = 1e-3;
+    m->anderson_m = 5;
 }

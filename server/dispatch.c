@@ -56,6 +56,19 @@ void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payl
                        df_msg_type_name(h->type));
         return;
     }
+    if (c->upload && h->type != DF_MSG_LOAD_MESH) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_EPROTO_CHUNK,
+                       "%s: a chunked load_mesh upload is in progress; finish it first",
+                       df_msg_type_name(h->type));
+        return;
+    }
+    if (!c->hello_done && h->type != DF_MSG_HELLO && h->type != DF_MSG_PING) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_ESTATE, "%s: send HELLO first",
+                       df_msg_type_name(h->type));
+        return;
+    }
     if (c->pending >= (int)DF_MAX_PENDING_REQUESTS) {
         c->srv->stats.requests_failed++;
         df_reply_error(c, h->type, h->request_id, DF_EPROTO_BUSY,

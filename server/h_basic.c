@@ -85,6 +85,7 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
     snprintf(r.server_name, sizeof r.server_name, "%s", DF_SERVER_NAME);
     if (m.client_name[0])
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
+    c->hello_done = 1;
     df_reply_hello_reply(c, h->type, h->request_id, &r, 1);
 }
 
@@ -221,7 +222,7 @@ static void subscribe_done(df_job *j)
     df_reply_session_info(j->c, j->type, j->req_id, &info, 1);
     if ((uintptr_t)j->body & DF_SUBSCRIBE_SNAPSHOT) {
         df_frames f = {0};
-        if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, 0, &f, &err) == DF_OK)
+        if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req_id, &f, &err) == DF_OK)
             for (size_t i = 0; i < f.n; i++) df_conn_send(j->c, f.v[i]);
         else
             df_log(DF_LOG_ERROR, "subscribe snapshot failed: %s", err.msg);
@@ -260,7 +261,13 @@ static void knob_done(df_job *j)
     if (df_job_failed(j)) return;
     knob *k = j->body;
     df_stroke *st = df_session_stroke(j->s, j->conn_id);
-    if (st) {
+    if (!st) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "set_brush_param: no open stroke on session %llu",
+                             (unsigned long long)j->s->id);
+        df_job_failed(j);
+        return;
+    }
+    {
         switch (k->param) {
         case DF_BP_RADIUS: st->brush.radius = k->value; break;
         case DF_BP_NU: st->brush.nu = k->value; break;
@@ -294,7 +301,7 @@ void df_h_set_brush_param(df_conn *c, const df_frame_header *h, const uint8_t *p
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
-    switch (m.param) {
+    switch (m.param) { /* remembered per connection (reported in stats) */
     case DF_BP_RADIUS: c->brush.radius = m.value; break;
     case DF_BP_NU: c->brush.nu = m.value; break;
     case DF_BP_STRENGTH: c->brush.strength = m.value; break;
@@ -302,7 +309,6 @@ void df_h_set_brush_param(df_conn *c, const df_frame_header *h, const uint8_t *p
     case DF_BP_RATIO: c->brush.ratio = m.value; break;
     default: break;
     }
-    c->brush_set |= 1u << m.param;
     k->param = m.param;
     k->value = m.value;
     j->body = k;

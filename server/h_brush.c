@@ -13,8 +13,10 @@
  * current - d_(k-1) first, so concurrent strokes add up instead of overwriting each other.
  * end commits the stroke as one undo step (no new version); cancel sets positions = base (one
  * version of kind BRUSH_CANCEL). Each begin/update is one version (kind BRUSH).
- * Knobs (set brush parameter) override the begin message's radius / nu / strength / falloff /
- * ratio for this client and change an open stroke from its next update on. Pinned points use the
+ * A begin whose loads are all zero publishes nothing (ack with the current version).
+ * Knobs (set brush parameter: radius / nu / strength / falloff / ratio) change the client's open
+ * stroke from its next update on (ESTATE without one). A client that disconnects with an open
+ * stroke has it ended (committed as an undo step). Pinned points use the
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
  * change. */
 #include <math.h>
@@ -72,7 +74,7 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     int rc;
     if (st->n_pins) {
         df_kelvinlet_pins pins = {.n = st->n_pins, .points = st->pins,
-                                  .flags = DF_KELVINLET_PIN_DISPLACEMENT, .radius = b.radius,
+                                  .flags = st->pin_flags, .radius = b.radius,
                                   .ratio = b.ratio, .nu = b.nu, .order = b.order};
         if (!s->kc) {
             rc = df_kelvinlet_constraints_create(&pins, &s->kc, err);
@@ -92,6 +94,12 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     if (rc != DF_OK) return rc;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
+    /* The float32 motion of each point: fl32(x0 + u) - x0 (0 where u is below x0's resolution). */
+    if (rc == DF_OK)
+        for (size_t i = 0; i < 3 * (size_t)s->nv; i++) {
+            float moved = st->startf[i] + disp[i];
+            disp[i] = moved - st->startf[i];
+        }
     return rc;
 }
 
@@ -115,7 +123,16 @@ static int stroke_publish(df_session *s, df_stroke *st, float *disp, uint8_t kin
     return rc;
 }
 
+static void begin_work_inner(df_job *j);
+
 static void begin_work(df_job *j)
+{
+    uint64_t t0 = uv_hrtime();
+    begin_work_inner(j);
+    j->s->brush_last_ms = (double)(uv_hrtime() - t0) / 1e6;
+}
+
+static void begin_work_inner(df_job *j)
 {
     brush_req *r = j->body;
     df_session *s = j->s;
@@ -160,16 +177,37 @@ static void begin_work(df_job *j)
     st->strength = m->strength;
     st->conn_id = j->conn_id;
     st->n_pins = m->n_pinned;
+    st->pin_flags = ((m->pin_flags & DF_PIN_DISPLACEMENT) ? DF_KELVINLET_PIN_DISPLACEMENT : 0) |
+                    ((m->pin_flags & DF_PIN_GRADIENT) ? DF_KELVINLET_PIN_GRADIENT : 0);
     if (m->n_pinned) memcpy(st->pins, m->pinned, 3 * (size_t)m->n_pinned * sizeof(double));
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
     st->last_version = atomic_load(&s->version);
+    int zero = 1;
+    for (int i = 0; i < 16; i++) zero &= r->load[i] == 0.0;
+    if (zero) { /* validate the brush, publish nothing */
+        df_kelvinlet_prepared prep;
+        if (st->n_pins) j->rc = DF_OK; /* pins are validated by the first update */
+        else if ((j->rc = df_kelvinlet_prepare(&st->brush, &prep, &j->err)) == DF_OK)
+            df_kelvinlet_prepared_free(&prep);
+        free(disp);
+        return;
+    }
     j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
     if (j->rc == DF_OK) j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH, r, &j->err);
     free(disp);
 }
 
+static void update_work_inner(df_job *j);
+
 static void update_work(df_job *j)
+{
+    uint64_t t0 = uv_hrtime();
+    update_work_inner(j);
+    j->s->brush_last_ms = (double)(uv_hrtime() - t0) / 1e6;
+}
+
+static void update_work_inner(df_job *j)
 {
     brush_req *r = j->body;
     df_session *s = j->s;
@@ -210,7 +248,7 @@ static void brush_done(df_job *j)
     }
     if (df_job_failed(j)) return;
     for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
-    srv->stats.versions++;
+    if (r->frames.n) srv->stats.versions++;
     if (r->created) { /* link the new stroke */
         r->created->next = s->strokes;
         s->strokes = r->created;
@@ -254,12 +292,6 @@ void df_h_brush_begin(df_conn *c, const df_frame_header *h, const uint8_t *p)
         return;
     }
     brush_req *r = j->body;
-    /* Knob overrides of this client. */
-    if (c->brush_set & (1u << DF_BP_RADIUS)) m.radius = c->brush.radius;
-    if (c->brush_set & (1u << DF_BP_NU)) m.nu = c->brush.nu;
-    if (c->brush_set & (1u << DF_BP_STRENGTH)) m.strength = c->brush.strength;
-    if (c->brush_set & (1u << DF_BP_FALLOFF)) m.falloff = (uint8_t)c->brush.falloff;
-    if (c->brush_set & (1u << DF_BP_RATIO)) m.ratio = c->brush.ratio;
     memcpy(r->load, m.move, 3 * sizeof(double));
     memcpy(r->load + 3, m.twist, 3 * sizeof(double));
     r->load[6] = m.scale;

@@ -2,8 +2,9 @@
  * streaming progress, superseded by newer moves), reset-rest (see handlers.h).
  *
  * The solver's rest shape is the session's REST positions; a move's iterates replace the current
- * positions. reset-rest makes the current positions the rest shape and drops the cached solver
- * (the next move rebuilds it against the new rest: one analysis + factorization). */
+ * positions. reset-rest makes the current positions the rest shape, clears the undo/redo history
+ * and drops the cached solver (the next move rebuilds it against the new rest: one analysis +
+ * factorization). */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -224,6 +225,7 @@ static void move_work(df_job *j)
     else if (r->res.converged) r->status = DF_MOVE_CONVERGED;
     else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
     else r->status = DF_MOVE_BUDGET;
+    s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
                               r->res.objective, r->res.residual, r->status, 1, &r->frames);
     j->rc = rc != DF_OK ? rc : prc;
@@ -314,6 +316,11 @@ static void reset_done(df_job *j)
     for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
     j->srv->stats.versions++;
     if (s->hs) df_cache_drop_solver(j->srv, s->hs); /* rebuilt against the new rest */
+    df_history h;
+    if (df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, NULL) == DF_OK) {
+        df_history_free(&s->hist); /* reset-rest clears undo/redo */
+        s->hist = h;
+    }
     df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
     if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
 }

@@ -60,6 +60,11 @@ static void history_work(df_job *j)
     mesh_req *r = j->body;
     df_session *s = j->s;
     int undo = j->type == DF_MSG_UNDO;
+    if (s->strokes) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "%s: a brush stroke is open on session %llu",
+                             undo ? "undo" : "redo", (unsigned long long)s->id);
+        return;
+    }
     if (undo ? !df_history_can_undo(&s->hist) : !df_history_can_redo(&s->hist)) {
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: nothing to %s on session %llu",
                              undo ? "undo" : "redo", undo ? "undo" : "redo",
@@ -162,7 +167,8 @@ static void get_mesh_work(df_job *j)
     if (rc == DF_OK && (r->flags & DF_GET_MESH_BASE))
         rc = add_section(j, DF_SECTION_BASE, (uint32_t)s->nv, 3, s->basef, NULL, 0);
     if (rc == DF_OK && (r->flags & DF_GET_MESH_REST)) {
-        for (size_t i = 0; i < n; i++) buf[i] = (float)s->rest[i];
+        /* same representation as positions: fl32(fl32(X) + fl32(rest - X)) */
+        for (size_t i = 0; i < n; i++) buf[i] = s->basef[i] + (float)(s->rest[i] - s->mesh.V[i]);
         rc = add_section(j, DF_SECTION_REST, (uint32_t)s->nv, 3, buf, NULL, 0);
     }
     if (rc == DF_OK)

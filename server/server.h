@@ -53,8 +53,8 @@ typedef struct df_conn {
     size_t wcount;           /* buffers in the current uv_write, 0 when idle */
     uv_buf_t wbufs[DF_OUTQ_MAX_BATCH];
     int pending;             /* requests accepted and not yet answered */
-    df_brush_defaults brush; /* knob values (set brush parameter) */
-    unsigned brush_set;      /* bit (1 << param id) set when that knob value was sent */
+    int hello_done;          /* a HELLO succeeded (required before most requests) */
+    df_brush_defaults brush; /* last knob values sent (set brush parameter) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     struct df_conn *prev, *next;

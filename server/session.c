@@ -167,7 +167,19 @@ int df_session_unsubscribe(df_session *s, df_conn *c)
     return 0;
 }
 
-static void drop_stroke_done(df_job *j) { df_session_drop_stroke(j->s, j->conn_id); }
+/* Ends (commits) a departed client's stroke. */
+static void end_stroke(df_session *s, uint64_t conn_id)
+{
+    if (df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo",
+               (unsigned long long)s->id);
+    df_session_drop_stroke(s, conn_id);
+}
+
+static void drop_stroke_done(df_job *j)
+{
+    if (j->rc == DF_OK && df_session_stroke(j->s, j->conn_id)) end_stroke(j->s, j->conn_id);
+}
 
 void df_session_forget_conn(df_server *srv, df_conn *c)
 {
@@ -175,7 +187,7 @@ void df_session_forget_conn(df_server *srv, df_conn *c)
         df_session_unsubscribe(s, c);
         if (!df_session_stroke(s, c->id)) continue;
         if (!s->running) {
-            df_session_drop_stroke(s, c->id);
+            end_stroke(s, c->id);
             continue;
         }
         /* A worker may be reading the stroke: drop it in FIFO order instead. */

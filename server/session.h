@@ -32,6 +32,7 @@ typedef struct df_stroke {
     df_kelvinlet_brush brush;    /* from begin (with the client's knob overrides) */
     double strength;
     uint32_t n_pins;
+    int pin_flags;               /* DF_KELVINLET_PIN_* bits */
     double *pins;                /* n_pins x 3, NULL when none */
     double *base;                /* positions without this stroke's contribution, nv x 3 */
     float *startf;               /* fl32(positions at begin): the points the field is evaluated at */
@@ -73,6 +74,8 @@ typedef struct df_session {
     df_kelvinlet_constraints *kc;/* cached K_pp LU of the last pinned set; NULL when none */
     size_t kc_bytes;
     uint64_t kc_lru;
+    double brush_last_ms;        /* worker time of the last brush begin/update/cancel */
+    double move_last_ms;         /* worker time of the last handle move */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
     struct df_session *next;
 } df_session;

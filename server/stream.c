@@ -146,8 +146,7 @@ int df_stream_snapshot(df_session *s, uint16_t type, uint64_t req_id, df_frames 
     d.total = (uint32_t)s->nv;
     d.xyz = s->uf;
     int reply = type != DF_MSG_DISPLACEMENT;
-    return emit_chunks(&d, NULL, type, reply ? DF_FLAG_REPLY : DF_FLAG_EVENT, reply ? req_id : 0,
-                       out, err);
+    return emit_chunks(&d, NULL, type, reply ? DF_FLAG_REPLY : DF_FLAG_EVENT, req_id, out, err);
 }
 
 void df_stream_positions(const df_session *s, float *xyz)

@@ -41,8 +41,8 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
 
 /* Appends a dense snapshot of the published state (kind DF_CHANGE_SNAPSHOT, version = current,
  * base_version 0) as reply frames (flags REPLY, MORE on all but the last) to request `req_id`
- * of type `type` (DF_MSG_SNAPSHOT), or as EVENT frames with id 0 when `type` is
- * DF_MSG_DISPLACEMENT. Errors: DF_ENOMEM. */
+ * of type `type` (DF_MSG_SNAPSHOT), or as EVENT frames carrying `req_id` (the subscribe's) when
+ * `type` is DF_MSG_DISPLACEMENT. Errors: DF_ENOMEM. */
 int df_stream_snapshot(df_session *s, uint16_t type, uint64_t req_id, df_frames *out,
                        df_error *err);
 

@@ -8,15 +8,10 @@
 #include "client/dc_files.h"
 #include "client/deformctl/ctl.h"
 
-/* Defaults of an unspecified option (those of core/kelvinlet's df_kelvinlet_brush_defaults). */
-#define BRUSH_DEFAULT_RADIUS 1.0
-#define BRUSH_DEFAULT_NU 0.5
-#define BRUSH_DEFAULT_RATIO 1.1
-
 enum {
     O_TYPE = CTL_NGLOBAL, O_CENTER, O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_RADIUS, O_NU,
-    O_FALLOFF, O_RATIO, O_DIM, O_INTEGRATOR, O_STEPS, O_MIRROR, O_PIN, O_STRENGTH, O_MOVING,
-    O_COUNT
+    O_FALLOFF, O_RATIO, O_DIM, O_INTEGRATOR, O_STEPS, O_MIRROR, O_PIN, O_PIN_MODE, O_STRENGTH,
+    O_MOVING, O_COUNT
 };
 
 static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
@@ -30,19 +25,22 @@ static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
                   "gradient, row-major"},
     {"radius", 1, "--radius R         regularization radius, mesh units (default 1)"},
     {"nu", 1, "--nu NU            Poisson ratio in [-1, 0.5], or inf (default 0.5)"},
-    {"falloff", 1, "--falloff N        1 single, 2 bi-scale, 3 tri-scale (default 1)"},
+    {"falloff", 1, "--falloff N        1 single, 2 bi-scale, 3 tri-scale, up to 8 (default 1)"},
     {"ratio", 1, "--ratio Q          multi-scale radius ratio > 1 (default 1.1)"},
     {"dim", 1, "--dim 2|3          2: planar brush for z = 0 meshes (default 3)"},
     {"integrator", 1, "--integrator euler|rk4   time integrator (default euler)"},
     {"steps", 1, "--steps N          integration steps (default 1)"},
     {"mirror", 1, "--mirror PX,PY,PZ,NX,NY,NZ   also apply mirrored across this plane"},
     {"pin", 1, "--pin FILE         points held fixed, one 'x y z' per line"},
+    {"pin-mode", 1, "--pin-mode displacement|gradient|both   what --pin holds (default "
+                    "displacement: u = 0)"},
     {"strength", 1, "--strength S       load multiplier (default 1)"},
     {"moving", 0, "--moving           moving brush: the centre follows the load"},
 };
 
 static const char *const TYPES[] = {"grab", "twist", "scale", "pinch", "affine", NULL};
 static const char *const INTEGRATORS[] = {"euler", "rk4", NULL};
+static const char *const PIN_MODES[] = {"displacement", "gradient", "both", NULL};
 
 /* The load option each type needs, indexed by type - 1. */
 static const int LOAD_OPT[5] = {O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_MATRIX};
@@ -51,7 +49,7 @@ static const int LOAD_OPT[5] = {O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_MATRIX};
  * input (the caller reports a usage error). */
 static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, df_error *e)
 {
-    memset(b, 0, sizeof *b);
+    df_msg_brush_defaults(b);
     memset(u, 0, sizeof *u);
     if (!a->val[O_TYPE] || !a->val[O_CENTER])
         return df_error_set(e, DF_EINVAL, "--type and --center are required");
@@ -79,14 +77,6 @@ static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, 
         rc = dc_cli_vec(a->val[O_MATRIX], "--matrix", 9, u->matrix, e);
     if (rc)
         return rc;
-    b->radius = BRUSH_DEFAULT_RADIUS;
-    b->nu = BRUSH_DEFAULT_NU;
-    b->ratio = BRUSH_DEFAULT_RATIO;
-    b->strength = 1.0;
-    b->falloff = 1;
-    b->dim = 3;
-    b->steps = 1;
-    b->integrator = DF_INTEG_EULER;
     long long v;
     if (a->val[O_RADIUS] && (rc = dc_cli_double(a->val[O_RADIUS], "--radius", 0, &b->radius, e)))
         return rc;
@@ -132,9 +122,17 @@ static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, 
         memcpy(b->mirror_point, m, sizeof b->mirror_point);
         memcpy(b->mirror_normal, m + 3, sizeof b->mirror_normal);
     }
+    if (a->val[O_PIN_MODE] && !a->val[O_PIN])
+        return df_error_set(e, DF_EINVAL, "--pin-mode needs --pin FILE");
+    b->pin_flags = DF_PIN_DISPLACEMENT;
+    if (a->val[O_PIN_MODE]) {
+        int k = dc_cli_choice(a->val[O_PIN_MODE], "--pin-mode", PIN_MODES, e);
+        if (k < 0)
+            return k;
+        b->pin_flags = (uint8_t)(k + 1); /* 1 displacement, 2 gradient, 3 both */
+    }
     b->moving = a->val[O_MOVING] ? 1 : 0;
-    /* Begin with the identity load; the update carries the whole load. */
-    return DF_OK;
+    return DF_OK; /* the begin keeps zero loads: the update carries the whole load */
 }
 
 static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
@@ -152,10 +150,12 @@ static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
             return ctl_usage_error(ctx, cmd, e.msg);
         if ((uint32_t)npins > DF_MAX_PINNED_POINTS) {
             free(pins);
-            return ctl_usage_error(ctx, cmd, "--pin: more than DF_MAX_PINNED_POINTS (1024) points");
+            return ctl_usage_error(ctx, cmd, "--pin: more points than DF_MAX_PINNED_POINTS");
         }
         b.n_pinned = (uint32_t)npins;
         b.pinned = pins;
+    } else {
+        b.pin_flags = 0;
     }
     df_client *c = ctl_connect(ctx, cmd);
     if (!c) {
@@ -195,7 +195,8 @@ const ctl_cmd ctl_cmds_brush[] = {
      "brush SESSION --type grab|twist|scale|pinch|affine --center X,Y,Z [--move DX,DY,DZ]\n"
      "       [--twist WX,WY,WZ] [--scale S] [--matrix M00,M01,...,M22] [--radius R] [--nu NU]\n"
      "       [--falloff N] [--ratio Q] [--dim 2|3] [--integrator euler|rk4] [--steps N]\n"
-     "       [--mirror PX,PY,PZ,NX,NY,NZ] [--pin FILE] [--strength S] [--moving]",
+     "       [--mirror PX,PY,PZ,NX,NY,NZ] [--pin FILE [--pin-mode MODE]] [--strength S]\n"
+     "       [--moving]",
      "Apply one whole Kelvinlet brush stroke (begin, update, end) as one new version.",
      BRUSH_OPTS, O_COUNT, 1, run_brush},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},

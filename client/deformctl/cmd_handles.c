@@ -8,17 +8,10 @@
 #include "client/dc_files.h"
 #include "client/deformctl/ctl.h"
 
-/* Handle-set defaults (core/admm's df_admm_params_default): w, s, rho, tol, max_iters; the
- * Neo-Hookean row uses the paper's pig settings (rho 5e5, w 500). */
-#define HANDLES_DEFAULT_W 1e-4
-#define HANDLES_DEFAULT_S 0.01
-#define HANDLES_DEFAULT_RHO 0.1
-#define HANDLES_DEFAULT_NH_W 500.0
-#define HANDLES_DEFAULT_NH_RHO 5e5
-#define HANDLES_DEFAULT_TOL 1e-11
-#define HANDLES_DEFAULT_ITERS 500
-
-enum { H_ENERGY = CTL_NGLOBAL, H_HANDLES, H_W, H_S, H_RHO, H_ITERS, H_TOL, H_COUNT };
+enum {
+    H_ENERGY = CTL_NGLOBAL, H_HANDLES, H_W, H_S, H_RHO, H_ITERS, H_TOL, H_YOUNGS, H_POISSON,
+    H_ACCEL, H_AREA, H_COUNT
+};
 
 static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
     CTL_GLOBAL_OPTS,
@@ -29,6 +22,10 @@ static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
     {"rho", 1, "--rho RHO          ADMM penalty > w/s (default 0.1; neohookean 5e5)"},
     {"iters", 1, "--iters N          default iteration budget of a move (default 500)"},
     {"tol", 1, "--tol T            residual tolerance >= 0 (default 1e-11)"},
+    {"youngs", 1, "--youngs E         neohookean Young's modulus, Pa (default 1e7)"},
+    {"poisson", 1, "--poisson NU       neohookean Poisson ratio in (-1, 0.5) (default 0.45)"},
+    {"accelerate", 0, "--accelerate       Anderson-accelerated ADMM"},
+    {"area-weighting", 0, "--area-weighting   weight the locality term by vertex area/volume"},
 };
 
 static const char *const ENERGIES[] = {"arap", "acap", "neohookean", "cloth", "polyline", NULL};
@@ -43,20 +40,17 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     if (en < 0)
         return ctl_usage_error(ctx, cmd, e.msg);
     df_msg_handles h;
-    memset(&h, 0, sizeof h);
-    h.energy = (uint8_t)(en + 1);
-    int nh = h.energy == DF_ENERGY_NEOHOOKEAN;
-    h.w = nh ? HANDLES_DEFAULT_NH_W : HANDLES_DEFAULT_W;
-    h.rho = nh ? HANDLES_DEFAULT_NH_RHO : HANDLES_DEFAULT_RHO;
-    h.s = HANDLES_DEFAULT_S;
-    h.tol = HANDLES_DEFAULT_TOL;
-    h.max_iters = HANDLES_DEFAULT_ITERS;
+    df_msg_handles_defaults(&h, (uint8_t)(en + 1));
     long long it;
     if ((a->val[H_W] && dc_cli_double(a->val[H_W], "--w", 0, &h.w, &e)) ||
         (a->val[H_S] && dc_cli_double(a->val[H_S], "--s", 0, &h.s, &e)) ||
         (a->val[H_RHO] && dc_cli_double(a->val[H_RHO], "--rho", 0, &h.rho, &e)) ||
-        (a->val[H_TOL] && dc_cli_double(a->val[H_TOL], "--tol", 0, &h.tol, &e)))
+        (a->val[H_TOL] && dc_cli_double(a->val[H_TOL], "--tol", 0, &h.tol, &e)) ||
+        (a->val[H_YOUNGS] && dc_cli_double(a->val[H_YOUNGS], "--youngs", 0, &h.youngs, &e)) ||
+        (a->val[H_POISSON] && dc_cli_double(a->val[H_POISSON], "--poisson", 0, &h.poisson, &e)))
         return ctl_usage_error(ctx, cmd, e.msg);
+    h.accelerate = a->val[H_ACCEL] ? 1 : 0;
+    h.area_weighting = a->val[H_AREA] ? 1 : 0;
     if (a->val[H_ITERS]) {
         if (dc_cli_int(a->val[H_ITERS], "--iters", 1, DF_MAX_MOVE_ITERS, &it, &e))
             return ctl_usage_error(ctx, cmd, e.msg);
@@ -197,7 +191,8 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 const ctl_cmd ctl_cmds_handles[] = {
     {"handles",
      "handles SESSION --energy arap|acap|neohookean|cloth|polyline --handles FILE [--w W]\n"
-     "       [--s S] [--rho RHO] [--iters N] [--tol T]",
+     "       [--s S] [--rho RHO] [--iters N] [--tol T] [--youngs E] [--poisson NU]\n"
+     "       [--accelerate] [--area-weighting]",
      "Define the session's handle set for SC-L1 local deformation (ADMM).", HANDLES_OPTS, H_COUNT,
      1, run_handles},
     {"move",

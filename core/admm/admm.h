@@ -69,6 +69,7 @@ typedef struct df_admm_params {
     double strain_min;     /* CLOTH: lower limit of the stretch singular values; default 0.9 */
     double strain_max;     /* CLOTH: upper limit of the stretch singular values; default 1.1 */
     double bending;        /* CLOTH: bending stiffness (energy units * length^2); default 1e-3 */
+    int threads;           /* OpenMP threads of the solver's kernels; 0 (default): OpenMP's default */
 } df_admm_params;
 
 /* Fills `p` with the defaults for `energy` (w 1e-4, s 0.01, rho 0.1, tol 1e-11, max_iters 500,
@@ -121,7 +122,9 @@ typedef int (*df_admm_progress_fn)(void *user, const df_admm_progress *p);
 
 typedef struct df_admm_budget {
     int max_iters;         /* <= 0: params.max_iters */
-    double max_ms;         /* wall-clock budget of this call in ms; <= 0: unlimited */
+    double max_ms;         /* wall-clock budget of this call in ms: no iteration is started that would
+                              end past it at the average iteration cost (the first always runs);
+                              <= 0: unlimited */
     int progress_every;    /* call `progress` every k iterations (and at the end); <= 0: never */
     df_admm_progress_fn progress;
     void *user;

@@ -43,10 +43,10 @@ void admm_aa_reset(admm_anderson *aa)
     aa->r_prev = INFINITY;
 }
 
-static double dot(const double *a, const double *b, int64_t n)
+static double dot(const double *a, const double *b, int64_t n, int nt)
 {
     double s = 0;
-    #pragma omp parallel for schedule(static) reduction(+ : s)
+    #pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : s)
     for (int64_t i = 0; i < n; i++) s += a[i] * b[i];
     return s;
 }
@@ -57,11 +57,12 @@ static double dot(const double *a, const double *b, int64_t n)
 int admm_aa_step(admm_anderson *aa, const double *x_before, double *state)
 {
     const int64_t n = aa->n;
+    const int nt = aa->nthreads;
     double *f = malloc((size_t)n * sizeof(double));
     if (!f) { aa->pending = 0; return 1; } /* no memory: plain ADMM */
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) num_threads(nt)
     for (int64_t i = 0; i < n; i++) f[i] = state[i] - x_before[i];
-    double r = sqrt(dot(f, f, n));
+    double r = sqrt(dot(f, f, n, nt));
     if (aa->pending && !(r <= aa->r_prev)) {
         memcpy(state, aa->g_fallback, (size_t)n * sizeof(double));
         free(f);
@@ -72,12 +73,12 @@ int admm_aa_step(admm_anderson *aa, const double *x_before, double *state)
     if (aa->have_prev) {
         int slot = aa->head;
         double *df = aa->dF + (size_t)slot * n, *dg = aa->dG + (size_t)slot * n;
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) num_threads(nt)
         for (int64_t i = 0; i < n; i++) { df[i] = f[i] - aa->f_prev[i]; dg[i] = state[i] - aa->g_prev[i]; }
         aa->head = (aa->head + 1) % aa->m;
         if (aa->count < aa->m) aa->count++;
         for (int j = 0; j < aa->count; j++) {
-            double d = dot(df, aa->dF + (size_t)j * n, n);
+            double d = dot(df, aa->dF + (size_t)j * n, n, nt);
             aa->gram[slot * aa->m + j] = d;
             aa->gram[j * aa->m + slot] = d;
         }
@@ -94,7 +95,7 @@ int admm_aa_step(admm_anderson *aa, const double *x_before, double *state)
     for (int i = 0; i < k; i++) {
         for (int j = 0; j < k; j++) A[i * k + j] = aa->gram[i * aa->m + j];
         A[i * k + i] += 1e-10 * trace / k + 1e-300;
-        b[i] = dot(aa->dF + (size_t)i * n, f, n);
+        b[i] = dot(aa->dF + (size_t)i * n, f, n, nt);
     }
     free(f);
     if (LAPACKE_dposv(LAPACK_ROW_MAJOR, 'L', k, 1, A, k, b, 1) != 0) {
@@ -104,7 +105,7 @@ int admm_aa_step(admm_anderson *aa, const double *x_before, double *state)
     for (int j = 0; j < k; j++) {
         const double *dg = aa->dG + (size_t)j * n;
         double t = b[j];
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) num_threads(nt)
         for (int64_t i = 0; i < n; i++) state[i] -= t * dg[i];
     }
     aa->pending = 1;

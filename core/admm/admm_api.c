@@ -1,6 +1,7 @@
 /* admm_api.c — solver lifetime and state access: create (validation, operators, factorization),
  * set_targets, positions, evaluate, reset_rest (sculpting), stats, free. */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -92,6 +93,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->esz = df_mesh_elem_size(mesh->kind);
     s->planar = 1;
     for (int32_t i = 0; i < mesh->nv; i++) if (mesh->V[3 * (size_t)i + 2] != 0.0) { s->planar = 0; break; }
+    s->nthreads = params->threads > 0 ? params->threads : omp_get_max_threads();
     s->family = (mesh->kind == DF_MESH_TET || params->energy == DF_ADMM_CLOTH) ? ADMM_FAM_ELEMENT : ADMM_FAM_VERTEX;
     s->q = mesh->kind == DF_MESH_TET ? 3 : 2;
     df_admm_lame(params->youngs, params->poisson, &s->mu, &s->lambda);
@@ -106,6 +108,19 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->hidx = malloc((size_t)nh * sizeof(int32_t));
     s->target = malloc((size_t)nh * 3 * sizeof(double));
     if (s->family == ADMM_FAM_ELEMENT) s->RX = calloc((size_t)s->ne * 9, sizeof(double));
+    if (params->energy == DF_ADMM_NEOHOOKEAN) {
+        s->nhQ = malloc((size_t)s->ne * 9 * sizeof(double));
+        s->nhx = calloc((size_t)s->ne * 3, sizeof(double)); /* zeros: no warm start yet */
+        if (!s->nhQ || !s->nhx) {
+            df_admm_free(s);
+            return df_error_set(err, DF_ENOMEM, "admm: out of memory");
+        }
+        for (int32_t e = 0; e < s->ne; e++) {
+            double *Q = s->nhQ + 9 * (size_t)e;
+            memset(Q, 0, 9 * sizeof(double));
+            Q[0] = Q[4] = Q[8] = 1.0;
+        }
+    }
     if (!s->E || !s->Vrest || !s->state || !s->Vout || !s->Z || !s->hidx || !s->target ||
         (s->family == ADMM_FAM_ELEMENT && !s->RX)) {
         df_admm_free(s);
@@ -141,6 +156,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     if (!rc) rc = admm_build_system_affine(s, s->aff, s->naff, err);
     if (!rc && s->p.accelerate && admm_aa_init(&s->aa, s->p.anderson_m, s->n_state))
         rc = df_error_set(err, DF_ENOMEM, "admm: out of memory (Anderson history)");
+    s->aa.nthreads = s->nthreads;
     if (rc) { df_admm_free(s); return rc; }
     *out = s;
     return DF_OK;
@@ -222,6 +238,6 @@ void df_admm_free(df_admm *s)
     for (int k = 0; k < s->naff; k++) free((void *)s->aff[k].verts);
     free(s->aff);
     free(s->E); free(s->Vrest); free(s->state); free(s->Vout); free(s->Z); free(s->hidx); free(s->target);
-    free(s->RX); free(s->Rv);
+    free(s->RX); free(s->Rv); free(s->nhQ); free(s->nhx);
     free(s);
 }

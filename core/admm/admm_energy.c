@@ -63,15 +63,15 @@ double admm_elastic(const df_admm *s, const double *V)
 {
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static) reduction(+ : E)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
         for (int32_t e = 0; e < s->ne; e++) E += element_energy(s, V, e);
     } else {
-        #pragma omp parallel for schedule(static) reduction(+ : E)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
         for (int32_t i = 0; i < s->nv; i++) E += vertex_energy(s, V, i);
     }
     if (s->bl_ptr) {
         double B = 0;
-        #pragma omp parallel for schedule(static) reduction(+ : B)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : B)
         for (int32_t k = 0; k < s->nv; k++) {
             double y[3] = {0, 0, 0};
             for (int32_t p = s->bl_ptr[k]; p < s->bl_ptr[k + 1]; p++)
@@ -87,7 +87,7 @@ double admm_locality(const df_admm *s, const double *V)
 {
     if (s->p.w == 0.0) return 0.0;
     double L = 0;
-    #pragma omp parallel for schedule(static) reduction(+ : L)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : L)
     for (int32_t i = 0; i < s->nv; i++) {
         double d[3];
         for (int k = 0; k < 3; k++) d[k] = V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k];

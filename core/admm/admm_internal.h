@@ -20,6 +20,7 @@ typedef struct admm_anderson {
     double *g_fallback;      /* plain ADMM iterate to revert to when a step is rejected */
     double r_prev;           /* |f| of the last accepted iterate, +inf when none */
     int have_prev, pending;  /* pending: the current state is an extrapolated (unverified) one */
+    int nthreads;
 } admm_anderson;
 
 struct df_admm {
@@ -37,6 +38,7 @@ struct df_admm {
     double *a;               /* nv locality weights a_i */
     double max_a;
     int family;
+    int nthreads;            /* OpenMP threads of the kernels */
     /* element family */
     int q;                   /* columns of F_e: 3 (tets), 2 (cloth triangles) */
     double *grad;            /* ne x esz x 3: g_{e,a}, F_e = sum_a V_a g_{e,a}^T (first q used) */
@@ -44,6 +46,7 @@ struct df_admm {
     double *gam;             /* ne element penalty weights */
     double *RX;              /* ne x 9: R_e X_e (3 x q, row stride 3) */
     double mu, lambda;
+    double *nhQ, *nhx;       /* Neo-Hookean warm starts: ne x 9 eigenvectors, ne x 3 prox answers */
     int32_t *ve_ptr, *ve_ent;/* vertex -> (element * esz + corner) incidence */
     /* vertex family (spokes and rims) */
     int32_t *sr_ptr;         /* nv + 1: entries of vertex i's cell */

@@ -27,7 +27,7 @@ static inline void element_F(const df_admm *s, const double *V, int32_t e, doubl
 static void local_x_element(df_admm *s)
 {
     const df_admm_energy en = s->p.energy;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int32_t e = 0; e < s->ne; e++) {
         double G[9], *W = s->W + 9 * (size_t)e, *RX = s->RX + 9 * (size_t)e;
         element_F(s, s->V, e, G);
@@ -67,10 +67,33 @@ static void local_x_element(df_admm *s)
             for (int k = 0; k < 9; k++) RX[k] = cr * R[k] + f * G[k];
             continue;
         }
+        /* Neo-Hookean: X = Q diag(prox(eig S)) Q^T with S = R^T G. Well-conditioned G: closed-form
+         * polar R and an eigen-decomposition of S warm-started from the element's previous
+         * eigenvectors (1-2 Jacobi sweeps), Newton warm-started from the previous singular values;
+         * otherwise (inverted or nearly singular G) the full signed SVD. */
+        double *Q = s->nhQ + 9 * (size_t)e, *xp = s->nhx + 3 * (size_t)e;
+        double R[9], x[3];
+        if (df_admm_polar3(G, R) == 0) {
+            double S[9], lam[3];
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++)
+                    S[3 * i + j] = R[i] * G[j] + R[3 + i] * G[3 + j] + R[6 + i] * G[6 + j];
+            df_admm_sym3_eig_warm(S, lam, Q);
+            if (df_admm_nh_prox(lam, xp, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = 1.0; }
+            double RQ[9];
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) RQ[3 * i + j] = R[3 * i] * Q[j] + R[3 * i + 1] * Q[3 + j] + R[3 * i + 2] * Q[6 + j];
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 3; c++)
+                    RX[3 * r + c] = RQ[3 * r] * x[0] * Q[3 * c] + RQ[3 * r + 1] * x[1] * Q[3 * c + 1] + RQ[3 * r + 2] * x[2] * Q[3 * c + 2];
+            memcpy(xp, x, sizeof(x));
+            continue;
+        }
         double U[9], sg[3], Vm[9];
         df_admm_svd3(G, U, sg, Vm);
-        double x[3];
-        if (df_admm_nh_prox(sg, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = 1.0; }
+        if (df_admm_nh_prox(sg, NULL, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = 1.0; }
+        memcpy(Q, Vm, sizeof(Vm));
+        memcpy(xp, x, sizeof(x));
         for (int r = 0; r < 3; r++)
             for (int c = 0; c < 3; c++)
                 RX[3 * r + c] = U[3 * r] * x[0] * Vm[3 * c] + U[3 * r + 1] * x[1] * Vm[3 * c + 1] +
@@ -116,14 +139,14 @@ void admm_local_x(df_admm *s)
         local_x_element(s);
         return;
     }
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int32_t i = 0; i < s->nv; i++) admm_fit_vertex(s, s->V, i, s->Rv + 9 * (size_t)i);
 }
 
 void admm_local_z(df_admm *s)
 {
     const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int32_t i = 0; i < s->nv; i++) {
         double x[3];
         for (int k = 0; k < 3; k++) x[k] = s->V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k] + s->U[3 * (size_t)i + k];
@@ -136,7 +159,7 @@ void admm_assemble_rhs(df_admm *s)
     const int32_t nf = s->nfree;
     double *rhs = s->rhs->x;
     const double rho = s->p.rho;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int32_t f = 0; f < nf; f++) {
         int32_t v = s->fvert[f];
         double b[3] = {0, 0, 0};
@@ -172,7 +195,7 @@ void admm_assemble_rhs(df_admm *s)
 void admm_dual_update(df_admm *s)
 {
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads)
         for (int32_t e = 0; e < s->ne; e++) {
             double F[9];
             element_F(s, s->V, e, F);
@@ -181,6 +204,6 @@ void admm_dual_update(df_admm *s)
             for (int k = 0; k < 9; k++) W[k] += F[k] - RX[k];
         }
     }
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int64_t o = 0; o < 3 * (int64_t)s->nv; o++) s->U[o] += s->V[o] - s->Vrest[o] - s->Z[o];
 }

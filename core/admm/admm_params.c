@@ -42,6 +42,7 @@ int admm_validate_params(const df_admm_params *p, df_error *err)
         if (!(p->youngs > 0) || !isfinite(p->youngs)) return df_error_set(err, DF_EINVAL, "admm: Young's modulus %g must be > 0", p->youngs);
         if (!(p->poisson > -1.0 && p->poisson < 0.5)) return df_error_set(err, DF_EINVAL, "admm: Poisson ratio %g outside (-1, 0.5)", p->poisson);
     }
+    if (p->threads < 0 || p->threads > 1024) return df_error_set(err, DF_EINVAL, "admm: threads = %d outside [0, 1024]", p->threads);
     if (p->accelerate && (p->anderson_m < 1 || p->anderson_m > DF_ADMM_MAX_ANDERSON))
         return df_error_set(err, DF_EINVAL, "admm: anderson_m = %d outside [1, %d]", p->anderson_m, DF_ADMM_MAX_ANDERSON);
     if (p->energy == DF_ADMM_CLOTH) {

@@ -54,7 +54,11 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
     int rc = DF_OK;
     r.stop = DF_ADMM_STOP_ITERS;
     for (int it = 0; it < maxit; it++) {
-        if (it > 0 && max_ms > 0 && (admm_now() - tstart) * 1e3 >= max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
+        if (it > 0 && max_ms > 0) {
+            /* stop when the next iteration (at the average cost so far) would overrun the budget */
+            double el_ms = (admm_now() - tstart) * 1e3;
+            if (el_ms + el_ms / it > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
+        }
         if (x_before) memcpy(x_before, s->state, (size_t)s->n_state * sizeof(double));
         rc = iterate(s, &r, err);
         if (rc) break;

@@ -153,7 +153,16 @@ static int build_affine(df_admm *s, const df_admm_affine *aff, int naff, df_erro
             double kij = s->Y[(size_t)s->ar_col[j] * nf + s->yc_free[s->ar_col[i]]];
             s->Sch[(size_t)j * M + i] = (ai[0] * aj[0] + ai[1] * aj[1] + ai[2] * aj[2]) * kij;
         }
+    double *dg = malloc((size_t)M * sizeof(double));
+    if (!dg) return df_error_set(err, DF_ENOMEM, "admm: out of memory (affine)");
+    for (int i = 0; i < M; i++) dg[i] = s->Sch[(size_t)i * M + i];
     lapack_int info = LAPACKE_dpotrf(LAPACK_COL_MAJOR, 'L', M, s->Sch, M);
+    /* a pivot that lost all but 1e-10 of its row's weight means (numerically) dependent rows */
+    for (int i = 0; i < M && info == 0; i++) {
+        double l = s->Sch[(size_t)i * M + i];
+        if (!(l * l > 1e-10 * dg[i])) info = i + 1;
+    }
+    free(dg);
     if (info != 0)
         return df_error_set(err, DF_ESINGULAR,
                             "admm: affine constraints are linearly dependent or contradictory (Schur pivot %d)", (int)info);

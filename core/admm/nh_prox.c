@@ -46,8 +46,8 @@ static int chol_solve3(const double H[9], const double g[3], double d[3])
     return 0;
 }
 
-int df_admm_nh_prox(const double sig[3], double vol, double mu, double lambda, double gamma,
-                    double out[3])
+int df_admm_nh_prox(const double sig[3], const double *start, double vol, double mu, double lambda,
+                    double gamma, double out[3])
 {
     if (!(vol > 0) || !(gamma > 0) || !(mu > 0) || !(lambda >= 0) || !isfinite(sig[0]) ||
         !isfinite(sig[1]) || !isfinite(sig[2]) || !isfinite(vol * mu) || !isfinite(gamma))
@@ -56,6 +56,9 @@ int df_admm_nh_prox(const double sig[3], double vol, double mu, double lambda, d
     double m = (fabs(sig[0]) + fabs(sig[1]) + fabs(sig[2])) / 3.0;
     double floor_ = 0.03 * (m < 1.0 ? 1.0 : m) + 1e-3;
     for (int i = 0; i < 3; i++) x[i] = fabs(sig[i]) > floor_ ? fabs(sig[i]) : floor_;
+    if (start && start[0] > 0 && start[1] > 0 && start[2] > 0 && isfinite(start[0] + start[1] + start[2])) {
+        x[0] = start[0]; x[1] = start[1]; x[2] = start[2];
+    }
     double scale = vol * mu + gamma;
     int it;
     double f = prox_obj(x, sig, vol, mu, lambda, gamma);
@@ -86,6 +89,13 @@ int df_admm_nh_prox(const double sig[3], double vol, double mu, double lambda, d
             if (d[i] < 0 && x[i] + t * d[i] <= 0.0) t = 0.9 * x[i] / -d[i];
         double slope = g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
         double xt[3], ft = INFINITY;
+        if (-slope <= 1e-10 * (fabs(f) + scale)) {
+            /* quadratic-convergence region: objective differences are at roundoff level, so
+             * Armijo cannot be tested; the full (boundary-safe) Newton step is taken */
+            for (int i = 0; i < 3; i++) x[i] += t * d[i];
+            f = prox_obj(x, sig, vol, mu, lambda, gamma);
+            continue;
+        }
         for (int ls = 0; ls < 40; ls++) {
             for (int i = 0; i < 3; i++) xt[i] = x[i] + t * d[i];
             ft = prox_obj(xt, sig, vol, mu, lambda, gamma);

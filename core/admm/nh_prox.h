@@ -14,13 +14,15 @@ double df_admm_nh_psi(const double sig[3], double mu, double lambda);
 /* out = argmin_x  vol psi(x) + gamma / 2 |x - sig|^2 over x in R^3 with all x_i > 0, for
  * vol > 0, gamma > 0, sig any finite 3-vector (signed singular values). Method: Newton's method
  * on the 3 unknowns (exact Hessian, plus a diagonal shift when it is not positive definite),
- * started from |sig_i| clamped below at 0.03 max(mean |sig|, 1) + 1e-3, with a fraction-to-boundary
- * rule that keeps x_i > 0 and Armijo backtracking: each step decreases the (strictly convex near
- * the solution) objective, so it cannot diverge. At most DF_ADMM_NH_MAX_NEWTON steps; stops when
- * the gradient norm is below 1e-13 (vol mu + gamma) (1 + |x|). Returns the number of Newton steps
- * taken, or -1 (out untouched) on invalid input. */
+ * started from `start` when it is non-NULL with positive finite entries (warm start: the previous
+ * ADMM iteration's answer), else from |sig_i| clamped below at 0.03 max(mean |sig|, 1) + 1e-3, with
+ * a fraction-to-boundary rule that keeps x_i > 0 and Armijo backtracking (full steps once the
+ * Newton decrement is at roundoff level): each step decreases the objective (strictly convex near
+ * the solution), so it cannot diverge. At most DF_ADMM_NH_MAX_NEWTON steps; stops when the gradient
+ * norm is below 1e-13 (vol mu + gamma) (1 + |x|). Returns the number of Newton steps taken, or -1
+ * (out untouched) on invalid input. */
 #define DF_ADMM_NH_MAX_NEWTON 30
-int df_admm_nh_prox(const double sig[3], double vol, double mu, double lambda, double gamma,
-                    double out[3]);
+int df_admm_nh_prox(const double sig[3], const double *start, double vol, double mu, double lambda,
+                    double gamma, double out[3]);
 
 #endif

@@ -11,10 +11,9 @@
 
 #define SVD3_MAX_SWEEPS 12
 
-void df_admm_sym3_eig(const double C[9], double lam[3], double Q[9])
+/* cyclic Jacobi on the symmetric a (in place), accumulating the rotations into v */
+static void jacobi3(double a[3][3], double v[3][3])
 {
-    double a[3][3] = {{C[0], C[1], C[2]}, {C[1], C[4], C[5]}, {C[2], C[5], C[8]}};
-    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     for (int sweep = 0; sweep < SVD3_MAX_SWEEPS; sweep++) {
         double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
         double dia = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
@@ -44,6 +43,34 @@ void df_admm_sym3_eig(const double C[9], double lam[3], double Q[9])
             }
         }
     }
+}
+
+void df_admm_sym3_eig_warm(const double C[9], double lam[3], double Q[9])
+{
+    double a[3][3], v[3][3], T[3][3];
+    /* a = Q^T C Q */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            T[i][j] = C[3 * i] * Q[j] + C[3 * i + 1] * Q[3 + j] + C[3 * i + 2] * Q[6 + j];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            a[i][j] = Q[i] * T[0][j] + Q[3 + i] * T[1][j] + Q[6 + i] * T[2][j];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) v[i][j] = Q[3 * i + j];
+    a[1][0] = a[0][1] = 0.5 * (a[0][1] + a[1][0]);
+    a[2][0] = a[0][2] = 0.5 * (a[0][2] + a[2][0]);
+    a[2][1] = a[1][2] = 0.5 * (a[1][2] + a[2][1]);
+    jacobi3(a, v);
+    for (int i = 0; i < 3; i++) lam[i] = a[i][i];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) Q[3 * i + j] = v[i][j];
+}
+
+void df_admm_sym3_eig(const double C[9], double lam[3], double Q[9])
+{
+    double a[3][3] = {{C[0], C[1], C[2]}, {C[1], C[4], C[5]}, {C[2], C[5], C[8]}};
+    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    jacobi3(a, v);
     int idx[3] = {0, 1, 2};
     double d[3] = {a[0][0], a[1][1], a[2][2]};
     for (int i = 0; i < 2; i++)

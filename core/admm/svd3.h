@@ -5,6 +5,12 @@
 #ifndef DF_ADMM_SVD3_H
 #define DF_ADMM_SVD3_H
 
+/* Warm-started eigen-decomposition of a symmetric 3x3 C: on entry Q is a rotation close to C's
+ * eigenvectors (e.g. the previous call's), on exit C = Q diag(lam) Q^T (columns of Q, unsorted,
+ * order kept from the warm start). Cyclic Jacobi on Q^T C Q: one or two sweeps when the start is
+ * good, at most 12. */
+void df_admm_sym3_eig_warm(const double C[9], double lam[3], double Q[9]);
+
 /* Signed SVD A = U diag(sig) V^T of a 3x3 matrix with det U = det V = +1 (proper rotations),
  * |sig[0]| >= |sig[1]| >= |sig[2]|, sig[0], sig[1] >= 0 and sig[2] < 0 exactly when det A < 0.
  * The polar rotation of A is R = U V^T and its symmetric factor S = V diag(sig) V^T (A = R S).

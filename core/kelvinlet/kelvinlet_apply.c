@@ -2,10 +2,11 @@
  * SIMD loop per load (orders 1-3 specialized at compile time so the scale loop unrolls),
  * Euler / RK4 per block, OpenMP over blocks.
  *
- * SIMD: the block integrator carries __attribute__((target_clones("arch=x86-64-v3",
- * "default"))): gcc emits an AVX2 clone (8 floats per op) next to the portable x86-64-v2
- * (SSE4.2, 4 floats) build and an ifunc picks one at load time. No FMA contraction happens
- * (-ffp-contract=off is global), so both clones round identically per operation.
+ * SIMD: the block integrator carries __attribute__((target_clones("arch=x86-64-v4",
+ * "arch=x86-64-v3", "default"))): gcc emits AVX-512 and AVX2/FMA clones next to the portable
+ * x86-64-v2 (SSE4.2) build and an ifunc picks one at load time from the running CPU. No FMA
+ * contraction happens (-ffp-contract=off is global), so every clone rounds identically per
+ * operation and results do not depend on the machine.
  * 1/sqrt is computed as the bit-level estimate plus three Newton steps (relative error at
  * float rounding level): plain C that vectorizes, where sqrtf would not (errno semantics). */
 #include <math.h>
@@ -21,12 +22,15 @@
 
 typedef struct fsrc {
     int dim, order, affine;
-    float c[3], f[3], F[9], S[9];
+    float c[3], f[3];      /* centre and grab force (times the step h)                  */
     float e2[MO];          /* eps_i^2                                                   */
     float del[MO];         /* eps_i^2 - eps_1^2                                         */
     float w[MO], wd[MO];   /* w_i and w_i (eps_i^2 - eps_1^2)                           */
+    float ie2, eh[MO];     /* tri-scale: 1 / eps_1^2 and eps_i^2 / eps_1^2              */
+    float W3, ie1, ie3, ie5; /* (eps_2^2 - eps_1^2)(eps_3^2 - eps_1^2) / eps_1^4, eps_1^-k */
     float kA1, kA3, kB;    /* grab:   A = kA1 sum w ir + kA3 sum w x ir^3, B = kB sum w ir^3 */
-    float kC1, kC1b, kC2, kC3; /* affine: C1 = kC1 sum w ir^3 + kC1b sum w x ir^5, ...    */
+    float K[9], D[9], t;   /* affine F split: skew K, symmetric traceless D, trace/dim t */
+    float kK, kD1, kD2, kDq, kT; /* affine coefficients (see affine3 / load2)          */
     float lcoef;           /* 2D: (b - a) sum_i w_i ln(s + eps_i^2)                     */
 } fsrc;
 
@@ -52,34 +56,45 @@ static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *s
     double F[9];
     for (int i = 0; i < 9; i++)
         F[i] = (i / 3 < k->dim && i % 3 < k->dim) ? h * src->F[i] : 0.0;
-    double tr = F[0] + F[4] + F[8];
+    double tr = (F[0] + F[4] + F[8]) / k->dim;
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) {
-            o->F[3 * i + j] = (float)F[3 * i + j];
-            o->S[3 * i + j] = (float)(F[3 * i + j] + F[3 * j + i]
-                                      + (i == j && i < k->dim ? tr : 0.0));
+            o->K[3 * i + j] = (float)(0.5 * (F[3 * i + j] - F[3 * j + i]));
+            o->D[3 * i + j] = (float)(0.5 * (F[3 * i + j] + F[3 * j + i])
+                                      - (i == j && i < k->dim ? tr : 0.0));
         }
+    o->t = (float)tr;
     for (int i = 0; i < k->order; i++) {
         double e2 = k->eps[i] * k->eps[i];
         o->e2[i] = (float)e2;
         o->del[i] = (float)(e2 - x0);
         o->w[i] = (float)k->w[i];
         o->wd[i] = (float)(k->w[i] * (e2 - x0));
+        o->eh[i] = (float)(e2 / x0);
     }
+    o->ie2 = (float)(1.0 / x0);
+    o->ie1 = (float)(1.0 / k->eps[0]);
+    o->ie3 = (float)(1.0 / (x0 * k->eps[0]));
+    o->ie5 = (float)(1.0 / (x0 * x0 * k->eps[0]));
+    if (k->order == 3)
+        o->W3 = (float)((k->eps[1] * k->eps[1] / x0 - 1.0) * (k->eps[2] * k->eps[2] / x0 - 1.0));
     if (k->dim == 3) {
         o->kA1 = (float)(a - b);
         o->kA3 = (float)(0.5 * a);
         o->kB = (float)b;
-        o->kC1 = (float)(-a);
-        o->kC1b = (float)(-1.5 * a);
-        o->kC2 = (float)b;
-        o->kC3 = (float)(-3.0 * b);
+        o->kK = (float)(-a);              /* skew:  -a (s3 + 1.5 x5) K r                   */
+        o->kD1 = (float)(2.0 * b - a);    /* dev:   ((2b - a) s3 - 1.5 a x5) D r           */
+        o->kD2 = (float)(-1.5 * a);       /*        - 3b s5 (r^T D r) r                    */
+        o->kDq = (float)(-3.0 * b);
+        o->kT = (float)(2.0 * b - a);     /* trace: (2b - a)(s3 + 1.5 x5) t r  (eq. 16)    */
     } else {
         o->kA3 = (float)a;            /* A = lcoef L + a sum w x q, B = 2b sum w q          */
         o->kB = (float)(2.0 * b);
-        o->kC1 = (float)(-2.0 * a);   /* C1 = -2a (sum w q + sum w x q^2), C2 = 2b sum w q  */
-        o->kC2 = (float)(2.0 * b);
-        o->kC3 = (float)(-4.0 * b);   /* C3 = -4b sum w q^2                                  */
+        o->kK = (float)(-2.0 * a);        /* skew:  -2a (sq + xq2) K r                     */
+        o->kD1 = (float)(4.0 * b - 2.0 * a); /* dev: ((4b - 2a) sq - 2a xq2) D r           */
+        o->kD2 = (float)(-2.0 * a);       /*        - 4b sq2 (r^T D r) r                   */
+        o->kDq = (float)(-4.0 * b);
+        o->kT = (float)(4.0 * b - 2.0 * a); /* trace: (4b - 2a)(sq + xq2) t r              */
     }
     o->lcoef = (float)(b - a);
 }
@@ -113,18 +128,61 @@ static inline __attribute__((always_inline)) float rsq(float x)
 
 typedef float blk[BLOCK];
 
+/* Tri-scale sums in closed form. With q_i = (s + eps_i^2)^-1/2 the tri-scale weights make
+ * sum_i w_i q_i^m = (x2 - x1)(x3 - x1) q^m[x1, x2, x3] (second divided difference in
+ * x = s + eps^2), and for q^m = x^(-m/2) that divided difference is
+ *   q1^2 q2^2 q3^2 P_m / ((q1 + q2)(q1 + q3)(q2 + q3)),
+ *   P_m = sum_{i<j} q_i q_j h_{m-1}(q_i, q_j) + 2 q1 q2 q3 h_{m-2}(q1, q2, q3)
+ * (h_k: complete homogeneous polynomials) — every term positive, so no cancellation at all.
+ * Evaluated on q scaled by eps_1 (in (0, 1]) to stay far from float overflow. */
+static inline __attribute__((always_inline)) void tri_sums(const fsrc *S, const int want5,
+                                                           float s, float *o1, float *o3,
+                                                           float *o5)
+{
+    float sh = s * S->ie2;
+    float q1 = rsq(sh + S->eh[0]), q2 = rsq(sh + S->eh[1]), q3 = rsq(sh + S->eh[2]);
+    float a12 = q1 * q2, a13 = q1 * q3, a23 = q2 * q3, e3 = a12 * q3;
+    float s1q = q1 * q1, s2q = q2 * q2, s3q = q3 * q3;
+    float C = S->W3 * e3 * e3 / ((q1 + q2) * (q1 + q3) * (q2 + q3));
+    float h12 = s1q + a12 + s2q, h13 = s1q + a13 + s3q, h23 = s2q + a23 + s3q;
+    float p1 = a12 + a13 + a23;
+    float p3 = a12 * h12 + a13 * h13 + a23 * h23 + 2.0f * e3 * (q1 + q2 + q3);
+    *o1 = C * p1 * S->ie1;
+    *o3 = C * p3 * S->ie3;
+    if (want5) {
+        float g12 = s1q * s1q + s1q * a12 + s1q * s2q + a12 * s2q + s2q * s2q;
+        float g13 = s1q * s1q + s1q * a13 + s1q * s3q + a13 * s3q + s3q * s3q;
+        float g23 = s2q * s2q + s2q * a23 + s2q * s3q + a23 * s3q + s3q * s3q;
+        float h3 = s1q * q1 + s1q * q2 + q1 * s2q + s2q * q2 + q3 * (h12 + q3 * (q1 + q2 + q3));
+        float p5 = a12 * g12 + a13 * g13 + a23 * g23 + 2.0f * e3 * h3;
+        *o5 = C * p5 * S->ie5;
+    }
+}
+
 /* Multi-scale sums of one point, cancellation-aware. With ir_i = (s + eps_i^2)^-1/2:
  *   s1 = sum w_i ir_i, s3 = sum w_i ir_i^3, s5 = sum w_i ir_i^5,
  *   x3 = sum w_i eps_i^2 ir_i^3, x5 = sum w_i eps_i^2 ir_i^5.
- * For order >= 2 the weights sum to 0, so sum w_i f_i = sum_{i>=2} w_i (f_i - f_1) with the
- * differences in closed form (ir_i - ir_1 = -del_i ir_1 ir_i / (rho_1 + rho_i)); for order
- * >= 3 also sum w_i del_i = 0, used the same way for the eps^2-weighted sums. This keeps the
- * float result accurate where the plain weighted sum would lose ~6 bits (tri-scale, 1.1). */
+ * Order 3 uses the closed forms above and eps^2 ir^m = ir^(m-2) - s ir^m. Other orders >= 2:
+ * the weights sum to 0, so sum w_i f_i = sum_{i>=2} w_i (f_i - f_1) with the differences in
+ * closed form (ir_i - ir_1 = -del_i ir_1 ir_i / (rho_1 + rho_i)); for order >= 4 also
+ * sum w_i del_i = 0, used the same way for the eps^2-weighted sums. */
 static inline __attribute__((always_inline)) void scale_sums3(const fsrc *S, const int order,
                                                               const int want5, float s,
                                                               float *o1, float *o3, float *o5,
                                                               float *ox3, float *ox5)
 {
+    if (order == 3) {
+        float t1, t3, t5 = 0.0f;
+        tri_sums(S, want5, s, &t1, &t3, &t5);
+        *o1 = t1;
+        *o3 = t3;
+        *ox3 = t1 - s * t3;
+        if (want5) {
+            *o5 = t5;
+            *ox5 = t3 - s * t5;
+        }
+        return;
+    }
     float s1p = s + S->e2[0];
     float i1 = rsq(s1p), i1s = i1 * i1, i13 = i1s * i1, i15 = i13 * i1s, rho1 = s1p * i1;
     float x1 = S->e2[0];
@@ -184,23 +242,25 @@ static inline __attribute__((always_inline)) void affine3(const fsrc *S, const i
                                                           blk *restrict p, blk *restrict u)
 {
     const float cx = S->c[0], cy = S->c[1], cz = S->c[2];
-    const float *F = S->F, *M = S->S;
+    const float *K = S->K, *D = S->D, t = S->t;
 #pragma omp simd
     for (int j = 0; j < BLOCK; j++) {
         float rx = p[0][j] - cx, ry = p[1][j] - cy, rz = p[2][j] - cz;
         float s = rx * rx + ry * ry + rz * rz, s1, s3, s5, x3, x5;
         scale_sums3(S, order, 1, s, &s1, &s3, &s5, &x3, &x5);
-        float C1 = S->kC1 * s3 + S->kC1b * x5, C2 = S->kC2 * s3, C3 = S->kC3 * s5;
-        float Frx = F[0] * rx + F[1] * ry + F[2] * rz;
-        float Fry = F[3] * rx + F[4] * ry + F[5] * rz;
-        float Frz = F[6] * rx + F[7] * ry + F[8] * rz;
-        float Srx = M[0] * rx + M[1] * ry + M[2] * rz;
-        float Sry = M[3] * rx + M[4] * ry + M[5] * rz;
-        float Srz = M[6] * rx + M[7] * ry + M[8] * rz;
-        float q = C3 * (rx * Frx + ry * Fry + rz * Frz);
-        u[0][j] += C1 * Frx + C2 * Srx + q * rx;
-        u[1][j] += C1 * Fry + C2 * Sry + q * ry;
-        u[2][j] += C1 * Frz + C2 * Srz + q * rz;
+        float base = s3 + 1.5f * x5;
+        float cK = S->kK * base, cT = S->kT * base * t;
+        float cD = S->kD1 * s3 + S->kD2 * x5, cQ = S->kDq * s5;
+        float Krx = K[0] * rx + K[1] * ry + K[2] * rz;
+        float Kry = K[3] * rx + K[4] * ry + K[5] * rz;
+        float Krz = K[6] * rx + K[7] * ry + K[8] * rz;
+        float Drx = D[0] * rx + D[1] * ry + D[2] * rz;
+        float Dry = D[3] * rx + D[4] * ry + D[5] * rz;
+        float Drz = D[6] * rx + D[7] * ry + D[8] * rz;
+        float q = cT + cQ * (rx * Drx + ry * Dry + rz * Drz);
+        u[0][j] += cK * Krx + cD * Drx + q * rx;
+        u[1][j] += cK * Kry + cD * Dry + q * ry;
+        u[2][j] += cK * Krz + cD * Drz + q * rz;
     }
 }
 
@@ -242,13 +302,14 @@ static inline __attribute__((always_inline)) void load2(const fsrc *S, blk *rest
             u[0][j] += A * S->f[0] + rf * rx;
             u[1][j] += A * S->f[1] + rf * ry;
         } else {
-            float C1 = S->kC1 * (sq + xq2), C2 = S->kC2 * sq, C3 = S->kC3 * sq2;
-            const float *F = S->F, *M = S->S;
-            float Frx = F[0] * rx + F[1] * ry, Fry = F[3] * rx + F[4] * ry;
-            float Srx = M[0] * rx + M[1] * ry, Sry = M[3] * rx + M[4] * ry;
-            float q = C3 * (rx * Frx + ry * Fry);
-            u[0][j] += C1 * Frx + C2 * Srx + q * rx;
-            u[1][j] += C1 * Fry + C2 * Sry + q * ry;
+            const float *K = S->K, *D = S->D;
+            float base = sq + xq2, cK = S->kK * base, cT = S->kT * base * S->t;
+            float cD = S->kD1 * sq + S->kD2 * xq2, cQ = S->kDq * sq2;
+            float Krx = K[0] * rx + K[1] * ry, Kry = K[3] * rx + K[4] * ry;
+            float Drx = D[0] * rx + D[1] * ry, Dry = D[3] * rx + D[4] * ry;
+            float q = cT + cQ * (rx * Drx + ry * Dry);
+            u[0][j] += cK * Krx + cD * Drx + q * rx;
+            u[1][j] += cK * Kry + cD * Dry + q * ry;
         }
     }
 }
@@ -415,7 +476,7 @@ static int run(const df_kelvinlet_prepared *p, const float *in, size_t n, float 
     if (rc == DF_OK) {
         int rk4 = p->brush.integrator == DF_KELVINLET_RK4, moving = mv != NULL;
         size_t nb = (n + BLOCK - 1) / BLOCK;
-#pragma omp parallel for schedule(static) if (nb >= PAR_MIN_BLOCKS)
+#pragma omp parallel for schedule(dynamic, 8) if (nb >= PAR_MIN_BLOCKS)
         for (size_t b = 0; b < nb; b++) {
             size_t lo = b * BLOCK, cnt = n - lo < BLOCK ? n - lo : BLOCK;
             integrate_block(plans, moving, steps, rk4, in + 3 * lo, (int)cnt, out + 3 * lo,

@@ -93,20 +93,32 @@ int df_mesh_analyze(const df_mesh *m, df_mesh_report *rep, df_error *err)
     r.first_inverted = -1;
     r.min_signed_volume = m->ne > 0 ? DBL_MAX : 0.0;
     int k = df_mesh_elem_size(m->kind);
-    int orientable = m->kind == DF_MESH_TET || (m->kind == DF_MESH_TRIANGLE && m->planar);
-    for (int32_t e = 0; e < m->ne; e++) {
-        double lmax;
-        double v = df_geom_elem_measure(m, e, &lmax);
-        if (v < r.min_signed_volume)
-            r.min_signed_volume = v;
-        double scale = k == 2 ? lmax : k == 3 ? lmax * lmax : lmax * lmax * lmax;
-        if (repeats_index(m->E + (size_t)k * (size_t)e, k) ||
-            fabs(v) <= DF_MESH_DEGENERATE_REL * scale || scale == 0.0) {
-            if (r.degenerate_elements++ == 0)
-                r.first_degenerate = e;
-        } else if (orientable && v < 0.0) {
-            if (r.inverted_elements++ == 0)
-                r.first_inverted = e;
+    int planar_tri = m->kind == DF_MESH_TRIANGLE && m->planar;
+    int32_t n_pos = 0, n_neg = 0;
+    for (int pass = 0; pass < (planar_tri ? 2 : 1); pass++) {
+        /* Planar triangles: pass 0 counts orientations; pass 1 flags the minority as inverted.
+         * Tets: negative volume is inverted. */
+        double good_sign = !planar_tri || n_pos >= n_neg ? 1.0 : -1.0;
+        for (int32_t e = 0; e < m->ne; e++) {
+            double lmax;
+            double v = df_geom_elem_measure(m, e, &lmax);
+            double scale = k == 2 ? lmax : k == 3 ? lmax * lmax : lmax * lmax * lmax;
+            int degenerate = repeats_index(m->E + (size_t)k * (size_t)e, k) ||
+                             fabs(v) <= DF_MESH_DEGENERATE_REL * scale || scale == 0.0;
+            if (planar_tri && pass == 0) {
+                n_pos += !degenerate && v > 0.0;
+                n_neg += !degenerate && v < 0.0;
+                continue;
+            }
+            if (v < r.min_signed_volume)
+                r.min_signed_volume = v;
+            if (degenerate) {
+                if (r.degenerate_elements++ == 0)
+                    r.first_degenerate = e;
+            } else if ((m->kind == DF_MESH_TET || planar_tri) && v * good_sign < 0.0) {
+                if (r.inverted_elements++ == 0)
+                    r.first_inverted = e;
+            }
         }
     }
     unsigned char *used = calloc((size_t)(m->nv ? m->nv : 1), 1);

@@ -6,6 +6,10 @@
  * .mesh (Vertices, Edges, Triangles, Quadrilaterals, Tetrahedra), TetGen .node + .ele (0- or
  * 1-based, detected from the first node id; 3 nodes per element = triangles, 4 or 10 = tets).
  *
+ * OBJ faces may only reference vertices defined above them (negative indices count back from the
+ * last one); `\` line continuations are not supported. Numbers go through strtod/printf, so
+ * LC_NUMERIC must stay "C" (the default; nothing in deformd calls setlocale).
+ *
  * Parsers work on explicit (pointer, length) buffers which need not be NUL-terminated; they never
  * read outside them. Every error names the file (or the caller's name for a buffer), the line (text)
  * or byte offset (binary) and the problem, e.g. "pig.ele:17: vertex index 10417 out of range
@@ -48,6 +52,8 @@ typedef enum df_mesh_format {
     DF_FMT_PLY_BINARY      /* write only: binary_little_endian PLY (reads as DF_FMT_PLY) */
 } df_mesh_format;
 
+/* Reader options. Start from df_mesh_read_opts_default(): a zero-initialized struct gets the
+ * default limits but allow_inverted = 0 (inverted elements then fail the read). */
 typedef struct df_mesh_read_opts {
     int32_t max_vertices;  /* refuse (DF_ELIMIT) more vertices; <= 0 means the default */
     int32_t max_elements;  /* refuse (DF_ELIMIT) more elements after triangulation; <= 0: default */
@@ -67,7 +73,8 @@ typedef struct df_mesh_report {
     int32_t polygons_triangulated;/* of those, how many had > 3 vertices (quads, n-gons) */
     int32_t ignored_elements;     /* e.g. OBJ `l` lines in a file that also has faces */
     int32_t degenerate_elements;  /* zero-measure or repeated-index elements */
-    int32_t inverted_elements;    /* tets (and planar triangles) with negative signed volume/area */
+    int32_t inverted_elements;    /* tets with negative volume; planar triangles whose orientation
+                                     disagrees with the majority (all-clockwise is consistent) */
     int32_t nonmanifold_edges;    /* edges shared by > 2 triangles (tets: > 2 boundary triangles) */
     int32_t nonmanifold_faces;    /* tets: triangles shared by > 2 tets */
     int32_t boundary_edges;       /* triangle meshes: edges used by exactly one triangle */
@@ -144,8 +151,8 @@ int df_mesh_validate(const df_mesh *m, df_error *err);
 int df_mesh_analyze(const df_mesh *m, df_mesh_report *rep, df_error *err);
 
 /* Refuses meshes the ADMM/elastic solvers cannot use: invalid structure (df_mesh_validate), no
- * elements, any degenerate element, any inverted element (tets; planar triangles with negative
- * signed area). Non-manifold edges and unreferenced vertices are allowed (reported in `rep`).
+ * elements, any degenerate element, any inverted element (tets with negative volume; planar
+ * triangles oriented against the majority). Non-manifold edges and unreferenced vertices are allowed (reported in `rep`).
  * `rep` may be NULL. Errors: DF_EINVAL naming the count and the first bad element, DF_ENOMEM. */
 int df_mesh_check_for_solver(const df_mesh *m, df_mesh_report *rep, df_error *err);
 

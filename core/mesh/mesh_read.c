@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "core/mesh/mesh_readers.h"
 #include "core/mesh/mesh_scan.h"
@@ -53,12 +54,17 @@ int df_mesh_read_memory(const void *buf, size_t len, df_mesh_format fmt, const c
     return df_error_set(err, DF_EINVAL, "%s: unknown mesh format %d", name, (int)fmt);
 }
 
-/* Loads a whole file; *buf malloc'd (1 spare byte), *len its size. */
+/* Loads a whole file (regular file, device or pipe; not a directory): *buf malloc'd, *len its size. */
 static int load(const char *path, char **buf, size_t *len, df_error *err)
 {
     FILE *f = fopen(path, "rb");
     if (!f)
         return df_error_set(err, DF_EIO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat st;
+    if (fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
+        fclose(f);
+        return df_error_set(err, DF_EIO, "%s: is a directory", path);
+    }
     size_t cap = 1 << 16, n = 0;
     char *b = malloc(cap);
     int rc = b ? DF_OK : df_error_set(err, DF_ENOMEM, "%s: out of memory", path);

@@ -32,6 +32,9 @@ static int corner(const df_mesh_build *b, const df_scan *s, const char *t, size_
     if (p < n)
         return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference '%.*s'", s->name,
                             (int)s->line, (int)(n > 32 ? 32 : n), t);
+    if (raw < 0 && -raw > b->nv)
+        return df_error_set(err, DF_EFORMAT, "%s:%d: vertex index %lld out of range (%lld vertices "
+                            "so far)", s->name, (int)s->line, (long long)raw, (long long)b->nv);
     if (raw < 0)
         raw = b->nv + raw + 1; /* -1 is the last vertex so far; make it 1-based */
     return df_mesh_build_index(b, s->line, raw, 1, -1, out, err);

@@ -4,12 +4,27 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Arrays up to this length are insertion-sorted. */
+#define DF_TOPO_SMALL_SORT 64
+
 const int df_topo_tet_face_corners[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 int df_topo_sort_u64(uint64_t *keys, int64_t n, df_error *err)
 {
     if (n < 2)
         return DF_OK;
+    if (n <= DF_TOPO_SMALL_SORT) { /* insertion sort: no 512 KB histogram for tiny inputs */
+        for (int64_t i = 1; i < n; i++) {
+            uint64_t k = keys[i];
+            int64_t j = i;
+            while (j > 0 && keys[j - 1] > k) {
+                keys[j] = keys[j - 1];
+                j--;
+            }
+            keys[j] = k;
+        }
+        return DF_OK;
+    }
     uint64_t *tmp = malloc((size_t)n * sizeof *tmp);
     size_t *count = malloc(65537 * sizeof *count);
     if (!tmp || !count) {

@@ -20,7 +20,8 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "client", "python"))
 sys.path.insert(0, os.path.dirname(__file__))
 
-from deformd_client import Client, DeformdError  # noqa: E402
+from deformd_client import Client, DeformdError, FrameDecoder, encode_frame  # noqa: E402
+from deformd_client.messages import HELLO, encode_hello  # noqa: E402
 
 BUILD = os.path.join(ROOT, os.environ.get("BUILD", "build"))
 DEFORMD = os.path.join(BUILD, "bin", "deformd")
@@ -67,7 +68,8 @@ class Daemon:
         self._wait_ready()
 
     def log(self) -> str:
-        self._log.flush()
+        if not self._log.closed:
+            self._log.flush()
         with open(self.log_path, "rb") as f:
             return f.read().decode("utf-8", "replace")
 
@@ -98,10 +100,20 @@ class Daemon:
     def tcp_client(self, timeout: float = 30.0, hello: bool = True) -> Client:
         return Client.connect_tcp("127.0.0.1", self.tcp_port, timeout=timeout, hello=hello)
 
-    def raw_unix(self, timeout: float = 5.0) -> socket.socket:
+    def raw_unix(self, timeout: float = 5.0, hello: bool = False) -> socket.socket:
+        """A plain socket; with hello=True the HELLO exchange is done (and checked) on it."""
         s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         s.settimeout(timeout)
         s.connect(self.socket_path)
+        if hello:
+            s.sendall(encode_frame(HELLO, encode_hello(1, 1, 0, "raw"), 0xFFFF))
+            dec = FrameDecoder()
+            frames = []
+            while not frames:
+                data = s.recv(65536)
+                assert data, "deformd closed the connection during HELLO"
+                frames = dec.feed(data)
+            assert frames[0].request_id == 0xFFFF and not frames[0].is_error
         return s
 
     def alive(self) -> bool:
@@ -134,6 +146,9 @@ def daemon():
         d = Daemon(tmp)
         yield d
         rc = d.stop()
+        if rc != 0:   # keep the log for the report
+            with open(os.path.join(tempfile.gettempdir(), "deformd-it-last-failure.log"), "w") as f:
+                f.write(d.log())
         assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, d.log()[-4000:])
 
 

@@ -6,14 +6,20 @@ from array import array
 from typing import List, Sequence, Tuple
 
 
-def grid_obj(n: int, m: int, size: float = 1.0) -> bytes:
-    """An n x m vertex grid in the z = 0.1 * sin plane (not planar), two triangles per cell,
-    as OBJ text."""
+def grid_obj(n: int, m: int, size: float = 1.0, symmetric: bool = False) -> bytes:
+    """An n x m vertex grid over [0, size]^2 on the surface z = 0.1 sin(3x + 2y) (not planar),
+    or, with symmetric, z = 0.1 cos(6 (x - size/2)) sin(2y) (mirror-symmetric about
+    x = size/2: vertex (i, j) mirrors (n-1-i, j) exactly); two triangles per cell, as OBJ."""
     lines = ["# deformd test grid %dx%d" % (n, m)]
     for j in range(m):
         for i in range(n):
-            x = size * i / (n - 1)
             y = size * j / (m - 1)
+            if symmetric:
+                d = size * (2 * i - (n - 1)) / (2 * (n - 1))   # signed distance to the plane
+                lines.append("v %s %.6f %.6f" % (_sym(size / 2, d), y,
+                                                  0.1 * math.cos(6 * abs(d)) * math.sin(2 * y)))
+                continue
+            x = size * i / (n - 1)
             lines.append("v %.6f %.6f %.6f" % (x, y, 0.1 * math.sin(3 * x + 2 * y)))
     for j in range(m - 1):
         for i in range(n - 1):
@@ -21,6 +27,12 @@ def grid_obj(n: int, m: int, size: float = 1.0) -> bytes:
             lines.append("f %d %d %d" % (a, a + 1, a + n + 1))
             lines.append("f %d %d %d" % (a, a + n + 1, a + n))
     return ("\n".join(lines) + "\n").encode()
+
+
+def _sym(c: float, d: float) -> str:
+    """c + d printed so that c + d and c - d are exact mirror images in binary (dyadic)."""
+    q = round(d * 1024) / 1024.0
+    return repr(c + q)
 
 
 def obj_bytes_positions(data: bytes) -> array:

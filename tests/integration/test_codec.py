@@ -58,7 +58,7 @@ def test_brush_body_matches_the_c_layout():
                 falloff=2, ratio=3.0, dim=2, integrator="rk4", steps=7, moving=True,
                 mirror=(0, 0, 0, 1, 0, 0), pinned=[(4, 5, 6), (7, 8, 9)])
     p = m.encode_brush(42, b)
-    assert len(p) == 252 + 2 * 24
+    assert len(p) == 253 + 2 * 24
     v = struct.unpack_from("<QBBBBHBB", p, 0)
     assert v == (42, 2, 2, 2, 2, 7, 1, 1)
     radius, ratio, nu, strength = struct.unpack_from("<4d", p, 16)
@@ -67,8 +67,11 @@ def test_brush_body_matches_the_c_layout():
     assert struct.unpack_from("<3d", p, 96) == (0.0, 0.0, 0.5)       # twist
     assert struct.unpack_from("<3d", p, 200) == (0.0, 0.0, 0.0)      # mirror point
     assert struct.unpack_from("<3d", p, 224) == (1.0, 0.0, 0.0)      # mirror normal
-    assert struct.unpack_from("<I", p, 248)[0] == 2
-    assert struct.unpack_from("<6d", p, 252) == (4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
+    assert struct.unpack_from("<IB", p, 248) == (2, m.PIN_DISPLACEMENT)
+    assert struct.unpack_from("<6d", p, 253) == (4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
+    assert m.encode_brush(1, m.Brush())[252] == 0                    # no pins: flags 0
+    both = m.Brush(pinned=[(0, 0, 0)], pin_flags=m.PIN_DISPLACEMENT | m.PIN_GRADIENT)
+    assert m.encode_brush(1, both)[252] == 3
     with pytest.raises(ValueError):
         m.encode_brush(1, m.Brush(type="smudge"))
     with pytest.raises(ValueError):
@@ -76,11 +79,12 @@ def test_brush_body_matches_the_c_layout():
 
 
 def test_handles_body_with_affine_sets():
-    p = m.encode_handles(9, "neohookean", [3, 1, 4], 1e4, 0.01, 5e5, 1e-11, 500,
+    hp = m.HandleParams.for_energy("neohookean", w=1.0, rho=1e3, max_iters=40, accelerate=True)
+    p = m.encode_handles(9, "neohookean", [3, 1, 4], hp,
                          [m.AffineSet(A=[(0, 0, 1)], b=[2.5], indices=[7, 8])])
-    sid, energy, w, s, rho, tol, iters, n = struct.unpack_from("<QB4dII", p, 0)
-    assert (sid, energy, w, s, rho, tol, iters, n) == (9, 3, 1e4, 0.01, 5e5, 1e-11, 500, 3)
-    off = 49
+    head = struct.unpack_from("<QBBBB9dII", p, 0)
+    assert head == (9, 3, 0, 1, 5, 1.0, 0.01, 1e3, 1e-11, 1e7, 0.45, 0.9, 1.1, 1e-3, 40, 3)
+    off = 92
     assert struct.unpack_from("<3I", p, off) == (3, 1, 4)
     off += 12
     assert struct.unpack_from("<IB", p, off) == (1, 1)
@@ -89,6 +93,9 @@ def test_handles_body_with_affine_sets():
     off += 32
     assert struct.unpack_from("<3I", p, off) == (2, 7, 8)
     assert len(p) == off + 12
+    assert m.HandleParams.for_energy("arap").w == 1e-4
+    with pytest.raises(TypeError):
+        m.HandleParams.for_energy("arap", omega=1)
 
 
 def test_disp_round_trip_dense_and_sparse_and_chunk_join():
@@ -139,3 +146,66 @@ def test_error_session_info_and_stats_bodies():
     assert m.decode_stats(st) == {"a.b_c": 2.5}
     with pytest.raises(m.ProtocolError):
         m.decode_session_info(info[:-1])
+
+
+def _mesh_chunk(section, offset, rows, data, nv=4, ne=2):
+    head = struct.pack("<QQBBBBIIIII", 7, 3, 2, 0, section, 0, nv, ne, 0, offset, rows)
+    return head + data.tobytes()
+
+
+def test_get_mesh_chunks_assemble_and_bad_order_is_refused():
+    from deformd_client import MeshData
+    pos = array("f", range(12))
+    tri = array("I", [0, 1, 2, 0, 2, 3])
+    chunks = [m.decode_mesh_chunk(_mesh_chunk(1, 0, 3, pos[:9])),
+              m.decode_mesh_chunk(_mesh_chunk(1, 3, 1, pos[9:])),
+              m.decode_mesh_chunk(_mesh_chunk(4, 0, 2, tri))]
+    mesh = m.assemble_mesh(chunks, MeshData)
+    assert mesh.positions == pos and mesh.elements == tri and mesh.elem_size == 3
+    with pytest.raises(m.ProtocolError):
+        m.assemble_mesh(chunks[1:], MeshData)
+    with pytest.raises(m.ProtocolError):
+        m.decode_mesh_chunk(_mesh_chunk(1, 3, 2, pos[:6]))      # rows beyond nv
+
+
+def test_client_queues_events_met_while_waiting_and_raises_errors():
+    """A fake daemon on a socketpair: the reply to a get-mesh comes in two chunks with a
+    displacement event in between; then an error reply; then the peer hangs up."""
+    import socket
+    import threading
+    from deformd_client import Client, ConnectionClosed, DeformdError, MeshData
+    a, b = socket.socketpair()
+    ev = m.Disp(7, 4, 3, m.CHANGE_UNDO, m.DISP_SPARSE, 4, 1, 0, 1, array("I", [2]),
+                array("f", [1, 2, 3]))
+
+    def fake_daemon():
+        dec = fr.FrameDecoder()
+        got = []
+        while len(got) < 2:
+            got += dec.feed(b.recv(65536))
+        rid1, rid2 = got[0].request_id, got[1].request_id
+        b.sendall(fr.encode_frame(m.GET_MESH, _mesh_chunk(1, 0, 4, array("f", range(12))), rid1,
+                                  fr.FLAG_REPLY | fr.FLAG_MORE)
+                  + fr.encode_frame(m.DISPLACEMENT, m.encode_disp(ev), 0, fr.FLAG_EVENT)
+                  + fr.encode_frame(m.GET_MESH, _mesh_chunk(4, 0, 2, array("I", [0, 1, 2, 0, 2, 3])),
+                                    rid1, fr.FLAG_REPLY)
+                  + fr.encode_frame(m.UNDO, struct.pack("<iH", -8, 7) + b"nothing", rid2,
+                                    fr.FLAG_REPLY | fr.FLAG_ERROR))
+        b.close()
+
+    t = threading.Thread(target=fake_daemon)
+    t.start()
+    c = Client(a, timeout=5, hello=False)
+    r1 = c.send(m.GET_MESH, m.encode_get_mesh(7))
+    r2 = c.send(m.UNDO, m.encode_session_ref(7))
+    mesh = m.assemble_mesh([m.decode_mesh_chunk(f.payload) for f in c.wait_reply(r1)], MeshData)
+    assert mesh.nv == 4 and mesh.positions == array("f", range(12))
+    with pytest.raises(DeformdError) as ei:
+        c.wait_reply(r2)
+    assert (ei.value.code, ei.value.name, ei.value.message) == (-8, "ESTATE", "nothing")
+    assert c.pending_events() == 1
+    assert c.next_event(1.0) == ev
+    with pytest.raises(ConnectionClosed):
+        c.next_event(1.0)
+    t.join()
+    c.close()

@@ -72,8 +72,18 @@ def test_fatal_header_errors_close_only_that_connection(daemon, what, header, co
     assert_serving(daemon)
 
 
-def test_unknown_type_gets_badtype_and_connection_survives(daemon):
+def test_requests_before_hello_are_refused_estate(daemon, grid_session):
+    """PROTOCOL.md 1.4: requests other than HELLO and PING before a successful HELLO get
+    ESTATE."""
     s = daemon.raw_unix()
+    assert ping_on(s)
+    f, _ = one_reply(s, fr.encode_frame(m.LIST_SESSIONS, b"", 5), 5)
+    assert f.is_error and error_of(f)[0] == E.ESTATE, "LIST_SESSIONS before HELLO was served"
+    s.close()
+
+
+def test_unknown_type_gets_badtype_and_connection_survives(daemon):
+    s = daemon.raw_unix(hello=True)
     f, closed = one_reply(s, fr.encode_frame(0x7777, b"hello", 41), 41)
     assert error_of(f)[0] == E.EPROTO_BADTYPE
     assert ping_on(s)
@@ -91,7 +101,7 @@ def test_unknown_type_gets_badtype_and_connection_survives(daemon):
     (0x0100, E.EPROTO_BADFLAGS),    # unknown bit
 ])
 def test_bad_flags_are_answered(daemon, flags, code):
-    s = daemon.raw_unix()
+    s = daemon.raw_unix(hello=True)
     s.sendall(fr.encode_frame(m.PING, b"abc", 7, flags))
     frames, closed = read_frames(s, 5.0)
     assert frames, "no reply to flags 0x%x (closed=%s)" % (flags, closed)
@@ -105,7 +115,7 @@ def test_bad_flags_are_answered(daemon, flags, code):
 
 
 def test_nonzero_reserved_header_field_is_answered(daemon):
-    s = daemon.raw_unix()
+    s = daemon.raw_unix(hello=True)
     s.sendall(fr.encode_header(m.PING, 0, 5, 2, reserved=1) + b"hi")
     frames, closed = read_frames(s, 5.0)
     assert frames and error_of(frames[0])[0] == E.EPROTO_RESERVED
@@ -137,7 +147,7 @@ def test_truncated_frame_then_silence_does_not_block_others(daemon):
                                       m.HANDLES_SET, m.HANDLES_MOVE, m.GET_MESH, m.UNDO,
                                       m.SNAPSHOT, m.SUBSCRIBE, m.OPEN_SESSION])
 def test_length_zero_body_is_truncated(daemon, msg_type):
-    s = daemon.raw_unix()
+    s = daemon.raw_unix(hello=True)
     f, _ = one_reply(s, fr.encode_frame(msg_type, b"", 11), 11)
     c, msg = error_of(f)
     assert c == E.EPROTO_TRUNCATED, "%s: %d %s" % (m.TYPE_NAMES[msg_type], c, msg)
@@ -147,7 +157,7 @@ def test_length_zero_body_is_truncated(daemon, msg_type):
 
 
 def test_trailing_bytes_are_refused(daemon, grid_session):
-    s = daemon.raw_unix()
+    s = daemon.raw_unix(hello=True)
     f, _ = one_reply(s, fr.encode_frame(m.UNDO, m.encode_session_ref(grid_session.session_id)
                                         + b"\0", 12), 12)
     assert error_of(f)[0] == E.EPROTO_TRAILING
@@ -164,6 +174,11 @@ def _brush_payload(sid, **kw):
 
 
 NAN = float("nan")
+
+
+def _handles(sid, handles, affine=(), **kw):
+    return m.encode_handles(sid, "arap", handles, m.HandleParams.for_energy("arap", **kw),
+                            affine)
 
 
 @pytest.mark.parametrize("what,payload_fn", [
@@ -198,18 +213,17 @@ def test_bad_brush_parameters_change_nothing(daemon, grid_session, what, payload
     ("param falloff 0", lambda sid: (m.SET_BRUSH_PARAM, m.encode_brush_param(sid, "falloff", 0))),
     ("param id 77", lambda sid: (m.SET_BRUSH_PARAM, struct.pack("<QBd", sid, 77, 1.0))),
     ("move target NaN", lambda sid: (m.HANDLES_MOVE, m.encode_handle_move(sid, [(NAN, 0, 0)]))),
-    ("handles w NaN", lambda sid: (m.HANDLES_SET, m.encode_handles(sid, "arap", [0], NAN, 0.01,
-                                                                    0.1, 0, 10))),
-    ("handle index out of range", lambda sid: (m.HANDLES_SET, m.encode_handles(
-        sid, "arap", [0, 64], 1e4, 0.01, 0.1, 0, 10))),
-    ("handle index 2^31", lambda sid: (m.HANDLES_SET, m.encode_handles(
-        sid, "arap", [0, 1 << 31], 1e4, 0.01, 0.1, 0, 10))),
-    ("affine index out of range", lambda sid: (m.HANDLES_SET, m.encode_handles(
-        sid, "arap", [0], 1e4, 0.01, 0.1, 0, 10,
-        [m.AffineSet(A=[(0, 0, 1)], b=[0], indices=[1000])]))),
-    ("energy 9", lambda sid: (m.HANDLES_SET, m.encode_handles(
-        sid, "arap", [0], 1e4, 0.01, 0.1, 0, 10)[:8] + b"\x09"
-        + m.encode_handles(sid, "arap", [0], 1e4, 0.01, 0.1, 0, 10)[9:])),
+    ("handles w NaN", lambda sid: (m.HANDLES_SET, _handles(sid, [0], w=NAN))),
+    ("handles rho inf", lambda sid: (m.HANDLES_SET, _handles(sid, [0], rho=math.inf))),
+    ("handles poisson 0.5", lambda sid: (m.HANDLES_SET, _handles(sid, [0], poisson=0.5))),
+    ("handle index out of range", lambda sid: (m.HANDLES_SET, _handles(sid, [0, 64]))),
+    ("handle index 2^31", lambda sid: (m.HANDLES_SET, _handles(sid, [0, 1 << 31]))),
+    ("handle repeated", lambda sid: (m.HANDLES_SET, _handles(sid, [3, 3]))),
+    ("affine index out of range", lambda sid: (m.HANDLES_SET, _handles(
+        sid, [0], affine=[m.AffineSet(A=[(0, 0, 1)], b=[0], indices=[1000])]))),
+    ("energy 9", lambda sid: (m.HANDLES_SET, _handles(sid, [0])[:8] + b"\x09"
+                              + _handles(sid, [0])[9:])),
+    ("anderson_m 0", lambda sid: (m.HANDLES_SET, _handles(sid, [0], anderson_m=0))),
 ])
 def test_bad_numbers_and_indices_are_refused(daemon, grid_session, what, payload_fn):
     sid = grid_session.session_id
@@ -244,7 +258,7 @@ def test_unknown_session_and_future_version(daemon, grid_session):
 
 def test_load_chunks_out_of_order_and_inconsistent(daemon):
     data = grid_obj(6, 6)
-    s = daemon.raw_unix()
+    s = daemon.raw_unix(hello=True)
     # first chunk claims offset 100
     p = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "bad", "", len(data), 0, 100, data[100:200])
     f, _ = one_reply(s, fr.encode_frame(m.LOAD_MESH, p, 21, fr.FLAG_MORE), 21)
@@ -280,7 +294,7 @@ def test_random_payloads_never_kill_the_daemon(daemon, grid_session):
     types = sorted(set(m.TYPE_NAMES) - {m.CLOSE_SESSION})
     sid = grid_session.session_id
     for round_ in range(4):
-        s = daemon.raw_unix()
+        s = daemon.raw_unix(hello=True)
         sent = 0
         for k in range(60):
             t = rng.choice(types)

@@ -120,15 +120,13 @@ class Client:
     def _read_more(self, deadline: Optional[float]) -> bool:
         """Reads from the socket into the frame queue. False on timeout."""
         if deadline is not None:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return False
-            self.sock.settimeout(left)
+            # past the deadline: one non-blocking read still collects what already arrived
+            self.sock.settimeout(max(0.0, deadline - time.monotonic()))
         else:
             self.sock.settimeout(None)
         try:
             data = self.sock.recv(RECV_BYTES)
-        except socket.timeout:
+        except (socket.timeout, BlockingIOError):
             return False
         except ConnectionResetError as e:
             raise ConnectionClosed("connection reset by deformd") from e
@@ -331,9 +329,9 @@ class Client:
         return m.decode_ack(self._one(m.BRUSH_CANCEL, m.encode_session_ref(session_id)))
 
     def stroke(self, session_id: int, brush: m.Brush) -> m.Ack:
-        """One whole stroke: begin with the brush's load, update with the same load, end."""
+        """One whole stroke committed as one version (like `deformctl brush`): begin with the
+        brush's load (applied as its first update), then end. Returns the end's ack."""
         self.brush_begin(session_id, brush)
-        self.brush_update(session_id, brush.move, brush.twist, brush.scale, brush.matrix)
         return self.brush_end(session_id)
 
     def set_brush_param(self, session_id: int, param: str, value: float) -> m.Ack:
@@ -343,10 +341,15 @@ class Client:
 
     # ------------------------------------------------------------------ handles
     def set_handles(self, session_id: int, handles: Sequence[int], energy: str = "arap",
-                    w: float = 1e4, s: float = 0.01, rho: float = 0.1, tol: float = 1e-11,
-                    max_iters: int = 500, affine: Sequence[m.AffineSet] = ()) -> m.Ack:
+                    affine: Sequence[m.AffineSet] = (), **params) -> m.Ack:
+        """Defines the session's handle set (replacing any previous one). params: any field of
+        messages.HandleParams (w, s, rho, tol, max_iters, youngs, poisson, strain_min,
+        strain_max, bending, area_weighting, accelerate, anderson_m); the rest take the
+        reference defaults for `energy` (w 1e-4, s 0.01, rho 0.1; Neo-Hookean w 500, rho 5e5;
+        the solver needs rho > w / s)."""
+        p = m.HandleParams.for_energy(energy, **params)
         return m.decode_ack(self._one(m.HANDLES_SET, m.encode_handles(
-            session_id, energy, handles, w, s, rho, tol, max_iters, affine)))
+            session_id, energy, handles, p, affine)))
 
     def move_handles(self, session_id: int, targets: Sequence[Sequence[float]],
                      max_iters: int = 0, max_ms: int = 0, progress_every: int = 0,

@@ -40,10 +40,13 @@ class MeshState:
         st.apply(client.snapshot(session_id))
         return st
 
-    def apply(self, d: m.Disp) -> bool:
-        """Applies one whole version (a joined Disp or a Progress's disp). Returns False (and
-        changes nothing) for a version already applied or for another session's frame; raises
-        OutOfSync when frames were missed. A SNAPSHOT frame (dense) always applies."""
+    def apply(self, d) -> bool:
+        """Applies one whole version: a Disp from Client.events()/snapshot() or a Progress
+        (its iterate). Returns False (and changes nothing) for a version already applied;
+        raises OutOfSync when versions were missed (resync: apply(client.snapshot(sid))).
+        A SNAPSHOT (dense, kind 7) always applies."""
+        if isinstance(d, m.Progress):
+            d = d.disp
         if d.nv != self.nv:
             raise ValueError("frame for %d vertices, replica has %d" % (d.nv, self.nv))
         if d.kind != m.CHANGE_SNAPSHOT:

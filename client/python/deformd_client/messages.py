@@ -287,10 +287,12 @@ class Brush:
     moving: bool = False
     mirror: Optional[Sequence[float]] = None   # (px, py, pz, nx, ny, nz)
     pinned: Sequence[Sequence[float]] = field(default_factory=list)
+    pin_flags: int = 0   # PIN_* bits; 0 = PIN_DISPLACEMENT when points are pinned
 
 
-BRUSH_STRUCT = struct.Struct("<QBBBBHBB4d3d3d3dd9d3d3dI")
-assert BRUSH_STRUCT.size == 252
+PIN_DISPLACEMENT, PIN_GRADIENT = 1, 2
+BRUSH_STRUCT = struct.Struct("<QBBBBHBB4d3d3d3dd9d3d3dIB")
+assert BRUSH_STRUCT.size == 253
 
 
 def encode_brush(session_id: int, b: Brush) -> bytes:
@@ -299,12 +301,13 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
     if b.integrator not in INTEGRATORS:
         raise ValueError("integrator %r not one of %s" % (b.integrator, sorted(INTEGRATORS)))
     mirror = _vec(b.mirror, 6, "mirror") if b.mirror is not None else [0.0] * 6
+    pin_flags = (b.pin_flags or PIN_DISPLACEMENT) if len(b.pinned) else 0
     head = BRUSH_STRUCT.pack(
         session_id, BRUSH_TYPES[b.type], b.dim, b.falloff, INTEGRATORS[b.integrator], b.steps,
         1 if b.moving else 0, 1 if b.mirror is not None else 0,
         float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
         *_vec(b.center, 3, "center"), *_vec(b.move, 3, "move"), *_vec(b.twist, 3, "twist"),
-        float(b.scale), *_vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned))
+        float(b.scale), *_vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
     return head + _f64_rows(b.pinned, "pinned point")
 
 
@@ -328,14 +331,49 @@ class AffineSet:
     indices: Sequence[int]
 
 
-def encode_handles(session_id: int, energy: str, handles: Sequence[int], w: float, s: float,
-                   rho: float, tol: float, max_iters: int,
+@dataclass
+class HandleParams:
+    """Solver settings of a handle set (proto/PROTOCOL.md 4.15). for_energy() gives the
+    reference defaults (df_msg_handles_defaults)."""
+    w: float = 1e-4
+    s: float = 0.01
+    rho: float = 0.1
+    tol: float = 1e-11
+    max_iters: int = 500
+    youngs: float = 1e7
+    poisson: float = 0.45
+    strain_min: float = 0.9
+    strain_max: float = 1.1
+    bending: float = 1e-3
+    area_weighting: bool = False
+    accelerate: bool = False
+    anderson_m: int = 5
+
+    @classmethod
+    def for_energy(cls, energy: str, **overrides) -> "HandleParams":
+        p = cls(w=500.0, rho=5e5) if energy == "neohookean" else cls()
+        for k, v in overrides.items():
+            if v is not None:
+                if not hasattr(p, k):
+                    raise TypeError("unknown handle parameter %r" % k)
+                setattr(p, k, v)
+        return p
+
+
+HANDLES_STRUCT = struct.Struct("<QBBBB9dII")
+assert HANDLES_STRUCT.size == 92
+
+
+def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: HandleParams,
                    affine: Sequence[AffineSet] = ()) -> bytes:
     if energy not in ENERGIES:
         raise ValueError("energy %r not one of %s" % (energy, sorted(ENERGIES)))
-    out = [struct.pack("<QB4dII", session_id, ENERGIES[energy], float(w), float(s), float(rho),
-                       float(tol), max_iters, len(handles)), _u32_array(handles),
-           struct.pack("<I", len(affine))]
+    out = [HANDLES_STRUCT.pack(session_id, ENERGIES[energy], 1 if p.area_weighting else 0,
+                               1 if p.accelerate else 0, p.anderson_m, float(p.w), float(p.s),
+                               float(p.rho), float(p.tol), float(p.youngs), float(p.poisson),
+                               float(p.strain_min), float(p.strain_max), float(p.bending),
+                               p.max_iters, len(handles)),
+           _u32_array(handles), struct.pack("<I", len(affine))]
     for a in affine:
         rows = len(a.A)
         if len(a.b) != rows:

@@ -72,12 +72,13 @@ static void test_node_text(void **state)
     assert_true(p[0] == 1.5 && p[1] == 2.5 && p[2] == 0 && p[3] == 3 && p[5] == 0);
     free(p);
     p = NULL;
+    /* the parser is core/mesh's: check codes and that messages name the file and line */
     assert_int_equal(dc_parse_node_text("3 3 0 0\n1 0 0 0\n2 0 0 0\n", "c.node", &p, &n, &e),
                      DF_EFORMAT);
-    assert_string_equal(e.msg, "c.node: 2 rows, header says 3");
+    assert_non_null(strstr(e.msg, "c.node:2:"));
     assert_int_equal(dc_parse_node_text("2 3 0 0\n1 0 0 0\n3 0 0 0\n", "c.node", &p, &n, &e),
                      DF_EFORMAT);
-    assert_string_equal(e.msg, "c.node:3: id 3, expected 2");
+    assert_non_null(strstr(e.msg, "c.node:3:"));
     assert_int_equal(dc_parse_node_text("1 3 0 0\n5 0 0 0\n", "c.node", &p, &n, &e), DF_EFORMAT);
     assert_int_equal(dc_parse_node_text("1 4 0 0\n1 0 0 0\n", "c.node", &p, &n, &e), DF_EFORMAT);
     assert_int_equal(dc_parse_node_text("1 3 0 0\n1 0 0\n", "c.node", &p, &n, &e), DF_EFORMAT);

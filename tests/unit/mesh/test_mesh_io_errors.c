@@ -122,7 +122,7 @@ static void test_indices_and_numbers(void **state)
     EXPECT("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", DF_FMT_OBJ, "i.obj", DF_EFORMAT, "i.obj:4:",
            "vertex index 4 out of range");
     EXPECT("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", DF_FMT_OBJ, "n.obj", DF_EFORMAT, "n.obj:4:",
-           "out of range");
+           "vertex index -4 out of range (3 vertices so far)");
     EXPECT("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", DF_FMT_OBJ, "z.obj", DF_EFORMAT, "z.obj:4:",
            "bad vertex reference '0'");
     EXPECT("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/x\n", DF_FMT_OBJ, "s.obj", DF_EFORMAT, "s.obj:4:",

@@ -398,6 +398,9 @@ static void test_files_and_tetgen_pair(void **state)
     snprintf(path, sizeof path, "%s/missing.off", dir);
     assert_int_equal(df_mesh_read_file(path, NULL, &back, &rep, &err), DF_EIO);
     assert_non_null(strstr(err.msg, "missing.off"));
+    assert_int_equal(df_mesh_read_file(dir, NULL, &back, &rep, &err), DF_EIO);
+    assert_non_null(strstr(err.msg, "is a directory"));
+    assert_null(back.V);
     rmdir(dir);
 }
 

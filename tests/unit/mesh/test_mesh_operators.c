@@ -155,15 +155,32 @@ static void test_right_triangle(void **state)
     }
     assert_true(fabs(r.vol[0] - 6.0) < TOL);
     df_mesh_rest_free(&r);
-    /* Clockwise order: signed area -6, reported inverted for a planar mesh. */
+    /* Clockwise order: signed area -6; a consistently clockwise mesh is not inverted ... */
     int32_t Ecw[] = {0, 2, 1};
     df_mesh cw = make(DF_MESH_TRIANGLE, 1, V, 3, Ecw, 1);
     assert_int_equal(df_mesh_element_volumes(&cw, &vol, &err), DF_OK);
     assert_true(fabs(vol + 6.0) < TOL);
     df_mesh_report rep;
-    assert_int_equal(df_mesh_check_for_solver(&cw, &rep, &err), DF_EINVAL);
+    assert_int_equal(df_mesh_check_for_solver(&cw, &rep, &err), DF_OK);
+    assert_int_equal(rep.inverted_elements, 0);
+    /* ... but one triangle against the majority is: square fan, last triangle flipped */
+    double Q[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0.5, 0.5, 0};
+    int32_t EQ[] = {4, 0, 1, 4, 1, 2, 4, 2, 3, 4, 0, 3};
+    df_mesh mixed = make(DF_MESH_TRIANGLE, 1, Q, 5, EQ, 4);
+    assert_int_equal(df_mesh_check_for_solver(&mixed, &rep, &err), DF_EINVAL);
     assert_int_equal(rep.inverted_elements, 1);
-    assert_non_null(strstr(err.msg, "inverted"));
+    assert_int_equal(rep.first_inverted, 3);
+    assert_true(fabs(rep.min_signed_volume + 0.25) < TOL);
+    assert_non_null(strstr(err.msg, "1 inverted element(s) (first: element 3"));
+    for (int t = 0; t < 4; t++) { /* reversing every triangle keeps exactly one odd one out */
+        int32_t tmp = EQ[3 * t + 1];
+        EQ[3 * t + 1] = EQ[3 * t + 2];
+        EQ[3 * t + 2] = tmp;
+    }
+    mixed.E = EQ;
+    assert_int_equal(df_mesh_analyze(&mixed, &rep, &err), DF_OK);
+    assert_int_equal(rep.inverted_elements, 1);
+    assert_int_equal(rep.first_inverted, 3);
 }
 
 static void test_regular_tet(void **state)

@@ -56,6 +56,7 @@ static inline df_msg_brush sample_brush(void)
     for (int i = 0; i < 9; i++)
         m.matrix[i] = i % 4 == 0 ? 0.1 : 0.01 * i;
     m.n_pinned = 2;
+    m.pin_flags = DF_PIN_DISPLACEMENT | DF_PIN_GRADIENT;
     m.pinned = sample_pinned;
     return m;
 }
@@ -63,14 +64,11 @@ static inline df_msg_brush sample_brush(void)
 static inline df_msg_handles sample_handles_msg(df_msg_affine_set *aff)
 {
     df_msg_handles m;
-    memset(&m, 0, sizeof m);
+    df_msg_handles_defaults(&m, DF_ENERGY_NEOHOOKEAN);
     m.session_id = 7;
-    m.energy = DF_ENERGY_NEOHOOKEAN;
     m.w = 1e4;
-    m.s = 0.01;
-    m.rho = 5e5;
-    m.tol = 1e-11;
-    m.max_iters = 500;
+    m.accelerate = 1;
+    m.bending = 0.25;
     m.n_handles = 4;
     m.handles = sample_handles;
     memset(aff, 0, sizeof *aff);

@@ -131,7 +131,7 @@ static void test_brush_fields(void **state)
     df_buf_init(&b);
     df_error e;
     assert_int_equal(df_msg_brush_encode(&in, &b, &e), DF_OK);
-    assert_int_equal(b.len, 252 + 24 * 2);
+    assert_int_equal(b.len, 253 + 24 * 2);
     /* spot-check documented offsets: radius at 16, nu at 32, n_pinned at 248 */
     double radius, nu;
     memcpy(&radius, b.data + 16, 8);
@@ -152,6 +152,7 @@ static void test_brush_fields(void **state)
     assert_true(out.matrix[4] == 0.1 && out.matrix[5] == 0.05);
     assert_true(out.mirror_normal[0] == 1 && out.mirror_normal[1] == 0);
     assert_int_equal(out.n_pinned, 2);
+    assert_int_equal(out.pin_flags, DF_PIN_DISPLACEMENT | DF_PIN_GRADIENT);
     assert_true(out.pinned != sample_pinned);
     assert_memory_equal(out.pinned, sample_pinned, sizeof sample_pinned);
     df_msg_brush_free(&out);
@@ -159,6 +160,7 @@ static void test_brush_fields(void **state)
     /* nu = +inf is legal and survives */
     in.nu = INFINITY;
     in.n_pinned = 0;
+    in.pin_flags = 0;
     df_buf_reset(&b);
     assert_int_equal(df_msg_brush_encode(&in, &b, &e), DF_OK);
     assert_int_equal(df_msg_brush_decode(b.data, b.len, &out, &e), DF_OK);
@@ -177,11 +179,16 @@ static void test_handles_and_move_fields(void **state)
     df_buf_init(&b);
     df_error e;
     assert_int_equal(df_msg_handles_encode(&in, &b, &e), DF_OK);
-    /* 49 fixed + 4 x 4 handles + 4 n_affine + (1 + 2*3*8 + 2*8 + 4 + 3*4) */
-    assert_int_equal(b.len, 49 + 16 + 4 + 1 + 48 + 16 + 4 + 12);
+    /* 92 fixed + 4 x 4 handles + 4 n_affine + (1 + 2*3*8 + 2*8 + 4 + 3*4) */
+    assert_int_equal(b.len, 92 + 16 + 4 + 1 + 48 + 16 + 4 + 12);
     assert_int_equal(df_msg_handles_decode(b.data, b.len, &out, &e), DF_OK);
     assert_int_equal(out.energy, DF_ENERGY_NEOHOOKEAN);
     assert_true(out.w == 1e4 && out.s == 0.01 && out.rho == 5e5 && out.tol == 1e-11);
+    assert_true(out.youngs == 1e7 && out.poisson == 0.45 && out.bending == 0.25);
+    assert_true(out.strain_min == 0.9 && out.strain_max == 1.1);
+    assert_int_equal(out.accelerate, 1);
+    assert_int_equal(out.anderson_m, 5);
+    assert_int_equal(out.area_weighting, 0);
     assert_int_equal(out.max_iters, 500);
     assert_int_equal(out.n_handles, 4);
     assert_int_equal(out.handles[3], 8000000);
@@ -295,6 +302,38 @@ static void test_body_kind_table(void **state)
     assert_int_equal(known, 26);
 }
 
+static void test_defaults_are_valid(void **state)
+{
+    (void)state;
+    df_buf b;
+    df_buf_init(&b);
+    df_error e;
+    df_msg_brush br;
+    df_msg_brush_defaults(&br);
+    assert_int_equal(df_msg_brush_encode(&br, &b, &e), DF_EINVAL); /* session_id still 0 */
+    br.session_id = 1;
+    assert_int_equal(df_msg_brush_encode(&br, &b, &e), DF_OK);
+    assert_true(br.ratio == 1.1 && br.nu == 0.5 && br.radius == 1 && br.strength == 1);
+    assert_int_equal(br.falloff, 1);
+    assert_int_equal(br.steps, 1);
+    int32_t h[2] = {0, 1};
+    for (uint8_t en = 0; en <= DF_ENERGY_MAX + 1; en++) {
+        df_msg_handles hs;
+        df_msg_handles_defaults(&hs, en);
+        hs.session_id = 1;
+        hs.n_handles = 2;
+        hs.handles = h;
+        df_buf_reset(&b);
+        assert_int_equal(df_msg_handles_encode(&hs, &b, &e), DF_OK);
+        assert_int_equal(b.len, 92 + 8 + 4);
+        assert_int_equal(hs.energy, en >= 1 && en <= DF_ENERGY_MAX ? en : DF_ENERGY_ARAP);
+        assert_true(hs.rho == (en == DF_ENERGY_NEOHOOKEAN ? 5e5 : 0.1));
+        assert_true(hs.w == (en == DF_ENERGY_NEOHOOKEAN ? 500 : 1e-4));
+        assert_int_equal(hs.max_iters, 500);
+    }
+    df_buf_free(&b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -305,6 +344,7 @@ int main(void)
         cmocka_unit_test(test_handles_and_move_fields),
         cmocka_unit_test(test_session_and_load_fields),
         cmocka_unit_test(test_body_kind_table),
+        cmocka_unit_test(test_defaults_are_valid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

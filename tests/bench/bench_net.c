@@ -1,0 +1,602 @@
+/* bench_net.c — network benchmarks of deformd (run by `make bench`).
+ *
+ * Starts build/bin/deformd (next to this binary: ../bin/deformd) on a temporary Unix socket and
+ * a loopback TCP port, uploads programmatic grid meshes (1k, 100k, 1M vertices, binary PLY) and
+ * measures, redis-benchmark style:
+ *   1. the raw 16-byte echo round trip over a Unix socket and loopback TCP (an in-process echo
+ *      thread: the machine's floor for any request/response);
+ *   2. brush update round trip (request sent -> its displacement event fully received) on the
+ *      1k and 100k meshes over Unix and TCP, p50/p99 over 1,000 updates;
+ *   3. full 1M-vertex displacement frames (dense, 12 MB) to one subscriber: frames/s and MB/s,
+ *      pure stream (pipelined SNAPSHOT replies) and brush-driven (each frame a new version);
+ *   4. the writer's update rate (update -> ack) on the 1k mesh with 1 vs 32 subscribers reading
+ *      in a separate thread.
+ * Targets (issue): 1k p50 <= 3x echo; 100k p50 <= 2 ms; >= 60 1M frames/s; 32 subs <= 2x.
+ * Exit status 0 when every measurement ran (targets are reported, not enforced), 1 otherwise. */
+#include <arpa/inet.h>
+#include <errno.h>
+#include <limits.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "client/dc_net.h"
+#include "client/deformclient.h"
+
+#define ECHO_BYTES 16
+#define ECHO_WARMUP 500
+#define ECHO_ROUNDS 20000
+#define RT_WARMUP 50
+#define RT_ROUNDS 1000
+#define STREAM_SECONDS 3.0
+#define STREAM_INFLIGHT 4
+#define WRITER_UPDATES 2000
+#define MANY_SUBS 32
+#define TARGET_ECHO_RATIO 3.0
+#define TARGET_100K_P50_US 2000.0
+#define TARGET_1M_FPS 60.0
+#define TARGET_SUB_COST 2.0
+
+typedef struct stats {
+    double p50, p99, mean;
+    int n;
+} stats;
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static stats stats_of(double *t, int n)
+{
+    stats s = {0, 0, 0, n};
+    if (n <= 0)
+        return s;
+    qsort(t, (size_t)n, sizeof *t, cmp_double);
+    double sum = 0;
+    for (int i = 0; i < n; i++)
+        sum += t[i];
+    s.p50 = t[n / 2];
+    s.p99 = t[(int)((n - 1) * 0.99)];
+    s.mean = sum / n;
+    return s;
+}
+
+static double now_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e6 + (double)ts.tv_nsec * 1e-3;
+}
+
+/* ---- raw 16-byte echo baseline ------------------------------------------------------------- */
+
+static void *echo_thread(void *arg)
+{
+    int lfd = *(int *)arg;
+    int fd = accept(lfd, NULL, NULL);
+    if (fd < 0)
+        return NULL;
+    int one = 1;
+    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    char b[ECHO_BYTES];
+    while (dc_net_read_exact(fd, b, sizeof b, -1, NULL) == DF_OK &&
+           dc_net_write_all(fd, b, sizeof b, NULL) == DF_OK) {
+    }
+    close(fd);
+    return NULL;
+}
+
+/* Round trips of a 16-byte message through an echo thread over AF_UNIX or AF_INET loopback. */
+static int bench_echo(int family, const char *dir, stats *out)
+{
+    int lfd = socket(family, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    char path[108];
+    int port = 0, ok = lfd >= 0;
+    if (ok && family == AF_UNIX) {
+        struct sockaddr_un sa = {.sun_family = AF_UNIX};
+        ok = snprintf(path, sizeof path, "%s/echo.sock", dir) < (int)sizeof path;
+        memcpy(sa.sun_path, path, sizeof path);
+        ok = bind(lfd, (struct sockaddr *)&sa, sizeof sa) == 0;
+    } else if (ok) {
+        struct sockaddr_in sa = {.sin_family = AF_INET};
+        sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        socklen_t sl = sizeof sa;
+        ok = bind(lfd, (struct sockaddr *)&sa, sizeof sa) == 0 &&
+             getsockname(lfd, (struct sockaddr *)&sa, &sl) == 0;
+        port = ntohs(sa.sin_port);
+    }
+    if (!ok || listen(lfd, 4) != 0) {
+        if (lfd >= 0)
+            close(lfd);
+        return -1;
+    }
+    pthread_t th;
+    pthread_create(&th, NULL, echo_thread, &lfd);
+    int fd = family == AF_UNIX ? dc_net_connect_unix(path, NULL)
+                               : dc_net_connect_tcp("127.0.0.1", port, NULL);
+    double *t = malloc(ECHO_ROUNDS * sizeof *t);
+    int n = 0;
+    char b[ECHO_BYTES] = "deformd-echo-16";
+    for (int i = 0; fd >= 0 && t && i < ECHO_WARMUP + ECHO_ROUNDS; i++) {
+        double t0 = now_us();
+        if (dc_net_write_all(fd, b, sizeof b, NULL) || dc_net_read_exact(fd, b, sizeof b, 5000, NULL))
+            break;
+        if (i >= ECHO_WARMUP)
+            t[n++] = now_us() - t0;
+    }
+    if (fd >= 0)
+        close(fd);
+    else
+        shutdown(lfd, SHUT_RDWR);
+    pthread_join(th, NULL);
+    close(lfd);
+    if (family == AF_UNIX)
+        unlink(path);
+    *out = stats_of(t, n);
+    free(t);
+    return n == ECHO_ROUNDS ? 0 : -1;
+}
+
+/* ---- daemon and meshes ---------------------------------------------------------------------- */
+
+typedef struct daemon_proc {
+    pid_t pid;
+    char dir[64];
+    char sock[96];
+    int port;
+} daemon_proc;
+
+/* A free loopback TCP port (bound then released; the daemon binds it right after). */
+static int free_port(void)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in sa = {.sin_family = AF_INET};
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t sl = sizeof sa;
+    int port = -1;
+    if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof sa) == 0 &&
+        getsockname(fd, (struct sockaddr *)&sa, &sl) == 0)
+        port = ntohs(sa.sin_port);
+    if (fd >= 0)
+        close(fd);
+    return port;
+}
+
+static int daemon_start(daemon_proc *d, const char *exe)
+{
+    snprintf(d->sock, sizeof d->sock, "%s/deformd.sock", d->dir);
+    d->port = free_port();
+    char tcp[64], log[128];
+    snprintf(tcp, sizeof tcp, "127.0.0.1:%d", d->port);
+    snprintf(log, sizeof log, "%s/deformd.log", d->dir);
+    d->pid = fork();
+    if (d->pid == 0) {
+        FILE *f = freopen(log, "w", stderr);
+        (void)f;
+        execl(exe, exe, "--foreground", "--socket", d->sock, "--tcp", tcp, "--log-level", "warn",
+              (char *)NULL);
+        _exit(127);
+    }
+    for (int i = 0; i < 200; i++) {
+        df_client *c;
+        if (df_client_connect_unix(d->sock, "bench", &c, NULL) == DF_OK) {
+            df_client_close(c);
+            return 0;
+        }
+        usleep(50000);
+    }
+    return -1;
+}
+
+static void daemon_stop(daemon_proc *d)
+{
+    if (d->pid > 0) {
+        kill(d->pid, SIGTERM);
+        waitpid(d->pid, NULL, 0);
+    }
+}
+
+/* Binary little-endian PLY of an n x n vertex grid over [0,1]^2 with a gentle z bump, 2(n-1)^2
+ * triangles. Returns a malloc'd buffer and its size. */
+static uint8_t *grid_ply(int n, size_t *len)
+{
+    size_t nv = (size_t)n * n, nf = 2 * (size_t)(n - 1) * (n - 1);
+    char head[256];
+    int hl = snprintf(head, sizeof head,
+                      "ply\nformat binary_little_endian 1.0\nelement vertex %zu\nproperty float x\n"
+                      "property float y\nproperty float z\nelement face %zu\n"
+                      "property list uchar int vertex_indices\nend_header\n", nv, nf);
+    *len = (size_t)hl + nv * 12 + nf * 13;
+    uint8_t *b = malloc(*len), *p = b;
+    if (!b)
+        return NULL;
+    memcpy(p, head, (size_t)hl);
+    p += hl;
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) {
+            float x = (float)i / (float)(n - 1), y = (float)j / (float)(n - 1);
+            float v[3] = {x, y, 0.05f * (x - x * x) * (y - y * y) * 16.0f};
+            memcpy(p, v, 12);
+            p += 12;
+        }
+    for (int j = 0; j + 1 < n; j++)
+        for (int i = 0; i + 1 < n; i++) {
+            int32_t a = j * n + i, t[2][3] = {{a, a + 1, a + n + 1}, {a, a + n + 1, a + n}};
+            for (int k = 0; k < 2; k++) {
+                *p++ = 3;
+                memcpy(p, t[k], 12);
+                p += 12;
+            }
+        }
+    return b;
+}
+
+static uint64_t load_grid(df_client *c, int n, const char *name)
+{
+    size_t len;
+    uint8_t *ply = grid_ply(n, &len);
+    df_msg_session_info info;
+    df_error e;
+    int rc = ply ? df_client_load_mesh_bytes(c, name, DF_FMT_PLY, ply, len, 0, &info, &e) : DF_ENOMEM;
+    free(ply);
+    if (rc) {
+        fprintf(stderr, "bench_net: loading %s failed: %s\n", name, rc == DF_ENOMEM ? "ENOMEM" : e.msg);
+        return 0;
+    }
+    return info.session_id;
+}
+
+static void brush_msg(df_msg_brush *b, uint64_t sid, double radius)
+{
+    df_msg_brush_defaults(b);
+    b->session_id = sid;
+    b->type = DF_BRUSH_GRAB;
+    b->radius = radius;
+    b->nu = 0.45;
+    b->center[0] = b->center[1] = 0.5;
+}
+
+/* Reads frames until the displacement event of `version` is complete (or the reply of
+ * `reply_id` when version is 0). Returns 0 or -1. */
+static int wait_for(df_client *c, uint64_t version, uint64_t reply_id)
+{
+    for (;;) {
+        df_frame_header h;
+        const uint8_t *p;
+        df_error e;
+        if (df_client_recv(c, 10000, &h, &p, &e) != DF_OK) {
+            fprintf(stderr, "bench_net: %s\n", e.msg);
+            return -1;
+        }
+        if (h.flags & DF_FLAG_ERROR) {
+            df_msg_error_decode(p, h.payload_len, &e, NULL);
+            fprintf(stderr, "bench_net: server error: %s\n", e.msg);
+            return -1;
+        }
+        if (version && h.type == DF_MSG_DISPLACEMENT && !(h.flags & DF_FLAG_MORE) &&
+            h.payload_len >= 16 && df_le64_load(p + 8) == version)
+            return 0;
+        if (!version && (h.flags & DF_FLAG_REPLY) && h.request_id == reply_id &&
+            !(h.flags & DF_FLAG_MORE))
+            return 0;
+    }
+}
+
+/* Brush update round trips on session `sid`: subscribe, begin, RT_ROUNDS updates each timed
+ * from send to its displacement event, end. */
+static int bench_rt(df_client *c, uint64_t sid, stats *out)
+{
+    df_error e;
+    df_msg_session_info info;
+    df_msg_ack ack;
+    df_msg_brush b;
+    brush_msg(&b, sid, 0.2);
+    if (df_client_subscribe(c, sid, 0, &info, &e) || df_client_brush_begin(c, &b, &ack, &e)) {
+        fprintf(stderr, "bench_net: %s\n", e.msg);
+        return -1;
+    }
+    uint64_t version = ack.version;
+    double *t = malloc(RT_ROUNDS * sizeof *t);
+    int n = 0, rc = 0;
+    df_buf buf;
+    df_buf_init(&buf);
+    for (int i = 0; t && i < RT_WARMUP + RT_ROUNDS && rc == 0; i++) {
+        df_msg_brush_update u;
+        memset(&u, 0, sizeof u);
+        u.session_id = sid;
+        u.move[0] = 0.001 * (1 + i % 7);
+        u.move[2] = 0.0005 * (i % 3);
+        df_buf_reset(&buf);
+        uint64_t id;
+        double t0 = now_us();
+        rc = df_msg_brush_update_encode(&u, &buf, &e) ||
+             df_client_send(c, DF_MSG_BRUSH_UPDATE, 0, 0, buf.data, buf.len, &id, &e) ||
+             wait_for(c, version + 1, 0);
+        double dt = now_us() - t0;
+        rc = rc || wait_for(c, 0, id);
+        version++;
+        if (i >= RT_WARMUP && rc == 0)
+            t[n++] = dt;
+    }
+    df_buf_free(&buf);
+    if (rc == 0 && (df_client_brush_end(c, sid, NULL, &e) || df_client_unsubscribe(c, sid, &e)))
+        rc = -1;
+    *out = stats_of(t, n);
+    free(t);
+    return rc || n != RT_ROUNDS ? -1 : 0;
+}
+
+/* Full dense frames of the 1M session: pipelined SNAPSHOT replies (pure stream) when `brush` is
+ * 0, else brush updates each producing a dense version to this subscribed connection. */
+static int bench_full_frames(df_client *c, uint64_t sid, uint32_t nv, int brush, double *fps,
+                             double *mbps)
+{
+    df_error e;
+    df_buf buf;
+    df_buf_init(&buf);
+    df_msg_ack ack;
+    df_msg_brush b;
+    brush_msg(&b, sid, 0.3);
+    if (brush && (df_client_subscribe(c, sid, 0, NULL, &e) || df_client_brush_begin(c, &b, &ack, &e))) {
+        fprintf(stderr, "bench_net: %s\n", e.msg);
+        return -1;
+    }
+    long sent = 0, frames = 0, inflight = 0;
+    double bytes = 0, t0 = now_us(), tend = t0 + STREAM_SECONDS * 1e6;
+    int rc = 0;
+    while (rc == 0 && (now_us() < tend || inflight > 0)) {
+        while (inflight < STREAM_INFLIGHT && now_us() < tend) {
+            df_buf_reset(&buf);
+            if (brush) {
+                df_msg_brush_update u;
+                memset(&u, 0, sizeof u);
+                u.session_id = sid;
+                u.move[0] = 0.001 * (1 + sent % 5);
+                rc = df_msg_brush_update_encode(&u, &buf, &e);
+            } else {
+                df_msg_snapshot_req q = {sid, 0};
+                rc = df_msg_snapshot_req_encode(&q, &buf, &e);
+            }
+            uint16_t type = brush ? DF_MSG_BRUSH_UPDATE : DF_MSG_SNAPSHOT;
+            rc = rc || df_client_send(c, type, 0, 0, buf.data, buf.len, NULL, &e);
+            sent++;
+            inflight++;
+        }
+        df_frame_header h;
+        const uint8_t *p;
+        if (rc || df_client_recv(c, 10000, &h, &p, &e) != DF_OK || (h.flags & DF_FLAG_ERROR)) {
+            fprintf(stderr, "bench_net: full frames: %s\n", e.msg);
+            rc = -1;
+            break;
+        }
+        int disp = brush ? h.type == DF_MSG_DISPLACEMENT : h.type == DF_MSG_SNAPSHOT;
+        if (disp) {
+            bytes += h.payload_len;
+            if (!(h.flags & DF_FLAG_MORE) && df_le32_load(p + 32) == nv)
+                frames++;
+        }
+        if ((h.flags & DF_FLAG_REPLY) && !(h.flags & DF_FLAG_MORE))
+            inflight--;
+    }
+    double secs = (now_us() - t0) / 1e6;
+    if (brush && rc == 0)
+        df_client_brush_end(c, sid, NULL, &e), df_client_unsubscribe(c, sid, &e);
+    df_buf_free(&buf);
+    *fps = frames / secs;
+    *mbps = bytes / secs / 1e6;
+    return rc;
+}
+
+/* Subscriber connections drained by one thread; each counts complete displacement versions. */
+typedef struct subs {
+    df_client *c[MANY_SUBS];
+    long versions[MANY_SUBS];
+    int n;
+    volatile int stop;
+} subs;
+
+static void count_event(void *user, const df_frame_header *h, const uint8_t *p)
+{
+    (void)p;
+    if (h->type == DF_MSG_DISPLACEMENT && !(h->flags & DF_FLAG_MORE))
+        (*(long *)user)++;
+}
+
+static void *subs_thread(void *arg)
+{
+    subs *s = arg;
+    struct pollfd pf[MANY_SUBS];
+    for (int i = 0; i < s->n; i++)
+        pf[i] = (struct pollfd){df_client_fd(s->c[i]), POLLIN, 0};
+    while (!s->stop) {
+        if (poll(pf, (nfds_t)s->n, 50) <= 0)
+            continue;
+        for (int i = 0; i < s->n; i++)
+            if (pf[i].revents & POLLIN)
+                df_client_pump(s->c[i], 0, NULL);
+    }
+    return NULL;
+}
+
+/* Writer updates per second on `sid` (update -> ack) with `nsubs` subscriber connections. */
+static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs, double *rate,
+                        long *min_seen)
+{
+    subs s;
+    memset(&s, 0, sizeof s);
+    df_error e;
+    for (int i = 0; i < nsubs; i++) {
+        if (df_client_connect_unix(sock, "bench-sub", &s.c[i], &e) ||
+            df_client_subscribe(s.c[i], sid, 0, NULL, &e)) {
+            fprintf(stderr, "bench_net: subscriber %d: %s\n", i, e.msg);
+            for (int k = 0; k < s.n; k++)
+                df_client_close(s.c[k]);
+            return -1;
+        }
+        df_client_set_event_callback(s.c[i], count_event, &s.versions[i]);
+        s.n++;
+    }
+    pthread_t th;
+    pthread_create(&th, NULL, subs_thread, &s);
+    df_msg_brush b;
+    brush_msg(&b, sid, 0.2);
+    int rc = df_client_brush_begin(w, &b, NULL, &e);
+    double t0 = now_us();
+    for (int i = 0; rc == 0 && i < WRITER_UPDATES; i++) {
+        df_msg_brush_update u;
+        memset(&u, 0, sizeof u);
+        u.session_id = sid;
+        u.move[1] = 0.001 * (1 + i % 9);
+        rc = df_client_brush_update(w, &u, NULL, &e);
+    }
+    double secs = (now_us() - t0) / 1e6;
+    if (rc == 0)
+        rc = df_client_brush_end(w, sid, NULL, &e);
+    if (rc)
+        fprintf(stderr, "bench_net: writer: %s\n", e.msg);
+    for (int k = 0; k < 100; k++) { /* let the subscribers drain (<= 5 s) */
+        long lo = LONG_MAX;
+        for (int i = 0; i < s.n; i++)
+            lo = s.versions[i] < lo ? s.versions[i] : lo;
+        if (lo >= WRITER_UPDATES)
+            break;
+        usleep(50000);
+    }
+    s.stop = 1;
+    pthread_join(th, NULL);
+    *min_seen = LONG_MAX;
+    for (int i = 0; i < s.n; i++) {
+        *min_seen = s.versions[i] < *min_seen ? s.versions[i] : *min_seen;
+        df_client_close(s.c[i]);
+    }
+    *rate = WRITER_UPDATES / secs;
+    return rc;
+}
+
+static const char *verdict(int ok)
+{
+    return ok ? "MET" : "MISSED";
+}
+
+int main(int argc, char **argv)
+{
+    (void)argc;
+    signal(SIGPIPE, SIG_IGN);
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    char exe[PATH_MAX + 32], self[PATH_MAX];
+    ssize_t sl = readlink("/proc/self/exe", self, sizeof self - 1);
+    self[sl > 0 ? sl : 0] = '\0';
+    char *slash = strrchr(self, '/');
+    if (slash)
+        *slash = '\0';
+    snprintf(exe, sizeof exe, "%s/../bin/deformd", sl > 0 ? self : ".");
+    if (getenv("DEFORMD_BIN"))
+        snprintf(exe, sizeof exe, "%s", getenv("DEFORMD_BIN"));
+    if (access(exe, X_OK) != 0) {
+        fprintf(stderr, "%s: deformd not found at %s (build it, or set DEFORMD_BIN)\n", argv[0], exe);
+        return 1;
+    }
+    daemon_proc d = {0};
+    snprintf(d.dir, sizeof d.dir, "/tmp/deformd-bench-XXXXXX");
+    if (!mkdtemp(d.dir)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    printf("bench_net: %ld CPUs online; timings are wall clock, best read as orders of magnitude "
+           "on a shared machine\n", ncpu);
+    int fail = 0;
+    stats eu, et;
+    fail |= bench_echo(AF_UNIX, d.dir, &eu) | bench_echo(AF_INET, d.dir, &et);
+    printf("raw 16-byte echo (%d round trips)   unix: p50 %7.1f us  p99 %7.1f us\n", ECHO_ROUNDS,
+           eu.p50, eu.p99);
+    printf("                                    tcp : p50 %7.1f us  p99 %7.1f us\n", et.p50, et.p99);
+    if (daemon_start(&d, exe) != 0) {
+        fprintf(stderr, "bench_net: deformd did not come up (log: %s/deformd.log)\n", d.dir);
+        daemon_stop(&d);
+        return 1;
+    }
+    df_client *cu = NULL, *ct = NULL;
+    df_error e;
+    if (df_client_connect_unix(d.sock, "bench", &cu, &e) ||
+        df_client_connect_tcp("127.0.0.1", d.port, "bench", &ct, &e)) {
+        fprintf(stderr, "bench_net: connect: %s\n", e.msg);
+        daemon_stop(&d);
+        return 1;
+    }
+    static const int sizes[2] = {32, 317};
+    static const char *const names[2] = {"grid-1k", "grid-100k"};
+    uint64_t sid[2] = {0, 0};
+    stats rt[2][2];
+    int rt_ok[2] = {0, 0};
+    for (int m = 0; m < 2; m++) {
+        sid[m] = load_grid(cu, sizes[m], names[m]);
+        if (!sid[m] || bench_rt(cu, sid[m], &rt[m][0]) || bench_rt(ct, sid[m], &rt[m][1])) {
+            fail = 1;
+            continue;
+        }
+        rt_ok[m] = 1;
+        for (int k = 0; k < 2; k++)
+            printf("brush update -> displacement %-9s %s: p50 %7.1f us  p99 %7.1f us  (%d "
+                   "vertices, %d updates)\n", names[m], k ? "tcp " : "unix", rt[m][k].p50,
+                   rt[m][k].p99, sizes[m] * sizes[m], RT_ROUNDS);
+    }
+    if (rt_ok[0]) {
+        double r = rt[0][0].p50 / eu.p50, rtcp = rt[0][1].p50 / et.p50;
+        printf("  target 1k p50 <= %.0fx raw echo: unix %.1fx, tcp %.1fx -> %s\n",
+               TARGET_ECHO_RATIO, r, rtcp, verdict(r <= TARGET_ECHO_RATIO && rtcp <= TARGET_ECHO_RATIO));
+    }
+    if (rt_ok[1])
+        printf("  target 100k p50 <= %.0f us: unix %.1f us, tcp %.1f us -> %s\n", TARGET_100K_P50_US,
+               rt[1][0].p50, rt[1][1].p50,
+               verdict(rt[1][0].p50 <= TARGET_100K_P50_US && rt[1][1].p50 <= TARGET_100K_P50_US));
+    uint64_t big = load_grid(cu, 1000, "grid-1M");
+    double fps[2] = {0, 0}, mbps[2] = {0, 0};
+    if (!big || bench_full_frames(cu, big, 1000000, 0, &fps[0], &mbps[0]) ||
+        bench_full_frames(cu, big, 1000000, 1, &fps[1], &mbps[1]))
+        fail = 1;
+    else {
+        printf("full 1M-vertex frames, unix, 1 subscriber: snapshot stream %6.1f frames/s %7.1f MB/s\n",
+               fps[0], mbps[0]);
+        printf("                                           brush versions  %6.1f frames/s %7.1f MB/s\n",
+               fps[1], mbps[1]);
+        printf("  target >= %.0f frames/s: stream %s, brush-driven %s\n", TARGET_1M_FPS,
+               verdict(fps[0] >= TARGET_1M_FPS), verdict(fps[1] >= TARGET_1M_FPS));
+    }
+    double rate1 = 0, rate32 = 0;
+    long seen1 = 0, seen32 = 0;
+    if (!sid[0] || bench_writer(d.sock, cu, sid[0], 1, &rate1, &seen1) ||
+        bench_writer(d.sock, cu, sid[0], MANY_SUBS, &rate32, &seen32))
+        fail = 1;
+    else {
+        printf("writer updates/s (1k mesh, update -> ack): 1 subscriber %8.0f, %d subscribers %8.0f"
+               " (each subscriber got >= %ld / %ld of %d versions)\n", rate1, MANY_SUBS, rate32,
+               seen1, seen32, WRITER_UPDATES);
+        double cost = rate1 / rate32;
+        printf("  target %d subscribers cost the writer <= %.0fx: %.2fx -> %s\n", MANY_SUBS,
+               TARGET_SUB_COST, cost, verdict(cost <= TARGET_SUB_COST));
+    }
+    df_client_close(cu);
+    df_client_close(ct);
+    daemon_stop(&d);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "%s/deformd.log", d.dir);
+    unlink(cmd);
+    unlink(d.sock);
+    rmdir(d.dir);
+    if (fail)
+        fprintf(stderr, "bench_net: some measurements failed\n");
+    return fail ? 1 : 0;
+}

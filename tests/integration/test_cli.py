@@ -1,0 +1,300 @@
+"""deformctl end to end against the real daemon: every command, --json, --help, Unix and TCP,
+on the shared meshes. Brush results are checked against the reference grab formula (eqs. 6-7)
+and against the same stroke sent through the Python client; `get` output is re-read."""
+import json
+import math
+import os
+import subprocess
+import time
+
+import pytest
+
+from conftest import DEFORMCTL
+from deformd_client import Brush, DeformdError
+from helpers import (grab_displacement, grid_obj, read_indices, read_node_positions,
+                     read_obj_positions, read_off_positions, tet_grid_medit)
+
+COMMANDS = ["ping", "load", "list", "brush", "handles", "move", "get", "undo", "redo",
+            "reset-rest", "watch", "stats"]
+
+
+@pytest.fixture(scope="module")
+def ctl(daemon):
+    if not os.access(DEFORMCTL, os.X_OK):
+        pytest.fail("%s is missing: build it first (make -j2)" % DEFORMCTL, pytrace=False)
+
+    def run(*args, tcp=False, check=True, timeout=120):
+        where = ["--tcp", "127.0.0.1:%d" % daemon.tcp_port] if tcp else \
+            ["--socket", daemon.socket_path]
+        p = subprocess.run([DEFORMCTL] + where + [str(a) for a in args], capture_output=True,
+                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+        if check:
+            assert p.returncode == 0, "deformctl %s -> %d\nstdout: %s\nstderr: %s" % (
+                " ".join(map(str, args)), p.returncode, p.stdout, p.stderr)
+        return p
+    return run
+
+
+def vec(v):
+    return ",".join("%.9g" % x for x in v)
+
+
+def test_help_everywhere(ctl):
+    top = subprocess.run([DEFORMCTL, "--help"], capture_output=True, text=True, timeout=10)
+    assert top.returncode == 0
+    for cmd in COMMANDS:
+        assert cmd in top.stdout
+        p = subprocess.run([DEFORMCTL, cmd, "--help"], capture_output=True, text=True, timeout=10)
+        assert p.returncode == 0 and "usage:" in p.stdout and cmd in p.stdout, (cmd, p.stderr)
+    bad = subprocess.run([DEFORMCTL, "frobnicate"], capture_output=True, text=True, timeout=10)
+    assert bad.returncode == 2 and bad.stderr
+
+
+@pytest.mark.parametrize("tcp", [False, True])
+def test_ping_and_json(ctl, tcp):
+    assert "pong" in ctl("ping", tcp=tcp).stdout
+    j = json.loads(ctl("--json", "ping", tcp=tcp).stdout)
+    assert j["ok"] is True and j["protocol"] == 1 and j["rtt_us"] > 0
+
+
+def test_load_prints_the_session_id_alone_and_list_shows_it(ctl, tmp_path):
+    f = tmp_path / "g.obj"
+    f.write_bytes(grid_obj(6, 6))
+    out = ctl("load", f, "--name", "cli-load").stdout
+    assert out.strip().isdigit() and out.endswith("\n") and out.count("\n") == 1
+    sid = int(out)
+    sessions = json.loads(ctl("--json", "list").stdout)["sessions"]
+    mine = [s for s in sessions if s["session"] == sid]
+    assert mine and mine[0]["name"] == "cli-load" and mine[0]["nv"] == 36
+    assert "cli-load" in ctl("list").stdout
+    other = int(ctl("load", f, tcp=True).stdout)
+    assert other != sid
+
+
+@pytest.fixture
+def spot(ctl, meshes, daemon):
+    path = os.path.join(meshes, "spot.obj")
+    sid = int(ctl("load", path).stdout)
+    yield sid, path
+    with daemon.unix_client() as c:
+        try:
+            c.close_session(sid)
+        except DeformdError:
+            pass
+
+
+def test_brush_grab_on_spot_matches_the_reference(ctl, spot, tmp_path):
+    sid, path = spot
+    ctl("get", sid, "--out", tmp_path / "before.obj")
+    X, nf = read_obj_positions(str(tmp_path / "before.obj"))
+    assert len(X) == 2930 and nf == 5856
+    center = X[1234]
+    tip = (0.05, 0.02, -0.03)
+    out = ctl("--json", "brush", sid, "--type", "grab", "--center", vec(center), "--move",
+              vec(tip), "--radius", 0.25, "--nu", 0.4).stdout
+    assert json.loads(out)["version"] >= 1
+    ctl("get", sid, "--out", tmp_path / "after.obj")
+    P, _ = read_obj_positions(str(tmp_path / "after.obj"))
+    worst = 0.0
+    for i in range(0, len(X), 3):
+        u = grab_displacement(X[i], center, tip, 0.25, 0.4)
+        worst = max(worst, max(abs(P[i][k] - X[i][k] - u[k]) for k in range(3)))
+    assert worst < 1e-5, worst
+    assert max(abs(P[1234][k] - center[k] - tip[k]) for k in range(3)) < 1e-5
+
+
+def test_brush_nu_inf_is_the_plain_falloff_brush(ctl, spot, tmp_path):
+    sid, _ = spot
+    ctl("get", sid, "--out", tmp_path / "b.off")
+    X, _ = read_off_positions(str(tmp_path / "b.off"))
+    center, tip = X[77], (0.0, 0.1, 0.0)
+    ctl("brush", sid, "--type", "grab", "--center", vec(center), "--move", vec(tip),
+        "--radius", 0.3, "--nu", "inf")
+    ctl("get", sid, "--out", tmp_path / "a.off")
+    P, _ = read_off_positions(str(tmp_path / "a.off"))
+    worst = max(max(abs(P[i][k] - X[i][k] - u[k]) for k in range(3))
+                for i in range(0, len(X), 5)
+                for u in [grab_displacement(X[i], center, tip, 0.3, math.inf)])
+    assert worst < 1e-5, worst
+
+
+CLI_BRUSHES = [
+    (["--type", "twist", "--twist", "0,0.4,0", "--radius", "0.3", "--nu", "0.45"],
+     Brush(type="twist", twist=(0, 0.4, 0), radius=0.3, nu=0.45)),
+    (["--type", "scale", "--scale", "0.2", "--radius", "0.3", "--nu", "0.3"],
+     Brush(type="scale", scale=0.2, radius=0.3, nu=0.3)),
+    (["--type", "pinch", "--matrix", "0.2,0,0,0,-0.2,0,0,0,0", "--radius", "0.3"],
+     Brush(type="pinch", matrix=(0.2, 0, 0, 0, -0.2, 0, 0, 0, 0), radius=0.3, nu=0.5)),
+    (["--type", "affine", "--matrix", "0.1,0.2,0,0,0.1,0,0,0,0.3", "--radius", "0.3",
+      "--nu", "0.3"],
+     Brush(type="affine", matrix=(0.1, 0.2, 0, 0, 0.1, 0, 0, 0, 0.3), radius=0.3, nu=0.3)),
+    (["--type", "grab", "--move", "0,0,0.1", "--radius", "0.2", "--falloff", "2", "--ratio",
+      "1.5", "--nu", "0.4"],
+     Brush(type="grab", move=(0, 0, 0.1), radius=0.2, falloff=2, ratio=1.5, nu=0.4)),
+    (["--type", "grab", "--move", "0,0.2,0", "--radius", "0.3", "--integrator", "rk4",
+      "--steps", "6", "--nu", "0.45"],
+     Brush(type="grab", move=(0, 0.2, 0), radius=0.3, integrator="rk4", steps=6, nu=0.45)),
+    (["--type", "grab", "--move", "0.1,0,0.05", "--radius", "0.2", "--mirror",
+      "0,0,0,1,0,0", "--nu", "0.45"],
+     Brush(type="grab", move=(0.1, 0, 0.05), radius=0.2, mirror=(0, 0, 0, 1, 0, 0), nu=0.45)),
+]
+
+
+@pytest.mark.parametrize("args,brush", CLI_BRUSHES,
+                         ids=["twist", "scale", "pinch", "affine", "bi-scale", "rk4", "mirror"])
+def test_cli_brush_equals_the_python_client_stroke(ctl, daemon, meshes, args, brush, tmp_path):
+    path = os.path.join(meshes, "decimated-knight.off")
+    a = int(ctl("load", path).stdout)
+    with daemon.unix_client() as c:
+        b = c.load_file(path).session_id
+        X = c.get_mesh(a).positions
+        brush.center = tuple(X[3 * 100:3 * 100 + 3])
+        ctl("brush", a, "--center", vec(brush.center), *args)
+        c.stroke(b, brush)
+        pa, pb = c.get_mesh(a).positions, c.get_mesh(b).positions
+        assert pa != X
+        assert max(abs(x - y) for x, y in zip(pa, pb)) < 1e-6
+        c.close_session(a)
+        c.close_session(b)
+
+
+def test_cli_brush_2d_and_pins(ctl, daemon, meshes, tmp_path):
+    path = os.path.join(meshes, "woody.obj")
+    sid = int(ctl("load", path).stdout)
+    with daemon.unix_client() as c:
+        X = c.get_mesh(sid).positions
+        size = max(X[0::3]) - min(X[0::3])          # woody is ~hundreds of units wide
+        center, pin_i = X[3 * 10:3 * 10 + 3], 20
+        ctl("brush", sid, "--type", "grab", "--center", vec(center), "--move",
+            vec((0.05 * size, 0.02 * size, 0)), "--radius", 0.2 * size, "--dim", 2, "--nu", 0.45)
+        P = c.get_mesh(sid).positions
+        assert all(P[3 * i + 2] == X[3 * i + 2] for i in range(len(X) // 3))
+        assert abs(P[30] - X[30] - 0.05 * size) < 1e-4 * size
+        pins = tmp_path / "pins.txt"
+        pins.write_text("%.9g %.9g %.9g\n" % tuple(P[3 * pin_i:3 * pin_i + 3]))
+        ctl("brush", sid, "--type", "grab", "--center", vec(P[3 * 10:3 * 10 + 3]),
+            "--move", vec((0, 0, 0.1 * size)), "--radius", 0.5 * size, "--pin", pins,
+            "--nu", 0.45)
+        Q = c.get_mesh(sid).positions
+        assert max(abs(Q[3 * pin_i + k] - P[3 * pin_i + k]) for k in range(3)) < 1e-5 * size
+        assert abs(Q[3 * 10 + 2] - P[3 * 10 + 2] - 0.1 * size) < 1e-5 * size
+        c.close_session(sid)
+
+
+def test_handles_and_move_on_the_apple(ctl, daemon, meshes, tmp_path):
+    rest = os.path.join(meshes, "teaser_apple_rest.node")
+    hfile = os.path.join(meshes, "teaser_apple_handles.txt")
+    tfile = os.path.join(meshes, "teaser_apple_init1.node")
+    sid = int(ctl("load", rest).stdout)
+    # the paper's apple setting rho 1e3, s 0.01 with the loss weight w = rho s / 10 = 1
+    out = ctl("handles", sid, "--energy", "neohookean", "--handles", hfile, "--rho", 1e3,
+              "--s", 0.01, "--w", 1, "--iters", 40).stdout
+    handles = read_indices(hfile)
+    assert str(len(handles)) in out
+    out = ctl("move", sid, "--targets", tfile, "--handles", hfile).stdout
+    words = out.split()
+    assert words[0] == "iterations" and words[2] == "residual" and words[4] == "objective", out
+    assert 1 <= int(words[1]) <= 40
+    assert float(words[3]) >= 0 and math.isfinite(float(words[5]))
+    ctl("get", sid, "--out", tmp_path / "moved.node")
+    P = read_node_positions(str(tmp_path / "moved.node"))
+    T = read_node_positions(tfile)
+    R = read_node_positions(rest)
+    assert len(P) == len(T) == 1088
+    assert max(abs(P[h][k] - T[h][k]) for h in handles for k in range(3)) < 1e-4
+    free = [i for i in range(len(P)) if i not in set(handles)]
+    assert max(abs(P[i][k] - R[i][k]) for i in free for k in range(3)) > 1e-3
+    j = json.loads(ctl("--json", "move", sid, "--targets", tfile, "--handles", hfile,
+                       "--max-iters", 5).stdout)
+    assert j["iterations"] <= 5 and j["status"] in ("converged", "budget")
+    # targets as plain 'x y z' rows in handle order give the same solve
+    pts = tmp_path / "targets.txt"
+    pts.write_text("".join("%.17g %.17g %.17g\n" % T[h] for h in handles))
+    j2 = json.loads(ctl("--json", "move", sid, "--targets", pts, "--max-iters", 5).stdout)
+    assert j2["iterations"] <= 5
+
+
+@pytest.mark.parametrize("ext", [".obj", ".off", ".ply", ".node", ".mesh"])
+def test_get_writes_every_format_readably(ctl, daemon, ext, tmp_path):
+    """get --out in each format, after a brush; the file loads back into the same mesh."""
+    src = tmp_path / ("src.mesh" if ext in (".node", ".mesh") else "src.obj")
+    src.write_bytes(tet_grid_medit(5) if ext in (".node", ".mesh") else grid_obj(12, 9))
+    sid = int(ctl("load", src).stdout)
+    ctl("brush", sid, "--type", "twist", "--center", "0.5,0.5,0.5", "--twist", "0,0,0.5",
+        "--radius", 0.4)
+    out = tmp_path / ("out" + ext)
+    j = json.loads(ctl("--json", "get", sid, "--out", out).stdout)
+    with daemon.unix_client() as c:
+        mesh = c.get_mesh(sid)
+        c.close_session(sid)
+        assert j["nv"] == mesh.nv and j["version"] == mesh.version == 1   # one stroke, one version
+        back = c.load_file(str(out))
+        assert (back.nv, back.ne, back.kind) == (mesh.nv, mesh.ne, mesh.kind)
+        again = c.get_mesh(back.session_id)
+        assert max(abs(a - b) for a, b in zip(again.positions, mesh.positions)) < 1e-6
+        assert again.elements == mesh.elements
+        c.close_session(back.session_id)
+
+
+def test_undo_redo_reset_rest(ctl, daemon, tmp_path):
+    f = tmp_path / "g.obj"
+    f.write_bytes(grid_obj(10, 10))
+    sid = int(ctl("load", f).stdout)
+    with daemon.unix_client() as c:
+        X = c.get_mesh(sid).positions
+        ctl("brush", sid, "--type", "grab", "--center", vec(X[0:3]), "--move", "0,0,0.1",
+            "--radius", 0.5)
+        moved = c.get_mesh(sid).positions
+        ctl("undo", sid)
+        assert c.get_mesh(sid).positions == X
+        ctl("redo", sid)
+        assert c.get_mesh(sid).positions == moved
+        p = ctl("redo", sid, check=False)
+        assert p.returncode == 1 and "ESTATE" in p.stderr
+        ctl("reset-rest", sid)
+        rest = c.get_mesh(sid, rest=True).rest
+        assert max(abs(a - b) for a, b in zip(rest, moved)) < 1e-6
+        c.close_session(sid)
+
+
+def test_watch_prints_one_line_per_version(ctl, daemon, tmp_path):
+    f = tmp_path / "g.obj"
+    f.write_bytes(grid_obj(10, 10))
+    sid = int(ctl("load", f, "--name", "cli-watch").stdout)
+    w = subprocess.Popen([DEFORMCTL, "--socket", daemon.socket_path, "watch", "cli-watch",
+                          "--count", "3"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, stdin=subprocess.DEVNULL)
+    try:
+        with daemon.unix_client() as c:
+            for _ in range(100):           # wait until the watcher subscribed
+                if c.open_session(sid).subscribers == 1:
+                    break
+                time.sleep(0.05)
+            X = c.get_mesh(sid).positions
+            c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.5))
+            c.undo(sid)
+            c.redo(sid)
+        out, err = w.communicate(timeout=15)
+    finally:
+        if w.poll() is None:
+            w.kill()
+    assert w.returncode == 0, err
+    lines = [ln for ln in out.splitlines() if ln.startswith("version")]
+    assert [ln.split()[1] for ln in lines] == ["1", "2", "3"], out
+    assert [ln.split()[2] for ln in lines] == ["brush", "undo", "redo"], out
+    assert [int(ln.split()[3]) for ln in lines] == [100, 100, 100], out
+
+
+def test_stats_and_errors(ctl, daemon):
+    st = json.loads(ctl("--json", "stats").stdout)
+    assert st and all(isinstance(v, (int, float)) for v in st.values())
+    assert ctl("stats").stdout.strip()
+    p = ctl("undo", "987654321", check=False)
+    assert p.returncode == 1 and "ENOTFOUND" in p.stderr
+    p = ctl("brush", "1", "--type", "smudge", "--center", "0,0,0", check=False)
+    assert p.returncode == 2
+    p = ctl("brush", "1", "--type", "grab", "--center", "0,0", check=False)
+    assert p.returncode == 2
+    p = subprocess.run([DEFORMCTL, "--socket", "/nonexistent/sock", "ping"],
+                       capture_output=True, text=True, timeout=10)
+    assert p.returncode == 1 and p.stderr

@@ -1,0 +1,116 @@
+"""Compute off the event loop: a newer handle move supersedes a running one, a long solve on one
+session does not stall strokes on another, factorizations are cached (hits in stats) and
+evicted under the memory cap, and a disconnect ends a client's open stroke."""
+import time
+
+from deformd_client import Brush, messages as m
+from helpers import grid_obj, obj_bytes_positions, tet_grid, tet_grid_medit
+
+LONG_ITERS = 1_000_000
+
+
+def cube_session(c, n=8, name=""):
+    pts, _ = tet_grid(n)
+    info = c.load_mesh(tet_grid_medit(n), fmt=".mesh", name=name)
+    bottom = [i for i, p in enumerate(pts) if p[2] == 0.0]
+    top = [i for i, p in enumerate(pts) if p[2] == 1.0]
+    handles = bottom + top
+    targets = [pts[i] for i in bottom] + [(p[0] + 0.3, p[1], p[2]) for p in (pts[i] for i in top)]
+    return info.session_id, handles, targets
+
+
+def test_newer_move_supersedes_the_running_one(daemon):
+    with daemon.unix_client() as c:
+        sid, handles, targets = cube_session(c)
+        c.set_handles(sid, handles, tol=0.0, max_iters=LONG_ITERS)
+        first = c.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, progress_every=50))
+        time.sleep(0.3)                                     # let it run
+        second = c.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, max_iters=20))
+        r1 = m.decode_move_result(c.wait_reply(first, 30)[0].payload)
+        r2 = m.decode_move_result(c.wait_reply(second, 30)[0].payload)
+        assert r1.status == m.MOVE_SUPERSEDED, r1
+        assert r2.status == m.MOVE_BUDGET and r2.iterations == 20, r2
+        assert r2.version > r1.version
+        assert c.stats()["jobs.superseded"] >= 1
+        c.close_session(sid)
+
+
+def test_long_solve_does_not_stall_another_sessions_strokes(daemon):
+    with daemon.unix_client() as solver, daemon.unix_client() as artist:
+        sid, handles, targets = cube_session(solver, n=9)
+        solver.set_handles(sid, handles, tol=0.0, max_iters=LONG_ITERS)
+        data = grid_obj(30, 30)
+        X = obj_bytes_positions(data)
+        other = artist.load_mesh(data, fmt=".obj").session_id
+        idle = []
+        for k in range(5):
+            t0 = time.perf_counter()
+            artist.stroke(other, Brush(type="grab", center=X[0:3], move=(0, 0, 0.01 * k),
+                                       radius=0.3))
+            idle.append(time.perf_counter() - t0)
+        rid = solver.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, max_ms=3000,
+                                                                progress_every=0))
+        time.sleep(0.2)
+        busy = []
+        for k in range(10):
+            t0 = time.perf_counter()
+            artist.stroke(other, Brush(type="grab", center=X[0:3], move=(0, 0, 0.01 * k),
+                                       radius=0.3))
+            busy.append(time.perf_counter() - t0)
+        res = m.decode_move_result(solver.wait_reply(rid, 30)[0].payload)
+        assert res.status == m.MOVE_BUDGET and res.elapsed_ms >= 2500, res
+        # strokes during the 3 s solve finished long before it did, near their idle cost
+        assert sum(busy) < 1.5, busy
+        assert sorted(busy)[5] < max(10 * sorted(idle)[2], 0.05), (idle, busy)
+        solver.close_session(sid)
+        artist.close_session(other)
+
+
+def test_admm_factorization_is_cached_and_evicted_under_the_cap(make_daemon):
+    # each 9^3 cube solver is estimated at ~3 MB (server/cache.h): two do not fit in 4 MiB
+    d = make_daemon("cache_memory_mb = 4\n")
+    with d.unix_client() as c:
+        a, ha, ta = cube_session(c, n=9, name="a")
+        b, hb, tb = cube_session(c, n=9, name="b")
+        s0 = c.stats()
+        c.set_handles(a, ha, max_iters=5)
+        c.move_handles(a, ta)
+        c.move_handles(a, ta)
+        s1 = c.stats()
+        assert s1["cache.admm.misses"] - s0["cache.admm.misses"] == 1   # factorized once
+        assert s1["cache.admm.hits"] - s0["cache.admm.hits"] >= 1
+        assert c.stats(a)["session.admm_cached"] == 1
+        c.set_handles(b, hb, max_iters=5)
+        c.move_handles(b, tb)                 # b's solver is installed: a's is evicted (LRU)
+        s2 = c.stats()
+        assert s2["cache.admm.misses"] - s1["cache.admm.misses"] == 1
+        assert s2["cache.lru_evictions"] > s1["cache.lru_evictions"]
+        assert c.stats(a)["session.admm_cached"] == 0
+        assert c.stats(b)["session.admm_cached"] == 1
+        assert s2["cache.bytes"] <= s2["cache.limit_bytes"]
+        c.move_handles(a, ta)                 # rebuilt: a miss again
+        s3 = c.stats()
+        assert s3["cache.admm.misses"] - s2["cache.admm.misses"] == 1
+        c.close_session(a)
+        c.close_session(b)
+        assert c.stats()["cache.bytes"] == 0
+
+
+def test_disconnect_ends_an_open_stroke(daemon):
+    data = grid_obj(10, 10)
+    X = obj_bytes_positions(data)
+    with daemon.unix_client() as c:
+        sid = c.load_mesh(data, fmt=".obj").session_id
+        with daemon.unix_client() as gone:
+            gone.brush_begin(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1),
+                                        radius=0.3))
+            assert c.stats(sid)["session.open_strokes"] == 1
+        for _ in range(100):
+            if c.stats(sid)["session.open_strokes"] == 0:
+                break
+            time.sleep(0.02)
+        info = c.open_session(sid)
+        assert c.stats(sid)["session.open_strokes"] == 0
+        assert info.undo_depth == 1 and info.version == 1    # ended = committed
+        assert c.get_mesh(sid).positions != X
+        c.close_session(sid)

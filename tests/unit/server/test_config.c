@@ -1,0 +1,220 @@
+/* Unit tests for server/config.c and server/log.c: defaults, the key = value parser (comments,
+ * whitespace, sizes with suffixes, every bad value, all-or-nothing on error), the command line
+ * (--config then overrides, --opt=value, --help, unknown options) and allow_paths matching. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <cmocka.h>
+
+#include "server/config.h"
+#include "server/log.h"
+
+static void test_defaults(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, "/run/user/1000");
+    assert_string_equal(c.socket_path, "/run/user/1000/deformd.sock");
+    df_config_defaults(&c, NULL);
+    assert_string_equal(c.socket_path, "/run/deformd/deformd.sock");
+    df_config_defaults(&c, "");
+    assert_string_equal(c.socket_path, "/run/deformd/deformd.sock");
+    assert_string_equal(c.tcp_host, "");
+    assert_int_equal(c.n_allow, 0);
+    assert_int_equal(c.max_clients, DF_CONFIG_DEFAULT_MAX_CLIENTS);
+    assert_true(c.output_queue_limit == DF_CONFIG_DEFAULT_QUEUE_LIMIT);
+    assert_int_equal(c.log_level, DF_LOG_INFO);
+    assert_int_equal(c.foreground, 0);
+    /* An XDG dir too long for sun_path falls back to /run/deformd. */
+    char longdir[200];
+    memset(longdir, 'a', sizeof longdir - 1);
+    longdir[0] = '/';
+    longdir[sizeof longdir - 1] = '\0';
+    df_config_defaults(&c, longdir);
+    assert_string_equal(c.socket_path, "/run/deformd/deformd.sock");
+}
+
+static void test_parse_file_text(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    const char *text = "# deformd test config\n"
+                       "\n"
+                       "socket = /tmp/x.sock   # trailing comment\n"
+                       "  tcp=127.0.0.1:7878\n"
+                       "allow_paths = /tmp, /\n"
+                       "max_clients = 12\n"
+                       "output_queue_limit = 8m\n"
+                       "cache_memory_mb = 64\n"
+                       "log_level = debug\n"
+                       "max_mesh_vertices = 2000\n"
+                       "max_sessions = 3\n"
+                       "threads = 2\r\n";
+    df_error e;
+    assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
+    assert_string_equal(c.socket_path, "/tmp/x.sock");
+    assert_string_equal(c.tcp_host, "127.0.0.1");
+    assert_int_equal(c.tcp_port, 7878);
+    assert_int_equal(c.n_allow, 2);
+    assert_string_equal(c.allow_paths[1], "/");
+    assert_int_equal(c.max_clients, 12);
+    assert_true(c.output_queue_limit == (size_t)8 << 20);
+    assert_true(c.cache_memory_mb == 64);
+    assert_int_equal(c.log_level, DF_LOG_DEBUG);
+    assert_int_equal(c.max_mesh_vertices, 2000);
+    assert_int_equal(c.max_sessions, 3);
+    assert_int_equal(c.threads, 2);
+    /* IPv6 brackets and disabling. */
+    assert_int_equal(df_config_set(&c, "tcp", "[::1]:0", &e), DF_OK);
+    assert_string_equal(c.tcp_host, "::1");
+    assert_int_equal(c.tcp_port, 0);
+    assert_int_equal(df_config_set(&c, "tcp", "none", &e), DF_OK);
+    assert_string_equal(c.tcp_host, "");
+    assert_int_equal(df_config_set(&c, "socket", "none", &e), DF_OK);
+    assert_string_equal(c.socket_path, "");
+}
+
+static void test_parse_errors_leave_config_untouched(void **state)
+{
+    (void)state;
+    static const char *const bad[] = {
+        "max_clients = 0\n",          "max_clients = -3\n",       "max_clients = 12x\n",
+        "output_queue_limit = 10\n",  "output_queue_limit = 2t\n", "log_level = loud\n",
+        "tcp = 127.0.0.1\n",          "tcp = :80\n",              "tcp = host:65536\n",
+        "tcp = host:8k\n",            "allow_paths = relative/dir\n",
+        "no_such_key = 1\n",          "just words\n",             " = 5\n",
+        "threads = 0\n",              "threads = 65\n",           "max_mesh_vertices = 0\n",
+        "max_sessions = 99999999\n",  "cache_memory_mb = lots\n",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        df_server_config c, before;
+        df_config_defaults(&c, "/x");
+        /* a good line first: must not be applied either (all-or-nothing) */
+        char text[256];
+        snprintf(text, sizeof text, "max_clients = 7\n%s", bad[i]);
+        before = c;
+        df_error e;
+        df_error_clear(&e);
+        int rc = df_config_parse(&c, text, strlen(text), "bad.conf", &e);
+        if (rc == DF_OK) fail_msg("accepted: %s", bad[i]);
+        assert_true(rc == DF_EINVAL || rc == DF_EFORMAT || rc == DF_ELIMIT);
+        assert_non_null(strstr(e.msg, "bad.conf:2:"));
+        assert_memory_equal(&c, &before, sizeof c);
+    }
+    /* NUL byte inside a line, over-long line. */
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    df_error e;
+    const char nul[] = "log_level = info\0x\n";
+    assert_int_equal(df_config_parse(&c, nul, sizeof nul - 1, "n", &e), DF_EFORMAT);
+    size_t big = DF_CONFIG_LINE_MAX + 10;
+    char *line = malloc(big);
+    assert_non_null(line);
+    memset(line, 'a', big);
+    assert_int_equal(df_config_parse(&c, line, big, "n", &e), DF_EFORMAT);
+    free(line);
+}
+
+static void test_load_file_and_cli(void **state)
+{
+    (void)state;
+    char path[] = "/tmp/deformd_test_conf_XXXXXX";
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    const char *text = "socket = /tmp/from_file.sock\nmax_clients = 5\nlog_level = warn\n";
+    assert_int_equal(write(fd, text, strlen(text)), (int)strlen(text));
+    close(fd);
+    df_server_config c;
+    df_cli_action act;
+    df_error e;
+    char *argv1[] = {"deformd", "--config", path, "--log-level=debug", "--tcp", "127.0.0.1:0",
+                     "--foreground", NULL};
+    assert_int_equal(df_config_from_args(&c, 7, argv1, "/run/user/7", &act, &e), DF_OK);
+    assert_int_equal(act, DF_CLI_RUN);
+    assert_string_equal(c.socket_path, "/tmp/from_file.sock");
+    assert_int_equal(c.max_clients, 5);
+    assert_int_equal(c.log_level, DF_LOG_DEBUG); /* command line wins over the file */
+    assert_string_equal(c.tcp_host, "127.0.0.1");
+    assert_int_equal(c.foreground, 1);
+    assert_string_equal(c.config_path, path);
+    /* --socket after --config overrides the file's socket, whatever the order on the line. */
+    char *argv2[] = {"deformd", "--socket", "/tmp/cli.sock", "--config", path, NULL};
+    assert_int_equal(df_config_from_args(&c, 5, argv2, NULL, &act, &e), DF_OK);
+    assert_string_equal(c.socket_path, "/tmp/cli.sock");
+    unlink(path);
+    /* Errors: missing file, unknown option, missing value. --help wins. */
+    df_server_config keep = c;
+    char *argv3[] = {"deformd", "--config", path, NULL};
+    assert_int_equal(df_config_from_args(&c, 3, argv3, NULL, &act, &e), DF_EIO);
+    char *argv4[] = {"deformd", "--bogus", NULL};
+    assert_int_equal(df_config_from_args(&c, 2, argv4, NULL, &act, &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "--bogus"));
+    char *argv5[] = {"deformd", "--socket", NULL};
+    assert_int_equal(df_config_from_args(&c, 2, argv5, NULL, &act, &e), DF_EINVAL);
+    char *argv6[] = {"deformd", "--log-level", "chatty", NULL};
+    assert_int_equal(df_config_from_args(&c, 3, argv6, NULL, &act, &e), DF_EINVAL);
+    assert_memory_equal(&c, &keep, sizeof c);
+    char *argv7[] = {"deformd", "--bogus", "--help", NULL};
+    assert_int_equal(df_config_from_args(&c, 3, argv7, NULL, &act, &e), DF_OK);
+    assert_int_equal(act, DF_CLI_HELP);
+    assert_non_null(strstr(df_config_usage(), "--foreground"));
+}
+
+static void test_allowed_paths(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    df_error e;
+    assert_int_equal(df_config_set(&c, "allow_paths", "/srv/meshes/:/data", &e), DF_OK);
+    assert_int_equal(df_config_set(&c, "allow_paths", "/opt/x", &e), DF_OK); /* appends */
+    assert_int_equal(c.n_allow, 3);
+    assert_int_equal(df_config_path_allowed(&c, "/srv/meshes/a.obj"), 1);
+    assert_int_equal(df_config_path_allowed(&c, "/srv/meshes/sub/a.obj"), 1);
+    assert_int_equal(df_config_path_allowed(&c, "/srv/meshesX/a.obj"), 0);
+    assert_int_equal(df_config_path_allowed(&c, "/srv/meshes"), 0);
+    assert_int_equal(df_config_path_allowed(&c, "/data/b.off"), 1);
+    assert_int_equal(df_config_path_allowed(&c, "/opt/x/y.mesh"), 1);
+    assert_int_equal(df_config_path_allowed(&c, "/etc/passwd"), 0);
+    assert_int_equal(df_config_path_allowed(&c, "relative/a.obj"), 0);
+    assert_int_equal(df_config_path_allowed(&c, NULL), 0);
+}
+
+static void test_log_levels(void **state)
+{
+    (void)state;
+    int l = -1;
+    assert_int_equal(df_log_parse_level("ERROR", &l), DF_OK);
+    assert_int_equal(l, DF_LOG_ERROR);
+    assert_int_equal(df_log_parse_level("warning", &l), DF_OK);
+    assert_int_equal(l, DF_LOG_WARN);
+    assert_int_equal(df_log_parse_level("3", &l), DF_OK);
+    assert_int_equal(l, DF_LOG_DEBUG);
+    assert_int_equal(df_log_parse_level("4", &l), DF_EINVAL);
+    assert_int_equal(l, DF_LOG_DEBUG);
+    assert_int_equal(df_log_parse_level("", &l), DF_EINVAL);
+    df_log_set_level(99);
+    assert_int_equal(df_log_get_level(), DF_LOG_DEBUG);
+    df_log_set_level(-5);
+    assert_int_equal(df_log_get_level(), DF_LOG_ERROR);
+    df_log_set_level(DF_LOG_INFO);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_parse_file_text),
+        cmocka_unit_test(test_parse_errors_leave_config_untouched),
+        cmocka_unit_test(test_load_file_and_cli),
+        cmocka_unit_test(test_allowed_paths),
+        cmocka_unit_test(test_log_levels),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
