@@ -44,7 +44,7 @@ BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
 
-.PHONY: all deps test unit bench asan fuzz run clean
+.PHONY: all deps test unit bench asan fuzz fuzz-build run clean
 all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need.
@@ -95,7 +95,7 @@ $(BUILD)/bench/%: tests/bench/%.c $(ALL_LIBS)
 
 # The README's test command: deps, build, every suite, one closing "N passed, N failed" line.
 test: deps
-	$(MAKE) all
+	$(MAKE) all fuzz-build
 	BUILD=$(BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
 
 unit: all
@@ -108,15 +108,29 @@ asan:
 	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
 	ASAN_OPTIONS=detect_leaks=1 BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
 
-# libFuzzer targets: each tests/fuzz/fuzz_X.c runs FUZZ_SECONDS over tests/fuzz/corpus/X.
+# libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
+# sources (compiled once into $(BUILD)/fuzz/obj). `make fuzz` mutates for FUZZ_SECONDS each, writing new
+# inputs to $(BUILD)/fuzz/corpus/X and only reading the checked-in seeds in tests/fuzz/corpus/X.
 FUZZ_SECONDS ?= 60
-fuzz:
-	@mkdir -p $(BUILD)/fuzz
-	@for f in $(FUZZ_SRC); do n=$$(basename $$f .c); \
-	  clang -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=fuzzer,address,undefined -fopenmp=libgomp $$f $(PROTO_SRC) $(wildcard core/*/*.c) \
-	    -o $(BUILD)/fuzz/$$n $(MATH_LIBS) -lgomp || exit 1; \
-	  mkdir -p tests/fuzz/corpus/$${n#fuzz_}; \
-	  $(BUILD)/fuzz/$$n -max_total_time=$(FUZZ_SECONDS) tests/fuzz/corpus/$${n#fuzz_} || exit 1; done
+FUZZ_CC     := clang
+FUZZ_FLAGS  := -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=address,undefined -fopenmp=libgomp
+FUZZ_LIBSRC := $(PROTO_SRC) $(wildcard core/*/*.c)
+FUZZ_OBJ    := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(FUZZ_LIBSRC))
+FUZZ_BIN    := $(patsubst tests/fuzz/%.c,$(BUILD)/fuzz/%,$(FUZZ_SRC))
+
+$(BUILD)/fuzz/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
+$(BUILD)/fuzz/%: tests/fuzz/%.c $(FUZZ_OBJ)
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer $< $(FUZZ_OBJ) -o $@ $(MATH_LIBS) -lgomp
+
+.SECONDARY: $(FUZZ_OBJ)
+fuzz-build: $(FUZZ_BIN)
+fuzz: fuzz-build
+	@for b in $(FUZZ_BIN); do n=$$(basename $$b); c=$${n#fuzz_}; mkdir -p $(BUILD)/fuzz/corpus/$$c; \
+	  echo "== $$n for $(FUZZ_SECONDS) s"; \
+	  $$b -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$c tests/fuzz/corpus/$$c || exit 1; done
 
 run: all
 	bash tests/demo_run.sh

@@ -235,6 +235,7 @@ int df_client_pump(df_client *c, int timeout_ms, df_error *err)
             df_error_clear(&e);
             df_msg_error_decode(p, h.payload_len, &e, NULL);
             c->remote_err = 1;
+            c->broken = 1; /* the server closes after a connection-level error */
             return df_error_set(err, e.code ? e.code : DF_EINTERNAL, "%s", e.msg);
         }
     }
@@ -244,7 +245,7 @@ int df_client_transact(df_client *c, uint16_t type, const void *payload, size_t 
                        df_client_reply_fn on_reply, void *user, df_error *err)
 {
     c->remote_err = 0;
-    uint64_t id;
+    uint64_t id = 0;
     int rc = df_client_send(c, type, 0, 0, payload, len, &id, err);
     if (rc)
         return rc;

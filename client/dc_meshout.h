@@ -1,8 +1,6 @@
-/* dc_meshout.h — writes a mesh fetched from the daemon to a file through core/mesh's
- * df_mesh_write_file (format from the extension: .obj .off .ply .node .mesh).
- *
- * Kept apart from deformclient.h on purpose: it includes only core/mesh/mesh.h, so callers need
- * not include both proto/messages.h and core/mesh/mesh_io.h in one translation unit. */
+/* dc_meshout.h — writes a mesh fetched from the daemon (float32 wire positions, int32 indices)
+ * to a file through core/mesh's df_mesh_write_file (format from the extension: .obj .off .ply
+ * .node .mesh). Used by `deformctl get`. */
 #ifndef DF_CLIENT_DC_MESHOUT_H
 #define DF_CLIENT_DC_MESHOUT_H
 

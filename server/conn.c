@@ -102,6 +102,51 @@ static void kick_write(df_conn *c)
     }
 }
 
+void df_conn_flush_all(df_server *srv, int which)
+{
+    for (int k = which == 1 ? 1 : 0; k < (which == 0 ? 1 : 2); k++) {
+        while (srv->kick_first[k]) {
+            df_conn *c = srv->kick_first[k];
+            srv->kick_first[k] = c->kick_next;
+            if (!srv->kick_first[k]) srv->kick_last[k] = NULL;
+            c->kick_next = NULL;
+            c->kick_queued = 0;
+            if (!c->closing) kick_write(c);
+            df_conn_unref(c);
+        }
+    }
+}
+
+static void on_cork(uv_timer_t *t) { df_conn_flush_all(t->data, 1); }
+
+/* Puts c on the deferred-write list (k = 0: it has a reply). */
+static void schedule_write(df_conn *c, int k)
+{
+    df_server *srv = c->srv;
+    if (c->wcount) return; /* a running write picks the frame up */
+    int have_ref = 0;
+    if (c->kick_queued) {
+        if (k == 1 || c->kick_queued == 1) return;
+        /* corked, now has a reply: move it to the reply list */
+        df_conn **pp = &srv->kick_first[1];
+        df_conn *prev = NULL;
+        while (*pp && *pp != c) prev = *pp, pp = &(*pp)->kick_next;
+        if (*pp) {
+            *pp = c->kick_next;
+            if (srv->kick_last[1] == c) srv->kick_last[1] = prev;
+            c->kick_next = NULL;
+            have_ref = 1; /* the list's reference moves with it */
+        }
+    }
+    c->kick_queued = k + 1;
+    if (!have_ref) df_conn_ref(c);
+    if (srv->kick_last[k]) srv->kick_last[k]->kick_next = c;
+    else srv->kick_first[k] = c;
+    srv->kick_last[k] = c;
+    if (k == 1 && !uv_is_active((uv_handle_t *)&srv->cork_timer) && !srv->stopping)
+        uv_timer_start(&srv->cork_timer, on_cork, DF_CONN_CORK_MS, 0);
+}
+
 int df_conn_send(df_conn *c, df_sbuf *frame)
 {
     if (c->closing) return DF_ESTATE;
@@ -116,7 +161,8 @@ int df_conn_send(df_conn *c, df_sbuf *frame)
         df_conn_close(c, why, 1);
         return DF_ELIMIT;
     }
-    kick_write(c);
+    int reply = frame->len >= DF_FRAME_HEADER_SIZE && (df_le16_load(frame->data + 8) & DF_FLAG_REPLY);
+    schedule_write(c, reply ? 0 : 1);
     return DF_OK;
 }
 

@@ -16,7 +16,18 @@
  * Refuses (accepts then closes) when max_clients are connected. */
 void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
 
-/* Queues `frame` (a reference is taken) for sending. Returns DF_OK, or DF_ELIMIT after dropping
+/* Subscriber-only output (events, no reply) is corked for up to this long so that consecutive
+ * versions go out in one writev per subscriber instead of one write per version. */
+#define DF_CONN_CORK_MS 1
+
+/* Starts the writes of connections that received frames: `which` 0 = those that got a reply in
+ * this loop iteration (run from the server's uv_check handle, so a requester's ack and its own
+ * displacement frames are never delayed behind a broadcast), 1 = corked subscriber-only output
+ * (run from the cork timer), 2 = both. */
+void df_conn_flush_all(df_server *srv, int which);
+
+/* Queues `frame` (a reference is taken) for sending; the write starts at the end of the current
+ * loop iteration (df_conn_flush_all), so frames queued together go out in one writev. Returns DF_OK, or DF_ELIMIT after dropping
  * the client (queue over the limit), or DF_ESTATE when the connection is closing (frame ignored). */
 int df_conn_send(df_conn *c, df_sbuf *frame);
 

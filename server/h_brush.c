@@ -20,6 +20,7 @@
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
  * change. */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -29,6 +30,10 @@
 #include "server/log.h"
 #include "server/reply.h"
 #include "server/stream.h"
+
+/* Below this many vertices a brush field is evaluated by the worker thread alone: waking an
+ * OpenMP team costs more than it saves. */
+#define DF_BRUSH_PARALLEL_MIN_VERTICES 32768
 
 typedef struct brush_req {
     df_msg_brush begin;          /* begin: the message (owns `pinned`) */
@@ -72,6 +77,7 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     for (int i = 0; i < 9; i++) b.grad[i] = k * load[7 + i];
     df_kelvinlet_prepared prep;
     int rc;
+    omp_set_num_threads(s->nv < DF_BRUSH_PARALLEL_MIN_VERTICES ? 1 : omp_get_num_procs());
     if (st->n_pins) {
         df_kelvinlet_pins pins = {.n = st->n_pins, .points = st->pins,
                                   .flags = st->pin_flags, .radius = b.radius,
@@ -103,23 +109,26 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     return rc;
 }
 
-/* Publishes base + disp as the next version; on success the stroke contributes disp. */
-static int stroke_publish(df_session *s, df_stroke *st, float *disp, uint8_t kind, brush_req *r,
+/* Publishes base + disp (disp = s->scratch_disp) as the next version; on success the stroke
+ * contributes disp. Buffers are swapped, not copied. */
+static int stroke_publish(df_session *s, df_stroke *st, uint8_t kind, brush_req *r,
                           df_error *err)
 {
     size_t n = 3 * (size_t)s->nv;
+    const float *disp = s->scratch_disp;
     if (atomic_load(&s->version) != st->last_version) /* someone else changed the mesh */
         for (size_t i = 0; i < n; i++) st->base[i] = s->cur[i] - (double)st->applied[i];
-    double *pos = malloc(n * sizeof *pos);
-    if (!pos) return df_error_set(err, DF_ENOMEM, "out of memory");
+    double *pos = s->scratch_pos;
     for (size_t i = 0; i < n; i++) pos[i] = st->base[i] + (double)disp[i];
     int rc = df_stream_publish(s, pos, kind, NULL, 0, &r->frames, NULL, err);
     if (rc == DF_OK) {
-        memcpy(s->cur, pos, n * sizeof *pos);
-        memcpy(st->applied, disp, n * sizeof *disp);
+        s->scratch_pos = s->cur;
+        s->cur = pos;
+        float *a = st->applied;
+        st->applied = s->scratch_disp;
+        s->scratch_disp = a;
         st->last_version = atomic_load(&s->version);
     }
-    free(pos);
     return rc;
 }
 
@@ -144,7 +153,11 @@ static void begin_work_inner(df_job *j)
     }
     size_t n = 3 * (size_t)s->nv;
     df_stroke *st = calloc(1, sizeof *st);
-    float *disp = malloc(n * sizeof *disp);
+    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) {
+        free(st);
+        return;
+    }
+    float *disp = s->scratch_disp;
     if (st) {
         st->base = malloc(n * sizeof *st->base);
         st->startf = malloc(n * sizeof *st->startf);
@@ -152,9 +165,8 @@ static void begin_work_inner(df_job *j)
         if (r->begin.n_pinned) st->pins = malloc(3 * (size_t)r->begin.n_pinned * sizeof(double));
     }
     r->created = st;
-    if (!st || !disp || !st->base || !st->startf || !st->applied ||
+    if (!st || !st->base || !st->startf || !st->applied ||
         (r->begin.n_pinned && !st->pins)) {
-        free(disp);
         j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
         return;
     }
@@ -190,12 +202,10 @@ static void begin_work_inner(df_job *j)
         if (st->n_pins) j->rc = DF_OK; /* pins are validated by the first update */
         else if ((j->rc = df_kelvinlet_prepare(&st->brush, &prep, &j->err)) == DF_OK)
             df_kelvinlet_prepared_free(&prep);
-        free(disp);
         return;
     }
     j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
-    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH, r, &j->err);
-    free(disp);
+    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
 }
 
 static void update_work_inner(df_job *j);
@@ -218,19 +228,15 @@ static void update_work_inner(df_job *j)
         return;
     }
     size_t n = 3 * (size_t)s->nv;
-    float *disp = malloc(n * sizeof *disp);
-    if (!disp) {
-        j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
-        return;
-    }
+    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
+    float *disp = s->scratch_disp;
     if (j->type == DF_MSG_BRUSH_CANCEL) {
         memset(disp, 0, n * sizeof *disp);
-        j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
+        j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
     } else {
         j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
-        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, disp, DF_CHANGE_BRUSH, r, &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
     }
-    free(disp);
 }
 
 static void brush_done(df_job *j)

@@ -217,7 +217,7 @@ static void move_work(df_job *j)
     r->progress_every = r->mv.progress_every;
     df_admm_budget b = {.max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs->max_iters,
                         .max_ms = r->mv.max_ms,
-                        .progress_every = r->mv.progress_every ? (int)r->mv.progress_every : 1,
+                        .progress_every = 1, /* every iteration: prompt supersede checks */
                         .progress = on_progress,
                         .user = j};
     int rc = df_admm_run(hs->solver, &b, &r->res, &j->err);

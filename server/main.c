@@ -18,6 +18,8 @@
  * Shutdown (SIGINT/SIGTERM): stop listening and reading, cancel running moves, wait for running
  * jobs, answer queued ones, close connections, free sessions, unlink the socket.
  */
+#include <malloc.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,6 +30,9 @@
 #include "server/log.h"
 #include "server/sd.h"
 #include "server/server.h"
+
+#define DF_MAIN_MMAP_THRESHOLD (32 << 20) /* glibc's maximum */
+#define DF_MAIN_TRIM_THRESHOLD (256 << 20)
 
 /* Forks into the background; the parent exits 0 once the child reports readiness on a pipe
  * (or 1 when it fails). Returns the write end of the pipe in the child. */
@@ -64,6 +69,11 @@ int main(int argc, char **argv)
         return 0;
     }
     df_log_set_level(cfg.log_level);
+    signal(SIGPIPE, SIG_IGN); /* a peer that hung up is an EPIPE write error, not a crash */
+    /* Frames and per-session buffers are large (12 MB for a dense 1M-vertex version) and
+     * short-lived: keep them in the heap instead of mmap/munmap (and page faults) per frame. */
+    mallopt(M_MMAP_THRESHOLD, DF_MAIN_MMAP_THRESHOLD);
+    mallopt(M_TRIM_THRESHOLD, DF_MAIN_TRIM_THRESHOLD);
     char threads[16];
     snprintf(threads, sizeof threads, "%d", cfg.threads);
     setenv("UV_THREADPOOL_SIZE", threads, 0);

@@ -51,6 +51,8 @@ void df_server_post(df_server *srv, struct df_job *job, df_sbuf *frame, uint64_t
 
 static void on_mail(uv_async_t *a) { df_server_drain_mail(a->data); }
 
+static void on_check(uv_check_t *h) { df_conn_flush_all(h->data, 0); }
+
 static void on_signal(uv_signal_t *h, int signum)
 {
     df_server *srv = h->data;
@@ -67,6 +69,11 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     pthread_mutex_init(&srv->mailbox_lock, NULL);
     uv_async_init(loop, &srv->mailbox, on_mail);
     srv->mailbox.data = srv;
+    uv_check_init(loop, &srv->kick_check);
+    srv->kick_check.data = srv;
+    uv_check_start(&srv->kick_check, on_check);
+    uv_timer_init(loop, &srv->cork_timer);
+    srv->cork_timer.data = srv;
     uv_signal_init(loop, &srv->sig_int);
     uv_signal_init(loop, &srv->sig_term);
     srv->sig_int.data = srv->sig_term.data = srv;
@@ -76,6 +83,8 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     if (rc != DF_OK) {
         srv->stopping = 1;
         uv_close((uv_handle_t *)&srv->mailbox, NULL);
+        uv_close((uv_handle_t *)&srv->kick_check, NULL);
+        uv_close((uv_handle_t *)&srv->cork_timer, NULL);
         uv_close((uv_handle_t *)&srv->sig_int, NULL);
         uv_close((uv_handle_t *)&srv->sig_term, NULL);
         return rc;
@@ -111,7 +120,11 @@ static void on_stop_timer(uv_timer_t *h)
         df_session_destroy(s);
     }
     for (df_conn *c = srv->conns; c; c = c->next) df_conn_close(c, "server shutting down", 0);
+    df_conn_flush_all(srv, 2);
     uv_close((uv_handle_t *)&srv->mailbox, NULL);
+    uv_close((uv_handle_t *)&srv->kick_check, NULL);
+    uv_timer_stop(&srv->cork_timer);
+    uv_close((uv_handle_t *)&srv->cork_timer, NULL);
     df_sd_notify("STOPPING=1");
 }
 

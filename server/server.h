@@ -57,6 +57,8 @@ typedef struct df_conn {
     df_brush_defaults brush; /* last knob values sent (set brush parameter) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
+    int kick_queued;         /* on the server's deferred-write list */
+    struct df_conn *kick_next;
     struct df_conn *prev, *next;
 } df_conn;
 
@@ -72,6 +74,9 @@ typedef struct df_server {
     uv_async_t mailbox;      /* workers -> loop: progress frames */
     pthread_mutex_t mailbox_lock;
     struct df_mail *mail_head, *mail_tail;
+    uv_check_t kick_check;   /* starts the writes queued during this loop iteration */
+    uv_timer_t cork_timer;   /* starts corked subscriber writes (DF_CONN_CORK_MS) */
+    df_conn *kick_first[2], *kick_last[2]; /* [0] connections with replies, [1] the others */
     df_conn *conns;          /* doubly linked list */
     int n_conns;
     uint64_t next_conn_id;

@@ -15,10 +15,11 @@
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err)
 {
-    if (srv->n_sessions >= srv->cfg.max_sessions) {
+    int max = srv->cfg.max_sessions < (int)DF_MAX_SESSIONS ? srv->cfg.max_sessions
+                                                           : (int)DF_MAX_SESSIONS;
+    if (srv->n_sessions >= max) {
         df_meshload_free(mesh);
-        return df_error_set(err, DF_ELIMIT, "too many sessions (max_sessions = %d)",
-                            srv->cfg.max_sessions);
+        return df_error_set(err, DF_ELIMIT, "too many sessions (max_sessions = %d)", max);
     }
     df_session *s = calloc(1, sizeof *s);
     size_t n = (size_t)mesh->nv * 3;
@@ -116,6 +117,11 @@ void df_session_destroy(df_session *s)
     free(s->cur);
     free(s->basef);
     free(s->uf);
+    free(s->scratch_u);
+    free(s->scratch_idx);
+    free(s->scratch_rows);
+    free(s->scratch_pos);
+    free(s->scratch_disp);
     df_log(DF_LOG_INFO, "session %llu closed", (unsigned long long)s->id);
     free(s);
 }

@@ -74,6 +74,12 @@ typedef struct df_session {
     df_kelvinlet_constraints *kc;/* cached K_pp LU of the last pinned set; NULL when none */
     size_t kc_bytes;
     uint64_t kc_lru;
+    /* Scratch of the running job (allocated on first use, reused: no per-version allocation). */
+    float *scratch_u;            /* next published displacements, nv x 3 (swapped with uf) */
+    int32_t *scratch_idx;        /* changed vertex indices, nv */
+    float *scratch_rows;         /* sparse rows, nv x 3 */
+    double *scratch_pos;         /* next positions, nv x 3 (brush: swapped with cur) */
+    float *scratch_disp;         /* brush field, nv x 3 */
     double brush_last_ms;        /* worker time of the last brush begin/update/cancel */
     double move_last_ms;         /* worker time of the last handle move */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */

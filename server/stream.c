@@ -69,30 +69,53 @@ static int emit_chunks(df_msg_disp *d, const df_msg_progress *progress, uint16_t
     return DF_OK;
 }
 
+int df_stream_scratch(df_session *s, df_error *err)
+{
+    size_t nv = (size_t)(s->nv > 0 ? s->nv : 1);
+    if (!s->scratch_u) s->scratch_u = malloc(3 * nv * sizeof(float));
+    if (!s->scratch_idx) s->scratch_idx = malloc(nv * sizeof(int32_t));
+    if (!s->scratch_rows) s->scratch_rows = malloc(3 * nv * sizeof(float));
+    if (!s->scratch_pos) s->scratch_pos = malloc(3 * nv * sizeof(double));
+    if (!s->scratch_disp) s->scratch_disp = malloc(3 * nv * sizeof(float));
+    if (!s->scratch_u || !s->scratch_idx || !s->scratch_rows || !s->scratch_pos ||
+        !s->scratch_disp)
+        return df_error_set(err, DF_ENOMEM, "out of memory for %zu vertices", nv);
+    return DF_OK;
+}
+
 int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
                       const df_msg_progress *progress, uint64_t req_id, df_frames *out,
                       uint32_t *changed, df_error *err)
 {
+    if (df_stream_scratch(s, err) != DF_OK) return err ? err->code : DF_ENOMEM;
     size_t nv = (size_t)s->nv;
     const double *X = s->mesh.V;
-    for (size_t i = 0; i < 3 * nv; i++) {
-        float u = (float)(pos[i] - X[i]);
-        if (!isfinite(pos[i]) || !isfinite(u))
-            return df_error_set(err, DF_EINVAL, "vertex %zu: position not finite", i / 3);
-    }
-    int32_t *idx = malloc((nv ? nv : 1) * sizeof *idx);
-    if (!idx) return df_error_set(err, DF_ENOMEM, "out of memory");
-    float *newu = malloc(3 * (nv ? nv : 1) * sizeof *newu);
-    if (!newu) {
-        free(idx);
-        return df_error_set(err, DF_ENOMEM, "out of memory");
-    }
+    const float *uf = s->uf;
+    float *newu = s->scratch_u;
+    int32_t *idx = s->scratch_idx;
+    /* One pass: new displacements, finiteness, changed rows. */
     uint32_t k = 0;
+    int bad = 0;
     for (size_t i = 0; i < nv; i++) {
-        float u[3] = {(float)(pos[3 * i] - X[3 * i]), (float)(pos[3 * i + 1] - X[3 * i + 1]),
-                      (float)(pos[3 * i + 2] - X[3 * i + 2])};
-        memcpy(newu + 3 * i, u, sizeof u);
-        if (memcmp(u, s->uf + 3 * i, sizeof u) != 0) idx[k++] = (int32_t)i;
+        const double *p = pos + 3 * i, *x = X + 3 * i;
+        float *u = newu + 3 * i;
+        u[0] = (float)(p[0] - x[0]);
+        u[1] = (float)(p[1] - x[1]);
+        u[2] = (float)(p[2] - x[2]);
+        bad |= !isfinite(u[0]) | !isfinite(u[1]) | !isfinite(u[2]);
+        uint32_t a, b;
+        uint64_t c, d;
+        memcpy(&a, u + 2, 4);
+        memcpy(&b, uf + 3 * i + 2, 4);
+        memcpy(&c, u, 8);
+        memcpy(&d, uf + 3 * i, 8);
+        idx[k] = (int32_t)i;
+        k += (a != b) | (c != d);
+    }
+    if (bad) {
+        for (size_t i = 0; i < 3 * nv; i++)
+            if (!isfinite(newu[i]))
+                return df_error_set(err, DF_EINVAL, "vertex %zu: position not finite", i / 3);
     }
     uint64_t version = atomic_load(&s->version) + 1;
     df_msg_disp d;
@@ -103,18 +126,12 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
     d.kind = kind;
     d.nv = (uint32_t)nv;
     d.encoding = df_msg_disp_choose(k, (uint32_t)nv);
-    float *sparse = NULL;
     if (d.encoding == DF_DISP_SPARSE) {
-        sparse = malloc(3 * (size_t)(k ? k : 1) * sizeof *sparse);
-        if (!sparse) {
-            free(idx);
-            free(newu);
-            return df_error_set(err, DF_ENOMEM, "out of memory");
-        }
-        for (uint32_t r = 0; r < k; r++) memcpy(sparse + 3 * r, newu + 3 * (size_t)idx[r], 12);
+        float *rows = s->scratch_rows;
+        for (uint32_t r = 0; r < k; r++) memcpy(rows + 3 * r, newu + 3 * (size_t)idx[r], 12);
         d.total = k;
         d.idx = idx;
-        d.xyz = sparse;
+        d.xyz = rows;
     } else {
         d.total = (uint32_t)nv;
         d.xyz = newu;
@@ -122,13 +139,11 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
     int rc = emit_chunks(&d, progress, DF_MSG_DISPLACEMENT, DF_FLAG_EVENT,
                          progress ? req_id : 0, out, err);
     if (rc == DF_OK) {
-        memcpy(s->uf, newu, 3 * nv * sizeof *newu);
+        s->scratch_u = s->uf; /* swap: newu becomes the published state */
+        s->uf = newu;
         atomic_store(&s->version, version);
         if (changed) *changed = k;
     }
-    free(sparse);
-    free(idx);
-    free(newu);
     return rc;
 }
 

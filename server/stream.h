@@ -29,6 +29,10 @@ int df_frames_push(df_frames *f, df_sbuf *b);
 /* Releases every frame and the list. */
 void df_frames_clear(df_frames *f);
 
+/* Allocates the session's scratch buffers when missing (worker of the running job).
+ * Errors: DF_ENOMEM. */
+int df_stream_scratch(df_session *s, df_error *err);
+
 /* Publishes `pos` (s->nv x 3 doubles) as version s->version + 1 of kind `kind` (df_change_kind):
  * updates s->uf and s->version (NOT s->cur) and appends the event frames to `out`. With
  * `progress` non-NULL the frames are DF_MSG_PROGRESS events carrying its fields and request id

@@ -28,7 +28,10 @@ cleanup() {
   if [ -n "$pid" ] && kill -0 "$pid" 2>/dev/null; then
     kill -TERM "$pid" 2>/dev/null || true
     for _ in $(seq 1 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-    kill -0 "$pid" 2>/dev/null && { echo "demo: deformd did not stop, killing it" >&2; kill -KILL "$pid"; }
+    if kill -0 "$pid" 2>/dev/null; then
+      echo "demo: deformd did not stop, killing it" >&2
+      kill -KILL "$pid"
+    fi
     wait "$pid" 2>/dev/null || true
   fi
   if [ "$rc" -ne 0 ] && [ -s "$tmp/deformd.log" ]; then
@@ -68,7 +71,8 @@ echo "demo: loaded $mesh as session $sid"
 ctl get "$sid" --out "$OUT/before.obj"
 
 # Brush placement from the mesh itself: grab the vertex with the largest x outward by 15% of
-# the bounding-box diagonal (radius 20%), then twist 0.6 rad about +y at the vertex of largest y.
+# the bounding-box diagonal (bi-scale, radius 20%), then twist 0.6 rad about +y at the vertex
+# of largest y.
 read -r gx gy gz ty_x ty_y ty_z diag < <(awk '$1 == "v" {
     n++; x = $2; y = $3; z = $4;
     if (n == 1 || x > gx) { gx = x; gy = y; gz = z }
@@ -80,17 +84,20 @@ read -r gx gy gz ty_x ty_y ty_z diag < <(awk '$1 == "v" {
         sqrt((x1 - x0)^2 + (y1 - y0)^2 + (z1 - z0)^2) }' "$OUT/before.obj")
 move=$(awk -v d="$diag" 'BEGIN { printf "%.6f,0,%.6f", 0.15 * d, 0.05 * d }')
 radius=$(awk -v d="$diag" 'BEGIN { printf "%.6f", 0.2 * d }')
-ctl brush "$sid" --type grab --center "$gx,$gy,$gz" --move "$move" --radius "$radius" --nu 0.45
-echo "demo: grab at ($gx, $gy, $gz) by ($move), radius $radius"
-ctl brush "$sid" --type twist --center "$ty_x,$ty_y,$ty_z" --twist 0,0.6,0 --radius "$radius" --nu 0.45
+ctl brush "$sid" --type grab --center "$gx,$gy,$gz" --move "$move" --radius "$radius" --nu 0.45 \
+  --falloff 2 --ratio 1.5
+echo "demo: bi-scale grab at ($gx, $gy, $gz) by ($move), radius $radius"
+ctl brush "$sid" --type twist --center "$ty_x,$ty_y,$ty_z" --twist 0,0.6,0 --radius "$radius" \
+  --nu 0.45
 echo "demo: twist 0.6 rad about +y at ($ty_x, $ty_y, $ty_z), radius $radius"
 ctl get "$sid" --out "$OUT/after.obj"
 
-awk '$1 == "v" { if (FNR == NR) { b[++n] = $2 " " $3 " " $4 } else { m++; split(b[m], p, " ");
-      d = sqrt(($2 - p[1])^2 + ($3 - p[2])^2 + ($4 - p[3])^2);
-      if (d > 1e-6) moved++; if (d > mx) mx = d } }
+awk -v diag="$diag" '$1 == "v" { if (FNR == NR) { b[++n] = $2 " " $3 " " $4 } else { m++;
+      split(b[m], p, " "); d = sqrt(($2 - p[1])^2 + ($3 - p[2])^2 + ($4 - p[3])^2);
+      if (d > 1e-6) moved++; if (d > 0.01 * diag) far++; if (d > mx) mx = d } }
   END { if (m != n) { print "demo: vertex counts differ: " n " vs " m; exit 1 }
-        printf "demo: %d of %d vertices moved, at most %.6g (mesh units)\n", moved, n, mx;
+        printf "demo: %d of %d vertices moved (%d by more than 1%% of the %.4g bounding-box " \
+               "diagonal), at most %.6g mesh units\n", moved, n, far, diag, mx;
         if (moved == 0) exit 1 }' "$OUT/before.obj" "$OUT/after.obj"
 echo "demo: before: $OUT/before.obj"
 echo "demo: after:  $OUT/after.obj"

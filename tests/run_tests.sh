@@ -3,11 +3,14 @@
 #   unit: each build/tests/unit/<area>/test_* cmocka binary (its "[  PASSED  ] N test(s)." lines
 #         are summed; a binary that dies without a FAILED line counts as one failure).
 #   integration: /usr/bin/python3 -m pytest tests/integration (when it holds test_*.py files).
-# Environment: BUILD (build dir), MESHES (../shared/meshes), PYTHON, SUITES ("unit integration").
+#   fuzz: each build/fuzz/fuzz_* libFuzzer binary mutates for FUZZ_TEST_SECONDS from its checked-in
+#         seeds (tests/fuzz/corpus/<name>); one test each, failed on any crash, leak or UB report.
+# Environment: BUILD (build dir), MESHES (../shared/meshes), PYTHON, SUITES ("unit integration fuzz").
 set -u
 BUILD=${BUILD:-build}
 PYTHON=${PYTHON:-/usr/bin/python3}
-SUITES=${SUITES:-unit integration}
+SUITES=${SUITES:-unit integration fuzz}
+FUZZ_TEST_SECONDS=${FUZZ_TEST_SECONDS:-15}
 export MESHES=${MESHES:-$(cd "$(dirname "$0")/.." && pwd)/../shared/meshes}
 passed=0; failed=0; skipped=0
 log=$(mktemp); trap 'rm -f "$log"' EXIT
@@ -40,6 +43,19 @@ if [[ " $SUITES " == *" integration "* ]] && ls tests/integration/test_*.py >/de
   f=$((f + e))
   if [ "$rc" -ne 0 ] && [ "$rc" -ne 5 ] && [ "$f" -eq 0 ]; then f=1; echo "!! pytest exited with status $rc"; fi
   passed=$((passed + p)); failed=$((failed + f)); skipped=$((skipped + s))
+fi
+
+if [[ " $SUITES " == *" fuzz "* ]]; then
+  for b in $(find "$BUILD/fuzz" -maxdepth 1 -type f -name 'fuzz_*' -perm -u+x 2>/dev/null | sort); do
+    n=$(basename "$b"); seeds="tests/fuzz/corpus/${n#fuzz_}"; scratch=$(mktemp -d)
+    echo "== $b for ${FUZZ_TEST_SECONDS}s from $seeds"
+    if "$b" -max_total_time="$FUZZ_TEST_SECONDS" -print_final_stats=1 "$scratch" "$seeds" >"$log" 2>&1; then
+      passed=$((passed + 1)); grep -E '^stat::number_of_executed_units' "$log"
+    else
+      failed=$((failed + 1)); tail -n 40 "$log"
+    fi
+    rm -rf "$scratch"
+  done
 fi
 
 if [ "$skipped" -gt 0 ]; then

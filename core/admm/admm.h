@@ -148,7 +148,9 @@ typedef struct df_admm_result {
     int anderson_accepted; /* accelerated steps accepted (0 without acceleration) */
     double t_local1;       /* seconds in local step 1 (X / rotations) */
     double t_local2;       /* seconds in local step 2 (Z prox) */
-    double t_global;       /* seconds in the global step (RHS + solve + duals) */
+    double t_global;       /* seconds in the global step (RHS + solve + dual updates; per-element
+                              energies also evaluate the objective's element terms there, fused
+                              with the dual update's F_e) */
     double t_other;        /* seconds in objective evaluation and acceleration */
     double t_total;        /* wall-clock seconds of the call */
 } df_admm_result;

@@ -107,7 +107,10 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->Z = calloc(nv3, sizeof(double));
     s->hidx = malloc((size_t)nh * sizeof(int32_t));
     s->target = malloc((size_t)nh * 3 * sizeof(double));
-    if (s->family == ADMM_FAM_ELEMENT) s->RX = calloc((size_t)s->ne * 9, sizeof(double));
+    if (s->family == ADMM_FAM_ELEMENT) {
+        s->RX = calloc((size_t)s->ne * 9, sizeof(double));
+        s->Ce = calloc((size_t)s->ne * s->esz * 3, sizeof(double));
+    }
     if (params->energy == DF_ADMM_NEOHOOKEAN) {
         s->nhQ = malloc((size_t)s->ne * 9 * sizeof(double));
         s->nhx = calloc((size_t)s->ne * 3, sizeof(double)); /* zeros: no warm start yet */
@@ -122,7 +125,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
         }
     }
     if (!s->E || !s->Vrest || !s->state || !s->Vout || !s->Z || !s->hidx || !s->target ||
-        (s->family == ADMM_FAM_ELEMENT && !s->RX)) {
+        (s->family == ADMM_FAM_ELEMENT && (!s->RX || !s->Ce))) {
         df_admm_free(s);
         return df_error_set(err, DF_ENOMEM, "admm: out of memory");
     }
@@ -170,7 +173,7 @@ int df_admm_set_targets(df_admm *s, const double *targets, df_error *err)
     memcpy(s->target, targets, (size_t)s->nh * 3 * sizeof(double));
     admm_update_kfhp(s);
     if (s->p.accelerate) admm_aa_reset(&s->aa);
-    s->E_last = NAN;
+    /* the objective does not depend on the targets: E_last (of the current positions) stays valid */
     return DF_OK;
 }
 
@@ -238,6 +241,6 @@ void df_admm_free(df_admm *s)
     for (int k = 0; k < s->naff; k++) free((void *)s->aff[k].verts);
     free(s->aff);
     free(s->E); free(s->Vrest); free(s->state); free(s->Vout); free(s->Z); free(s->hidx); free(s->target);
-    free(s->RX); free(s->Rv); free(s->nhQ); free(s->nhx);
+    free(s->RX); free(s->Ce); free(s->Rv); free(s->nhQ); free(s->nhx);
     free(s);
 }

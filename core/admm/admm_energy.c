@@ -8,16 +8,8 @@
 #include "core/admm/scl1.h"
 #include "core/admm/svd3.h"
 
-static double element_energy(const df_admm *s, const double *V, int32_t e)
+double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9])
 {
-    const int32_t *el = s->E + (size_t)e * s->esz;
-    const double *g = s->grad + (size_t)e * s->esz * 3;
-    double F[9] = {0};
-    for (int a = 0; a < s->esz; a++) {
-        const double *x = V + 3 * (size_t)el[a];
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * g[3 * a + c];
-    }
     double vol = s->vol[e];
     if (s->q == 2) {
         double Fc[6] = {F[0], F[1], F[3], F[4], F[6], F[7]}, sg[2];
@@ -39,6 +31,19 @@ static double element_energy(const df_admm *s, const double *V, int32_t e)
     double t = df_admm_trace_sym3(F);
     double d = s->p.energy == DF_ADMM_ACAP ? I1 - t * t / 3.0 : I1 - 2.0 * t + 3.0;
     return 0.5 * vol * (d > 0 ? d : 0.0);
+}
+
+static double element_energy(const df_admm *s, const double *V, int32_t e)
+{
+    const int32_t *el = s->E + (size_t)e * s->esz;
+    const double *g = s->grad + (size_t)e * s->esz * 3;
+    double F[9] = {0};
+    for (int a = 0; a < s->esz; a++) {
+        const double *x = V + 3 * (size_t)el[a];
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * g[3 * a + c];
+    }
+    return admm_element_energy_F(s, e, F);
 }
 
 static double vertex_energy(const df_admm *s, const double *V, int32_t i)
@@ -69,6 +74,12 @@ double admm_elastic(const df_admm *s, const double *V)
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
         for (int32_t i = 0; i < s->nv; i++) E += vertex_energy(s, V, i);
     }
+    return E + admm_bending(s, V);
+}
+
+double admm_bending(const df_admm *s, const double *V)
+{
+    double E = 0;
     if (s->bl_ptr) {
         double B = 0;
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : B)

@@ -45,6 +45,7 @@ struct df_admm {
     double *vol;             /* ne rest measures */
     double *gam;             /* ne element penalty weights */
     double *RX;              /* ne x 9: R_e X_e (3 x q, row stride 3) */
+    double *Ce;              /* ne x esz x 3: gam_e (R_e X_e - W_e) g_{e,a}, the global RHS pieces */
     double mu, lambda;
     double *nhQ, *nhx;       /* Neo-Hookean warm starts: ne x 9 eigenvectors, ne x 3 prox answers */
     int32_t *ve_ptr, *ve_ent;/* vertex -> (element * esz + corner) incidence */
@@ -107,13 +108,17 @@ int admm_global_solve(df_admm *s, df_error *err);
 void admm_local_x(df_admm *s);
 void admm_local_z(df_admm *s);
 void admm_assemble_rhs(df_admm *s);
-void admm_dual_update(df_admm *s);
+/* dual updates; for the element family also returns sum_e E_e(F_e(V)) (the elastic energy of V
+ * without bending, from the same F_e), else 0 */
+double admm_dual_update(df_admm *s);
 
 /* admm_energy.c: objective pieces at positions V; elastic is +inf for inverted NH elements.
  * admm_fit_vertex: best s_i R_i (row-major 3x3) of vertex i's cell at V (ACAP: s_i analytic). */
 void admm_fit_vertex(const df_admm *s, const double *V, int32_t i, double SR[9]);
 double admm_elastic(const df_admm *s, const double *V);
 double admm_locality(const df_admm *s, const double *V);
+double admm_bending(const df_admm *s, const double *V);
+double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9]);
 
 /* admm_anderson.c */
 int admm_aa_init(admm_anderson *aa, int m, int64_t n);

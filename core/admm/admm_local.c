@@ -24,11 +24,37 @@ static inline void element_F(const df_admm *s, const double *V, int32_t e, doubl
     }
 }
 
+/* per-element right-hand side contributions C_{e,a} = gam_e (R_e X_e - W_e) g_{e,a}, gathered per
+ * vertex by admm_assemble_rhs (element-ordered writes, no atomics) */
+static inline void element_contrib(df_admm *s, int32_t e, const double *RX, const double *W)
+{
+    double P[9];
+    for (int k = 0; k < 9; k++) P[k] = s->gam[e] * (RX[k] - W[k]);
+    const double *g = s->grad + (size_t)e * s->esz * 3;
+    double *C = s->Ce + (size_t)e * s->esz * 3;
+    for (int a = 0; a < s->esz; a++)
+        for (int r = 0; r < 3; r++) {
+            double acc = 0;
+            for (int c = 0; c < s->q; c++) acc += P[3 * r + c] * g[3 * a + c];
+            C[3 * a + r] = acc;
+        }
+}
+
+static void local_x_element_one(df_admm *s, int32_t e);
+
 static void local_x_element(df_admm *s)
 {
-    const df_admm_energy en = s->p.energy;
     #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int32_t e = 0; e < s->ne; e++) {
+        local_x_element_one(s, e);
+        element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);
+    }
+}
+
+static void local_x_element_one(df_admm *s, int32_t e)
+{
+    const df_admm_energy en = s->p.energy;
+    {
         double G[9], *W = s->W + 9 * (size_t)e, *RX = s->RX + 9 * (size_t)e;
         element_F(s, s->V, e, G);
         for (int k = 0; k < 9; k++) G[k] += W[k];
@@ -44,7 +70,7 @@ static void local_x_element(df_admm *s)
             for (int r = 0; r < 3; r++)
                 for (int c = 0; c < 2; c++)
                     RX[3 * r + c] = U[2 * r] * sg[0] * Vm[2 * c] + U[2 * r + 1] * sg[1] * Vm[2 * c + 1];
-            continue;
+            return;
         }
         if (en != DF_ADMM_NEOHOOKEAN) {
             /* ARAP: R X = (vol R + gam G) / (vol + gam); ACAP: R X = (1 - f) (tr S / 3) R + f G,
@@ -65,7 +91,7 @@ static void local_x_element(df_admm *s)
             double f = gam / (vol + gam);
             double cr = en == DF_ADMM_ARAP ? 1.0 - f : (1.0 - f) * tS / 3.0;
             for (int k = 0; k < 9; k++) RX[k] = cr * R[k] + f * G[k];
-            continue;
+            return;
         }
         /* Neo-Hookean: X = Q diag(prox(eig S)) Q^T with S = R^T G. Well-conditioned G: closed-form
          * polar R and an eigen-decomposition of S warm-started from the element's previous
@@ -87,7 +113,7 @@ static void local_x_element(df_admm *s)
                 for (int c = 0; c < 3; c++)
                     RX[3 * r + c] = RQ[3 * r] * x[0] * Q[3 * c] + RQ[3 * r + 1] * x[1] * Q[3 * c + 1] + RQ[3 * r + 2] * x[2] * Q[3 * c + 2];
             memcpy(xp, x, sizeof(x));
-            continue;
+            return;
         }
         double U[9], sg[3], Vm[9];
         df_admm_svd3(G, U, sg, Vm);
@@ -165,15 +191,8 @@ void admm_assemble_rhs(df_admm *s)
         double b[3] = {0, 0, 0};
         if (s->family == ADMM_FAM_ELEMENT) {
             for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
-                int32_t ent = s->ve_ent[p], e = ent / s->esz;
-                const double *RX = s->RX + 9 * (size_t)e, *W = s->W + 9 * (size_t)e;
-                const double *g = s->grad + 3 * (size_t)ent;
-                double gam = s->gam[e];
-                for (int r = 0; r < 3; r++) {
-                    double acc = 0;
-                    for (int c = 0; c < s->q; c++) acc += (RX[3 * r + c] - W[3 * r + c]) * g[c];
-                    b[r] += gam * acc;
-                }
+                const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
+                b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
             }
         } else {
             for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
@@ -192,18 +211,21 @@ void admm_assemble_rhs(df_admm *s)
     }
 }
 
-void admm_dual_update(df_admm *s)
+double admm_dual_update(df_admm *s)
 {
+    double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
         for (int32_t e = 0; e < s->ne; e++) {
             double F[9];
             element_F(s, s->V, e, F);
             double *W = s->W + 9 * (size_t)e;
             const double *RX = s->RX + 9 * (size_t)e;
             for (int k = 0; k < 9; k++) W[k] += F[k] - RX[k];
+            E += admm_element_energy_F(s, e, F);
         }
     }
     #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int64_t o = 0; o < 3 * (int64_t)s->nv; o++) s->U[o] += s->V[o] - s->Vrest[o] - s->Z[o];
+    return E;
 }

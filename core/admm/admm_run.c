@@ -15,8 +15,9 @@ double admm_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* one plain ADMM iteration on the state; accumulates phase times */
-static int iterate(df_admm *s, df_admm_result *r, df_error *err)
+/* one plain ADMM iteration on the state; accumulates phase times. *el_fused receives the elastic
+ * energy of the new V computed during the dual update (element family), NAN otherwise. */
+static int iterate(df_admm *s, df_admm_result *r, double *el_fused, df_error *err)
 {
     double t0 = admm_now();
     admm_local_x(s);
@@ -26,7 +27,8 @@ static int iterate(df_admm *s, df_admm_result *r, df_error *err)
     admm_assemble_rhs(s);
     int rc = admm_global_solve(s, err);
     if (rc) return rc;
-    admm_dual_update(s);
+    double ef = admm_dual_update(s);
+    *el_fused = s->family == ADMM_FAM_ELEMENT ? ef : NAN;
     double t3 = admm_now();
     r->t_local1 += t1 - t0;
     r->t_local2 += t2 - t1;
@@ -60,12 +62,16 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
             if (el_ms + el_ms / it > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
         }
         if (x_before) memcpy(x_before, s->state, (size_t)s->n_state * sizeof(double));
-        rc = iterate(s, &r, err);
+        double el_fused;
+        rc = iterate(s, &r, &el_fused, err);
         if (rc) break;
         memcpy(s->Vout, s->V, (size_t)s->nv * 3 * sizeof(double));
         double ta = admm_now();
         if (x_before) r.anderson_accepted += admm_aa_step(&s->aa, x_before, s->state) && s->aa.pending;
-        double el = admm_elastic(s, s->Vout), lo = admm_locality(s, s->Vout);
+        /* element family: the energy of Vout (= V before any Anderson extrapolation) came with the
+         * dual update's F_e; only the bending part remains */
+        double el = s->family == ADMM_FAM_ELEMENT ? el_fused + admm_bending(s, s->Vout) : admm_elastic(s, s->Vout);
+        double lo = admm_locality(s, s->Vout);
         double E = el + lo;
         r.t_other += admm_now() - ta;
         r.iterations++;

@@ -13,7 +13,7 @@ double df_admm_nh_psi(const double sig[3], double mu, double lambda)
 {
     double J = sig[0] * sig[1] * sig[2];
     if (!(J > 0.0) || sig[0] <= 0.0 || sig[1] <= 0.0 || sig[2] <= 0.0) return INFINITY;
-    double L = log(sig[0]) + log(sig[1]) + log(sig[2]);
+    double L = log(J);
     return 0.5 * mu * (sig[0] * sig[0] + sig[1] * sig[1] + sig[2] * sig[2] - 3.0) - mu * L +
            0.5 * lambda * L * L;
 }
@@ -61,9 +61,9 @@ int df_admm_nh_prox(const double sig[3], const double *start, double vol, double
     }
     double scale = vol * mu + gamma;
     int it;
-    double f = prox_obj(x, sig, vol, mu, lambda, gamma);
+    double f = NAN; /* computed lazily: warm-started solves usually take full steps only */
     for (it = 0; it < DF_ADMM_NH_MAX_NEWTON; it++) {
-        double L = log(x[0]) + log(x[1]) + log(x[2]);
+        double L = log(x[0] * x[1] * x[2]);
         double g[3], H[9];
         for (int i = 0; i < 3; i++)
             g[i] = vol * (mu * x[i] - mu / x[i] + lambda * L / x[i]) + gamma * (x[i] - sig[i]);
@@ -88,12 +88,13 @@ int df_admm_nh_prox(const double sig[3], const double *start, double vol, double
         for (int i = 0; i < 3; i++)
             if (d[i] < 0 && x[i] + t * d[i] <= 0.0) t = 0.9 * x[i] / -d[i];
         double slope = g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
+        if (isnan(f) && !(-slope <= 1e-10 * scale)) f = prox_obj(x, sig, vol, mu, lambda, gamma);
         double xt[3], ft = INFINITY;
-        if (-slope <= 1e-10 * (fabs(f) + scale)) {
+        if (-slope <= 1e-10 * ((isnan(f) ? 0.0 : fabs(f)) + scale)) {
             /* quadratic-convergence region: objective differences are at roundoff level, so
              * Armijo cannot be tested; the full (boundary-safe) Newton step is taken */
             for (int i = 0; i < 3; i++) x[i] += t * d[i];
-            f = prox_obj(x, sig, vol, mu, lambda, gamma);
+            f = NAN; /* recomputed only if a later step needs a line search */
             continue;
         }
         for (int ls = 0; ls < 40; ls++) {

@@ -187,7 +187,8 @@ static double trace_root(const double A[9], double C[6], double *I1o, double *Jo
         if (!(fp > 0)) break;
         double dt = f / fp;
         t -= dt;
-        if (fabs(dt) <= 1e-15 * t) break;
+        /* quadratic convergence from above: after a step of 1e-9 t the error is ~1e-18 t */
+        if (fabs(dt) <= 1e-9 * t) break;
     }
     return t;
 }
@@ -199,7 +200,7 @@ double df_admm_trace_sym3(const double A[9])
 {
     double C[6], I1, J;
     double t = trace_root(A, C, &I1, &J);
-    if (J >= TRACE_MIN_DET_REL * pow(I1 / 3.0, 1.5) && I1 > 0) return t;
+    if (J >= TRACE_MIN_DET_REL * (I1 / 3.0) * sqrt(I1 / 3.0) && I1 > 0) return t;
     double sg[3];
     df_admm_svd3(A, NULL, sg, NULL);
     return sg[0] + sg[1] + sg[2];
@@ -209,7 +210,7 @@ int df_admm_polar3(const double A[9], double R[9])
 {
     double C[6], I1, J;
     double t = trace_root(A, C, &I1, &J);
-    if (!(I1 > 0) || !(J >= TRACE_MIN_DET_REL * pow(I1 / 3.0, 1.5))) return -1;
+    if (!(I1 > 0) || !(J >= TRACE_MIN_DET_REL * (I1 / 3.0) * sqrt(I1 / 3.0))) return -1;
     /* Cayley-Hamilton for S = sqrt(C): S (C + i2 I) = i1 C + i3 I, so R = A (C + i2 I) (t C + J I)^-1 */
     double i2 = 0.5 * (t * t - I1);
     double P[9] = {C[0] + i2, C[1], C[2], C[1], C[3] + i2, C[4], C[2], C[4], C[5] + i2};

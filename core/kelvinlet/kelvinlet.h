@@ -162,7 +162,9 @@ int df_kelvinlet_apply_ref(const df_kelvinlet_prepared *p, double *xyz, size_t n
 
 enum {
     DF_KELVINLET_PIN_DISPLACEMENT = 1,  /* u(x_k) = 0: a grab load at each pin (3 DoF)       */
-    DF_KELVINLET_PIN_GRADIENT = 2       /* grad u(x_k) = 0: an affine load at each pin (9 DoF) */
+    DF_KELVINLET_PIN_GRADIENT = 2       /* grad u(x_k) = 0: an affine load at each pin (9 DoF;
+                                           8 at nu = 0.5, where the trace load vanishes and the
+                                           field is divergence-free anyway)                  */
 };
 
 /* The pinned set and the kernel of its loads. */
@@ -174,9 +176,12 @@ typedef struct df_kelvinlet_pins {
     int order;
 } df_kelvinlet_pins;
 
-typedef struct df_kelvinlet_constraints df_kelvinlet_constraints;  /* opaque */
+/* Opaque solver; not thread-safe (one per session/stroke owner). Every other function of this
+ * header is reentrant and may run concurrently on different data. */
+typedef struct df_kelvinlet_constraints df_kelvinlet_constraints;
 
-/* Builds K_pp (3n or 9n or 12n square) and caches its LU (LAPACKE dgetrf).
+/* Builds K_pp (3n, 9n or 12n square; 8n / 11n at nu = 0.5) and caches its LU (LAPACKE
+ * dgetrf, condition checked with dgecon).
  * Errors: DF_EINVAL (bad numbers, n = 0, flags 0), DF_ELIMIT (n > MAX_PINS), DF_ENOMEM,
  * DF_ESINGULAR (duplicated / coincident pins or numerically singular K_pp); *out untouched. */
 int df_kelvinlet_constraints_create(const df_kelvinlet_pins *pins, df_kelvinlet_constraints **out,

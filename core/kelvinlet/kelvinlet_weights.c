@@ -33,20 +33,25 @@ int df_kelvinlet_weights(int order, double ratio, double radius, double *eps, do
         ww[1] = -(x[2] - x[0]) / (x[2] - x[1]);
         ww[2] = (x[1] - x[0]) / (x[2] - x[1]);
     } else {
-        /* The Vandermonde system sum_i w_i x_i^k = 0 (k = 0..n-2) with w_0 = 1 has the exact
-         * (Cramer / Lagrange divided-difference) solution w_i = c / prod_{j != i}(x_i - x_j),
-         * c chosen so that w_0 = 1. Products of differences of distinct positive nodes are
-         * accurate to rounding, unlike Gaussian elimination on the ill-conditioned matrix. */
-        double p0 = 1.0;
-        for (int j = 1; j < order; j++)
-            p0 *= x[0] - x[j];
-        for (int i = 0; i < order; i++) {
-            double pi = 1.0;
-            for (int j = 0; j < order; j++)
-                if (j != i)
-                    pi *= x[i] - x[j];
-            ww[i] = p0 / pi;
+        /* n-scale: solve the Vandermonde system sum_i z_i x_i^k = [k == n-1] (k = 0..n-1) with
+         * the Bjorck-Pereyra algorithm (Golub & Van Loan, Alg. 4.6.2), accurate to rounding for
+         * ordered positive nodes where Gaussian elimination would lose digits to the
+         * conditioning; w = z / z_0 then cancels the first n-1 far-field terms (k <= n-2). */
+        int n = order - 1;
+        double z[DF_KELVINLET_MAX_ORDER];
+        for (int i = 0; i <= n; i++)
+            z[i] = i == n ? 1.0 : 0.0;
+        for (int k = 0; k < n; k++)
+            for (int i = n; i > k; i--)
+                z[i] -= x[k] * z[i - 1];
+        for (int k = n - 1; k >= 0; k--) {
+            for (int i = k + 1; i <= n; i++)
+                z[i] /= x[i] - x[i - k - 1];
+            for (int i = k; i < n; i++)
+                z[i] -= z[i + 1];
         }
+        for (int i = 0; i <= n; i++)
+            ww[i] = z[i] / z[0];
     }
     for (int i = 0; i < order; i++) {
         if (!dfk_finite(ww[i]) || !dfk_finite(e[i]))

@@ -105,8 +105,8 @@ static int quality_cb(void *user, const df_admm_progress *pr)
     return 0;
 }
 
-/* 500 plain iterations: Table 2 row; returns the final objective */
-static double table_row(const experiment *x, const loaded *L)
+/* 500 plain iterations: Table 2 row; returns the final objective, *t the run's seconds */
+static double table_row(const experiment *x, const loaded *L, double *t)
 {
     double tc = now();
     df_admm *s = make(x, L, 0, 0);
@@ -123,16 +123,19 @@ static double table_row(const experiment *x, const loaded *L)
            r.t_global, r.t_total, 1e3 * r.t_total / r.iterations, t_setup, st.analyses, st.factorizations, st.solves);
     printf("%-18s objective eval + other %.2f s of the total; %d iterations\n", "", r.t_other, r.iterations);
     df_admm_free(s);
+    *t = r.t_total;
     return r.objective;
 }
 
 /* the smallest penalty the convexity condition allows, with a 25% margin: rho = 1.25 w / s */
 #define FAST_RHO_FACTOR 1.25
 
-static void time_to_quality(const experiment *x, const loaded *L, double E500, double goal_s)
+static void time_to_quality(const experiment *x, const loaded *L, double E500, double t500, double goal_s)
 {
     double w = x->rho * x->s / 10.0, fast = FAST_RHO_FACTOR * w / x->s;
-    for (int variant = 0; variant < 4; variant++) {
+    printf("  %-26s reaches it after  500 its in %6.3f s (by definition; the Table 2 run): %.2fx the %.1f s target%s\n",
+           "plain, paper rho", t500, t500 / goal_s, goal_s, t500 <= goal_s ? " (met)" : " (NOT met)");
+    for (int variant = 1; variant < 4; variant++) {
         int acc = variant & 1;
         double rho = variant >= 2 ? fast : x->rho;
         df_admm *s = make(x, L, acc, rho);
@@ -143,7 +146,7 @@ static void time_to_quality(const experiment *x, const loaded *L, double E500, d
         char label[64];
         snprintf(label, sizeof(label), "%s, rho %g", acc ? "Anderson(5)" : "plain", rho);
         q.t0 = now();
-        df_admm_run(s, &(df_admm_budget){1500, 0, 1, quality_cb, &q}, &r, &err);
+        df_admm_run(s, &(df_admm_budget){600, 0, 1, quality_cb, &q}, &r, &err);
         if (q.it_hit > 0)
             printf("  %-26s reached it after %4d its in %6.3f s (%.2f ms/it): %.2fx the %.1f s target%s\n", label, q.it_hit,
                    q.t_hit, 1e3 * q.t_hit / q.it_hit, q.t_hit / goal_s, goal_s, q.t_hit <= goal_s ? " (met)" : " (NOT met)");
@@ -210,19 +213,19 @@ int main(void)
     };
     printf("== Table 2 (500 plain ADMM iterations, times in seconds; paper: pig ARAP 4.03, pig NH 7.18, bar ARAP 5.65,"
            " apple NH 1.13 on 8 threads)\n");
-    double E500[4];
+    double E500[4], T500[4];
     loaded L[4];
     for (int i = 0; i < 4; i++) {
         if (load(&ex[i], &L[i])) return 1;
-        E500[i] = table_row(&ex[i], &L[i]);
+        E500[i] = table_row(&ex[i], &L[i], &T500[i]);
     }
     printf("== time to quality: reach the objective of 500 plain iterations at the paper's rho within %g (relative);\n"
            "   variants: plain / Anderson-accelerated ADMM, at the paper's rho and at rho = %.2f w / s (same w, same\n"
            "   objective; the smallest penalty that keeps the SC-L1 prox convex, with margin)\n", QUALITY_REL, FAST_RHO_FACTOR);
     printf("pig ARAP (target 1.0 s; paper 4.03 s for 500 its):\n");
-    time_to_quality(&ex[0], &L[0], E500[0], 1.0);
+    time_to_quality(&ex[0], &L[0], E500[0], T500[0], 1.0);
     printf("pig Neo-Hookean (target 2.0 s; paper 7.18 s for 500 its):\n");
-    time_to_quality(&ex[1], &L[1], E500[1], 2.0);
+    time_to_quality(&ex[1], &L[1], E500[1], T500[1], 2.0);
     for (int i = 0; i < 4; i++) unload(&L[i]);
     printf("== interactive drag\n");
     experiment teaser_nh = {"pig teaser Neo-Hookean", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01};

@@ -11,6 +11,7 @@
  *      pure stream (pipelined SNAPSHOT replies) and brush-driven (each frame a new version);
  *   4. the writer's update rate (update -> ack) on the 1k mesh with 1 vs 32 subscribers reading
  *      in a separate thread.
+ * Latencies and rates are the best of BENCH_REPEAT runs (the machine is shared and noisy).
  * Targets (issue): 1k p50 <= 3x echo; 100k p50 <= 2 ms; >= 60 1M frames/s; 32 subs <= 2x.
  * Exit status 0 when every measurement ran (targets are reported, not enforced), 1 otherwise. */
 #include <arpa/inet.h>
@@ -24,6 +25,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <sys/wait.h>
@@ -42,6 +44,7 @@
 #define STREAM_INFLIGHT 4
 #define WRITER_UPDATES 2000
 #define MANY_SUBS 32
+#define BENCH_REPEAT 3        /* latency/rate runs per case; the best one is reported */
 #define TARGET_ECHO_RATIO 3.0
 #define TARGET_100K_P50_US 2000.0
 #define TARGET_1M_FPS 60.0
@@ -183,6 +186,7 @@ static int daemon_start(daemon_proc *d, const char *exe)
     snprintf(log, sizeof log, "%s/deformd.log", d->dir);
     d->pid = fork();
     if (d->pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGTERM); /* never outlive the bench */
         FILE *f = freopen(log, "w", stderr);
         (void)f;
         execl(exe, exe, "--foreground", "--socket", d->sock, "--tcp", tcp, "--log-level", "warn",
@@ -515,11 +519,18 @@ int main(int argc, char **argv)
         return 1;
     }
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    printf("bench_net: %ld CPUs online; timings are wall clock, best read as orders of magnitude "
-           "on a shared machine\n", ncpu);
+    printf("bench_net: %ld CPUs online; latencies and rates are the best of %d runs (wall clock, "
+           "shared machine)\n", ncpu, BENCH_REPEAT);
     int fail = 0;
-    stats eu, et;
-    fail |= bench_echo(AF_UNIX, d.dir, &eu) | bench_echo(AF_INET, d.dir, &et);
+    stats eu = {0, 0, 0, 0}, et = {0, 0, 0, 0};
+    for (int r = 0; r < BENCH_REPEAT; r++) {
+        stats a, b;
+        fail |= bench_echo(AF_UNIX, d.dir, &a) | bench_echo(AF_INET, d.dir, &b);
+        if (r == 0 || a.p50 < eu.p50)
+            eu = a;
+        if (r == 0 || b.p50 < et.p50)
+            et = b;
+    }
     printf("raw 16-byte echo (%d round trips)   unix: p50 %7.1f us  p99 %7.1f us\n", ECHO_ROUNDS,
            eu.p50, eu.p99);
     printf("                                    tcp : p50 %7.1f us  p99 %7.1f us\n", et.p50, et.p99);
@@ -536,14 +547,34 @@ int main(int argc, char **argv)
         daemon_stop(&d);
         return 1;
     }
+    double *pt = malloc(RT_ROUNDS * sizeof *pt);
+    int np = 0;
+    for (int i = 0; pt && i < RT_WARMUP + RT_ROUNDS; i++) {
+        double us;
+        if (df_client_ping(cu, "deformd-ping-16b", 16, &us, &e) == DF_OK && i >= RT_WARMUP)
+            pt[np++] = us;
+    }
+    stats ps = stats_of(pt, np);
+    free(pt);
+    printf("daemon PING 16 B (loop thread only) unix: p50 %7.1f us  p99 %7.1f us\n", ps.p50, ps.p99);
     static const int sizes[2] = {32, 317};
     static const char *const names[2] = {"grid-1k", "grid-100k"};
     uint64_t sid[2] = {0, 0};
     stats rt[2][2];
+    memset(rt, 0, sizeof rt);
     int rt_ok[2] = {0, 0};
     for (int m = 0; m < 2; m++) {
         sid[m] = load_grid(cu, sizes[m], names[m]);
-        if (!sid[m] || bench_rt(cu, sid[m], &rt[m][0]) || bench_rt(ct, sid[m], &rt[m][1])) {
+        int bad = !sid[m];
+        for (int r = 0; !bad && r < BENCH_REPEAT; r++) {
+            stats a, b;
+            bad = bench_rt(cu, sid[m], &a) || bench_rt(ct, sid[m], &b);
+            if (!bad && (r == 0 || a.p50 < rt[m][0].p50))
+                rt[m][0] = a;
+            if (!bad && (r == 0 || b.p50 < rt[m][1].p50))
+                rt[m][1] = b;
+        }
+        if (bad) {
             fail = 1;
             continue;
         }
@@ -555,13 +586,13 @@ int main(int argc, char **argv)
     }
     if (rt_ok[0]) {
         double r = rt[0][0].p50 / eu.p50, rtcp = rt[0][1].p50 / et.p50;
-        printf("  target 1k p50 <= %.0fx raw echo: unix %.1fx, tcp %.1fx -> %s\n",
-               TARGET_ECHO_RATIO, r, rtcp, verdict(r <= TARGET_ECHO_RATIO && rtcp <= TARGET_ECHO_RATIO));
+        printf("  target 1k p50 <= %.0fx raw echo: unix %.1fx %s, tcp %.1fx %s\n", TARGET_ECHO_RATIO,
+               r, verdict(r <= TARGET_ECHO_RATIO), rtcp, verdict(rtcp <= TARGET_ECHO_RATIO));
     }
     if (rt_ok[1])
-        printf("  target 100k p50 <= %.0f us: unix %.1f us, tcp %.1f us -> %s\n", TARGET_100K_P50_US,
-               rt[1][0].p50, rt[1][1].p50,
-               verdict(rt[1][0].p50 <= TARGET_100K_P50_US && rt[1][1].p50 <= TARGET_100K_P50_US));
+        printf("  target 100k p50 <= %.0f us: unix %.1f us %s, tcp %.1f us %s\n", TARGET_100K_P50_US,
+               rt[1][0].p50, verdict(rt[1][0].p50 <= TARGET_100K_P50_US), rt[1][1].p50,
+               verdict(rt[1][1].p50 <= TARGET_100K_P50_US));
     uint64_t big = load_grid(cu, 1000, "grid-1M");
     double fps[2] = {0, 0}, mbps[2] = {0, 0};
     if (!big || bench_full_frames(cu, big, 1000000, 0, &fps[0], &mbps[0]) ||
@@ -577,8 +608,18 @@ int main(int argc, char **argv)
     }
     double rate1 = 0, rate32 = 0;
     long seen1 = 0, seen32 = 0;
-    if (!sid[0] || bench_writer(d.sock, cu, sid[0], 1, &rate1, &seen1) ||
-        bench_writer(d.sock, cu, sid[0], MANY_SUBS, &rate32, &seen32))
+    int wbad = !sid[0];
+    for (int r = 0; !wbad && r < BENCH_REPEAT; r++) {
+        double a, b;
+        long sa, sb;
+        wbad = bench_writer(d.sock, cu, sid[0], 1, &a, &sa) ||
+               bench_writer(d.sock, cu, sid[0], MANY_SUBS, &b, &sb);
+        if (!wbad && (r == 0 || a > rate1))
+            rate1 = a, seen1 = sa;
+        if (!wbad && (r == 0 || b > rate32))
+            rate32 = b, seen32 = sb;
+    }
+    if (wbad)
         fail = 1;
     else {
         printf("writer updates/s (1k mesh, update -> ack): 1 subscriber %8.0f, %d subscribers %8.0f"

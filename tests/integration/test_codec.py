@@ -7,7 +7,7 @@ from array import array
 import pytest
 
 from deformd_client import frame as fr
-from deformd_client import messages as m
+from deformd_client import messages as m, stream as st
 from deformd_client import MeshState, OutOfSync
 
 
@@ -100,39 +100,39 @@ def test_handles_body_with_affine_sets():
 
 def test_disp_round_trip_dense_and_sparse_and_chunk_join():
     xyz = array("f", [0.5 * k for k in range(12)])
-    dense = m.Disp(5, 3, 2, m.CHANGE_BRUSH, m.DISP_DENSE, 4, 4, 0, 4, None, xyz)
-    assert m.decode_disp(m.encode_disp(dense)) == dense
-    sp = m.Disp(5, 4, 3, m.CHANGE_UNDO, m.DISP_SPARSE, 4, 2, 0, 2, array("I", [1, 3]),
+    dense = st.Disp(5, 3, 2, m.CHANGE_BRUSH, m.DISP_DENSE, 4, 4, 0, 4, None, xyz)
+    assert st.decode_disp(st.encode_disp(dense)) == dense
+    sp = st.Disp(5, 4, 3, m.CHANGE_UNDO, m.DISP_SPARSE, 4, 2, 0, 2, array("I", [1, 3]),
                 array("f", [1, 2, 3, -4, -5, -6]))
-    enc = m.encode_disp(sp)
+    enc = st.encode_disp(sp)
     assert len(enc) == 44 + 32
-    assert m.decode_disp(enc) == sp
-    halves = [m.Disp(5, 3, 2, 1, 1, 4, 4, 0, 2, None, xyz[:6]),
-              m.Disp(5, 3, 2, 1, 1, 4, 4, 2, 2, None, xyz[6:])]
-    assert m.join_disp(halves).xyz == xyz
-    with pytest.raises(m.ProtocolError):
-        m.join_disp(halves[::-1])
-    with pytest.raises(m.ProtocolError):
-        m.decode_disp(enc[:-1])
-    with pytest.raises(m.ProtocolError):
-        m.decode_disp(enc + b"\0")
+    assert st.decode_disp(enc) == sp
+    halves = [st.Disp(5, 3, 2, 1, 1, 4, 4, 0, 2, None, xyz[:6]),
+              st.Disp(5, 3, 2, 1, 1, 4, 4, 2, 2, None, xyz[6:])]
+    assert st.join_disp(halves).xyz == xyz
+    with pytest.raises(st.ProtocolError):
+        st.join_disp(halves[::-1])
+    with pytest.raises(st.ProtocolError):
+        st.decode_disp(enc[:-1])
+    with pytest.raises(st.ProtocolError):
+        st.decode_disp(enc + b"\0")
 
 
 def test_mesh_state_applies_dense_sparse_and_detects_gaps():
     base = array("f", [0, 0, 0, 1, 0, 0, 0, 1, 0])
-    st = MeshState(base)
-    d1 = m.Disp(1, 1, 0, 1, m.DISP_DENSE, 3, 3, 0, 3, None,
+    rep = MeshState(base)
+    d1 = st.Disp(1, 1, 0, 1, m.DISP_DENSE, 3, 3, 0, 3, None,
                 array("f", [0.1, 0, 0, 0.2, 0, 0, 0.3, 0, 0]))
-    assert st.apply(d1) and st.version == 1
-    assert list(st.positions) == list(array("f", [0.1, 0, 0, 1.2, 0, 0, 0.3, 1, 0]))
-    d2 = m.Disp(1, 2, 1, 4, m.DISP_SPARSE, 3, 1, 0, 1, array("I", [2]), array("f", [0, 0, 0]))
-    assert st.apply(d2)
-    assert st.positions[6:9] == array("f", [0, 1, 0])
-    assert not st.apply(d2)                      # already applied
-    d4 = m.Disp(1, 4, 3, 1, m.DISP_SPARSE, 3, 1, 0, 1, array("I", [0]), array("f", [1, 1, 1]))
+    assert rep.apply(d1) and rep.version == 1
+    assert list(rep.positions) == list(array("f", [0.1, 0, 0, 1.2, 0, 0, 0.3, 1, 0]))
+    d2 = st.Disp(1, 2, 1, 4, m.DISP_SPARSE, 3, 1, 0, 1, array("I", [2]), array("f", [0, 0, 0]))
+    assert rep.apply(d2)
+    assert rep.positions[6:9] == array("f", [0, 1, 0])
+    assert not rep.apply(d2)                      # already applied
+    d4 = st.Disp(1, 4, 3, 1, m.DISP_SPARSE, 3, 1, 0, 1, array("I", [0]), array("f", [1, 1, 1]))
     with pytest.raises(OutOfSync):
-        st.apply(d4)
-    assert st.version == 2
+        rep.apply(d4)
+    assert rep.version == 2
 
 
 def test_error_session_info_and_stats_bodies():
@@ -142,9 +142,9 @@ def test_error_session_info_and_stats_bodies():
     s = m.decode_session_info(info)
     assert (s.session_id, s.version, s.nv, s.ne, s.undo_depth, s.name) == (3, 9, 100, 196, 2, "spot")
     assert m.decode_session_list(struct.pack("<I", 2) + info + info)[1].name == "spot"
-    st = struct.pack("<I", 1) + struct.pack("<H", 5) + b"a.b_c" + struct.pack("<d", 2.5)
-    assert m.decode_stats(st) == {"a.b_c": 2.5}
-    with pytest.raises(m.ProtocolError):
+    stats = struct.pack("<I", 1) + struct.pack("<H", 5) + b"a.b_c" + struct.pack("<d", 2.5)
+    assert m.decode_stats(stats) == {"a.b_c": 2.5}
+    with pytest.raises(st.ProtocolError):
         m.decode_session_info(info[:-1])
 
 
@@ -157,15 +157,15 @@ def test_get_mesh_chunks_assemble_and_bad_order_is_refused():
     from deformd_client import MeshData
     pos = array("f", range(12))
     tri = array("I", [0, 1, 2, 0, 2, 3])
-    chunks = [m.decode_mesh_chunk(_mesh_chunk(1, 0, 3, pos[:9])),
-              m.decode_mesh_chunk(_mesh_chunk(1, 3, 1, pos[9:])),
-              m.decode_mesh_chunk(_mesh_chunk(4, 0, 2, tri))]
-    mesh = m.assemble_mesh(chunks, MeshData)
+    chunks = [st.decode_mesh_chunk(_mesh_chunk(1, 0, 3, pos[:9])),
+              st.decode_mesh_chunk(_mesh_chunk(1, 3, 1, pos[9:])),
+              st.decode_mesh_chunk(_mesh_chunk(4, 0, 2, tri))]
+    mesh = st.assemble_mesh(chunks, MeshData)
     assert mesh.positions == pos and mesh.elements == tri and mesh.elem_size == 3
-    with pytest.raises(m.ProtocolError):
-        m.assemble_mesh(chunks[1:], MeshData)
-    with pytest.raises(m.ProtocolError):
-        m.decode_mesh_chunk(_mesh_chunk(1, 3, 2, pos[:6]))      # rows beyond nv
+    with pytest.raises(st.ProtocolError):
+        st.assemble_mesh(chunks[1:], MeshData)
+    with pytest.raises(st.ProtocolError):
+        st.decode_mesh_chunk(_mesh_chunk(1, 3, 2, pos[:6]))      # rows beyond nv
 
 
 def test_client_queues_events_met_while_waiting_and_raises_errors():
@@ -175,7 +175,7 @@ def test_client_queues_events_met_while_waiting_and_raises_errors():
     import threading
     from deformd_client import Client, ConnectionClosed, DeformdError, MeshData
     a, b = socket.socketpair()
-    ev = m.Disp(7, 4, 3, m.CHANGE_UNDO, m.DISP_SPARSE, 4, 1, 0, 1, array("I", [2]),
+    ev = st.Disp(7, 4, 3, m.CHANGE_UNDO, m.DISP_SPARSE, 4, 1, 0, 1, array("I", [2]),
                 array("f", [1, 2, 3]))
 
     def fake_daemon():
@@ -186,7 +186,7 @@ def test_client_queues_events_met_while_waiting_and_raises_errors():
         rid1, rid2 = got[0].request_id, got[1].request_id
         b.sendall(fr.encode_frame(m.GET_MESH, _mesh_chunk(1, 0, 4, array("f", range(12))), rid1,
                                   fr.FLAG_REPLY | fr.FLAG_MORE)
-                  + fr.encode_frame(m.DISPLACEMENT, m.encode_disp(ev), 0, fr.FLAG_EVENT)
+                  + fr.encode_frame(m.DISPLACEMENT, st.encode_disp(ev), 0, fr.FLAG_EVENT)
                   + fr.encode_frame(m.GET_MESH, _mesh_chunk(4, 0, 2, array("I", [0, 1, 2, 0, 2, 3])),
                                     rid1, fr.FLAG_REPLY)
                   + fr.encode_frame(m.UNDO, struct.pack("<iH", -8, 7) + b"nothing", rid2,
@@ -198,7 +198,7 @@ def test_client_queues_events_met_while_waiting_and_raises_errors():
     c = Client(a, timeout=5, hello=False)
     r1 = c.send(m.GET_MESH, m.encode_get_mesh(7))
     r2 = c.send(m.UNDO, m.encode_session_ref(7))
-    mesh = m.assemble_mesh([m.decode_mesh_chunk(f.payload) for f in c.wait_reply(r1)], MeshData)
+    mesh = st.assemble_mesh([st.decode_mesh_chunk(f.payload) for f in c.wait_reply(r1)], MeshData)
     assert mesh.nv == 4 and mesh.positions == array("f", range(12))
     with pytest.raises(DeformdError) as ei:
         c.wait_reply(r2)

@@ -6,7 +6,7 @@ import os
 import pytest
 
 from deformd_client import (Brush, DeformdError, MeshState, SessionClosed, errors as E,
-                            messages as m)
+                            messages as m, stream as st)
 from conftest import MESHES
 from helpers import (grab_displacement, grid_obj, obj_bytes_positions, tet_grid,
                      tet_grid_medit)
@@ -174,7 +174,7 @@ def test_grab_stroke_matches_the_reference_formula(daemon, conn, grid):
     # the brush tip moved by exactly the requested displacement
     for k in range(3):
         assert abs(mesh.positions[3 * ci + k] - (center[k] + tip[k])) < 1e-6
-    evs = list(conn.events(timeout=1.0))
+    evs = list(conn.events(timeout=0.5))
     assert [e.version for e in evs] == [1, 2]
     assert all(e.kind == m.CHANGE_BRUSH for e in evs)
 
@@ -244,7 +244,7 @@ def test_cancel_undo_redo_and_their_stream_kinds(daemon, grid):
         with pytest.raises(DeformdError) as ei:
             c.redo(sid)
         assert ei.value.code == E.ESTATE
-        kinds = [e.kind for e in c.events(timeout=1.0)]
+        kinds = [e.kind for e in c.events(timeout=0.5)]
         assert kinds == [m.CHANGE_BRUSH, m.CHANGE_BRUSH, m.CHANGE_BRUSH_CANCEL, m.CHANGE_BRUSH,
                          m.CHANGE_UNDO, m.CHANGE_REDO]
 
@@ -331,7 +331,7 @@ def test_handles_move_streams_progress_and_reaches_targets(daemon):
         assert res.status in (m.MOVE_CONVERGED, m.MOVE_BUDGET), res
         assert 1 <= res.iterations <= 60
         assert math.isfinite(res.objective) and res.residual >= 0
-        progress = [e for e in c.events(timeout=1.0) if isinstance(e, m.Progress)]
+        progress = [e for e in c.events(timeout=0.5) if isinstance(e, st.Progress)]
         assert len(progress) >= 2
         assert progress[-1].final == 1 and all(p.final == 0 for p in progress[:-1])
         assert [p.iteration for p in progress] == sorted(p.iteration for p in progress)
@@ -381,7 +381,7 @@ def test_snapshot_and_replica_follow_the_stream(daemon, grid):
                                  radius=0.15))
         c.brush_cancel(sid)
         final = c.get_mesh(sid)
-        for ev in w.events(timeout=1.0):
+        for ev in w.events(timeout=0.5):
             replica.apply(ev)
         assert replica.version == final.version
         assert replica.tobytes() == final.positions.tobytes()
@@ -420,7 +420,7 @@ def test_sparse_frames_list_only_moved_vertices(daemon):
         c.brush_update(sid, move=(0, 0, 0.1))
         c.brush_update(sid, move=(0, 0, 0.1))     # same load: nothing changes
         c.brush_end(sid)
-        evs = list(c.events(timeout=1.0))
+        evs = list(c.events(timeout=0.5))
         assert [e.encoding for e in evs] == [m.DISP_SPARSE] * 3
         assert [e.count for e in evs] == [GRID_N * GRID_N, GRID_N * GRID_N, 0]
         assert list(evs[0].idx) == list(range(GRID_N * GRID_N))
@@ -446,7 +446,7 @@ def test_unsubscribe_stops_the_stream(daemon, grid):
     with daemon.unix_client() as c, daemon.unix_client() as w:
         w.subscribe(sid)
         c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.3))
-        assert len(list(w.events(timeout=1.0))) == 1
+        assert len(list(w.events(timeout=0.5))) == 1
         w.unsubscribe(sid)
         c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.3))
         assert list(w.events(timeout=0.5)) == []

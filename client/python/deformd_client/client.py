@@ -21,7 +21,9 @@ from typing import Deque, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 from . import frame as fr
 from . import messages as m
+from . import stream as st
 from .errors import ConnectionClosed, DeformdError, error_name
+from .wire import ProtocolError
 
 DEFAULT_TIMEOUT_S = 60.0
 RECV_BYTES = 1 << 20
@@ -56,7 +58,7 @@ class MeshData:
         return m.ELEM_SIZE.get(self.kind, 0)
 
 
-Event = Union[m.Disp, m.Progress, SessionClosed]
+Event = Union[st.Disp, st.Progress, SessionClosed]
 
 
 class Client:
@@ -69,7 +71,7 @@ class Client:
         self._decoder = fr.FrameDecoder()
         self._frames: Deque[fr.Frame] = deque()   # received, not yet consumed
         self._events: Deque[Event] = deque()      # complete events, oldest first
-        self._partial: Dict[Tuple[int, int], List] = {}  # (type, rid/session+version) -> chunks
+        self._partial: Dict[Tuple[int, int, int], List] = {}  # (type, session, version) -> chunks
         self._next_id = 1
         self._closed = False
         self.server: Optional[m.HelloReply] = None
@@ -150,29 +152,29 @@ class Client:
             self._events.append(SessionClosed(m.decode_session_ref(f.payload)))
             return
         if f.type == m.DISPLACEMENT:
-            d = m.decode_disp(f.payload)
+            d = st.decode_disp(f.payload)
             key = (f.type, d.session_id, d.version)
             chunks = self._partial.setdefault(key, [])
             chunks.append(d)
             if not f.more:
                 del self._partial[key]
-                self._events.append(m.join_disp(chunks))
+                self._events.append(st.join_disp(chunks))
             return
         if f.type == m.PROGRESS:
-            p = m.decode_progress(f.payload)
+            p = st.decode_progress(f.payload)
             key = (f.type, p.disp.session_id, p.disp.version)
             chunks = self._partial.setdefault(key, [])
             chunks.append(p)
             if not f.more:
                 del self._partial[key]
                 p0 = chunks[0]
-                p0.disp = m.join_disp([c.disp for c in chunks])
+                p0.disp = st.join_disp([c.disp for c in chunks])
                 self._events.append(p0)
             return
         if f.is_error:
             code, msg = m.decode_error(f.payload)
             raise DeformdError(code, error_name(code), msg)
-        raise m.ProtocolError("unexpected event type 0x%x" % f.type)
+        raise ProtocolError("unexpected event type 0x%x" % f.type)
 
     def events(self, timeout: float = 1.0, max_events: Optional[int] = None) -> Iterator[Event]:
         """Yields queued and arriving events (Disp, Progress, SessionClosed) until none arrives
@@ -374,12 +376,12 @@ class Client:
     def get_mesh(self, session_id: int, rest: bool = False, base: bool = False) -> MeshData:
         flags = (m.GET_MESH_REST if rest else 0) | (m.GET_MESH_BASE if base else 0)
         parts = self.request(m.GET_MESH, m.encode_get_mesh(session_id, flags))
-        return m.assemble_mesh([m.decode_mesh_chunk(p.payload) for p in parts], MeshData)
+        return st.assemble_mesh([st.decode_mesh_chunk(p.payload) for p in parts], MeshData)
 
-    def snapshot(self, session_id: int, version: int = 0) -> m.Disp:
+    def snapshot(self, session_id: int, version: int = 0) -> st.Disp:
         """Dense displacements of `version` (0: current) for a resync."""
         parts = self.request(m.SNAPSHOT, m.encode_snapshot_req(session_id, version))
-        return m.join_disp([m.decode_disp(p.payload) for p in parts])
+        return st.join_disp([st.decode_disp(p.payload) for p in parts])
 
     def stats(self, session_id: int = 0) -> Dict[str, float]:
         """Daemon-wide (0) or one session's counters, key -> value."""

@@ -38,7 +38,7 @@ class Frame(NamedTuple):
     type: int
     flags: int
     request_id: int
-    payload: bytes
+    payload: bytes            # bytes, or a bytearray for large payloads (no extra copy)
     version: int = PROTO_VERSION
 
     @property
@@ -95,32 +95,53 @@ def decode_header(buf: bytes):
 class FrameDecoder:
     """Incremental decoder: feed() arbitrary byte slices, collect complete frames.
 
-    Handles frames split across reads and several frames per read. After a FrameError the
-    decoder is poisoned (the stream cannot be resynchronised) and raises again on every feed."""
+    Handles frames split across reads and several frames per read; a large payload is copied
+    once, into a buffer of its final size. After a FrameError the decoder is poisoned (the
+    stream cannot be resynchronised) and raises again on every feed."""
 
     def __init__(self) -> None:
-        self._buf = bytearray()
+        self._head = bytearray()          # bytes of the next header (and what follows it)
+        self._hdr = None                  # parsed header of the frame being filled
+        self._body: Optional[bytearray] = None
+        self._fill = 0
         self._error: Optional[FrameError] = None
 
     def feed(self, data: bytes) -> List[Frame]:
         if self._error is not None:
             raise self._error
-        self._buf += data
         out: List[Frame] = []
-        while len(self._buf) >= HEADER_SIZE:
-            try:
-                mtype, flags, rid, plen, ver = decode_header(self._buf)
-            except FrameError as e:
-                self._error = e
-                raise
-            if len(self._buf) < HEADER_SIZE + plen:
-                break
-            payload = bytes(self._buf[HEADER_SIZE:HEADER_SIZE + plen])
-            del self._buf[:HEADER_SIZE + plen]
-            out.append(Frame(mtype, flags, rid, payload, ver))
-        return out
+        view = memoryview(data)
+        pos = 0
+        while True:
+            if self._hdr is None:
+                take = min(HEADER_SIZE - len(self._head), len(view) - pos)
+                self._head += view[pos:pos + take]
+                pos += take
+                if len(self._head) < HEADER_SIZE:
+                    return out
+                try:
+                    self._hdr = decode_header(self._head)
+                except FrameError as e:
+                    self._error = e
+                    raise
+                self._head = bytearray()
+                self._body = bytearray(self._hdr[3])
+                self._fill = 0
+            mtype, flags, rid, plen, ver = self._hdr
+            take = min(plen - self._fill, len(view) - pos)
+            if take:
+                self._body[self._fill:self._fill + take] = view[pos:pos + take]
+                self._fill += take
+                pos += take
+            if self._fill < plen:
+                return out
+            out.append(Frame(mtype, flags, rid, bytes(self._body) if plen < 4096 else self._body,
+                             ver))
+            self._hdr, self._body = None, None
+            if pos == len(view):
+                return out
 
     @property
     def pending(self) -> int:
         """Bytes buffered that do not yet form a complete frame."""
-        return len(self._buf)
+        return len(self._head) + (self._fill if self._hdr is not None else 0)

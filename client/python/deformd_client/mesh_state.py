@@ -4,10 +4,12 @@ Every stream frame carries float32 displacements u_i = x_i - X_i from the sessio
 (load-time) positions X; a replica computes x_i = X_i + u_i in float32, so every client that
 applies the same versions holds byte-identical positions (positions.tobytes()).
 """
+import operator
 from array import array
 from typing import Optional
 
 from . import messages as m
+from . import stream as st
 
 
 class OutOfSync(RuntimeError):
@@ -26,8 +28,7 @@ class MeshState:
         self.disp = array("f", bytes(4 * len(base))) if disp is None else array("f", disp)
         self.positions = array("f", self.base)
         if disp is not None:
-            for k in range(len(base)):
-                self.positions[k] = self.base[k] + self.disp[k]
+            self.positions = array("f", map(operator.add, self.base, self.disp))
         self.version = version
         self.applied = 0
 
@@ -45,7 +46,7 @@ class MeshState:
         (its iterate). Returns False (and changes nothing) for a version already applied;
         raises OutOfSync when versions were missed (resync: apply(client.snapshot(sid))).
         A SNAPSHOT (dense, kind 7) always applies."""
-        if isinstance(d, m.Progress):
+        if isinstance(d, st.Progress):
             d = d.disp
         if d.nv != self.nv:
             raise ValueError("frame for %d vertices, replica has %d" % (d.nv, self.nv))
@@ -60,9 +61,9 @@ class MeshState:
         u, x, base = self.disp, self.positions, self.base
         if d.encoding == m.DISP_DENSE:
             if d.offset == 0 and d.count == self.nv:
-                u[:] = d.xyz
-                for k in range(3 * self.nv):
-                    x[k] = base[k] + u[k]
+                # a double sum of two float32 values rounded to float32 is the float32 sum
+                self.disp = array("f", d.xyz)
+                self.positions = array("f", map(operator.add, base, self.disp))
             else:
                 o = 3 * d.offset
                 for k in range(3 * d.count):

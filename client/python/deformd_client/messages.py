@@ -5,11 +5,11 @@ a plain object (a dataclass), raising ProtocolError on a short, long or inconsis
 Wire: little-endian; strings are u16 length + UTF-8 bytes; positions/displacements float32,
 parameters float64; vertex indices u32.
 """
-import math
 import struct
-from array import array
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence
+
+from .wire import Reader, f64_rows, pack_str, u32_array, vec
 
 # ------------------------------------------------------------------ message types
 HELLO = 0x0001
@@ -83,75 +83,6 @@ SUBSCRIBE_SNAPSHOT = 1
 ELEM_SIZE = {1: 2, 2: 3, 3: 4}
 
 
-class ProtocolError(ValueError):
-    """A payload that does not decode (truncated, trailing bytes, bad value)."""
-
-
-# ------------------------------------------------------------------ cursor helpers
-class _Rd:
-    def __init__(self, p: bytes, what: str) -> None:
-        self.p = memoryview(p)
-        self.off = 0
-        self.what = what
-
-    def take(self, fmt: str):
-        st = struct.Struct("<" + fmt)
-        if self.off + st.size > len(self.p):
-            raise ProtocolError("%s: truncated at byte %d" % (self.what, self.off))
-        v = st.unpack_from(self.p, self.off)
-        self.off += st.size
-        return v if len(v) > 1 else v[0]
-
-    def raw(self, n: int) -> bytes:
-        if self.off + n > len(self.p):
-            raise ProtocolError("%s: truncated at byte %d (need %d)" % (self.what, self.off, n))
-        b = bytes(self.p[self.off:self.off + n])
-        self.off += n
-        return b
-
-    def str(self) -> str:
-        n = self.take("H")
-        return self.raw(n).decode("utf-8", "replace")
-
-    def farray(self, typecode: str, count: int) -> array:
-        a = array(typecode)
-        a.frombytes(self.raw(count * a.itemsize))
-        return a
-
-    def end(self) -> None:
-        if self.off != len(self.p):
-            raise ProtocolError("%s: %d trailing bytes" % (self.what, len(self.p) - self.off))
-
-
-def _str(s: str) -> bytes:
-    b = s.encode("utf-8")
-    if len(b) > 0xFFFF:
-        raise ValueError("string of %d bytes too long" % len(b))
-    return struct.pack("<H", len(b)) + b
-
-
-def _vec(v: Optional[Sequence[float]], n: int, what: str) -> List[float]:
-    if v is None:
-        return [0.0] * n
-    v = [float(x) for x in v]
-    if len(v) != n:
-        raise ValueError("%s needs %d numbers, got %d" % (what, n, len(v)))
-    return v
-
-
-def _u32_array(values: Sequence[int]) -> bytes:
-    a = array("I", (int(x) for x in values))
-    assert a.itemsize == 4
-    return a.tobytes()
-
-
-def _f64_rows(rows: Sequence[Sequence[float]], what: str) -> bytes:
-    flat: List[float] = []
-    for r in rows:
-        flat += _vec(r, 3, what)
-    return struct.pack("<%dd" % len(flat), *flat)
-
-
 # ------------------------------------------------------------------ bodies
 @dataclass
 class HelloReply:
@@ -171,11 +102,11 @@ class HelloReply:
 
 def encode_hello(min_version: int = 1, max_version: int = 1, features: int = 0,
                  client_name: str = "") -> bytes:
-    return struct.pack("<HHI", min_version, max_version, features) + _str(client_name)
+    return struct.pack("<HHI", min_version, max_version, features) + pack_str(client_name)
 
 
 def decode_hello_reply(p: bytes) -> HelloReply:
-    r = _Rd(p, "hello_reply")
+    r = Reader(p, "hello_reply")
     v = r.take("HHIIIIIIQQBB")
     name = r.str()
     r.end()
@@ -188,7 +119,7 @@ def encode_auth(method: int, token: bytes) -> bytes:
 
 def decode_error(p: bytes):
     """Returns (code, message)."""
-    r = _Rd(p, "error")
+    r = Reader(p, "error")
     code = r.take("i")
     msg = r.str()
     r.end()
@@ -198,7 +129,7 @@ def decode_error(p: bytes):
 def encode_load_mesh(source: int, fmt: int, name: str, path: str, total_size: int,
                      part2_offset: int, offset: int, data: bytes) -> bytes:
     return (struct.pack("<BBHQQQ", source, fmt, 0, total_size, part2_offset, offset)
-            + _str(name) + _str(path) + struct.pack("<I", len(data)) + bytes(data))
+            + pack_str(name) + pack_str(path) + struct.pack("<I", len(data)) + bytes(data))
 
 
 def encode_session_ref(session_id: int) -> bytes:
@@ -206,14 +137,14 @@ def encode_session_ref(session_id: int) -> bytes:
 
 
 def decode_session_ref(p: bytes) -> int:
-    r = _Rd(p, "session_ref")
+    r = Reader(p, "session_ref")
     sid = r.take("Q")
     r.end()
     return sid
 
 
 def encode_open_session(session_id: int = 0, name: str = "") -> bytes:
-    return struct.pack("<Q", session_id) + _str(name)
+    return struct.pack("<Q", session_id) + pack_str(name)
 
 
 def encode_subscribe(session_id: int, flags: int = 0) -> bytes:
@@ -234,20 +165,20 @@ class SessionInfo:
     name: str
 
 
-def _read_session_info(r: _Rd) -> SessionInfo:
+def _read_session_info(r: Reader) -> SessionInfo:
     v = r.take("QQBBHIIII")
     return SessionInfo(*v, name=r.str())
 
 
 def decode_session_info(p: bytes) -> SessionInfo:
-    r = _Rd(p, "session_info")
+    r = Reader(p, "session_info")
     s = _read_session_info(r)
     r.end()
     return s
 
 
 def decode_session_list(p: bytes) -> List[SessionInfo]:
-    r = _Rd(p, "session_list")
+    r = Reader(p, "session_list")
     n = r.take("I")
     out = [_read_session_info(r) for _ in range(n)]
     r.end()
@@ -261,7 +192,7 @@ class Ack:
 
 
 def decode_ack(p: bytes) -> Ack:
-    r = _Rd(p, "ack")
+    r = Reader(p, "ack")
     v = r.take("QQ")
     r.end()
     return Ack(*v)
@@ -300,21 +231,21 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
         raise ValueError("brush type %r not one of %s" % (b.type, sorted(BRUSH_TYPES)))
     if b.integrator not in INTEGRATORS:
         raise ValueError("integrator %r not one of %s" % (b.integrator, sorted(INTEGRATORS)))
-    mirror = _vec(b.mirror, 6, "mirror") if b.mirror is not None else [0.0] * 6
+    mirror = vec(b.mirror, 6, "mirror") if b.mirror is not None else [0.0] * 6
     pin_flags = (b.pin_flags or PIN_DISPLACEMENT) if len(b.pinned) else 0
     head = BRUSH_STRUCT.pack(
         session_id, BRUSH_TYPES[b.type], b.dim, b.falloff, INTEGRATORS[b.integrator], b.steps,
         1 if b.moving else 0, 1 if b.mirror is not None else 0,
         float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
-        *_vec(b.center, 3, "center"), *_vec(b.move, 3, "move"), *_vec(b.twist, 3, "twist"),
-        float(b.scale), *_vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
-    return head + _f64_rows(b.pinned, "pinned point")
+        *vec(b.center, 3, "center"), *vec(b.move, 3, "move"), *vec(b.twist, 3, "twist"),
+        float(b.scale), *vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
+    return head + f64_rows(b.pinned, "pinned point")
 
 
 def encode_brush_update(session_id: int, move=None, twist=None, scale: float = 0.0,
                         matrix=None) -> bytes:
-    return struct.pack("<Q3d3dd9d", session_id, *_vec(move, 3, "move"), *_vec(twist, 3, "twist"),
-                       float(scale), *_vec(matrix, 9, "matrix"))
+    return struct.pack("<Q3d3dd9d", session_id, *vec(move, 3, "move"), *vec(twist, 3, "twist"),
+                       float(scale), *vec(matrix, 9, "matrix"))
 
 
 def encode_brush_param(session_id: int, param: str, value: float) -> bytes:
@@ -373,21 +304,21 @@ def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: Hand
                                float(p.rho), float(p.tol), float(p.youngs), float(p.poisson),
                                float(p.strain_min), float(p.strain_max), float(p.bending),
                                p.max_iters, len(handles)),
-           _u32_array(handles), struct.pack("<I", len(affine))]
+           u32_array(handles), struct.pack("<I", len(affine))]
     for a in affine:
         rows = len(a.A)
         if len(a.b) != rows:
             raise ValueError("affine set: %d rows of A but %d entries of b" % (rows, len(a.b)))
-        out.append(struct.pack("<B", rows) + _f64_rows(a.A, "affine row")
+        out.append(struct.pack("<B", rows) + f64_rows(a.A, "affine row")
                    + struct.pack("<%dd" % rows, *[float(x) for x in a.b])
-                   + struct.pack("<I", len(a.indices)) + _u32_array(a.indices))
+                   + struct.pack("<I", len(a.indices)) + u32_array(a.indices))
     return b"".join(out)
 
 
 def encode_handle_move(session_id: int, targets: Sequence[Sequence[float]], max_iters: int = 0,
                        max_ms: int = 0, progress_every: int = 0) -> bytes:
     return (struct.pack("<QIIII", session_id, max_iters, max_ms, progress_every, len(targets))
-            + _f64_rows(targets, "target"))
+            + f64_rows(targets, "target"))
 
 
 @dataclass
@@ -406,7 +337,7 @@ class MoveResult:
 
 
 def decode_move_result(p: bytes) -> MoveResult:
-    r = _Rd(p, "move_result")
+    r = Reader(p, "move_result")
     v = r.take("QQBIddd")
     r.end()
     return MoveResult(*v)
@@ -424,212 +355,8 @@ def encode_stats_req(session_id: int = 0) -> bytes:
     return struct.pack("<Q", session_id)
 
 
-def finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
-
-
-def lookup(table: Dict[str, int], code: int) -> str:
-    for k, v in table.items():
-        if v == code:
-            return k
-    return "unknown"
-
-
-# ------------------------------------------------------------------ displacement stream
-@dataclass
-class Disp:
-    """One session version (or one chunk of it): float32 displacements u_i = x_i - X_i from the
-    session's base positions X. DENSE: rows offset..offset+count-1; SPARSE: rows idx[k]."""
-    session_id: int
-    version: int
-    base_version: int
-    kind: int
-    encoding: int
-    nv: int
-    total: int
-    offset: int
-    count: int
-    idx: Optional[array]   # array('I') of count vertex indices (SPARSE), else None
-    xyz: array             # array('f') of 3*count displacement components
-
-    @property
-    def kind_name(self) -> str:
-        return CHANGE_NAMES.get(self.kind, "unknown")
-
-    def vertices(self) -> Sequence[int]:
-        """Vertex index of every row."""
-        if self.idx is not None:
-            return self.idx
-        return range(self.offset, self.offset + self.count)
-
-
-DISP_STRUCT = struct.Struct("<QQQBBHIIII")
-assert DISP_STRUCT.size == 44
-
-
-def _read_disp(r: _Rd) -> Disp:
-    sid, ver, base, kind, enc, res, nv, total, offset, count = r.take("QQQBBHIIII")
-    if res != 0:
-        raise ProtocolError("disp: reserved field %d" % res)
-    if enc == DISP_DENSE:
-        xyz = r.farray("f", 3 * count)
-        idx = None
-    elif enc == DISP_SPARSE:
-        raw = r.raw(16 * count)
-        words = array("I")
-        words.frombytes(raw)
-        floats = array("f")
-        floats.frombytes(raw)
-        idx = words[0::4]
-        xyz = array("f", bytes(12 * count))
-        xyz[0::3] = floats[1::4]
-        xyz[1::3] = floats[2::4]
-        xyz[2::3] = floats[3::4]
-    else:
-        raise ProtocolError("disp: encoding %d" % enc)
-    if offset + count > total or (enc == DISP_DENSE and total != nv):
-        raise ProtocolError("disp: rows [%d, +%d) of %d (nv %d)" % (offset, count, total, nv))
-    return Disp(sid, ver, base, kind, enc, nv, total, offset, count, idx, xyz)
-
-
-def encode_disp(d: Disp) -> bytes:
-    """Body of one disp chunk (used by tests to forge stream frames)."""
-    head = DISP_STRUCT.pack(d.session_id, d.version, d.base_version, d.kind, d.encoding, 0, d.nv,
-                            d.total, d.offset, d.count)
-    if d.encoding == DISP_DENSE:
-        return head + d.xyz.tobytes()
-    rows = bytearray()
-    for k in range(d.count):
-        rows += struct.pack("<I3f", d.idx[k], *d.xyz[3 * k:3 * k + 3])
-    return head + bytes(rows)
-
-
-def decode_disp(p: bytes) -> Disp:
-    r = _Rd(p, "disp")
-    d = _read_disp(r)
-    r.end()
-    return d
-
-
-@dataclass
-class Progress:
-    """One ADMM iterate of a handle move; `disp` is the iterate as a session version."""
-    status: int
-    final: int
-    iteration: int
-    objective: float
-    residual: float
-    elapsed_ms: float
-    disp: Disp
-
-
-def decode_progress(p: bytes) -> Progress:
-    r = _Rd(p, "progress")
-    status, final, res, it, obj, resid, ms = r.take("BBHIddd")
-    if res != 0:
-        raise ProtocolError("progress: reserved field %d" % res)
-    d = _read_disp(r)
-    r.end()
-    return Progress(status, final, it, obj, resid, ms, d)
-
-
-def join_disp(chunks: List[Disp]) -> Disp:
-    """Concatenates the chunks of one version (in arrival order) into one Disp of all rows."""
-    if len(chunks) == 1 and chunks[0].count == chunks[0].total:
-        return chunks[0]
-    first = chunks[0]
-    xyz = array("f")
-    idx = array("I") if first.encoding == DISP_SPARSE else None
-    expect = 0
-    for c in chunks:
-        if (c.session_id, c.version, c.encoding, c.total) != \
-                (first.session_id, first.version, first.encoding, first.total):
-            raise ProtocolError("disp chunks of different versions mixed")
-        if c.offset != expect:
-            raise ProtocolError("disp chunk at row %d, expected %d" % (c.offset, expect))
-        expect += c.count
-        xyz += c.xyz
-        if idx is not None:
-            idx += c.idx
-    if expect != first.total:
-        raise ProtocolError("disp chunks hold %d of %d rows" % (expect, first.total))
-    return Disp(first.session_id, first.version, first.base_version, first.kind, first.encoding,
-                first.nv, first.total, 0, expect, idx, xyz)
-
-
-# ------------------------------------------------------------------ get mesh, stats
-@dataclass
-class MeshChunk:
-    session_id: int
-    version: int
-    kind: int
-    planar: int
-    section: int
-    nv: int
-    ne: int
-    nf: int
-    offset: int
-    count: int
-    data: array   # array('f') 3*count (xyz sections) or array('I') rows*width (index sections)
-
-
-def _section_rows(c) -> int:
-    return {SECTION_POSITIONS: c.nv, SECTION_BASE: c.nv, SECTION_REST: c.nv,
-            SECTION_ELEMENTS: c.ne, SECTION_FACES: c.nf}[c.section]
-
-
-def decode_mesh_chunk(p: bytes) -> MeshChunk:
-    r = _Rd(p, "mesh_chunk")
-    sid, ver, kind, planar, section, res, nv, ne, nf, off, count = r.take("QQBBBBIIIII")
-    if res != 0:
-        raise ProtocolError("mesh_chunk: reserved field %d" % res)
-    if kind not in ELEM_SIZE or section not in (1, 2, 3, 4, 5):
-        raise ProtocolError("mesh_chunk: kind %d section %d" % (kind, section))
-    if section in (SECTION_POSITIONS, SECTION_BASE, SECTION_REST):
-        data = r.farray("f", 3 * count)
-    else:
-        width = ELEM_SIZE[kind] if section == SECTION_ELEMENTS else 3
-        data = r.farray("I", width * count)
-    r.end()
-    c = MeshChunk(sid, ver, kind, planar, section, nv, ne, nf, off, count, data)
-    if off + count > _section_rows(c):
-        raise ProtocolError("mesh_chunk: rows [%d, +%d) beyond section %d" % (off, count, section))
-    return c
-
-
-def assemble_mesh(chunks: List[MeshChunk], cls):
-    """Joins the chunks of a get-mesh reply into cls(session_id, version, kind, planar, nv, ne,
-    nf, positions, elements, faces, rest, base)."""
-    if not chunks:
-        raise ProtocolError("get_mesh: empty reply")
-    c0 = chunks[0]
-    sections: Dict[int, array] = {}
-    rows: Dict[int, int] = {}
-    for c in chunks:
-        if (c.session_id, c.version, c.kind, c.nv, c.ne, c.nf) != \
-                (c0.session_id, c0.version, c0.kind, c0.nv, c0.ne, c0.nf):
-            raise ProtocolError("get_mesh: chunks disagree on the mesh header")
-        have = rows.get(c.section, 0)
-        if c.offset != have:
-            raise ProtocolError("get_mesh: section %d chunk at row %d, expected %d"
-                                % (c.section, c.offset, have))
-        sections.setdefault(c.section, array(c.data.typecode)).extend(c.data)
-        rows[c.section] = have + c.count
-    for sec, n in rows.items():
-        full = c0.nv if sec in (1, 2, 3) else c0.ne if sec == 4 else c0.nf
-        if n != full:
-            raise ProtocolError("get_mesh: section %d has %d of %d rows" % (sec, n, full))
-    if SECTION_POSITIONS not in sections and c0.nv:
-        raise ProtocolError("get_mesh: no positions")
-    return cls(c0.session_id, c0.version, c0.kind, c0.planar, c0.nv, c0.ne, c0.nf,
-               sections.get(SECTION_POSITIONS, array("f")),
-               sections.get(SECTION_ELEMENTS, array("I")),
-               sections.get(SECTION_FACES, array("I")),
-               sections.get(SECTION_REST), sections.get(SECTION_BASE))
-
-
 def decode_stats(p: bytes) -> Dict[str, float]:
-    r = _Rd(p, "stats")
+    r = Reader(p, "stats")
     n = r.take("I")
     out: Dict[str, float] = {}
     for _ in range(n):

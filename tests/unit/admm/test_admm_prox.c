@@ -43,7 +43,7 @@ static void check_prox_regime(int convex)
 {
     unsigned seed = convex ? 7u : 11u;
     int n_zero = 0, n_shrunk = 0, n_identity = 0;
-    for (int t = 0; t < 3000; t++) {
+    for (int t = 0; t < 1000; t++) {
         double s = 0.01 + urand(&seed);
         double wa = 0.01 + urand(&seed) * 2.0;
         /* convex: rho s > wa; nonconvex: rho s <= wa */
@@ -58,22 +58,22 @@ static void check_prox_regime(int convex)
         if (zn > 0) assert_true(fabs(z[0] * x[0] + z[1] * x[1] + z[2] * x[2] - zn * xn) < 1e-12 * (1 + zn * xn));
         /* brute force over r in [0, 3 max(s, |x|)] */
         double hi = 3 * fmax(s, xn), best = INFINITY, rbest = 0;
-        for (int k = 0; k <= 200000; k++) {
-            double r = hi * k / 200000.0, g = ray_obj(r, xn, wa, s, rho);
+        for (int k = 0; k <= 100000; k++) {
+            double r = hi * k / 100000.0, g = ray_obj(r, xn, wa, s, rho);
             if (g < best) { best = g; rbest = r; }
         }
         double gz = ray_obj(zn, xn, wa, s, rho);
         assert_true(gz <= best + 1e-12 * (1 + fabs(best)));
-        if (convex) assert_true(fabs(zn - rbest) <= 2.5 * hi / 200000.0 + 1e-12);
+        if (convex) assert_true(fabs(zn - rbest) <= 2.5 * hi / 100000.0 + 1e-12);
         if (zn == 0) n_zero++;
         else if (fabs(zn - xn) < 1e-15) n_identity++;
         else n_shrunk++;
     }
     /* every branch was exercised */
-    assert_true(n_zero > 100);
-    assert_true(n_identity > 100);
-    if (convex) assert_true(n_shrunk > 100);
-    printf("prox %s regime: %d zero, %d shrunk, %d identity of 3000\n", convex ? "convex" : "nonconvex", n_zero, n_shrunk, n_identity);
+    assert_true(n_zero > 30);
+    assert_true(n_identity > 30);
+    if (convex) assert_true(n_shrunk > 30);
+    printf("prox %s regime: %d zero, %d shrunk, %d identity of 1000 (each checked against a 1e5-point search)\n", convex ? "convex" : "nonconvex", n_zero, n_shrunk, n_identity);
 }
 
 static void test_scl1_prox_convex(void **st) { (void)st; check_prox_regime(1); }

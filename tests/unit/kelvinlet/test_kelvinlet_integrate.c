@@ -207,6 +207,16 @@ static void test_float_matches_double_100k(void **state)
             b2.integrator = DF_KELVINLET_RK4;
             float_vs_double(b2, n, xf, xd, uf, ud, 1e-5);
         }
+    /* moving and mirrored brushes go through the same kernels */
+    b = brush(DF_KELVINLET_GRAB, 3, 3, 0.45);
+    b.integrator = DF_KELVINLET_RK4;
+    b.steps = 4;
+    b.moving = 1;
+    float_vs_double(b, n, xf, xd, uf, ud, 1e-5);
+    b.mirror = 1;
+    b.mirror_point[0] = 0.1;     /* not crossed by the stroke */
+    b.mirror_normal[0] = 1.0;
+    float_vs_double(b, n, xf, xd, uf, ud, 1e-5);
     /* higher orders cancel more: documented looser bound */
     b = brush(DF_KELVINLET_GRAB, 3, 5, 0.4);
     float_vs_double(b, n, xf, xd, uf, ud, 1e-3);

@@ -47,6 +47,11 @@ static void fake_free(fake *f)
     free(f->s.mesh.V);
     free(f->s.basef);
     free(f->s.uf);
+    free(f->s.scratch_u);
+    free(f->s.scratch_idx);
+    free(f->s.scratch_rows);
+    free(f->s.scratch_pos);
+    free(f->s.scratch_disp);
     free(f->cur);
 }
 

@@ -1,0 +1,228 @@
+/* Live test of libdeformclient against the real daemon ($BUILD/bin/deformd next to this test's
+ * build tree; skipped when it is not built): two writers stroke one session concurrently while
+ * four connections keep df_client_replica copies from the displacement stream; every replica must
+ * end byte-identical to the daemon's positions, and a stale replica must resync by snapshot. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <limits.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <cmocka.h>
+
+#include "client/deformclient.h"
+
+#define LIVE_CLIENTS 4      /* connections with a replica; clients 0 and 1 also write */
+#define LIVE_UPDATES 6      /* brush updates per writer */
+#define LIVE_WAIT_MS 10000  /* longest wait for the stream to catch up */
+
+typedef struct live {
+    pid_t pid;
+    char dir[64], sock[96];
+    df_client *c[LIVE_CLIENTS];
+    df_client_replica r[LIVE_CLIENTS];
+    int feed_errors[LIVE_CLIENTS];
+} live;
+
+static void on_event(void *user, const df_frame_header *h, const uint8_t *p)
+{
+    df_client_replica *r = user;
+    if (df_client_replica_feed(r, h, p, NULL) < 0)
+        r->stale = 1;
+}
+
+/* Path of deformd relative to this binary: BUILD/tests/unit/client/test_live -> BUILD/bin. */
+static int daemon_path(char *out, size_t cap)
+{
+    char self[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n <= 0)
+        return -1;
+    self[n] = '\0';
+    for (int k = 0; k < 4; k++) {
+        char *s = strrchr(self, '/');
+        if (!s)
+            return -1;
+        *s = '\0';
+    }
+    return snprintf(out, cap, "%s/bin/deformd", self) < (int)cap && access(out, X_OK) == 0 ? 0 : -1;
+}
+
+static int start_daemon(live *L, const char *exe)
+{
+    snprintf(L->dir, sizeof L->dir, "/tmp/dc-live-XXXXXX");
+    if (!mkdtemp(L->dir))
+        return -1;
+    snprintf(L->sock, sizeof L->sock, "%s/d.sock", L->dir);
+    L->pid = fork();
+    if (L->pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGTERM);
+        char log[128];
+        snprintf(log, sizeof log, "%s/deformd.log", L->dir);
+        FILE *f = freopen(log, "w", stderr); /* keep cmocka's output lines clean */
+        (void)f;
+        execl(exe, exe, "--foreground", "--socket", L->sock, "--log-level", "error", (char *)NULL);
+        _exit(127);
+    }
+    for (int i = 0; i < 100; i++) {
+        df_client *c;
+        if (df_client_connect_unix(L->sock, "live", &c, NULL) == DF_OK) {
+            df_client_close(c);
+            return 0;
+        }
+        usleep(50000);
+    }
+    return -1;
+}
+
+static void stop_daemon(live *L)
+{
+    kill(L->pid, SIGTERM);
+    waitpid(L->pid, NULL, 0);
+    char log[128];
+    snprintf(log, sizeof log, "%s/deformd.log", L->dir);
+    unlink(log);
+    unlink(L->sock);
+    rmdir(L->dir);
+}
+
+/* An n x n grid as OFF text (triangles), slightly curved. */
+static char *grid_off(int n, size_t *len)
+{
+    size_t cap = (size_t)n * n * 64 + 64;
+    char *t = malloc(cap);
+    size_t o = (size_t)snprintf(t, cap, "OFF\n%d %d 0\n", n * n, 2 * (n - 1) * (n - 1));
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++)
+            o += (size_t)snprintf(t + o, cap - o, "%g %g %g\n", i / (n - 1.0), j / (n - 1.0),
+                                  0.1 * (i % 3) / n);
+    for (int j = 0; j + 1 < n; j++)
+        for (int i = 0; i + 1 < n; i++) {
+            int a = j * n + i;
+            o += (size_t)snprintf(t + o, cap - o, "3 %d %d %d\n3 %d %d %d\n", a, a + 1, a + n + 1,
+                                  a, a + n + 1, a + n);
+        }
+    *len = o;
+    return t;
+}
+
+static void stroke_update(df_client *c, uint64_t sid, int writer, int i)
+{
+    df_msg_brush_update u;
+    memset(&u, 0, sizeof u);
+    u.session_id = sid;
+    u.move[writer] = 0.01 * (i + 1);
+    u.move[2] = -0.003 * i;
+    df_error e;
+    assert_int_equal(df_client_brush_update(c, &u, NULL, &e), DF_OK);
+}
+
+/* Pumps every client until its replica reaches `version` (or the wait runs out). */
+static void catch_up(live *L, uint64_t version)
+{
+    for (int k = 0; k < LIVE_CLIENTS; k++)
+        for (int t = 0; t < LIVE_WAIT_MS / 10 && L->r[k].version < version; t++)
+            assert_true(df_client_pump(L->c[k], 10, NULL) >= 0);
+}
+
+static void test_replicas_match_the_daemon(void **state)
+{
+    (void)state;
+    char exe[PATH_MAX];
+    if (daemon_path(exe, sizeof exe) != 0) {
+        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
+        skip();
+    }
+    live L;
+    memset(&L, 0, sizeof L);
+    assert_int_equal(start_daemon(&L, exe), 0);
+    df_error e;
+    for (int k = 0; k < LIVE_CLIENTS; k++)
+        assert_int_equal(df_client_connect_unix(L.sock, "live", &L.c[k], &e), DF_OK);
+    size_t len;
+    char *off = grid_off(30, &len);
+    df_msg_session_info info;
+    assert_int_equal(df_client_load_mesh_bytes(L.c[0], "live", DF_FMT_OFF, off, len, 0, &info, &e),
+                     DF_OK);
+    free(off);
+    uint64_t sid = info.session_id;
+    assert_int_equal(info.nv, 900);
+    for (int k = 0; k < LIVE_CLIENTS; k++) {
+        df_client_mesh m;
+        assert_int_equal(df_client_get_mesh(L.c[k], sid, DF_GET_MESH_BASE, &m, &e), DF_OK);
+        assert_int_equal(df_client_replica_init(&L.r[k], sid, m.nv, m.base, NULL, m.version, &e),
+                         DF_OK);
+        L.r[k].stale = 1; /* until the subscribe snapshot arrives */
+        df_client_mesh_free(&m);
+        df_client_set_event_callback(L.c[k], on_event, &L.r[k]);
+        assert_int_equal(df_client_subscribe(L.c[k], sid, DF_SUBSCRIBE_SNAPSHOT, NULL, &e), DF_OK);
+    }
+    /* two concurrent strokes, interleaved updates */
+    df_msg_brush b;
+    df_msg_brush_defaults(&b);
+    b.session_id = sid;
+    b.radius = 0.2;
+    b.nu = 0.4;
+    for (int w = 0; w < 2; w++) {
+        b.center[0] = 0.3 + 0.4 * w;
+        b.center[1] = 0.5;
+        assert_int_equal(df_client_brush_begin(L.c[w], &b, NULL, &e), DF_OK);
+    }
+    for (int i = 0; i < LIVE_UPDATES; i++)
+        for (int w = 0; w < 2; w++)
+            stroke_update(L.c[w], sid, w, i);
+    df_msg_ack ack;
+    for (int w = 0; w < 2; w++)
+        assert_int_equal(df_client_brush_end(L.c[w], sid, &ack, &e), DF_OK);
+    assert_int_equal(df_client_undo(L.c[0], sid, &ack, &e), DF_OK);
+    assert_int_equal(df_client_redo(L.c[1], sid, &ack, &e), DF_OK);
+    uint64_t final = ack.version;
+    assert_true(final >= 2 * LIVE_UPDATES + 2);
+    catch_up(&L, final);
+    df_client_mesh m;
+    assert_int_equal(df_client_get_mesh(L.c[2], sid, 0, &m, &e), DF_OK);
+    assert_int_equal(m.version, final);
+    float *pos = malloc((size_t)m.nv * 3 * sizeof(float));
+    for (int k = 0; k < LIVE_CLIENTS; k++) {
+        assert_int_equal(L.r[k].stale, 0);
+        assert_int_equal(L.r[k].version, final);
+        df_client_replica_positions(&L.r[k], pos);
+        assert_memory_equal(pos, m.positions, (size_t)m.nv * 3 * sizeof(float));
+    }
+    /* the strokes moved something, and the stream carried every version */
+    int moved = 0;
+    for (size_t i = 0; i < (size_t)m.nv * 3; i++)
+        moved += L.r[3].u[i] != 0.0f;
+    assert_true(moved > 100);
+    /* a replica that lost data resyncs by snapshot */
+    memset(L.r[3].u, 0, (size_t)m.nv * 3 * sizeof(float));
+    L.r[3].stale = 1;
+    assert_int_equal(df_client_replica_resync(L.c[3], &L.r[3], &e), DF_OK);
+    df_client_replica_positions(&L.r[3], pos);
+    assert_memory_equal(pos, m.positions, (size_t)m.nv * 3 * sizeof(float));
+    assert_int_equal(L.r[3].version, final);
+    printf("live: %d replicas byte-identical at version %llu (%d coordinates moved)\n",
+           LIVE_CLIENTS, (unsigned long long)final, moved);
+    free(pos);
+    df_client_mesh_free(&m);
+    for (int k = 0; k < LIVE_CLIENTS; k++) {
+        df_client_replica_free(&L.r[k]);
+        df_client_close(L.c[k]);
+    }
+    stop_daemon(&L);
+}
+
+int main(void)
+{
+    signal(SIGPIPE, SIG_IGN);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_replicas_match_the_daemon),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
