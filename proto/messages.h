@@ -561,4 +561,8 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
                       df_error *err);
 void df_msg_any_free(df_msg_any *m);
 
+/* Encodes the body held in `*m` (selected by m->which) by appending it to `out`; the inverse of
+ * df_msg_any_decode. Returns DF_OK, the body encoder's error, or DF_EINTERNAL for an unknown kind. */
+int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *err);
+
 #endif
