@@ -20,7 +20,7 @@ static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
     {"center", 1, "--center X,Y,Z     brush centre (required)"},
     {"move", 1, "--move DX,DY,DZ    grab: displacement of the centre"},
     {"twist", 1, "--twist WX,WY,WZ   twist: rotation vector at the centre (radians)"},
-    {"scale", 1, "--scale S          scale: centre dilation (grad u = S I)"},
+    {"scale", 1, "--scale S          scale: centre dilation (grad u = S I; needs --nu < 0.5)"},
     {"matrix", 1, "--matrix M00,M01,...,M22   pinch (symmetric, traceless) / affine: centre "
                   "gradient, row-major"},
     {"radius", 1, "--radius R         regularization radius, mesh units (default 1)"},
