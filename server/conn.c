@@ -55,8 +55,21 @@ void df_conn_close_after_flush(df_conn *c, const char *why)
     if (c->closing || c->flush_close) return;
     c->flush_close = 1;
     c->flush_why = why;
+    c->flush_deadline = uv_now(c->srv->loop) + DF_CONN_FLUSH_TIMEOUT_MS;
     uv_read_stop(&c->h.stream);
     if (c->wcount == 0 && c->outq.count == 0) df_conn_close(c, why, 1);
+}
+
+void df_conn_sweep(df_server *srv)
+{
+    uint64_t now = uv_now(srv->loop);
+    df_conn *c = srv->conns;
+    while (c) {
+        df_conn *next = c->next;
+        if (c->flush_close && !c->closing && now >= c->flush_deadline)
+            df_conn_close(c, "peer did not read its error frame in time", 1);
+        c = next;
+    }
 }
 
 static void on_written(uv_write_t *req, int status)
@@ -269,7 +282,6 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
     c->h.stream.data = c;
     c->id = ++srv->next_conn_id;
     df_outq_init(&c->outq, srv->cfg.output_queue_limit);
-    df_brush_defaults_init(&c->brush);
     c->next = srv->conns;
     if (srv->conns) srv->conns->prev = c;
     srv->conns = c;

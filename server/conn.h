@@ -35,7 +35,15 @@ int df_conn_send(df_conn *c, df_sbuf *frame);
  * (warn when `warn` is 1). Idempotent. */
 void df_conn_close(df_conn *c, const char *why, int warn);
 
-/* Stops reading and closes the connection once its output queue is flushed. */
+/* How long a connection closing after an error frame may take to read it before it is closed
+ * anyway (a peer that never reads must not hold its slot). */
+#define DF_CONN_FLUSH_TIMEOUT_MS 5000
+
+/* Closes every connection whose flush-close deadline has passed (server sweep timer). */
+void df_conn_sweep(df_server *srv);
+
+/* Stops reading and closes the connection once its output queue is flushed (or after
+ * DF_CONN_FLUSH_TIMEOUT_MS). */
 void df_conn_close_after_flush(df_conn *c, const char *why);
 
 /* Reference counting: jobs hold a reference so that the struct outlives the socket; the memory is

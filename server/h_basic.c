@@ -13,15 +13,6 @@
 
 #define DF_SERVER_NAME "deformd 0.1"
 
-void df_brush_defaults_init(df_brush_defaults *b)
-{
-    b->radius = 1.0;
-    b->ratio = 1.1;
-    b->nu = 0.5;
-    b->strength = 1.0;
-    b->falloff = 1;
-}
-
 void df_session_info_fill(const df_session *s, df_msg_session_info *out)
 {
     memset(out, 0, sizeof *out);
@@ -300,14 +291,6 @@ void df_h_set_brush_param(df_conn *c, const df_frame_header *h, const uint8_t *p
         df_error_set(&err, DF_ENOMEM, "out of memory");
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
-    }
-    switch (m.param) { /* remembered per connection (reported in stats) */
-    case DF_BP_RADIUS: c->brush.radius = m.value; break;
-    case DF_BP_NU: c->brush.nu = m.value; break;
-    case DF_BP_STRENGTH: c->brush.strength = m.value; break;
-    case DF_BP_FALLOFF: c->brush.falloff = (int)m.value; break;
-    case DF_BP_RATIO: c->brush.ratio = m.value; break;
-    default: break;
     }
     k->param = m.param;
     k->value = m.value;

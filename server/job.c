@@ -8,8 +8,6 @@
 #include "server/log.h"
 #include "server/reply.h"
 
-void df_server_drain_mail(df_server *srv);
-
 df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
                    df_job_fn work, df_job_fn done)
 {

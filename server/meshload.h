@@ -1,7 +1,7 @@
-/* meshload.h — the server's use of core/mesh I/O, behind an interface that needs only mesh.h
- * (proto/messages.h and core/mesh/mesh_io.h both define `df_mesh_format`, so no translation unit
- * may include both; format numbers are the same on the wire and in mesh_io: 0 auto, 1 obj, 2 off,
- * 3 ply, 4 medit, 5 tetgen). Pure functions, safe on worker threads. */
+/* meshload.h — the server's use of core/mesh I/O for load requests, behind an interface that
+ * needs only mesh.h. Wire format numbers equal core/mesh/mesh_io.h's df_mesh_format values
+ * (0 auto, 1 obj, 2 off, 3 ply, 4 medit, 5 tetgen; see proto/messages.h). Pure functions, safe on
+ * worker threads. */
 #ifndef DF_SERVER_MESHLOAD_H
 #define DF_SERVER_MESHLOAD_H
 

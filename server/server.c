@@ -13,6 +13,8 @@
 #include "server/sd.h"
 #include "server/session.h"
 
+#define DF_SERVER_SWEEP_MS 1000 /* period of the flush-close deadline sweep */
+
 void df_server_drain_mail(df_server *srv)
 {
     pthread_mutex_lock(&srv->mailbox_lock);
@@ -53,6 +55,8 @@ static void on_mail(uv_async_t *a) { df_server_drain_mail(a->data); }
 
 static void on_check(uv_check_t *h) { df_conn_flush_all(h->data, 0); }
 
+static void on_sweep(uv_timer_t *t) { df_conn_sweep(t->data); }
+
 static void on_signal(uv_signal_t *h, int signum)
 {
     df_server *srv = h->data;
@@ -74,6 +78,10 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     uv_check_start(&srv->kick_check, on_check);
     uv_timer_init(loop, &srv->cork_timer);
     srv->cork_timer.data = srv;
+    uv_timer_init(loop, &srv->sweep_timer);
+    srv->sweep_timer.data = srv;
+    uv_timer_start(&srv->sweep_timer, on_sweep, DF_SERVER_SWEEP_MS, DF_SERVER_SWEEP_MS);
+    uv_unref((uv_handle_t *)&srv->sweep_timer);
     uv_signal_init(loop, &srv->sig_int);
     uv_signal_init(loop, &srv->sig_term);
     srv->sig_int.data = srv->sig_term.data = srv;
@@ -85,6 +93,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
         uv_close((uv_handle_t *)&srv->mailbox, NULL);
         uv_close((uv_handle_t *)&srv->kick_check, NULL);
         uv_close((uv_handle_t *)&srv->cork_timer, NULL);
+        uv_close((uv_handle_t *)&srv->sweep_timer, NULL);
         uv_close((uv_handle_t *)&srv->sig_int, NULL);
         uv_close((uv_handle_t *)&srv->sig_term, NULL);
         return rc;
@@ -125,6 +134,7 @@ static void on_stop_timer(uv_timer_t *h)
     uv_close((uv_handle_t *)&srv->kick_check, NULL);
     uv_timer_stop(&srv->cork_timer);
     uv_close((uv_handle_t *)&srv->cork_timer, NULL);
+    uv_close((uv_handle_t *)&srv->sweep_timer, NULL);
     df_sd_notify("STOPPING=1");
 }
 

@@ -18,18 +18,6 @@
 struct df_session;
 struct df_job;
 
-/* Per-connection brush defaults set by "set brush parameter" (what HID knobs send). */
-typedef struct df_brush_defaults {
-    double radius;    /* regularization radius epsilon, mesh units */
-    double ratio;     /* multi-scale radius ratio (> 1) */
-    double nu;        /* Poisson ratio (may be +inf in the wire sense: incompressible limit) */
-    double strength;  /* multiplies the stroke's displacement / gradients */
-    int falloff;      /* falloff order (1 = single Kelvinlet, 2 = bi-scale, 3 = tri-scale) */
-} df_brush_defaults;
-
-/* Fills `b` with the defaults (radius 1, ratio 1.1, nu 0.5, strength 1, falloff 1). */
-void df_brush_defaults_init(df_brush_defaults *b);
-
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
 #define DF_CONN_MAX_SUBS 64            /* sessions one connection may subscribe to */
 
@@ -45,6 +33,7 @@ typedef struct df_conn {
     int closing;             /* uv_close called (or about to be) */
     int flush_close;         /* close once the output queue is flushed; reading stopped */
     const char *flush_why;   /* static reason logged at that close */
+    uint64_t flush_deadline; /* uv_now() after which a flush-close happens regardless */
     int refs;                /* 1 for the open handle + 1 per job/reference held */
     uint8_t *rbuf;           /* bytes received, not yet framed */
     size_t rlen, rcap;
@@ -54,7 +43,6 @@ typedef struct df_conn {
     uv_buf_t wbufs[DF_OUTQ_MAX_BATCH];
     int pending;             /* requests accepted and not yet answered */
     int hello_done;          /* a HELLO succeeded (required before most requests) */
-    df_brush_defaults brush; /* last knob values sent (set brush parameter) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int kick_queued;         /* on the server's deferred-write list */
@@ -76,6 +64,7 @@ typedef struct df_server {
     struct df_mail *mail_head, *mail_tail;
     uv_check_t kick_check;   /* starts the writes queued during this loop iteration */
     uv_timer_t cork_timer;   /* starts corked subscriber writes (DF_CONN_CORK_MS) */
+    uv_timer_t sweep_timer;  /* closes connections whose flush-close deadline passed */
     df_conn *kick_first[2], *kick_last[2]; /* [0] connections with replies, [1] the others */
     df_conn *conns;          /* doubly linked list */
     int n_conns;
@@ -117,5 +106,9 @@ void df_server_describe(const df_server *srv, char *buf, size_t cap);
 /* Posts a frame from a worker thread to the loop (thread-safe); the loop broadcasts it to the
  * job's session subscribers. Takes ownership of one reference of `frame`. */
 void df_server_post(df_server *srv, struct df_job *job, struct df_sbuf *frame, uint64_t version);
+
+/* Broadcasts every frame posted with df_server_post so far, in posting order (loop thread;
+ * called by the mailbox's uv_async and before any job's `done`). */
+void df_server_drain_mail(df_server *srv);
 
 #endif

@@ -98,7 +98,6 @@ double admm_locality(const df_admm *s, const double *V)
 {
     if (s->p.w == 0.0) return 0.0;
     double L = 0;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : L)
     for (int32_t i = 0; i < s->nv; i++) {
         double d[3];
         for (int k = 0; k < 3; k++) d[k] = V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k];

@@ -172,7 +172,7 @@ void admm_local_x(df_admm *s)
 void admm_local_z(df_admm *s)
 {
     const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+    /* serial: ~20 flops per vertex, cheaper than an OpenMP fork/join on a shared machine */
     for (int32_t i = 0; i < s->nv; i++) {
         double x[3];
         for (int k = 0; k < 3; k++) x[k] = s->V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k] + s->U[3 * (size_t)i + k];
@@ -225,7 +225,6 @@ double admm_dual_update(df_admm *s)
             E += admm_element_energy_F(s, e, F);
         }
     }
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
     for (int64_t o = 0; o < 3 * (int64_t)s->nv; o++) s->U[o] += s->V[o] - s->Vrest[o] - s->Z[o];
     return E;
 }

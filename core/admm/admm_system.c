@@ -218,6 +218,10 @@ int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df
     if (!ok || s->cc.status == CHOLMOD_NOT_POSDEF || s->L->minor < s->L->n)
         return df_error_set(err, DF_ESINGULAR, "admm: global matrix is not positive definite (pivot %d of %d)",
                             (int)s->L->minor, (int)nf);
+    /* solves with 3 right-hand sides: a simplicial LL^T factor solves without BLAS calls (no
+     * BLAS thread pool competing with the OpenMP kernels every iteration); same numbers */
+    if (s->L->is_super && !cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, s->L, &s->cc))
+        return df_error_set(err, DF_EINTERNAL, "admm: cholmod_change_factor failed (status %d)", s->cc.status);
     s->rhs = cholmod_zeros(nf, 3, CHOLMOD_REAL, &s->cc);
     if (!s->rhs) return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory");
     admm_update_kfhp(s);

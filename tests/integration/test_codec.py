@@ -170,7 +170,8 @@ def test_get_mesh_chunks_assemble_and_bad_order_is_refused():
 
 def test_client_queues_events_met_while_waiting_and_raises_errors():
     """A fake daemon on a socketpair: the reply to a get-mesh comes in two chunks with a
-    displacement event in between; then an error reply; then the peer hangs up."""
+    displacement event in between; then an error reply; then the peer hangs up. Replies are
+    collected by id in any order."""
     import socket
     import threading
     from deformd_client import Client, ConnectionClosed, DeformdError, MeshData
@@ -198,11 +199,11 @@ def test_client_queues_events_met_while_waiting_and_raises_errors():
     c = Client(a, timeout=5, hello=False)
     r1 = c.send(m.GET_MESH, m.encode_get_mesh(7))
     r2 = c.send(m.UNDO, m.encode_session_ref(7))
-    mesh = st.assemble_mesh([st.decode_mesh_chunk(f.payload) for f in c.wait_reply(r1)], MeshData)
-    assert mesh.nv == 4 and mesh.positions == array("f", range(12))
-    with pytest.raises(DeformdError) as ei:
+    with pytest.raises(DeformdError) as ei:      # collected before the earlier request's reply
         c.wait_reply(r2)
     assert (ei.value.code, ei.value.name, ei.value.message) == (-8, "ESTATE", "nothing")
+    mesh = st.assemble_mesh([st.decode_mesh_chunk(f.payload) for f in c.wait_reply(r1)], MeshData)
+    assert mesh.nv == 4 and mesh.positions == array("f", range(12))
     assert c.pending_events() == 1
     assert c.next_event(1.0) == ev
     with pytest.raises(ConnectionClosed):

@@ -195,3 +195,21 @@ def test_subscribers_hanging_up_mid_stream_do_not_kill_the_daemon(daemon):
         writer.close_session(sid)
     with daemon.unix_client() as fresh:
         assert fresh.ping(b"x") == b"x"
+
+
+def test_session_closed_reaching_a_subscriber_that_just_left(daemon):
+    """The subscriber reads a big version, the session is closed, the subscriber hangs up at
+    once: the SESSION_CLOSED write behind the big frame fails with EPIPE (regression: SIGPIPE
+    killed the daemon)."""
+    data = grid_obj(300, 300)
+    X = obj_bytes_positions(data)
+    for trial in range(3):
+        with daemon.unix_client() as c, daemon.unix_client() as w:
+            sid = c.load_mesh(data, fmt=".obj").session_id
+            w.subscribe(sid)
+            c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=5.0))
+            assert w.next_event(10).count == len(X) // 3
+            c.close_session(sid)
+        assert daemon.alive(), daemon.log()[-2000:]
+    with daemon.unix_client() as fresh:
+        assert fresh.ping(b"x") == b"x"

@@ -73,6 +73,8 @@ class Client:
         self._events: Deque[Event] = deque()      # complete events, oldest first
         self._partial: Dict[Tuple[int, int, int], List] = {}  # (type, session, version) -> chunks
         self._next_id = 1
+        self._pending: Dict[int, List[fr.Frame]] = {}   # sent, not awaited: frames so far
+        self._done: Dict[int, List[fr.Frame]] = {}      # complete replies not yet collected
         self._closed = False
         self.server: Optional[m.HelloReply] = None
         if hello:
@@ -112,12 +114,23 @@ class Client:
     # ------------------------------------------------------------------ framing
     def send(self, msg_type: int, payload: bytes = b"", flags: int = 0,
              request_id: Optional[int] = None) -> int:
-        """Sends one frame; returns its request id (a fresh one unless given)."""
+        """Sends one frame; returns its request id (a fresh one unless given). Several requests
+        may be in flight: wait_reply() collects each reply by id, in any order."""
         if request_id is None:
             request_id = self._next_id
             self._next_id += 1
         self.sock.sendall(fr.encode_frame(msg_type, payload, request_id, flags))
+        self._pending.setdefault(request_id, [])
         return request_id
+
+    def _keep_reply(self, f: fr.Frame) -> None:
+        """Files a reply frame of a request nobody is waiting for yet (dropped if unknown)."""
+        parts = self._pending.get(f.request_id)
+        if parts is None:
+            return
+        parts.append(f)
+        if f.is_error or not f.more:
+            self._done[f.request_id] = self._pending.pop(f.request_id)
 
     def _read_more(self, deadline: Optional[float]) -> bool:
         """Reads from the socket into the frame queue. False on timeout."""
@@ -178,8 +191,8 @@ class Client:
 
     def events(self, timeout: float = 1.0, max_events: Optional[int] = None) -> Iterator[Event]:
         """Yields queued and arriving events (Disp, Progress, SessionClosed) until none arrives
-        for `timeout` seconds (or max_events were yielded). Replies arriving meanwhile for
-        requests nobody waits for are dropped."""
+        for `timeout` seconds (or max_events were yielded). Replies arriving meanwhile are kept
+        for wait_reply()."""
         n = 0
         while max_events is None or n < max_events:
             if self._events:
@@ -189,8 +202,10 @@ class Client:
             f = self.recv_frame(timeout)
             if f is None:
                 return
-            if f.is_event or (f.type == m.ERROR and f.request_id == 0):
+            if f.is_event or (f.type == m.ERROR and f.request_id == 0 and not f.is_reply):
                 self._take_event_frame(f)
+            else:
+                self._keep_reply(f)
 
     def next_event(self, timeout: float = 1.0) -> Optional[Event]:
         """The next event, or None when none arrives within `timeout` seconds."""
@@ -208,26 +223,26 @@ class Client:
         ConnectionClosed."""
         timeout = self.timeout if timeout is None else timeout
         deadline = time.monotonic() + timeout
-        parts: List[fr.Frame] = []
-        while True:
-            while not self._frames:
-                if not self._read_more(deadline):
-                    raise TimeoutError("no reply to request %d within %.1f s" % (rid, timeout))
-            f = self._frames.popleft()
-            if f.is_event or (f.type == m.ERROR and f.request_id == 0 and not f.is_reply):
-                if f.type == m.ERROR:
-                    code, msg = m.decode_error(f.payload)
-                    raise DeformdError(code, error_name(code), msg)
-                self._take_event_frame(f)
-                continue
-            if f.request_id != rid:
-                continue  # a late reply to an abandoned request
-            if f.is_error:
-                code, msg = m.decode_error(f.payload)
-                raise DeformdError(code, error_name(code), msg)
-            parts.append(f)
-            if not f.more:
-                return parts
+        parts = self._done.pop(rid, None)
+        if parts is None:
+            parts = self._pending.pop(rid, [])
+            while not parts or (parts[-1].more and not parts[-1].is_error):
+                while not self._frames:
+                    if not self._read_more(deadline):
+                        self._pending[rid] = parts
+                        raise TimeoutError("no reply to request %d within %.1f s"
+                                           % (rid, timeout))
+                f = self._frames.popleft()
+                if f.is_event or (f.type == m.ERROR and f.request_id == 0 and not f.is_reply):
+                    self._take_event_frame(f)
+                elif f.request_id == rid:
+                    parts.append(f)
+                else:
+                    self._keep_reply(f)
+        if parts[-1].is_error:
+            code, msg = m.decode_error(parts[-1].payload)
+            raise DeformdError(code, error_name(code), msg)
+        return parts
 
     def request(self, msg_type: int, payload: bytes = b"",
                 timeout: Optional[float] = None) -> List[fr.Frame]:

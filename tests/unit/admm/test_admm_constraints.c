@@ -135,6 +135,10 @@ static void test_bad_input(void **st)
     expect_create_error(&m, &q, h, 2, DF_EINVAL, "w =");
     q = p; q.max_iters = 0;
     expect_create_error(&m, &q, h, 2, DF_EINVAL, "max_iters");
+    q = p; q.accelerate = 1; q.anderson_m = 0;
+    expect_create_error(&m, &q, h, 2, DF_EINVAL, "anderson_m");
+    q = p; q.threads = -2;
+    expect_create_error(&m, &q, h, 2, DF_EINVAL, "threads");
     q = p; q.energy = DF_ADMM_NEOHOOKEAN; q.poisson = 0.5;
     expect_create_error(&m, &q, h, 2, DF_EINVAL, "Poisson");
     /* inverted tet */
