@@ -107,6 +107,7 @@ static void kick_write(df_conn *c)
     c->wreq.data = c;
     df_conn_ref(c);
     int rc = uv_write(&c->wreq, &c->h.stream, c->wbufs, (unsigned)n, on_written);
+    { void df_tr_flush(uint64_t t); df_tr_flush(uv_hrtime()); }
     if (rc < 0) {
         c->wcount = 0;
         df_outq_complete(&c->outq, n);

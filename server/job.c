@@ -75,10 +75,35 @@ static void finish(df_job *j)
     if (s) s->running = NULL;
 }
 
+#include <stdio.h>
+uint64_t df_tr_sub, df_tr_ws, df_tr_we, df_tr_aft, df_tr_done;
+static double tr_acc[5][4096]; static int tr_n;
+void df_tr_flush(uint64_t t);
+void df_tr_flush(uint64_t t)
+{
+    if (!df_tr_sub || tr_n >= 4096) return;
+    tr_acc[0][tr_n] = (double)(df_tr_ws - df_tr_sub) / 1e3;
+    tr_acc[1][tr_n] = (double)(df_tr_we - df_tr_ws) / 1e3;
+    tr_acc[2][tr_n] = (double)(df_tr_aft - df_tr_we) / 1e3;
+    tr_acc[3][tr_n] = (double)(df_tr_done - df_tr_aft) / 1e3;
+    tr_acc[4][tr_n] = (double)(t - df_tr_done) / 1e3;
+    tr_n++;
+    df_tr_sub = 0;
+    if (tr_n == 1000) {
+        for (int k = 0; k < 5; k++) {
+            double *a = tr_acc[k];
+            for (int x = 1; x < tr_n; x++) for (int y = x; y > 0 && a[y-1] > a[y]; y--) { double q = a[y]; a[y] = a[y-1]; a[y-1] = q; }
+            fprintf(stderr, "TRACE stage %d p50 %.2f us p90 %.2f\n", k, a[tr_n/2], a[tr_n*9/10]);
+        }
+        tr_n = 0;
+    }
+}
 static void work_cb(uv_work_t *w)
 {
     df_job *j = w->data;
+    df_tr_ws = uv_hrtime();
     j->work(j);
+    df_tr_we = uv_hrtime();
 }
 
 static void after_cb(uv_work_t *w, int status)
@@ -86,6 +111,7 @@ static void after_cb(uv_work_t *w, int status)
     df_job *j = w->data;
     df_server *srv = j->srv;
     df_session *s = j->s;
+    df_tr_aft = uv_hrtime();
     srv->jobs_running--;
     /* Progress frames the worker posted must go out before the job's final frames. */
     df_server_drain_mail(srv);
@@ -94,6 +120,7 @@ static void after_cb(uv_work_t *w, int status)
         j->rc = df_error_set(&j->err, DF_ESTATE, "server shutting down");
     }
     finish(j);
+    df_tr_done = uv_hrtime();
     if (s) pump(s);
 }
 
@@ -138,6 +165,7 @@ void df_job_submit(df_job *j)
         }
         return;
     }
+    if (j->work) df_tr_sub = uv_hrtime();
     if (s->jtail) s->jtail->next = j;
     else s->jhead = j;
     s->jtail = j;

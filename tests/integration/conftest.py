@@ -180,10 +180,3 @@ def meshes() -> str:
     if not os.path.isdir(MESHES):
         pytest.skip("shared meshes not found at %s (set MESHES)" % MESHES)
     return MESHES
-
-
-@pytest.fixture
-def client(daemon):
-    c = daemon.unix_client()
-    yield c
-    c.close()

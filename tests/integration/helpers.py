@@ -1,7 +1,6 @@
 """Shared helpers of the integration suite: generated meshes, a reference Kelvinlet grab
 (de Goes & James 2017, eqs. 6-7), small file readers for what deformctl writes."""
 import math
-import os
 from array import array
 from typing import List, Sequence, Tuple
 
@@ -99,15 +98,6 @@ def read_node_positions(path: str) -> List[Tuple[float, float, float]]:
 def read_indices(path: str) -> List[int]:
     with open(path) as f:
         return [int(line.split()[0]) for line in f if line.strip()]
-
-
-def mesh_path(meshes: str, name: str) -> str:
-    return os.path.join(meshes, name)
-
-
-def max_abs_diff(a: Sequence[float], b: Sequence[float]) -> float:
-    assert len(a) == len(b)
-    return max((abs(x - y) for x, y in zip(a, b)), default=0.0)
 
 
 def tet_grid(n: int, size: float = 1.0):
