@@ -1,5 +1,5 @@
 /* dc_calls_fetch.c — libdeformclient calls that read state: get mesh (chunk reassembly),
- * displacement snapshot, stats. */
+ * displacement snapshot, stats, the session's handle set. */
 #include "client/dc_client.h"
 
 #include <stdlib.h>
@@ -204,6 +204,37 @@ int df_client_stats(df_client *c, uint64_t session_id, df_msg_stats *out, df_err
     int rc = dc_request(c, DF_MSG_STATS, enc_stats, &req, reply_stats, &t, err);
     if (rc) {
         df_msg_stats_free(&t);
+        return rc;
+    }
+    *out = t;
+    return DF_OK;
+}
+
+static int reply_handles(void *user, const df_frame_header *h, const uint8_t *p, df_error *err)
+{
+    df_msg_handles *t = user;
+    df_msg_handles_free(t); /* a repeated reply body replaces the previous one */
+    return df_msg_handles_decode(p, h->payload_len, t, err);
+}
+
+static int enc_ref(const void *m, df_buf *out, df_error *err)
+{
+    return df_msg_session_ref_encode(m, out, err);
+}
+
+int df_client_handles_get(df_client *c, uint64_t session_id, df_msg_handles *out, df_error *err)
+{
+    if (!out)
+        return df_error_set(err, DF_EINVAL, "handles get: no output");
+    df_msg_session_ref req = {session_id};
+    df_msg_handles t;
+    memset(&t, 0, sizeof t);
+    int rc = dc_request(c, DF_MSG_HANDLES_GET, enc_ref, &req, reply_handles, &t, err);
+    if (rc == DF_OK && t.session_id != session_id)
+        rc = df_error_set(err, DF_EFORMAT, "handles get: reply is for session %llu, asked %llu",
+                          (unsigned long long)t.session_id, (unsigned long long)session_id);
+    if (rc) {
+        df_msg_handles_free(&t);
         return rc;
     }
     *out = t;

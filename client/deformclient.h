@@ -163,6 +163,13 @@ int df_client_set_brush_param(df_client *c, uint64_t session_id, uint8_t param, 
 /* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets). */
 int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);
 
+/* Fetches the session's current handle set into *out: every parameter as set, the handle vertex
+ * indices in handle order (the order of df_client_handles_move targets) and the affine sets.
+ * Arrays are malloc'd: release with df_msg_handles_free(out). DF_ENOTFOUND (remote) when the
+ * session does not exist or has no handle set; DF_EFORMAT when the reply names another session.
+ * *out is untouched on error. */
+int df_client_handles_get(df_client *c, uint64_t session_id, df_msg_handles *out, df_error *err);
+
 /* Moves the handles to m->targets and waits for the final reply (*res). Progress iterates
  * arrive meanwhile as DF_MSG_PROGRESS events (the callback). */
 int df_client_handles_move(df_client *c, const df_msg_handle_move *m, df_msg_move_result *res,

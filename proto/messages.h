@@ -81,6 +81,8 @@ typedef enum df_msg_type {
     DF_MSG_RESET_REST = 0x0032,     /* df_msg_session_ref      -> df_msg_ack */
     DF_MSG_UNDO = 0x0033,           /* df_msg_session_ref      -> df_msg_ack */
     DF_MSG_REDO = 0x0034,           /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_HANDLES_GET = 0x0035,    /* df_msg_session_ref      -> df_msg_handles (the current set;
+                                     * error ENOTFOUND when the session has none) */
     DF_MSG_GET_MESH = 0x0040,       /* df_msg_get_mesh         -> df_msg_mesh_chunk chunks */
     DF_MSG_SNAPSHOT = 0x0041,       /* df_msg_snapshot_req     -> df_msg_disp chunks (dense) */
     DF_MSG_STATS = 0x0042,          /* df_msg_stats_req        -> df_msg_stats */

@@ -15,8 +15,11 @@
  *   max_mesh_vertices  largest mesh accepted (vertices)
  *   max_sessions       sessions alive at once
  *   threads            worker threads of the compute pool (1 .. DF_CONFIG_MAX_THREADS)
+ *   spin_us            microseconds a compute worker keeps polling for the next short job
+ *                      before sleeping (0 .. DF_CONFIG_MAX_SPIN_US, default 0; see pool.h:
+ *                      lowers stroke latency only when cores are idle)
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
- * --log-level LEVEL, --help. */
+ * --log-level LEVEL, --spin-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -31,6 +34,7 @@
 #define DF_CONFIG_LINE_MAX 8192
 #define DF_CONFIG_MAX_CLIENTS_LIMIT 100000
 #define DF_CONFIG_MAX_THREADS 64
+#define DF_CONFIG_MAX_SPIN_US 1000
 
 #define DF_CONFIG_DEFAULT_MAX_CLIENTS 256
 #define DF_CONFIG_DEFAULT_QUEUE_LIMIT ((size_t)256 << 20) /* 256 MiB per client */
@@ -38,6 +42,7 @@
 #define DF_CONFIG_DEFAULT_MAX_VERTICES 4000000
 #define DF_CONFIG_DEFAULT_MAX_SESSIONS 64
 #define DF_CONFIG_DEFAULT_THREADS 4
+#define DF_CONFIG_DEFAULT_SPIN_US 0
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -52,6 +57,7 @@ typedef struct df_server_config {
     int32_t max_mesh_vertices;
     int max_sessions;
     int threads;
+    int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
     int foreground;              /* 1: do not daemonize */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;

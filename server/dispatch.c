@@ -28,6 +28,7 @@ static const struct {
     {DF_MSG_SET_BRUSH_PARAM, df_h_set_brush_param},
     {DF_MSG_HANDLES_SET, df_h_handles_set},
     {DF_MSG_HANDLES_MOVE, df_h_handles_move},
+    {DF_MSG_HANDLES_GET, df_h_handles_get},
     {DF_MSG_RESET_REST, df_h_reset_rest},
     {DF_MSG_UNDO, df_h_undo},
     {DF_MSG_REDO, df_h_redo},

@@ -4,13 +4,14 @@
  * The solver's rest shape is the session's REST positions; a move's iterates replace the current
  * positions. reset-rest makes the current positions the rest shape, clears the undo/redo history
  * and drops the cached solver (the next move rebuilds it against the new rest: one analysis +
- * factorization). */
+ * factorization). handles_get answers the stored set (params, indices, affine sets). */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "server/cache.h"
+#include "server/conn.h"
 #include "server/handlers.h"
 #include "server/job.h"
 #include "server/log.h"
@@ -72,6 +73,14 @@ static void set_work(df_job *j)
     hs->params.rho = m->rho;
     hs->params.tol = m->tol;
     hs->params.max_iters = (int)m->max_iters;
+    hs->params.youngs = m->youngs;
+    hs->params.poisson = m->poisson;
+    hs->params.area_weighting = m->area_weighting;
+    hs->params.accelerate = m->accelerate;
+    hs->params.anderson_m = m->anderson_m;
+    hs->params.strain_min = m->strain_min;
+    hs->params.strain_max = m->strain_max;
+    hs->params.bending = m->bending;
     hs->max_iters = (int)m->max_iters;
     hs->nh = (int32_t)m->n_handles;
     hs->handles = malloc((size_t)hs->nh * sizeof *hs->handles);
@@ -147,6 +156,87 @@ void df_h_handles_set(df_conn *c, const df_frame_header *h, const uint8_t *p)
     }
     ((hs_req *)j->body)->m = m;
     df_job_submit(j);
+}
+
+/* Handles_get: the session's current set as a handles body (loop thread, in FIFO order so it sees
+ * every earlier handles_set). The affine index arrays point into `hs` (valid during the call). */
+static void get_done(df_job *j)
+{
+    df_session *s = j->s;
+    const df_handleset *hs = s->hs;
+    if (df_job_failed(j) || !j->c) return;
+    if (!hs) {
+        df_error e;
+        df_error_set(&e, DF_ENOTFOUND, "handles_get: session %llu has no handle set",
+                     (unsigned long long)s->id);
+        df_reply_fail(j->c, j->type, j->req_id, &e);
+        return;
+    }
+    df_msg_affine_set aff[DF_MAX_AFFINE_SETS];
+    df_msg_handles m;
+    memset(&m, 0, sizeof m);
+    m.session_id = s->id;
+    m.energy = (uint8_t)hs->params.energy;
+    m.area_weighting = (uint8_t)hs->params.area_weighting;
+    m.accelerate = (uint8_t)hs->params.accelerate;
+    m.anderson_m = (uint8_t)hs->params.anderson_m;
+    m.w = hs->params.w;
+    m.s = hs->params.s;
+    m.rho = hs->params.rho;
+    m.tol = hs->params.tol;
+    m.youngs = hs->params.youngs;
+    m.poisson = hs->params.poisson;
+    m.strain_min = hs->params.strain_min;
+    m.strain_max = hs->params.strain_max;
+    m.bending = hs->params.bending;
+    m.max_iters = (uint32_t)hs->max_iters;
+    m.n_handles = (uint32_t)hs->nh;
+    m.handles = hs->handles;
+    m.n_affine = (uint32_t)(hs->n_affine < (int)DF_MAX_AFFINE_SETS ? hs->n_affine
+                                                                     : (int)DF_MAX_AFFINE_SETS);
+    for (uint32_t k = 0; k < m.n_affine; k++) {
+        const df_admm_affine *a = &hs->affine[k];
+        memset(&aff[k], 0, sizeof aff[k]);
+        aff[k].rows = (uint8_t)a->m;
+        memcpy(aff[k].A, a->A, sizeof aff[k].A);
+        memcpy(aff[k].b, a->b, sizeof aff[k].b);
+        aff[k].n_indices = (uint32_t)a->n;
+        aff[k].indices = (int32_t *)a->verts;
+    }
+    m.affine = aff;
+    df_error err;
+    df_buf b;
+    size_t start;
+    df_buf_init(&b);
+    int rc = df_frame_begin(&b, j->type, DF_FLAG_REPLY, j->req_id, &start, &err);
+    if (rc == DF_OK) rc = df_msg_handles_encode(&m, &b, &err);
+    if (rc == DF_OK) rc = df_frame_end(&b, start, &err);
+    df_sbuf *f = rc == DF_OK ? df_sbuf_from_buf(&b) : NULL;
+    if (!f) {
+        df_buf_free(&b);
+        if (rc == DF_OK) df_error_set(&err, DF_ENOMEM, "out of memory building a frame");
+        df_log(DF_LOG_ERROR, "encoding a handles_get reply failed: %s", err.msg);
+        df_error_set(&err, DF_EINTERNAL, "handles_get: server could not encode the set");
+        df_reply_fail(j->c, j->type, j->req_id, &err);
+        return;
+    }
+    if (j->c->pending > 0) j->c->pending--;
+    j->srv->stats.requests_ok++;
+    df_conn_send(j->c, f);
+    df_sbuf_unref(f);
+}
+
+void df_h_handles_get(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_session_ref m;
+    df_error err;
+    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    df_session *s = df_h_session(c, h, m.session_id);
+    df_job *j = s ? new_job(c, h, s, NULL, get_done) : NULL;
+    if (j) df_job_submit(j);
 }
 
 static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }

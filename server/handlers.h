@@ -31,6 +31,7 @@ DF_HANDLER(brush_cancel);
 DF_HANDLER(set_brush_param);
 DF_HANDLER(handles_set);
 DF_HANDLER(handles_move);
+DF_HANDLER(handles_get);
 DF_HANDLER(reset_rest);
 DF_HANDLER(undo);
 DF_HANDLER(redo);

@@ -1,6 +1,7 @@
 /* job.c — per-session FIFO of jobs on the libuv pool (see job.h). */
 #include "server/job.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -75,43 +76,17 @@ static void finish(df_job *j)
     if (s) s->running = NULL;
 }
 
-#include <stdio.h>
-uint64_t df_tr_sub, df_tr_ws, df_tr_we, df_tr_aft, df_tr_done;
-static double tr_acc[5][4096]; static int tr_n;
-void df_tr_flush(uint64_t t);
-void df_tr_flush(uint64_t t)
-{
-    if (!df_tr_sub || tr_n >= 4096) return;
-    tr_acc[0][tr_n] = (double)(df_tr_ws - df_tr_sub) / 1e3;
-    tr_acc[1][tr_n] = (double)(df_tr_we - df_tr_ws) / 1e3;
-    tr_acc[2][tr_n] = (double)(df_tr_aft - df_tr_we) / 1e3;
-    tr_acc[3][tr_n] = (double)(df_tr_done - df_tr_aft) / 1e3;
-    tr_acc[4][tr_n] = (double)(t - df_tr_done) / 1e3;
-    tr_n++;
-    df_tr_sub = 0;
-    if (tr_n == 1000) {
-        for (int k = 0; k < 5; k++) {
-            double *a = tr_acc[k];
-            for (int x = 1; x < tr_n; x++) for (int y = x; y > 0 && a[y-1] > a[y]; y--) { double q = a[y]; a[y] = a[y-1]; a[y-1] = q; }
-            fprintf(stderr, "TRACE stage %d p50 %.2f us p90 %.2f\n", k, a[tr_n/2], a[tr_n*9/10]);
-        }
-        tr_n = 0;
-    }
-}
 static void work_cb(uv_work_t *w)
 {
     df_job *j = w->data;
-    df_tr_ws = uv_hrtime();
     j->work(j);
-    df_tr_we = uv_hrtime();
 }
 
-static void after_cb(uv_work_t *w, int status)
+/* The job's work has run (or was cancelled: status UV_ECANCELED); loop thread. */
+static void completed(df_job *j, int status)
 {
-    df_job *j = w->data;
     df_server *srv = j->srv;
     df_session *s = j->s;
-    df_tr_aft = uv_hrtime();
     srv->jobs_running--;
     /* Progress frames the worker posted must go out before the job's final frames. */
     df_server_drain_mail(srv);
@@ -120,8 +95,20 @@ static void after_cb(uv_work_t *w, int status)
         j->rc = df_error_set(&j->err, DF_ESTATE, "server shutting down");
     }
     finish(j);
-    df_tr_done = uv_hrtime();
     if (s) pump(s);
+}
+
+static void after_cb(uv_work_t *w, int status) { completed(w->data, status); }
+
+static void task_work(df_task *t)
+{
+    df_job *j = (df_job *)((char *)t - offsetof(df_job, task));
+    j->work(j);
+}
+
+static void task_after(df_task *t)
+{
+    completed((df_job *)((char *)t - offsetof(df_job, task)), 0);
 }
 
 /* Starts queued jobs until one is running on the pool or the FIFO is empty; frees a closed
@@ -134,7 +121,14 @@ static void pump(df_session *s)
         if (!s->jhead) s->jtail = NULL;
         j->next = NULL;
         s->running = j;
-        if (j->work) {
+        if (j->work && j->srv->pool) { /* the server's low-latency pool */
+            j->srv->jobs_running++;
+            j->task.work = task_work;
+            j->task.after = task_after;
+            df_pool_submit(j->srv->pool, &j->task);
+            return;
+        }
+        if (j->work) { /* bare servers (unit tests): the libuv pool */
             j->w.data = j;
             j->srv->jobs_running++;
             int rc = uv_queue_work(j->srv->loop, &j->w, work_cb, after_cb);
@@ -165,7 +159,6 @@ void df_job_submit(df_job *j)
         }
         return;
     }
-    if (j->work) df_tr_sub = uv_hrtime();
     if (s->jtail) s->jtail->next = j;
     else s->jhead = j;
     s->jtail = j;

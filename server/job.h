@@ -3,9 +3,11 @@
  * A job has an optional `work` (runs on a worker thread, touches only the job's own data and its
  * session's compute state) and a `done` (runs on the loop thread afterwards: publishes frames,
  * replies). Jobs of one session run strictly one after another in submission order; jobs of
- * different sessions run in parallel (uv_queue_work). A job without `work` runs `done` directly
- * on the loop thread when it reaches the head of its FIFO. Jobs without a session (mesh loads)
- * go straight to the pool. */
+ * different sessions run in parallel: on the server's compute pool (srv->pool, see pool.h: low
+ * hand-off latency for interactive strokes), or on the libuv pool (uv_queue_work) when the
+ * server has no pool. A job without `work` runs `done` directly on the loop thread when it
+ * reaches the head of its FIFO. Jobs without a session (mesh loads) go straight to the libuv
+ * pool. */
 #ifndef DF_SERVER_JOB_H
 #define DF_SERVER_JOB_H
 
@@ -14,6 +16,7 @@
 #include <uv.h>
 
 #include "core/common/df_error.h"
+#include "server/pool.h"
 #include "server/sbuf.h"
 #include "server/server.h"
 #include "server/session.h"
@@ -36,7 +39,8 @@ struct df_job {
     df_error err;
     atomic_int cancel;        /* set by the loop thread to supersede a running move */
     int canceled;             /* the pool refused/cancelled the job (shutdown) */
-    uv_work_t w;
+    uv_work_t w;              /* session-less jobs, and every job of a server without a pool */
+    df_task task;             /* session jobs on srv->pool */
     df_sbuf **frames;         /* frames produced by work, broadcast in done */
     size_t nframes, capframes;
     uint64_t version;         /* version after the job (for the ack) */

@@ -10,6 +10,7 @@
 #include "server/job.h"
 #include "server/listener.h"
 #include "server/log.h"
+#include "server/pool.h"
 #include "server/sd.h"
 #include "server/session.h"
 
@@ -98,6 +99,12 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
         uv_close((uv_handle_t *)&srv->sig_term, NULL);
         return rc;
     }
+    df_error perr;
+    if (df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, &perr) !=
+        DF_OK) {
+        srv->pool = NULL; /* jobs use the libuv pool instead: slower hand-off, same semantics */
+        df_log(DF_LOG_WARN, "%s; using the libuv thread pool", perr.msg);
+    }
     return DF_OK;
 }
 
@@ -130,6 +137,7 @@ static void on_stop_timer(uv_timer_t *h)
     }
     for (df_conn *c = srv->conns; c; c = c->next) df_conn_close(c, "server shutting down", 0);
     df_conn_flush_all(srv, 2);
+    df_pool_close(srv->pool); /* idle: jobs_running is 0 */
     uv_close((uv_handle_t *)&srv->mailbox, NULL);
     uv_close((uv_handle_t *)&srv->kick_check, NULL);
     uv_timer_stop(&srv->cork_timer);
@@ -172,4 +180,6 @@ void df_server_free(df_server *srv)
     }
     srv->mail_head = srv->mail_tail = NULL;
     pthread_mutex_destroy(&srv->mailbox_lock);
+    df_pool_free(srv->pool);
+    srv->pool = NULL;
 }

@@ -72,6 +72,7 @@ typedef struct df_server {
     struct df_session *sessions; /* singly linked, newest first */
     int n_sessions;
     uint64_t next_session_id;
+    struct df_pool *pool;    /* compute pool for session jobs (NULL: libuv pool) */
     int jobs_running;        /* jobs submitted to the thread pool and not completed */
     int stopping;
     size_t cache_bytes;      /* bytes of cached factorizations over all sessions */

@@ -92,8 +92,8 @@ static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     CTL_GLOBAL_OPTS,
     {"targets", 1, "--targets FILE     'x y z' per handle in handle order, or a .node file "
                    "whose rows at the handle indices are the targets (required)"},
-    {"handles", 1, "--handles FILE     the handle index file given to `handles` (needed to pick "
-                   "the rows of a .node targets file)"},
+    {"handles", 1, "--handles FILE     handle index file picking the rows of a .node targets "
+                   "file (default: the session's handle set, fetched from the daemon)"},
     {"max-iters", 1, "--max-iters N      iteration budget (default: the handle set's --iters)"},
     {"max-ms", 1, "--max-ms MS        wall-clock budget in ms (default: none)"},
     {"progress-every", 1, "--progress-every N progress event every N iterations (default 10)"},
@@ -136,34 +136,64 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     size_t tl = strlen(tf);
     int is_node = tl >= 5 && strcasecmp(tf + tl - 5, ".node") == 0;
-    int32_t *hidx = NULL, nh = 0, np = 0;
+    /* Read every local file before connecting: a missing file is a usage error either way. */
+    char *node_text = NULL;
+    int32_t *hidx = NULL, nh = 0;
     double *targets = NULL;
     int rc;
-    if (is_node) {
-        if (!a->val[M_HANDLES])
-            return ctl_usage_error(ctx, cmd, "a .node --targets file needs --handles FILE");
+    if (is_node)
+        rc = dc_read_file(tf, &node_text, NULL, &e);
+    else
+        rc = dc_load_points_file(tf, &targets, &nh, &e);
+    if (rc == DF_OK && is_node && a->val[M_HANDLES])
         rc = dc_load_index_file(a->val[M_HANDLES], &hidx, &nh, &e);
-        if (rc == DF_OK)
-            rc = dc_load_targets(tf, hidx, nh, &targets, &e);
-        free(hidx);
-        np = nh;
-    } else {
-        rc = dc_load_points_file(tf, &targets, &np, &e);
-    }
-    if (rc)
+    if (rc) {
+        free(node_text);
+        free(targets);
         return ctl_usage_error(ctx, cmd, e.msg);
-    m.n_targets = (uint32_t)np;
-    m.targets = targets;
+    }
     df_client *c = ctl_connect(ctx, cmd);
     if (!c) {
+        free(node_text);
+        free(hidx);
         free(targets);
         return CTL_EXIT_SERVER;
     }
+    rc = ctl_session_id(c, a->pos[0], &m.session_id, &e);
+    df_msg_handles hs;
+    memset(&hs, 0, sizeof hs);
+    if (rc == DF_OK && is_node && !hidx) {
+        /* No --handles: the rows of the .node file at the session's own handle indices. */
+        rc = df_client_handles_get(c, m.session_id, &hs, &e);
+        if (rc == DF_OK) {
+            hidx = hs.handles;
+            hs.handles = NULL;
+            nh = (int32_t)hs.n_handles;
+        }
+        df_msg_handles_free(&hs);
+    }
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        free(node_text);
+        free(hidx);
+        free(targets);
+        df_client_close(c);
+        return rc;
+    }
+    if (is_node) {
+        rc = dc_parse_targets_text(node_text, tf, 1, hidx, nh, &targets, &e);
+        free(node_text);
+        free(hidx);
+        if (rc) {
+            df_client_close(c);
+            return ctl_usage_error(ctx, cmd, e.msg);
+        }
+    }
+    m.n_targets = (uint32_t)nh;
+    m.targets = targets;
     df_msg_move_result r;
     memset(&r, 0, sizeof r);
-    rc = ctl_session_id(c, a->pos[0], &m.session_id, &e);
-    if (rc == DF_OK)
-        rc = df_client_handles_move(c, &m, &r, &e);
+    rc = df_client_handles_move(c, &m, &r, &e);
     free(targets);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);

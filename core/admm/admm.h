@@ -22,6 +22,12 @@
  * W_e and the element penalty weight gamma_e = vol_e (ARAP, ACAP, CLOTH: area) or
  * (2.0066 mu + 1.0122 lambda) vol_e (Neo-Hookean); the global matrix is
  * sum_e gamma_e D_e^T D_e + rho I (per-vertex energies: their spokes-and-rims Laplacian + rho I).
+ * Local step 1 per element: polar rotation R of F_e + W_e (closed form, signed SVD fallback for
+ * inverted or ill-conditioned elements); ARAP/ACAP/cloth then have closed-form X; Neo-Hookean solves
+ * the prox of its energy on the 3 stretches by safeguarded Newton (core/admm/nh_prox.h: exact
+ * Hessian, positivity kept by a fraction-to-boundary rule, Armijo backtracking), warm-started from
+ * the element's previous stretches and eigenvectors. Per-vertex energies fit R_i (s_i) in closed
+ * form (2x2 for planar meshes, signed 3x3 SVD otherwise).
  *
  * The SC-L1 prox uses the penalty rho (true ADMM), so `w` is the true loss weight; rho > w max(a_i)/s
  * is required. (The paper's released code used 10 w / s instead of rho; its settings translate to
@@ -157,8 +163,11 @@ typedef struct df_admm_result {
 
 /* Runs ADMM iterations from the current state until the residual drops below tol, the iteration or
  * time budget is spent, or the callback stops it. `budget` may be NULL (params.max_iters, no time
- * limit, no callback); `res` may be NULL. Errors: DF_EINVAL (NULL solver), DF_EINTERNAL (CHOLMOD
- * solve failure; positions then keep their last finite values). */
+ * limit, no callback); `res` may be NULL. The objective is +inf while an element of the current
+ * iterate is inverted under Neo-Hookean (intermediate ADMM iterates may invert; the residual is then
+ * +inf and the run does not count as converged). Errors: DF_EINVAL (NULL solver), DF_ENOMEM
+ * (Anderson work buffer), DF_EINTERNAL (CHOLMOD solve failure; positions then keep their last
+ * values). */
 int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, df_error *err);
 
 /* Number of vertices of the solver's mesh. */

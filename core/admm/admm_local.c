@@ -44,7 +44,8 @@ static void local_x_element_one(df_admm *s, int32_t e);
 
 static void local_x_element(df_admm *s)
 {
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+    /* dynamic chunks: inverted / badly conditioned elements take the slower SVD path */
+    #pragma omp parallel for schedule(dynamic, 1024) num_threads(s->nthreads)
     for (int32_t e = 0; e < s->ne; e++) {
         local_x_element_one(s, e);
         element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);

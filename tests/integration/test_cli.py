@@ -214,6 +214,51 @@ def test_handles_and_move_on_the_apple(ctl, daemon, meshes, tmp_path):
     assert j2["iterations"] <= 5
 
 
+def test_move_node_targets_without_handles_uses_the_session_set(ctl, daemon, meshes, tmp_path):
+    """`move --targets X.node` alone: the rows at the session's own handle indices (HANDLES_GET);
+    --handles FILE still overrides them."""
+    rest = os.path.join(meshes, "teaser_apple_rest.node")
+    hfile = os.path.join(meshes, "teaser_apple_handles.txt")
+    tfile = os.path.join(meshes, "teaser_apple_init1.node")
+    sid = int(ctl("load", rest).stdout)
+    p = ctl("move", sid, "--targets", tfile, check=False)      # no handle set yet
+    assert p.returncode == 1 and "ENOTFOUND" in p.stderr and "handle set" in p.stderr, p.stderr
+    ctl("handles", sid, "--energy", "neohookean", "--handles", hfile, "--rho", 1e3,
+        "--s", 0.01, "--w", 1, "--iters", 40)
+    handles = read_indices(hfile)
+    out = ctl("move", sid, "--targets", tfile).stdout
+    words = out.split()
+    assert words[0] == "iterations" and words[2] == "residual" and words[4] == "objective", out
+    assert 1 <= int(words[1]) <= 40
+    assert float(words[3]) >= 0 and math.isfinite(float(words[5]))
+    ctl("get", sid, "--out", tmp_path / "moved.node")
+    P = read_node_positions(str(tmp_path / "moved.node"))
+    T = read_node_positions(tfile)
+    R = read_node_positions(rest)
+    assert len(P) == len(T) == 1088
+    assert max(abs(P[h][k] - T[h][k]) for h in handles for k in range(3)) < 1e-4
+    hset = set(handles)
+    assert max(abs(P[i][k] - R[i][k]) for i in range(len(P)) if i not in hset
+               for k in range(3)) > 1e-3
+    j = json.loads(ctl("--json", "move", sid, "--targets", tfile, "--max-iters", 5).stdout)
+    assert j["iterations"] <= 5 and j["status"] in ("converged", "budget")
+    # the override is really used: a shorter handle file gives the wrong target count
+    short = tmp_path / "short.txt"
+    short.write_text("".join("%d\n" % h for h in handles[:3]))
+    p = ctl("move", sid, "--targets", tfile, "--handles", short, check=False)
+    assert p.returncode == 1 and "EINVAL" in p.stderr and "3 targets" in p.stderr, p.stderr
+    # a .node file without rows at the handle indices is a usage error
+    tiny = tmp_path / "tiny.node"
+    tiny.write_text("3 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n")
+    p = ctl("move", sid, "--targets", tiny, check=False)
+    assert p.returncode == 2 and "tiny.node" in p.stderr, p.stderr
+    p = ctl("move", sid, "--targets", tmp_path / "missing.node", check=False)
+    assert p.returncode == 2 and p.stderr
+    with daemon.unix_client() as c:
+        assert c.get_mesh(sid).version == j["version"]   # failed moves changed nothing
+        c.close_session(sid)
+
+
 @pytest.mark.parametrize("ext", [".obj", ".off", ".ply", ".node", ".mesh"])
 def test_get_writes_every_format_readably(ctl, daemon, ext, tmp_path):
     """get --out in each format, after a brush; the file loads back into the same mesh."""

@@ -8,7 +8,7 @@ import pytest
 
 from deformd_client import frame as fr
 from deformd_client import messages as m, stream as st
-from deformd_client import MeshState, OutOfSync
+from deformd_client import MeshState, OutOfSync, ProtocolError
 
 
 def test_header_layout_is_24_bytes_little_endian():
@@ -96,6 +96,28 @@ def test_handles_body_with_affine_sets():
     assert m.HandleParams.for_energy("arap").w == 1e-4
     with pytest.raises(TypeError):
         m.HandleParams.for_energy("arap", omega=1)
+
+
+def test_handles_body_decodes_back_and_rejects_bad_bytes():
+    """decode_handles (the HANDLES_GET reply) inverts encode_handles field by field."""
+    hp = m.HandleParams.for_energy("cloth", strain_min=0.85, bending=0.5, area_weighting=True,
+                                   anderson_m=3, max_iters=12)
+    aff = [m.AffineSet(A=[(0, 0, 1), (1, 0, 0), (0, 1, 0)], b=[2.5, -1, 0.25], indices=[7, 8, 2])]
+    p = m.encode_handles(11, "cloth", [30, 2, 17], hp, aff)
+    hs = m.decode_handles(p)
+    assert (hs.session_id, hs.energy, hs.handles) == (11, "cloth", [30, 2, 17])
+    assert hs.params == hp
+    assert hs.affine[0].A == [[0, 0, 1], [1, 0, 0], [0, 1, 0]]
+    assert hs.affine[0].b == [2.5, -1, 0.25] and hs.affine[0].indices == [7, 8, 2]
+    assert m.encode_handles(11, hs.energy, hs.handles, hs.params, hs.affine) == p
+    for cut in (0, 91, 92, len(p) - 1):
+        with pytest.raises(ProtocolError):
+            m.decode_handles(p[:cut])
+    with pytest.raises(ProtocolError):
+        m.decode_handles(p + b"\0")
+    with pytest.raises(ProtocolError):
+        m.decode_handles(p[:8] + b"\x09" + p[9:])          # energy 9
+    assert m.TYPE_NAMES[m.HANDLES_GET] == "handles_get" and m.HANDLES_GET == 0x0035
 
 
 def test_disp_round_trip_dense_and_sparse_and_chunk_join():

@@ -145,7 +145,8 @@ def test_truncated_frame_then_silence_does_not_block_others(daemon):
 
 @pytest.mark.parametrize("msg_type", [m.BRUSH_BEGIN, m.BRUSH_UPDATE, m.HELLO, m.LOAD_MESH,
                                       m.HANDLES_SET, m.HANDLES_MOVE, m.GET_MESH, m.UNDO,
-                                      m.SNAPSHOT, m.SUBSCRIBE, m.OPEN_SESSION])
+                                      m.SNAPSHOT, m.SUBSCRIBE, m.OPEN_SESSION,
+                                      m.HANDLES_GET])
 def test_length_zero_body_is_truncated(daemon, msg_type):
     s = daemon.raw_unix(hello=True)
     f, _ = one_reply(s, fr.encode_frame(msg_type, b"", 11), 11)
@@ -163,6 +164,14 @@ def test_trailing_bytes_are_refused(daemon, grid_session):
     assert error_of(f)[0] == E.EPROTO_TRAILING
     f, _ = one_reply(s, fr.encode_frame(m.LIST_SESSIONS, b"x", 13), 13)
     assert error_of(f)[0] == E.EPROTO_TRAILING
+    for rid, body in ((14, m.encode_session_ref(grid_session.session_id) + b"\0"),
+                      (15, m.encode_session_ref(grid_session.session_id)[:7])):
+        f, _ = one_reply(s, fr.encode_frame(m.HANDLES_GET, body, rid), rid)
+        assert f.type == m.HANDLES_GET
+        assert error_of(f)[0] == (E.EPROTO_TRAILING if rid == 14 else E.EPROTO_TRUNCATED)
+    f, _ = one_reply(s, fr.encode_frame(m.HANDLES_GET, m.encode_session_ref(0), 16), 16)
+    assert error_of(f)[0] in (E.EINVAL, E.ENOTFOUND)
+    assert ping_on(s)
     s.close()
 
 

@@ -348,6 +348,57 @@ def test_handles_move_streams_progress_and_reaches_targets(daemon):
         c.close_session(sid)
 
 
+def test_get_handles_returns_the_set_and_follows_replacements(daemon):
+    """HANDLES_GET: ENOTFOUND before any set; then every parameter, the handle order and the
+    affine sets exactly as sent; a pipelined get after a set sees that set; moves still work."""
+    pts, _ = tet_grid(4)
+    with daemon.unix_client() as c:
+        sid = c.load_mesh(tet_grid_medit(4), fmt=".mesh", name="msg-get-handles").session_id
+        with pytest.raises(DeformdError) as ei:
+            c.get_handles(sid)
+        assert ei.value.code == E.ENOTFOUND and "handle set" in ei.value.message
+        with pytest.raises(DeformdError) as ei:
+            c.get_handles(987654321)
+        assert ei.value.code == E.ENOTFOUND
+        bottom = [i for i, p in enumerate(pts) if p[2] == 0.0]
+        top = [i for i, p in enumerate(pts) if p[2] == 1.0]
+        mid = [i for i, p in enumerate(pts) if 0 < p[2] < 1 and p[0] == 0.0]
+        handles = top[::-1] + bottom          # not sorted: the order must survive
+        aff = [m.AffineSet(A=[(1.0, 0.0, 0.0)], b=[0.0], indices=mid),
+               m.AffineSet(A=[(0.0, 1.0, 0.0), (0.0, 0.0, 1.0)], b=[1.0 / 3, 2.0 / 3],
+                           indices=[i for i in range(len(pts)) if i not in handles][:1])]
+        sent = dict(w=2.5e-4, s=0.02, rho=0.75, tol=1e-9, max_iters=77, accelerate=True,
+                    anderson_m=7, area_weighting=True, youngs=2e6, poisson=0.3,
+                    strain_min=0.8, strain_max=1.25, bending=0.125)
+        c.set_handles(sid, handles, energy="arap", affine=aff, **sent)
+        hs = c.get_handles(sid)
+        assert hs.session_id == sid and hs.energy == "arap"
+        assert hs.handles == handles
+        assert hs.params == m.HandleParams(**sent)
+        assert len(hs.affine) == 2
+        for got, want in zip(hs.affine, aff):
+            assert got.A == [list(r) for r in want.A] and got.b == list(want.b)
+            assert got.indices == list(want.indices)
+        # a replacement set, sent without waiting, then a get: the get sees the new set
+        rid_set = c.send(m.HANDLES_SET, m.encode_handles(
+            sid, "neohookean", bottom, m.HandleParams.for_energy("neohookean", rho=1e3, w=1.0)))
+        rid_get = c.send(m.HANDLES_GET, m.encode_session_ref(sid))
+        c.wait_reply(rid_set)
+        hs2 = m.decode_handles(b"".join(f.payload for f in c.wait_reply(rid_get)))
+        assert hs2.energy == "neohookean" and hs2.handles == bottom and hs2.affine == []
+        assert (hs2.params.w, hs2.params.rho, hs2.params.s) == (1.0, 1e3, 0.01)
+        assert hs2.params.youngs == 1e7 and hs2.params.accelerate is False
+        # the fetched handle order is the move's target order
+        res = c.move_handles(sid, [pts[i] for i in hs2.handles], max_iters=5)
+        assert res.status in (m.MOVE_CONVERGED, m.MOVE_BUDGET)
+        P = c.get_mesh(sid).positions
+        assert max(abs(P[3 * h + k] - pts[h][k]) for h in bottom for k in range(3)) < 1e-5
+        c.close_session(sid)
+        with pytest.raises(DeformdError) as ei:
+            c.get_handles(sid)
+        assert ei.value.code == E.ENOTFOUND
+
+
 def test_reset_rest_makes_current_the_rest_shape(daemon, grid):
     info, X = grid
     sid = info.session_id

@@ -12,14 +12,14 @@ from .client import Client, MeshData, SessionClosed
 from .errors import ConnectionClosed, DeformdError, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
-from .messages import AffineSet, Brush, HandleParams, MoveResult, SessionInfo
+from .messages import AffineSet, Brush, HandleParams, HandleSet, MoveResult, SessionInfo
 from .stream import Disp, Progress
 from .wire import ProtocolError
 
 __all__ = [
     "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "error_name",
     "Frame", "FrameDecoder", "FrameError", "encode_frame", "encode_header", "MeshState",
-    "OutOfSync", "AffineSet", "Brush", "HandleParams", "Disp", "MoveResult", "Progress",
-    "ProtocolError", "SessionInfo",
+    "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "MoveResult",
+    "Progress", "ProtocolError", "SessionInfo",
 ]
 __version__ = "0.1.0"

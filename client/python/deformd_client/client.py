@@ -368,6 +368,11 @@ class Client:
         return m.decode_ack(self._one(m.HANDLES_SET, m.encode_handles(
             session_id, energy, handles, p, affine)))
 
+    def get_handles(self, session_id: int) -> m.HandleSet:
+        """The session's current handle set (energy, every parameter, handle indices in handle
+        order, affine sets). DeformdError ENOTFOUND when the session has no handle set."""
+        return m.decode_handles(self._one(m.HANDLES_GET, m.encode_session_ref(session_id)))
+
     def move_handles(self, session_id: int, targets: Sequence[Sequence[float]],
                      max_iters: int = 0, max_ms: int = 0, progress_every: int = 0,
                      timeout: Optional[float] = None) -> m.MoveResult:

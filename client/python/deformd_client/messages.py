@@ -9,7 +9,7 @@ import struct
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence
 
-from .wire import Reader, f64_rows, pack_str, u32_array, vec
+from .wire import ProtocolError, Reader, f64_rows, pack_str, u32_array, vec
 
 # ------------------------------------------------------------------ message types
 HELLO = 0x0001
@@ -31,6 +31,7 @@ HANDLES_MOVE = 0x0031
 RESET_REST = 0x0032
 UNDO = 0x0033
 REDO = 0x0034
+HANDLES_GET = 0x0035
 GET_MESH = 0x0040
 SNAPSHOT = 0x0041
 STATS = 0x0042
@@ -313,6 +314,58 @@ def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: Hand
                    + struct.pack("<%dd" % rows, *[float(x) for x in a.b])
                    + struct.pack("<I", len(a.indices)) + u32_array(a.indices))
     return b"".join(out)
+
+
+@dataclass
+class HandleSet:
+    """A session's handle set as returned by Client.get_handles (HANDLES_GET reply, the handles
+    body of PROTOCOL.md 4.15): energy name, every parameter, the handle vertex indices in handle
+    order (the order move targets follow) and the affine constraint sets."""
+    session_id: int
+    energy: str
+    params: HandleParams
+    handles: List[int]
+    affine: List[AffineSet]
+
+
+ENERGY_NAMES = {v: k for k, v in ENERGIES.items()}
+MAX_HANDLES = 1 << 20
+MAX_AFFINE_SETS = 64
+
+
+def _count(r: Reader, what: str, limit: int) -> int:
+    n = r.take("I")
+    if n > limit:
+        raise ProtocolError("%s: %s %d exceeds limit %d" % (r.what, what, n, limit))
+    return n
+
+
+def decode_handles(p: bytes) -> HandleSet:
+    """Inverse of encode_handles; ProtocolError on a truncated/trailing body or a bad enum."""
+    r = Reader(p, "handles")
+    v = r.take(HANDLES_STRUCT.format.lstrip("<"))
+    (session_id, energy, area, accel, anderson_m, w, s, rho, tol, youngs, poisson, smin, smax,
+     bending, max_iters, nh) = v
+    if energy not in ENERGY_NAMES:
+        raise ProtocolError("handles: energy %d not in 1..%d" % (energy, len(ENERGIES)))
+    if nh > MAX_HANDLES:
+        raise ProtocolError("handles: n_handles %d exceeds limit %d" % (nh, MAX_HANDLES))
+    handles = list(r.farray("I", nh))
+    affine: List[AffineSet] = []
+    for _ in range(_count(r, "n_affine", MAX_AFFINE_SETS)):
+        rows = r.take("B")
+        if not 1 <= rows <= 3:
+            raise ProtocolError("handles: affine rows %d not in 1..3" % rows)
+        A = [list(r.take("3d")) for _ in range(rows)]
+        b = [r.take("d") for _ in range(rows)]
+        idx = list(r.farray("I", _count(r, "affine n_indices", MAX_HANDLES)))
+        affine.append(AffineSet(A=A, b=b, indices=idx))
+    r.end()
+    params = HandleParams(w=w, s=s, rho=rho, tol=tol, max_iters=max_iters, youngs=youngs,
+                          poisson=poisson, strain_min=smin, strain_max=smax, bending=bending,
+                          area_weighting=bool(area), accelerate=bool(accel),
+                          anderson_m=anderson_m)
+    return HandleSet(session_id, ENERGY_NAMES[energy], params, handles, affine)
 
 
 def encode_handle_move(session_id: int, targets: Sequence[Sequence[float]], max_iters: int = 0,

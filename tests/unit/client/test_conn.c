@@ -1,7 +1,7 @@
 /* Unit tests for libdeformclient's connection core against a scripted fake server on a Unix
  * socket: hello, error replies surfaced as df_error, events dispatched during a request, stray
  * replies dropped, byte-by-byte (partial) writes, get-mesh chunk reassembly and its consistency
- * checks, chunked mesh upload, fatal connection errors. */
+ * checks, chunked mesh upload, handles-get decoding and its errors, fatal connection errors. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -353,6 +353,106 @@ static void test_chunked_upload(void **state)
     finish(&f, c);
 }
 
+/* ---- handles get: decoded set, remote ENOTFOUND, a reply for another session -------------- */
+
+static int32_t hg_handles[3] = {5, 1, 9};
+static int32_t hg_aff_idx[2] = {2, 3};
+
+static df_msg_handles hg_set(uint64_t session_id, df_msg_affine_set *aff)
+{
+    df_msg_handles m;
+    df_msg_handles_defaults(&m, DF_ENERGY_ACAP);
+    m.session_id = session_id;
+    m.w = 0.5;
+    m.s = 0.25;
+    m.rho = 3;
+    m.accelerate = 1;
+    m.anderson_m = 9;
+    m.max_iters = 1234;
+    m.n_handles = 3;
+    m.handles = hg_handles;
+    memset(aff, 0, sizeof *aff);
+    aff->rows = 1;
+    aff->A[2] = 1;
+    aff->b[0] = -0.75;
+    aff->n_indices = 2;
+    aff->indices = hg_aff_idx;
+    m.n_affine = 1;
+    m.affine = aff;
+    return m;
+}
+
+static void script_handles_get(int fd)
+{
+    df_frame_header h;
+    df_buf b, o;
+    df_buf_init(&b);
+    df_buf_init(&o);
+    df_msg_session_ref ref;
+    df_msg_affine_set aff;
+    /* 1: the set of session 7 */
+    expect(srv_read(fd, &h, &b) == 0 && h.type == DF_MSG_HANDLES_GET, "handles_get 1");
+    expect(df_msg_session_ref_decode(b.data, b.len, &ref, NULL) == DF_OK && ref.session_id == 7,
+           "handles_get body is session 7");
+    df_msg_handles m = hg_set(7, &aff);
+    expect(df_msg_handles_encode(&m, &o, NULL) == DF_OK, "encode set");
+    srv_send(fd, DF_MSG_HANDLES_GET, DF_FLAG_REPLY, h.request_id, o.data, o.len, 0);
+    /* 2: no handle set */
+    expect(srv_read(fd, &h, &b) == 0 && h.type == DF_MSG_HANDLES_GET, "handles_get 2");
+    df_buf_reset(&o);
+    df_msg_error_frame(&o, DF_MSG_HANDLES_GET, h.request_id, DF_ENOTFOUND, NULL,
+                       "handles_get: session 8 has no handle set");
+    dc_net_write_all(fd, o.data, o.len, NULL);
+    /* 3: a reply naming session 5 instead of 7 */
+    expect(srv_read(fd, &h, &b) == 0 && h.type == DF_MSG_HANDLES_GET, "handles_get 3");
+    m = hg_set(5, &aff);
+    df_buf_reset(&o);
+    df_msg_handles_encode(&m, &o, NULL);
+    srv_send(fd, DF_MSG_HANDLES_GET, DF_FLAG_REPLY, h.request_id, o.data, o.len, 1);
+    df_buf_free(&b);
+    df_buf_free(&o);
+}
+
+static void test_handles_get(void **state)
+{
+    (void)state;
+    fake f;
+    df_client *c = start(&f, script_handles_get);
+    df_error e;
+    df_msg_handles hs;
+    memset(&hs, 0, sizeof hs);
+    assert_int_equal(df_client_handles_get(c, 7, &hs, &e), DF_OK);
+    assert_true(hs.session_id == 7);
+    assert_int_equal(hs.energy, DF_ENERGY_ACAP);
+    assert_true(hs.w == 0.5 && hs.s == 0.25 && hs.rho == 3 && hs.tol == 1e-11);
+    assert_int_equal(hs.accelerate, 1);
+    assert_int_equal(hs.anderson_m, 9);
+    assert_int_equal(hs.max_iters, 1234);
+    assert_int_equal(hs.n_handles, 3);
+    assert_int_equal(hs.handles[0], 5);
+    assert_int_equal(hs.handles[1], 1);
+    assert_int_equal(hs.handles[2], 9);
+    assert_int_equal(hs.n_affine, 1);
+    assert_int_equal(hs.affine[0].rows, 1);
+    assert_true(hs.affine[0].A[2] == 1 && hs.affine[0].b[0] == -0.75);
+    assert_int_equal(hs.affine[0].n_indices, 2);
+    assert_int_equal(hs.affine[0].indices[1], 3);
+    df_msg_handles_free(&hs);
+    assert_null(hs.handles);
+    df_msg_handles keep;
+    memset(&keep, 0x5A, sizeof keep);
+    memcpy(&hs, &keep, sizeof hs);
+    assert_int_equal(df_client_handles_get(c, 8, &hs, &e), DF_ENOTFOUND);
+    assert_string_equal(e.msg, "handles_get: session 8 has no handle set");
+    assert_int_equal(df_client_last_error_was_remote(c), 1);
+    assert_memory_equal(&hs, &keep, sizeof hs); /* untouched on error */
+    assert_int_equal(df_client_handles_get(c, 7, &hs, &e), DF_EFORMAT);
+    assert_non_null(strstr(e.msg, "session 5"));
+    assert_memory_equal(&hs, &keep, sizeof hs);
+    assert_int_equal(df_client_handles_get(c, 7, NULL, &e), DF_EINVAL);
+    finish(&f, c);
+}
+
 /* ---- connection lost mid-frame --------------------------------------------------------------- */
 
 static void script_hangup(int fd)
@@ -403,6 +503,7 @@ int main(void)
         cmocka_unit_test(test_errors_events_partial_writes),
         cmocka_unit_test(test_get_mesh_reassembly),
         cmocka_unit_test(test_chunked_upload),
+        cmocka_unit_test(test_handles_get),
         cmocka_unit_test(test_connection_lost_mid_frame),
         cmocka_unit_test(test_connect_errors),
     };

@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES = 27 };
+enum { N_SAMPLES = 29 };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -185,6 +185,10 @@ static inline void build_samples(sample *s)
     df_msg_stat st[3] = {{"sessions", 2}, {"cache.kelvinlet_lu.hits", 17}, {"uptime_s", 0.5}};
     df_msg_stats sts = {3, st};
     ADD("stats", DF_MSG_STATS, DF_FLAG_REPLY, df_msg_stats_encode(&sts, out, &e));
+    /* appended last so that the request ids (fuzz seeds) of the samples above stay stable */
+    df_msg_session_ref hg = {7};
+    ADD("handles_get", DF_MSG_HANDLES_GET, 0, df_msg_session_ref_encode(&hg, out, &e));
+    ADD("handles_reply", DF_MSG_HANDLES_GET, DF_FLAG_REPLY, df_msg_handles_encode(&hs, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

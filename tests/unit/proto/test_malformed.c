@@ -184,6 +184,7 @@ static void test_session_bodies(void **state)
 {
     (void)state;
     u64("session_ref", 0, 0, DF_EINVAL, "session_id 0");
+    u64("handles_get", 0, 0, DF_EINVAL, "session_id 0");
     u64("open_session", 0, 5, DF_EINVAL, "not both");
     u16("open_session", 8, 0, DF_EPROTO_TRAILING, NULL);
     u32("subscribe", 8, 2, DF_EINVAL, "flag");
@@ -306,6 +307,10 @@ static void test_handle_bodies(void **state)
 {
     (void)state;
     u8("handles", 8, 0, DF_EINVAL, "energy 0");
+    u8("handles_reply", 8, 0, DF_EINVAL, "energy 0");   /* HANDLES_GET reply: same rules */
+    u32("handles_reply", 92 + 4, DF_MAX_MESH_VERTICES, DF_EINVAL, "out of range");
+    f64("handles_reply", 28, NAN, DF_EINVAL, "rho");
+    u32("handles_reply", 108, 2, DF_EPROTO_TRUNCATED, NULL);
     u8("handles", 8, 6, DF_EINVAL, "energy 6");
     u8("handles", 9, 2, DF_EINVAL, "area_weighting 2");
     u8("handles", 10, 2, DF_EINVAL, "accelerate 2");

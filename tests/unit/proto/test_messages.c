@@ -225,6 +225,29 @@ static void test_session_and_load_fields(void **state)
             assert_int_equal(m.u.auth.token[3], 6);
         } else if (!strcmp(s[i].name, "brush_param")) {
             assert_true(isinf(m.u.brush_param.value) && m.u.brush_param.value < 0);
+        } else if (!strcmp(s[i].name, "handles_get")) {
+            assert_int_equal(m.which, DF_BODY_SESSION_REF);
+            assert_int_equal(s[i].payload.len, 8);
+            assert_true(m.u.session_ref.session_id == 7);
+        } else if (!strcmp(s[i].name, "handles_reply")) {
+            /* the reply is byte-identical to the handles_set request of the same set */
+            const sample *req = NULL;
+            for (int k2 = 0; k2 < N_SAMPLES; k2++)
+                if (!strcmp(s[k2].name, "handles"))
+                    req = &s[k2];
+            assert_non_null(req);
+            assert_int_equal(s[i].payload.len, req->payload.len);
+            assert_memory_equal(s[i].payload.data, req->payload.data, req->payload.len);
+            assert_int_equal(m.which, DF_BODY_HANDLES);
+            assert_int_equal(m.u.handles.energy, DF_ENERGY_NEOHOOKEAN);
+            assert_int_equal(m.u.handles.n_handles, 4);
+            assert_int_equal(m.u.handles.handles[3], 8000000);
+            assert_true(m.u.handles.w == 1e4 && m.u.handles.bending == 0.25);
+            assert_int_equal(m.u.handles.accelerate, 1);
+            assert_int_equal(m.u.handles.n_affine, 1);
+            assert_int_equal(m.u.handles.affine[0].rows, 2);
+            assert_int_equal(m.u.handles.affine[0].indices[2], 7);
+            assert_true(m.u.handles.affine[0].b[1] == -0.5);
         } else if (!strcmp(s[i].name, "move_result")) {
             assert_int_equal(s[i].payload.len, 45);
             assert_int_equal(m.u.move_result.iterations, 123);
@@ -244,6 +267,16 @@ static void test_body_kind_table(void **state)
     assert_int_equal(k, DF_BODY_HANDLE_MOVE);
     assert_int_equal(df_msg_body_kind(DF_MSG_HANDLES_MOVE, DF_FLAG_REPLY, &k, &e), DF_OK);
     assert_int_equal(k, DF_BODY_MOVE_RESULT);
+    /* handles_get: a session ref in, the handles_set body back; never an event */
+    assert_int_equal(df_msg_body_kind(DF_MSG_HANDLES_GET, 0, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_SESSION_REF);
+    assert_int_equal(df_msg_body_kind(DF_MSG_HANDLES_GET, DF_FLAG_REPLY, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_HANDLES);
+    assert_int_equal(df_msg_body_kind(DF_MSG_HANDLES_GET, DF_FLAG_EVENT, &k, &e),
+                     DF_EPROTO_BADTYPE);
+    assert_non_null(strstr(e.msg, "handles_get"));
+    assert_string_equal(df_msg_type_name(DF_MSG_HANDLES_GET), "handles_get");
+    assert_int_equal(DF_MSG_HANDLES_GET, 0x0035);
     assert_int_equal(df_msg_body_kind(DF_MSG_SNAPSHOT, DF_FLAG_REPLY | DF_FLAG_MORE, &k, &e), DF_OK);
     assert_int_equal(k, DF_BODY_DISP);
     assert_int_equal(df_msg_body_kind(DF_MSG_BRUSH_END, DF_FLAG_REPLY | DF_FLAG_ERROR, &k, &e),
@@ -266,7 +299,7 @@ static void test_body_kind_table(void **state)
     int known = 0;
     for (unsigned t = 0; t <= 0xFFFF; t++)
         known += df_msg_type_valid((uint16_t)t);
-    assert_int_equal(known, 26);
+    assert_int_equal(known, 27);
 }
 
 static void test_defaults_are_valid(void **state)

@@ -1,0 +1,264 @@
+/* pool.c — compute pool: condition-variable workers, optional bounded spin, eventfd completions
+ * (see pool.h).
+ *
+ * Lost wake-ups. Completions: a worker appends to the done list and then sets `signaled`
+ * (exchange); only the worker that flips it 0 -> 1 writes the eventfd. The loop clears
+ * `signaled` before taking the list, so an append after the take finds it 0 and writes again.
+ * Queue: a spinner leaving its spin decrements nspinning under the queue lock and re-checks the
+ * queue under it, so a submit that counted it as spinning (and did not signal) is still seen. */
+#include "server/pool.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#define DF_POOL_PAUSES_PER_YIELD 16 /* pause instructions between two sched_yield in a spin */
+
+struct df_pool {
+    uv_loop_t *loop;
+    int efd;                 /* eventfd: workers -> loop, "the done list is not empty"   */
+    uv_poll_t poll;          /* watches efd                                             */
+    int handle_open;         /* poll handle initialized and not closed yet              */
+    int closing;             /* df_pool_close ran                                       */
+    int free_on_close;       /* start failed: free the struct in the close callback     */
+    uint64_t spin_ns;
+    pthread_t th[DF_POOL_MAX_THREADS];
+    int nthreads;
+    /* queue, under lock */
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    df_task *qhead, *qtail;
+    int nq, nspinning, nsleeping, stopping;
+    atomic_int qhint;        /* nq, read by spinners without the lock */
+    atomic_int stop;
+    /* completions, under dlock */
+    pthread_mutex_t dlock;
+    df_task *dhead, *dtail;
+    atomic_int signaled;     /* the eventfd was written and the loop has not drained yet */
+    atomic_uint_fast64_t spin_hits;
+    /* loop thread only */
+    int inflight;
+    uint64_t tasks, wakeups;
+};
+
+/* One spin step: a few pause instructions, then give the core to any runnable thread. */
+static inline void relax(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    for (int i = 0; i < DF_POOL_PAUSES_PER_YIELD; i++) __builtin_ia32_pause();
+#endif
+    sched_yield();
+}
+
+static void complete(df_pool *p, df_task *t)
+{
+    t->next = NULL;
+    pthread_mutex_lock(&p->dlock);
+    if (p->dtail) p->dtail->next = t;
+    else p->dhead = t;
+    p->dtail = t;
+    pthread_mutex_unlock(&p->dlock);
+    if (atomic_exchange(&p->signaled, 1) == 0) {
+        uint64_t one = 1;
+        while (write(p->efd, &one, sizeof one) < 0 && errno == EINTR) {
+        }
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    df_pool *p = arg;
+    uint64_t spin_until = 0;
+    pthread_mutex_lock(&p->lock);
+    for (;;) {
+        int spun = 0;
+        while (!p->qhead && !p->stopping) {
+            if (spin_until && uv_hrtime() < spin_until) {
+                p->nspinning++;
+                pthread_mutex_unlock(&p->lock);
+                while (!atomic_load_explicit(&p->qhint, memory_order_acquire) &&
+                       !atomic_load_explicit(&p->stop, memory_order_relaxed) &&
+                       uv_hrtime() < spin_until)
+                    relax();
+                pthread_mutex_lock(&p->lock);
+                p->nspinning--;
+                spun = 1;
+                continue;
+            }
+            spun = 0;
+            p->nsleeping++;
+            pthread_cond_wait(&p->cond, &p->lock);
+            p->nsleeping--;
+        }
+        if (p->stopping) break;
+        df_task *t = p->qhead;
+        p->qhead = t->next;
+        if (!p->qhead) p->qtail = NULL;
+        p->nq--;
+        atomic_store_explicit(&p->qhint, p->nq, memory_order_release);
+        pthread_mutex_unlock(&p->lock);
+        if (spun) atomic_fetch_add_explicit(&p->spin_hits, 1, memory_order_relaxed);
+        uint64_t t0 = uv_hrtime();
+        t->work(t);
+        uint64_t t1 = uv_hrtime();
+        t->work_ns = t1 - t0;
+        spin_until = p->spin_ns && t->work_ns < DF_POOL_SHORT_TASK_NS ? t1 + p->spin_ns : 0;
+        complete(p, t);
+        pthread_mutex_lock(&p->lock);
+    }
+    pthread_mutex_unlock(&p->lock);
+    return NULL;
+}
+
+/* Runs `after` of every completed task in completion order (loop thread). */
+static void drain(df_pool *p)
+{
+    atomic_store(&p->signaled, 0);
+    pthread_mutex_lock(&p->dlock);
+    df_task *t = p->dhead;
+    p->dhead = p->dtail = NULL;
+    pthread_mutex_unlock(&p->dlock);
+    while (t) {
+        df_task *next = t->next;
+        p->inflight--;
+        p->tasks++;
+        t->after(t);
+        t = next;
+    }
+}
+
+static void on_poll(uv_poll_t *h, int status, int events)
+{
+    (void)status;
+    (void)events;
+    df_pool *p = h->data;
+    uint64_t v;
+    while (read(p->efd, &v, sizeof v) < 0 && errno == EINTR) {
+    }
+    p->wakeups++;
+    drain(p);
+}
+
+void df_pool_submit(df_pool *p, df_task *t)
+{
+    p->inflight++;
+    t->next = NULL;
+    t->work_ns = 0;
+    pthread_mutex_lock(&p->lock);
+    if (p->qtail) p->qtail->next = t;
+    else p->qhead = t;
+    p->qtail = t;
+    p->nq++;
+    atomic_store_explicit(&p->qhint, p->nq, memory_order_release);
+    if (p->nsleeping > 0 && p->nq > p->nspinning) pthread_cond_signal(&p->cond);
+    pthread_mutex_unlock(&p->lock);
+}
+
+int df_pool_inflight(const df_pool *p) { return p->inflight; }
+
+void df_pool_counters_get(const df_pool *p, df_pool_counters *out)
+{
+    out->tasks = p->tasks;
+    out->spin_hits = atomic_load_explicit(&p->spin_hits, memory_order_relaxed);
+    out->wakeups = p->wakeups;
+}
+
+static void stop_threads(df_pool *p)
+{
+    pthread_mutex_lock(&p->lock);
+    p->stopping = 1;
+    atomic_store(&p->stop, 1);
+    pthread_cond_broadcast(&p->cond);
+    pthread_mutex_unlock(&p->lock);
+    for (int i = 0; i < p->nthreads; i++) pthread_join(p->th[i], NULL);
+    p->nthreads = 0;
+}
+
+static void on_closed(uv_handle_t *h)
+{
+    df_pool *p = h->data;
+    p->handle_open = 0;
+    if (p->free_on_close) df_pool_free(p);
+}
+
+static void close_handle(df_pool *p)
+{
+    if (p->closing) return;
+    p->closing = 1;
+    if (!p->handle_open) {
+        if (p->free_on_close) df_pool_free(p);
+        return;
+    }
+    uv_poll_stop(&p->poll);
+    uv_close((uv_handle_t *)&p->poll, on_closed);
+}
+
+int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out, df_error *err)
+{
+    if (threads < 1 || threads > DF_POOL_MAX_THREADS)
+        return df_error_set(err, DF_EINVAL, "pool: %d threads not in 1..%d", threads,
+                            DF_POOL_MAX_THREADS);
+    if (spin_ns > DF_POOL_MAX_SPIN_NS)
+        return df_error_set(err, DF_EINVAL, "pool: spin of %llu ns over the %llu ns bound",
+                            (unsigned long long)spin_ns, (unsigned long long)DF_POOL_MAX_SPIN_NS);
+    df_pool *p = calloc(1, sizeof *p);
+    if (!p) return df_error_set(err, DF_ENOMEM, "pool: out of memory");
+    p->loop = loop;
+    p->spin_ns = spin_ns;
+    p->efd = -1;
+    pthread_mutex_init(&p->lock, NULL);
+    pthread_mutex_init(&p->dlock, NULL);
+    pthread_cond_init(&p->cond, NULL);
+    atomic_init(&p->qhint, 0);
+    atomic_init(&p->stop, 0);
+    atomic_init(&p->signaled, 0);
+    atomic_init(&p->spin_hits, 0);
+    p->efd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    int rc = p->efd < 0 ? -errno : uv_poll_init(loop, &p->poll, p->efd);
+    if (rc == 0) {
+        p->poll.data = p;
+        p->handle_open = 1;
+        rc = uv_poll_start(&p->poll, UV_READABLE, on_poll);
+    }
+    if (rc != 0) {
+        const char *what = p->efd < 0 ? strerror(-rc) : uv_strerror(rc);
+        df_error_set(err, DF_EIO, "pool: cannot watch an eventfd: %s", what);
+        p->free_on_close = 1;
+        close_handle(p);
+        return DF_EIO;
+    }
+    for (int i = 0; i < threads; i++) {
+        int e = pthread_create(&p->th[i], NULL, worker_main, p);
+        if (e != 0) {
+            stop_threads(p);
+            p->free_on_close = 1;
+            close_handle(p);
+            return df_error_set(err, DF_EIO, "pool: cannot start worker %d: %s", i, strerror(e));
+        }
+        p->nthreads++;
+    }
+    *out = p;
+    return DF_OK;
+}
+
+void df_pool_close(df_pool *p)
+{
+    if (!p) return;
+    stop_threads(p);
+    close_handle(p);
+}
+
+void df_pool_free(df_pool *p)
+{
+    if (!p) return;
+    if (p->efd >= 0) close(p->efd);
+    pthread_mutex_destroy(&p->lock);
+    pthread_mutex_destroy(&p->dlock);
+    pthread_cond_destroy(&p->cond);
+    free(p);
+}

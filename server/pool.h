@@ -1,0 +1,69 @@
+/* pool.h — the compute pool: a few worker threads that run session jobs off the loop thread.
+ *
+ * Same contract as uv_queue_work (work on a worker, `after` on the loop thread, the loop never
+ * waits for work), with a cheaper hand-off for interactive requests:
+ *   - completions are signalled through one eventfd watched by a uv_poll handle, written only
+ *     when the loop has not been told yet (uv_async makes the woken loop spin until the sender
+ *     has left uv_async_send, which on a loaded machine can mean waiting for it to be
+ *     rescheduled);
+ *   - optionally (spin_ns > 0) a worker that just finished a SHORT task (< DF_POOL_SHORT_TASK_NS)
+ *     polls the queue for up to spin_ns (bounded by DF_POOL_MAX_SPIN_NS) before sleeping on its
+ *     condition variable, so that back-to-back strokes skip the futex wake-up. Each poll step
+ *     yields the CPU (sched_yield) so a spinner never holds a core another thread wants. This
+ *     pays off only with idle cores: on an oversubscribed machine the spinner sits on the core
+ *     the loop needs, which is why deformd's default is 0 (config key `spin_us`).
+ * A worker that ran a long task (a solve) always sleeps at once. */
+#ifndef DF_SERVER_POOL_H
+#define DF_SERVER_POOL_H
+
+#include <stdint.h>
+#include <uv.h>
+
+#include "core/common/df_error.h"
+
+#define DF_POOL_MAX_THREADS 64
+#define DF_POOL_SHORT_TASK_NS 200000ull /* tasks below this are "interactive" (may spin after) */
+#define DF_POOL_MAX_SPIN_NS 1000000ull  /* upper bound of spin_ns                             */
+
+typedef struct df_task df_task;
+typedef void (*df_task_fn)(df_task *t);
+
+/* A unit of work, embedded by the caller (which owns its memory until `after` ran). */
+struct df_task {
+    df_task_fn work;   /* worker thread; required */
+    df_task_fn after;  /* loop thread, once work returned; required */
+    uint64_t work_ns;  /* measured work time in ns, set before `after` runs */
+    df_task *next;     /* pool-internal */
+};
+
+typedef struct df_pool df_pool;
+
+/* Starts `threads` (1..DF_POOL_MAX_THREADS) workers delivering completions on `loop` (call on
+ * the loop thread); spin_ns (0..DF_POOL_MAX_SPIN_NS, ns) is how long a worker polls for new work
+ * after a short task, 0 = never. *out receives the pool. Errors: DF_EINVAL (threads or spin_ns
+ * out of range), DF_ENOMEM, DF_EIO (eventfd, handle or thread creation failed; nothing is left
+ * running, *out untouched). */
+int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out, df_error *err);
+
+/* Queues `t` (loop thread; t->work and t->after set). Never waits for running work. */
+void df_pool_submit(df_pool *p, df_task *t);
+
+/* Tasks submitted and whose `after` has not run yet. */
+int df_pool_inflight(const df_pool *p);
+
+/* Stops the workers (they finish the task they run; queued tasks are NOT run: call this when
+ * nothing is in flight), joins them and closes the pool's handles (loop thread). The memory
+ * stays valid until df_pool_free, to be called once the loop has run the close callbacks. */
+void df_pool_close(df_pool *p);
+
+/* Frees a closed pool (NULL-safe). */
+void df_pool_free(df_pool *p);
+
+/* Counters (loop thread): tasks completed, tasks a spinning worker picked up without a
+ * wake-up, eventfd wake-ups of the loop (several completions may share one). */
+typedef struct df_pool_counters {
+    uint64_t tasks, spin_hits, wakeups;
+} df_pool_counters;
+void df_pool_counters_get(const df_pool *p, df_pool_counters *out);
+
+#endif
