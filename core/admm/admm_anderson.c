@@ -45,6 +45,7 @@ void admm_aa_reset(admm_anderson *aa)
 
 static double dot(const double *a, const double *b, int64_t n, int nt)
 {
+    (void)nt; /* used only by the OpenMP clause */
     double s = 0;
     #pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : s)
     for (int64_t i = 0; i < n; i++) s += a[i] * b[i];

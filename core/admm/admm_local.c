@@ -10,6 +10,10 @@
 #include "core/admm/scl1.h"
 #include "core/admm/svd3.h"
 
+/* relative deviatoric size |S - tr S / 3 I| / (tr S / 3) below which the Neo-Hookean local step
+ * uses the isotropic expansion instead of an eigen-decomposition */
+#define ADMM_NH_ISO_REL 1e-8
+
 /* F = sum_a V_a g_a^T (3 x q, row stride 3) */
 static inline void element_F(const df_admm *s, const double *V, int32_t e, double F[9])
 {
@@ -105,6 +109,33 @@ static void local_x_element_one(df_admm *s, int32_t e)
             for (int i = 0; i < 3; i++)
                 for (int j = 0; j < 3; j++)
                     S[3 * i + j] = R[i] * G[j] + R[3 + i] * G[3 + j] + R[6 + i] * G[6 + j];
+            double m = (S[0] + S[4] + S[8]) / 3.0, dn = 0;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) {
+                    double d = 0.5 * (S[3 * i + j] + S[3 * j + i]) - (i == j ? m : 0.0);
+                    dn += d * d;
+                }
+            if (m > 0 && dn <= ADMM_NH_ISO_REL * ADMM_NH_ISO_REL * m * m) {
+                /* nearly isotropic S = m I + D (the bulk far from the handles): the prox is an
+                 * isotropic matrix function, so X = x(m) I + a D + O(|D|^2) with x(m) the prox at
+                 * (m, m, m) and a = gam / (vol alpha + gam) its derivative along deviatoric
+                 * directions (alpha = mu + mu / x^2 - lambda ln J / x^2, J = x^3); the neglected
+                 * term is ~1e-16 relative at ADMM_NH_ISO_REL = 1e-8 */
+                double sm[3] = {m, m, m};
+                if (df_admm_nh_prox(sm, xp, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = m; }
+                double xm = (x[0] + x[1] + x[2]) / 3.0, x2 = xm * xm;
+                double alpha = s->mu + s->mu / x2 - s->lambda * log(x2 * xm) / x2;
+                double a = gam / (vol * alpha + gam);
+                double X[9];
+                for (int i = 0; i < 3; i++)
+                    for (int j = 0; j < 3; j++)
+                        X[3 * i + j] = a * (0.5 * (S[3 * i + j] + S[3 * j + i]) - (i == j ? m : 0.0)) + (i == j ? xm : 0.0);
+                for (int r = 0; r < 3; r++)
+                    for (int c = 0; c < 3; c++)
+                        RX[3 * r + c] = R[3 * r] * X[c] + R[3 * r + 1] * X[3 + c] + R[3 * r + 2] * X[6 + c];
+                xp[0] = xp[1] = xp[2] = xm;
+                return;
+            }
             df_admm_sym3_eig_warm(S, lam, Q);
             if (df_admm_nh_prox(lam, xp, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = 1.0; }
             double RQ[9];

@@ -12,12 +12,13 @@
 #define SVD3_MAX_SWEEPS 12
 
 /* cyclic Jacobi on the symmetric a (in place), accumulating the rotations into v */
-static void jacobi3(double a[3][3], double v[3][3])
+static void jacobi3(double a[3][3], double v[3][3], double tol2)
 {
     for (int sweep = 0; sweep < SVD3_MAX_SWEEPS; sweep++) {
         double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
         double dia = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if (off <= 1e-34 * dia || off == 0.0) break;
+        /* off-diagonal below sqrt(tol2) of the diagonal (relative, in norm): converged */
+        if (off <= tol2 * dia || off == 0.0) break;
         for (int p = 0; p < 2; p++) {
             for (int q = p + 1; q < 3; q++) {
                 double apq = a[p][q];
@@ -35,6 +36,7 @@ static void jacobi3(double a[3][3], double v[3][3])
                     a[p][k] = c * apk - s * aqk;
                     a[q][k] = s * apk + c * aqk;
                 }
+                a[p][q] = a[q][p] = 0.0; /* exactly annihilated by construction */
                 for (int k = 0; k < 3; k++) {
                     double vkp = v[k][p], vkq = v[k][q];
                     v[k][p] = c * vkp - s * vkq;
@@ -60,7 +62,7 @@ void df_admm_sym3_eig_warm(const double C[9], double lam[3], double Q[9])
     a[1][0] = a[0][1] = 0.5 * (a[0][1] + a[1][0]);
     a[2][0] = a[0][2] = 0.5 * (a[0][2] + a[2][0]);
     a[2][1] = a[1][2] = 0.5 * (a[1][2] + a[2][1]);
-    jacobi3(a, v);
+    jacobi3(a, v, 1e-30);
     for (int i = 0; i < 3; i++) lam[i] = a[i][i];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) Q[3 * i + j] = v[i][j];
@@ -70,7 +72,7 @@ void df_admm_sym3_eig(const double C[9], double lam[3], double Q[9])
 {
     double a[3][3] = {{C[0], C[1], C[2]}, {C[1], C[4], C[5]}, {C[2], C[5], C[8]}};
     double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    jacobi3(a, v);
+    jacobi3(a, v, 1e-30);
     int idx[3] = {0, 1, 2};
     double d[3] = {a[0][0], a[1][1], a[2][2]};
     for (int i = 0; i < 2; i++)

@@ -25,16 +25,17 @@ void df_admm_svd32(const double F[6], double U[6], double sig[2], double V[4]);
  * lam descending, Q a proper rotation (columns = eigenvectors). Q may be NULL. */
 void df_admm_sym3_eig(const double C[9], double lam[3], double Q[9]);
 
-/* Polar rotation R of a well-conditioned 3x3 matrix A (A = R S, S symmetric positive definite)
- * in closed form: S's trace t from df_admm_trace_sym3's quartic, then by Cayley-Hamilton
- * R = A (C + i2 I) (t C + det A I)^-1 with C = A^T A, i2 = (t^2 - |A|^2) / 2. ~150 flops, accuracy
- * ~1e-15. Returns 0 with R filled, or -1 (R untouched) when det A < 0.05 (|A|_F^2 / 3)^(3/2)
- * (inverted, nearly singular or strongly anisotropic: callers then use df_admm_svd3). */
 /* Sum of the signed singular values of A (tr S, S its symmetric polar factor; the smallest singular
  * value counts negative when det A < 0) from the invariants of A^T A: the largest root of
  * (t^2 - I1)^2 - 4 I2 - 8 J t = 0, found by Newton's method from sqrt(3 I1) (monotone, quadratic),
  * ~40 flops; falls back to df_admm_svd3 when det A < 0.05 (|A|_F^2 / 3)^(3/2). */
 double df_admm_trace_sym3(const double A[9]);
+
+/* Polar rotation R of a well-conditioned 3x3 matrix A (A = R S, S symmetric positive definite)
+ * in closed form: S's trace t from df_admm_trace_sym3's quartic, then by Cayley-Hamilton
+ * R = A (C + i2 I) (t C + det A I)^-1 with C = A^T A, i2 = (t^2 - |A|^2) / 2. ~150 flops, accuracy
+ * ~1e-15. Returns 0 with R filled, or -1 (R untouched) when det A < 0.05 (|A|_F^2 / 3)^(3/2)
+ * (inverted, nearly singular or strongly anisotropic: callers then use df_admm_svd3). */
 int df_admm_polar3(const double A[9], double R[9]);
 
 #endif
