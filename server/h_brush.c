@@ -100,26 +100,29 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     if (rc != DF_OK) return rc;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
-    /* The float32 motion of each point: fl32(x0 + u) - x0 (0 where u is below x0's resolution). */
-    if (rc == DF_OK)
-        for (size_t i = 0; i < 3 * (size_t)s->nv; i++) {
-            float moved = st->startf[i] + disp[i];
-            disp[i] = moved - st->startf[i];
-        }
     return rc;
 }
 
-/* Publishes base + disp (disp = s->scratch_disp) as the next version; on success the stroke
- * contributes disp. Buffers are swapped, not copied. */
+/* Publishes base + m as the next version, m = fl32(x0 + disp) - x0 the float32 motion of each
+ * stroke-start point x0 = st->startf (0 where disp is below x0's resolution; disp =
+ * s->scratch_disp, replaced by m). On success the stroke contributes m. Buffers are swapped,
+ * not copied. */
 static int stroke_publish(df_session *s, df_stroke *st, uint8_t kind, brush_req *r,
                           df_error *err)
 {
     size_t n = 3 * (size_t)s->nv;
-    const float *disp = s->scratch_disp;
+    float *disp = s->scratch_disp;
     if (atomic_load(&s->version) != st->last_version) /* someone else changed the mesh */
         for (size_t i = 0; i < n; i++) st->base[i] = s->cur[i] - (double)st->applied[i];
     double *pos = s->scratch_pos;
-    for (size_t i = 0; i < n; i++) pos[i] = st->base[i] + (double)disp[i];
+    const float *x0 = st->startf;
+    const double *base = st->base;
+#pragma omp simd /* one fused pass; distinct arrays (gcc -O2 would not vectorize it) */
+    for (size_t i = 0; i < n; i++) {
+        float m = (x0[i] + disp[i]) - x0[i];
+        disp[i] = m;
+        pos[i] = base[i] + (double)m;
+    }
     int rc = df_stream_publish(s, pos, kind, NULL, 0, &r->frames, NULL, err);
     if (rc == DF_OK) {
         s->scratch_pos = s->cur;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "server/handlers.h"
+#include "server/pool.h"
 #include "server/reply.h"
 
 #define DF_STATS_MAX 96 /* entries this server reports */
@@ -73,6 +74,15 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "cache.admm_chol.misses", (double)x->admm_misses);
         put(&st, "cache.admm.misses", (double)x->admm_misses);
         put(&st, "cache.lru_evictions", (double)x->lru_evictions);
+        if (srv->pool) { /* compute pool hand-offs (pool.h) */
+            df_pool_counters pc;
+            df_pool_counters_get(srv->pool, &pc);
+            put(&st, "pool.threads", srv->cfg.threads);
+            put(&st, "pool.spin_us", srv->cfg.spin_us);
+            put(&st, "pool.tasks", (double)pc.tasks);
+            put(&st, "pool.spin_hits", (double)pc.spin_hits);
+            put(&st, "pool.wakeups", (double)pc.wakeups);
+        }
     } else {
         int strokes = 0;
         for (df_stroke *k = s->strokes; k; k = k->next) strokes++;

@@ -5,8 +5,11 @@
  * One libuv loop thread owns every connection, session, subscriber list, job FIFO, the undo
  * history bookkeeping and all stats; all socket I/O happens there (non-blocking, partial reads
  * reassembled into frames, writes queued per client with a byte bound). Compute (mesh parsing,
- * Kelvinlet fields, ADMM factorizations and iterations, stream encoding) runs on the libuv thread
- * pool (uv_queue_work, `threads` workers). Each session has a FIFO of jobs and only its head job
+ * Kelvinlet fields, ADMM factorizations and iterations, stream encoding) runs off the loop: session
+ * jobs on the server's compute pool (pool.h: `threads` workers, eventfd completions, LIFO wake-ups,
+ * optional bounded spin `spin_us`), mesh loads on the libuv pool (uv_queue_work). Replies go out
+ * with one uv_try_write when the socket takes them (uv_write for the rest), TCP with NODELAY.
+ * Each session has a FIFO of jobs and only its head job
  * runs, so a worker touches only its job's private inputs plus the compute state of its session
  * (positions, published displacements, version, strokes, cached solvers), which the FIFO
  * guarantees no other thread uses meanwhile. Different sessions run in parallel. Results return

@@ -5,7 +5,10 @@
  * (exchange); only the worker that flips it 0 -> 1 writes the eventfd. The loop clears
  * `signaled` before taking the list, so an append after the take finds it 0 and writes again.
  * Queue: a spinner leaving its spin decrements nspinning under the queue lock and re-checks the
- * queue under it, so a submit that counted it as spinning (and did not signal) is still seen. */
+ * queue under it, so a submit that counted it as spinning (and did not signal) is still seen.
+ * Sleeping workers form a LIFO stack, each with its own condition variable: a submit wakes the
+ * worker that went idle last, so one stroke after another keeps landing on the same (cache-warm)
+ * thread instead of rotating through the pool. */
 #include "server/pool.h"
 
 #include <errno.h>
@@ -19,6 +22,14 @@
 
 #define DF_POOL_PAUSES_PER_YIELD 16 /* pause instructions between two sched_yield in a spin */
 
+typedef struct worker {
+    struct df_pool *p;
+    pthread_t th;
+    pthread_cond_t cond;     /* this worker's wake-up                                   */
+    int woken;               /* set (under lock) by the submit that picked this worker  */
+    struct worker *next_idle;
+} worker;
+
 struct df_pool {
     uv_loop_t *loop;
     int efd;                 /* eventfd: workers -> loop, "the done list is not empty"   */
@@ -27,13 +38,14 @@ struct df_pool {
     int closing;             /* df_pool_close ran                                       */
     int free_on_close;       /* start failed: free the struct in the close callback     */
     uint64_t spin_ns;
-    pthread_t th[DF_POOL_MAX_THREADS];
+    worker w[DF_POOL_MAX_THREADS];
     int nthreads;
     /* queue, under lock */
     pthread_mutex_t lock;
-    pthread_cond_t cond;
     df_task *qhead, *qtail;
-    int nq, nspinning, nsleeping, stopping;
+    worker *idle;            /* sleeping workers, most recently idle first (LIFO: the woken
+                              * thread is the one whose caches are warm)                 */
+    int nq, nspinning, stopping;
     atomic_int qhint;        /* nq, read by spinners without the lock */
     atomic_int stop;
     /* completions, under dlock */
@@ -72,7 +84,8 @@ static void complete(df_pool *p, df_task *t)
 
 static void *worker_main(void *arg)
 {
-    df_pool *p = arg;
+    worker *me = arg;
+    df_pool *p = me->p;
     uint64_t spin_until = 0;
     pthread_mutex_lock(&p->lock);
     for (;;) {
@@ -91,9 +104,10 @@ static void *worker_main(void *arg)
                 continue;
             }
             spun = 0;
-            p->nsleeping++;
-            pthread_cond_wait(&p->cond, &p->lock);
-            p->nsleeping--;
+            me->woken = 0;
+            me->next_idle = p->idle;
+            p->idle = me;
+            while (!me->woken && !p->stopping) pthread_cond_wait(&me->cond, &p->lock);
         }
         if (p->stopping) break;
         df_task *t = p->qhead;
@@ -155,7 +169,12 @@ void df_pool_submit(df_pool *p, df_task *t)
     p->qtail = t;
     p->nq++;
     atomic_store_explicit(&p->qhint, p->nq, memory_order_release);
-    if (p->nsleeping > 0 && p->nq > p->nspinning) pthread_cond_signal(&p->cond);
+    if (p->idle && p->nq > p->nspinning) { /* wake the most recently idle worker */
+        worker *w = p->idle;
+        p->idle = w->next_idle;
+        w->woken = 1;
+        pthread_cond_signal(&w->cond);
+    }
     pthread_mutex_unlock(&p->lock);
 }
 
@@ -173,9 +192,12 @@ static void stop_threads(df_pool *p)
     pthread_mutex_lock(&p->lock);
     p->stopping = 1;
     atomic_store(&p->stop, 1);
-    pthread_cond_broadcast(&p->cond);
+    for (int i = 0; i < p->nthreads; i++) pthread_cond_signal(&p->w[i].cond);
     pthread_mutex_unlock(&p->lock);
-    for (int i = 0; i < p->nthreads; i++) pthread_join(p->th[i], NULL);
+    for (int i = 0; i < p->nthreads; i++) {
+        pthread_join(p->w[i].th, NULL);
+        pthread_cond_destroy(&p->w[i].cond);
+    }
     p->nthreads = 0;
 }
 
@@ -213,7 +235,6 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
     p->efd = -1;
     pthread_mutex_init(&p->lock, NULL);
     pthread_mutex_init(&p->dlock, NULL);
-    pthread_cond_init(&p->cond, NULL);
     atomic_init(&p->qhint, 0);
     atomic_init(&p->stop, 0);
     atomic_init(&p->signaled, 0);
@@ -233,8 +254,12 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
         return DF_EIO;
     }
     for (int i = 0; i < threads; i++) {
-        int e = pthread_create(&p->th[i], NULL, worker_main, p);
+        worker *w = &p->w[i];
+        w->p = p;
+        pthread_cond_init(&w->cond, NULL);
+        int e = pthread_create(&w->th, NULL, worker_main, w);
         if (e != 0) {
+            pthread_cond_destroy(&w->cond);
             stop_threads(p);
             p->free_on_close = 1;
             close_handle(p);
@@ -259,6 +284,5 @@ void df_pool_free(df_pool *p)
     if (p->efd >= 0) close(p->efd);
     pthread_mutex_destroy(&p->lock);
     pthread_mutex_destroy(&p->dlock);
-    pthread_cond_destroy(&p->cond);
     free(p);
 }

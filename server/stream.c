@@ -1,11 +1,16 @@
 /* stream.c — displacement stream encoding (see stream.h). */
 #include "server/stream.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/buf.h"
+#include "proto/frame_codec.h"
 #include "server/reply.h"
+
+#define DF_STREAM_DISP_HEADER 44 /* bytes of a disp body before its rows (proto/msg_disp.c) */
 
 int df_frames_push(df_frames *f, df_sbuf *b)
 {
@@ -31,6 +36,50 @@ void df_frames_clear(df_frames *f)
     f->n = f->cap = 0;
 }
 
+/* One displacement frame built in a single exact-size allocation: the bytes df_out_disp
+ * produces for the same arguments, without its validation passes (the rows come from
+ * df_stream_publish / the published state, already checked finite and in range). */
+static df_sbuf *disp_frame(const df_msg_disp *d, uint16_t type, uint16_t flags, uint64_t req_id,
+                           df_error *err)
+{
+    size_t row = df_msg_disp_row_bytes(d->encoding);
+    size_t payload = DF_STREAM_DISP_HEADER + row * (size_t)d->count;
+    df_sbuf *b = df_sbuf_new(DF_FRAME_HEADER_SIZE + payload);
+    if (!b) {
+        df_error_set(err, DF_ENOMEM, "out of memory for a %zu-byte frame", payload);
+        return NULL;
+    }
+    df_frame_header h = {.magic = DF_FRAME_MAGIC, .version = DF_PROTO_VERSION, .type = type,
+                         .flags = flags, .request_id = req_id, .payload_len = (uint32_t)payload};
+    int rc = df_frame_header_encode(&h, b->data, err);
+    if (rc != DF_OK) {
+        df_sbuf_unref(b);
+        return NULL;
+    }
+    uint8_t *q = b->data + DF_FRAME_HEADER_SIZE;
+    df_le64_store(q, d->session_id);
+    df_le64_store(q + 8, d->version);
+    df_le64_store(q + 16, d->base_version);
+    q[24] = d->kind;
+    q[25] = d->encoding;
+    df_le16_store(q + 26, 0);
+    df_le32_store(q + 28, d->nv);
+    df_le32_store(q + 32, d->total);
+    df_le32_store(q + 36, d->offset);
+    df_le32_store(q + 40, d->count);
+    q += DF_STREAM_DISP_HEADER;
+    if (d->encoding == DF_DISP_DENSE) {
+        memcpy(q, d->xyz, 12 * (size_t)d->count);
+    } else {
+        for (uint32_t i = 0; i < d->count; i++, q += 16) {
+            df_le32_store(q, (uint32_t)d->idx[i]);
+            memcpy(q + 4, d->xyz + 3 * (size_t)i, 12);
+        }
+    }
+    b->len = DF_FRAME_HEADER_SIZE + payload;
+    return b;
+}
+
 /* Splits `d` (total rows in d->total, arrays for all of them) into chunk frames. */
 static int emit_chunks(df_msg_disp *d, const df_msg_progress *progress, uint16_t type,
                        uint16_t flags, uint64_t req_id, df_frames *out, df_error *err)
@@ -54,7 +103,7 @@ static int emit_chunks(df_msg_disp *d, const df_msg_progress *progress, uint16_t
             p.disp = *d;
             f = df_out_progress(DF_MSG_PROGRESS, fl, req_id, &p, err);
         } else {
-            f = df_out_disp(type, fl, req_id, d, err);
+            f = disp_frame(d, type, fl, req_id, err);
         }
         if (!f || df_frames_push(out, f) != DF_OK) {
             while (out->n > first) df_sbuf_unref(out->v[--out->n]);
@@ -83,6 +132,18 @@ int df_stream_scratch(df_session *s, df_error *err)
     return DF_OK;
 }
 
+/* 1 when the bits of row u differ from row v (3 floats each). */
+static inline uint32_t row_changed(const float *u, const float *v)
+{
+    uint64_t a, b;
+    uint32_t c, d;
+    memcpy(&a, u, 8);
+    memcpy(&b, v, 8);
+    memcpy(&c, u + 2, 4);
+    memcpy(&d, v + 2, 4);
+    return (a != b) | (c != d);
+}
+
 int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
                       const df_msg_progress *progress, uint64_t req_id, df_frames *out,
                       uint32_t *changed, df_error *err)
@@ -93,29 +154,36 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
     const float *uf = s->uf;
     float *newu = s->scratch_u;
     int32_t *idx = s->scratch_idx;
-    /* One pass: new displacements, finiteness, changed rows. */
-    uint32_t k = 0;
+    /* Pass 1: new displacements, their finiteness, changed components. `omp simd` because
+     * gcc's -O2 cost model will not add the alias checks needed to vectorize it on its own. */
+    size_t m = 3 * nv;
     int bad = 0;
-    for (size_t i = 0; i < nv; i++) {
-        const double *p = pos + 3 * i, *x = X + 3 * i;
-        float *u = newu + 3 * i;
-        u[0] = (float)(p[0] - x[0]);
-        u[1] = (float)(p[1] - x[1]);
-        u[2] = (float)(p[2] - x[2]);
-        bad |= !isfinite(u[0]) | !isfinite(u[1]) | !isfinite(u[2]);
+    uint32_t ne = 0;
+#pragma omp simd reduction(| : bad) reduction(+ : ne)
+    for (size_t i = 0; i < m; i++) {
+        float u = (float)(pos[i] - X[i]);
         uint32_t a, b;
-        uint64_t c, d;
-        memcpy(&a, u + 2, 4);
-        memcpy(&b, uf + 3 * i + 2, 4);
-        memcpy(&c, u, 8);
-        memcpy(&d, uf + 3 * i, 8);
-        idx[k] = (int32_t)i;
-        k += (a != b) | (c != d);
+        memcpy(&a, &u, 4);
+        memcpy(&b, uf + i, 4);
+        newu[i] = u;
+        bad |= !(fabsf(u) <= FLT_MAX); /* NaN or infinite */
+        ne += a != b;
     }
     if (bad) {
-        for (size_t i = 0; i < 3 * nv; i++)
+        for (size_t i = 0; i < m; i++)
             if (!isfinite(newu[i]))
                 return df_error_set(err, DF_EINVAL, "vertex %zu: position not finite", i / 3);
+    }
+    /* Pass 2: rows whose bits changed, their indices when the frame will be sparse. Skipped
+     * when the ne changed components (>= ne / 3 rows) already make it dense and the caller does
+     * not ask for the row count (a brush stroke moving every vertex). */
+    uint32_t k = (ne + 2) / 3;
+    if (changed || df_msg_disp_choose(k, (uint32_t)nv) == DF_DISP_SPARSE) {
+        k = 0;
+        for (size_t i = 0; i < nv; i++) {
+            idx[k] = (int32_t)i;
+            k += row_changed(newu + 3 * i, uf + 3 * i);
+        }
     }
     uint64_t version = atomic_load(&s->version) + 1;
     df_msg_disp d;

@@ -11,6 +11,9 @@
  *      pure stream (pipelined SNAPSHOT replies) and brush-driven (each frame a new version);
  *   4. the writer's update rate (update -> ack) on the 1k mesh with 1 vs 32 subscribers reading
  *      in a separate thread.
+ * After the 1k round trips it prints the daemon's side from STATS: compute-pool tasks, how many
+ * woke the loop, how many a spinning worker took without a wake-up (deformd --spin-us), and the
+ * worker time of the last brush update. DEFORMD_ARGS adds daemon options (e.g. "--spin-us 60").
  * Latencies and rates are the best of BENCH_REPEAT runs (the machine is shared and noisy).
  * Targets (issue): 1k p50 <= 3x echo; 100k p50 <= 2 ms; >= 60 1M frames/s; 32 subs <= 2x.
  * Exit status 0 when every measurement ran (targets are reported, not enforced), 1 otherwise. */
@@ -44,6 +47,7 @@
 #define STREAM_INFLIGHT 4
 #define WRITER_UPDATES 2000
 #define MANY_SUBS 32
+#define MAX_EXTRA_ARGS 8       /* words of DEFORMD_ARGS passed to the daemon */
 #define BENCH_REPEAT 3        /* latency/rate runs per case; the best one is reported */
 #define TARGET_ECHO_RATIO 3.0
 #define TARGET_100K_P50_US 2000.0
@@ -189,8 +193,15 @@ static int daemon_start(daemon_proc *d, const char *exe)
         prctl(PR_SET_PDEATHSIG, SIGTERM); /* never outlive the bench */
         FILE *f = freopen(log, "w", stderr);
         (void)f;
-        execl(exe, exe, "--foreground", "--socket", d->sock, "--tcp", tcp, "--log-level", "warn",
-              (char *)NULL);
+        char *argv[8 + MAX_EXTRA_ARGS + 1] = {(char *)exe, "--foreground", "--socket", d->sock,
+                                               "--tcp", tcp, "--log-level", "warn"};
+        int argc = 8;
+        static char extra[256]; /* DEFORMD_ARGS: extra daemon options, space separated */
+        snprintf(extra, sizeof extra, "%s", getenv("DEFORMD_ARGS") ? getenv("DEFORMD_ARGS") : "");
+        for (char *t = strtok(extra, " "); t && argc < 8 + MAX_EXTRA_ARGS; t = strtok(NULL, " "))
+            argv[argc++] = t;
+        argv[argc] = NULL;
+        execv(exe, argv);
         _exit(127);
     }
     for (int i = 0; i < 200; i++) {
@@ -340,6 +351,21 @@ static int bench_rt(df_client *c, uint64_t sid, stats *out)
     *out = stats_of(t, n);
     free(t);
     return rc || n != RT_ROUNDS ? -1 : 0;
+}
+
+/* Value of `key` in the daemon-wide (sid 0) or a session's STATS; -1 when absent. */
+static double stat_value(df_client *c, uint64_t sid, const char *key)
+{
+    df_msg_stats st;
+    df_error e;
+    double v = -1;
+    if (df_client_stats(c, sid, &st, &e) != DF_OK)
+        return -1;
+    for (uint32_t i = 0; i < st.count; i++)
+        if (strcmp(st.items[i].key, key) == 0)
+            v = st.items[i].value;
+    df_msg_stats_free(&st);
+    return v;
 }
 
 /* Full dense frames of the 1M session: pipelined SNAPSHOT replies (pure stream) when `brush` is
@@ -563,9 +589,13 @@ int main(int argc, char **argv)
     stats rt[2][2];
     memset(rt, 0, sizeof rt);
     int rt_ok[2] = {0, 0};
+    double pool0[3] = {0, 0, 0}, pool1[3] = {0, 0, 0}, work_ms = -1;
+    static const char *const pool_keys[3] = {"pool.tasks", "pool.wakeups", "pool.spin_hits"};
     for (int m = 0; m < 2; m++) {
         sid[m] = load_grid(cu, sizes[m], names[m]);
         int bad = !sid[m];
+        for (int k = 0; m == 0 && k < 3; k++)
+            pool0[k] = stat_value(cu, 0, pool_keys[k]);
         for (int r = 0; !bad && r < BENCH_REPEAT; r++) {
             stats a, b;
             bad = bench_rt(cu, sid[m], &a) || bench_rt(ct, sid[m], &b);
@@ -578,12 +608,21 @@ int main(int argc, char **argv)
             fail = 1;
             continue;
         }
+        if (m == 0) {
+            for (int k = 0; k < 3; k++)
+                pool1[k] = stat_value(cu, 0, pool_keys[k]);
+            work_ms = stat_value(cu, sid[0], "brush.last_ms");
+        }
         rt_ok[m] = 1;
         for (int k = 0; k < 2; k++)
             printf("brush update -> displacement %-9s %s: p50 %7.1f us  p99 %7.1f us  (%d "
                    "vertices, %d updates)\n", names[m], k ? "tcp " : "unix", rt[m][k].p50,
                    rt[m][k].p99, sizes[m] * sizes[m], RT_ROUNDS);
     }
+    if (rt_ok[0] && pool0[0] >= 0 && pool1[0] >= 0) /* the daemon's side of the 1k runs */
+        printf("  1k runs on the daemon: %.0f pool tasks, %.0f loop wake-ups by workers, %.0f "
+               "tasks taken by a spinning worker; last brush work %.1f us\n",
+               pool1[0] - pool0[0], pool1[1] - pool0[1], pool1[2] - pool0[2], work_ms * 1e3);
     if (rt_ok[0]) {
         double r = rt[0][0].p50 / eu.p50, rtcp = rt[0][1].p50 / et.p50;
         printf("  target 1k p50 <= %.0fx raw echo: unix %.1fx %s, tcp %.1fx %s\n", TARGET_ECHO_RATIO,
