@@ -32,6 +32,7 @@ typedef struct fsrc {
     float K[9], D[9], t;   /* affine F split: skew K, symmetric traceless D, trace/dim t */
     float kK, kD1, kD2, kDq, kT; /* affine coefficients (see affine3 / load2)          */
     float lcoef;           /* 2D: (b - a) sum_i w_i ln(s + eps_i^2)                     */
+    double dx[MO], ddel[MO], dw[MO], dwd[MO]; /* 2D (scalar path): the same in double     */
 } fsrc;
 
 typedef struct fplan {
@@ -71,6 +72,10 @@ static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *s
         o->w[i] = (float)k->w[i];
         o->wd[i] = (float)(k->w[i] * (e2 - x0));
         o->eh[i] = (float)(e2 / x0);
+        o->dx[i] = e2;
+        o->ddel[i] = e2 - x0;
+        o->dw[i] = k->w[i];
+        o->dwd[i] = k->w[i] * (e2 - x0);
     }
     o->ie2 = (float)(1.0 / x0);
     o->ie1 = (float)(1.0 / k->eps[0]);
@@ -265,32 +270,35 @@ static inline __attribute__((always_inline)) void affine3(const fsrc *S, const i
     }
 }
 
-/* 2D loads (z untouched): generic order, scalar logf / log1pf for the log term; the same
- * difference trick with q_i = 1/(s + eps_i^2): q_i - q_1 = -del_i q_i q_1. */
+/* 2D loads (z untouched): a scalar loop (the log term needs log1p) whose multi-scale sums are
+ * taken in double, so the multi-scale cancellation costs no float digits; with q_i = 1/(s +
+ * eps_i^2) the differences q_i - q_1 = -del_i q_i q_1 are exact in form, as in 3D. */
 static inline __attribute__((always_inline)) void load2(const fsrc *S, blk *restrict p,
                                                         blk *restrict u)
 {
-    const float cx = S->c[0], cy = S->c[1], x1 = S->e2[0];
+    const float cx = S->c[0], cy = S->c[1];
+    const double x1 = S->dx[0];
     const int order = S->order;
     for (int j = 0; j < BLOCK; j++) {
-        float rx = p[0][j] - cx, ry = p[1][j] - cy, s = rx * rx + ry * ry;
-        float q1 = 1.0f / (s + x1), sq, sq2, xq, xq2, lg = 0.0f;
+        float rx = p[0][j] - cx, ry = p[1][j] - cy;
+        double s = (double)rx * rx + (double)ry * ry;
+        double q1 = 1.0 / (s + x1), sq, sq2, xq, xq2, lg = 0.0;
         if (order == 1) {
             sq = q1;
             sq2 = q1 * q1;
             xq = x1 * q1;
             xq2 = x1 * sq2;
-            lg = logf(s + x1);
+            lg = log(s + x1);
         } else {
-            float a1 = 0.0f, a2 = 0.0f, t1 = 0.0f, t2 = 0.0f;
+            double a1 = 0.0, a2 = 0.0, t1 = 0.0, t2 = 0.0;
             for (int i = 1; i < order; i++) {
-                float qi = 1.0f / (s + S->e2[i]);
-                float d1 = -S->del[i] * qi * q1, d2 = d1 * (qi + q1);
-                a1 += S->w[i] * d1;
-                a2 += S->w[i] * d2;
-                t1 += S->wd[i] * (order >= 3 ? d1 : qi);
-                t2 += S->wd[i] * (order >= 3 ? d2 : qi * qi);
-                lg += S->w[i] * log1pf(S->del[i] * q1);
+                double qi = 1.0 / (s + S->dx[i]);
+                double d1 = -S->ddel[i] * qi * q1, d2 = d1 * (qi + q1);
+                a1 += S->dw[i] * d1;
+                a2 += S->dw[i] * d2;
+                t1 += S->dwd[i] * (order >= 3 ? d1 : qi);
+                t2 += S->dwd[i] * (order >= 3 ? d2 : qi * qi);
+                lg += S->dw[i] * log1p(S->ddel[i] * q1);
             }
             sq = a1;
             sq2 = a2;
@@ -298,14 +306,15 @@ static inline __attribute__((always_inline)) void load2(const fsrc *S, blk *rest
             xq2 = x1 * a2 + t2;
         }
         if (!S->affine) {
-            float A = S->lcoef * lg + S->kA3 * xq;
-            float rf = S->kB * sq * (rx * S->f[0] + ry * S->f[1]);
+            float A = (float)(S->lcoef * lg + S->kA3 * xq);
+            float rf = (float)(S->kB * sq) * (rx * S->f[0] + ry * S->f[1]);
             u[0][j] += A * S->f[0] + rf * rx;
             u[1][j] += A * S->f[1] + rf * ry;
         } else {
             const float *K = S->K, *D = S->D;
-            float base = sq + xq2, cK = S->kK * base, cT = S->kT * base * S->t;
-            float cD = S->kD1 * sq + S->kD2 * xq2, cQ = S->kDq * sq2;
+            double base = sq + xq2;
+            float cK = (float)(S->kK * base), cT = (float)(S->kT * base * S->t);
+            float cD = (float)(S->kD1 * sq + S->kD2 * xq2), cQ = (float)(S->kDq * sq2);
             float Krx = K[0] * rx + K[1] * ry, Kry = K[3] * rx + K[4] * ry;
             float Drx = D[0] * rx + D[1] * ry, Dry = D[3] * rx + D[4] * ry;
             float q = cT + cQ * (rx * Drx + ry * Dry);
