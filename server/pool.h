@@ -1,18 +1,19 @@
 /* pool.h — the compute pool: a few worker threads that run session jobs off the loop thread.
  *
- * Same contract as uv_queue_work (work on a worker, `after` on the loop thread, the loop never
- * waits for work), with a cheaper hand-off for interactive requests:
+ * Same contract as uv_queue_work (work on a worker, `after` on the loop thread in completion
+ * order, the loop never waits for work), with a cheaper hand-off for interactive requests:
  *   - completions are signalled through one eventfd watched by a uv_poll handle, written only
  *     when the loop has not been told yet (uv_async makes the woken loop spin until the sender
- *     has left uv_async_send, which on a loaded machine can mean waiting for it to be
- *     rescheduled);
+ *     has left uv_async_send, which on a loaded machine means waiting for it to be rescheduled);
+ *   - sleeping workers are woken last-idle-first (each has its own condition variable), so one
+ *     stroke after another runs on the same cache-warm thread;
  *   - optionally (spin_ns > 0) a worker that just finished a SHORT task (< DF_POOL_SHORT_TASK_NS)
- *     polls the queue for up to spin_ns (bounded by DF_POOL_MAX_SPIN_NS) before sleeping on its
- *     condition variable, so that back-to-back strokes skip the futex wake-up. Each poll step
- *     yields the CPU (sched_yield) so a spinner never holds a core another thread wants. This
- *     pays off only with idle cores: on an oversubscribed machine the spinner sits on the core
- *     the loop needs, which is why deformd's default is 0 (config key `spin_us`).
- * A worker that ran a long task (a solve) always sleeps at once. */
+ *     polls the queue for up to spin_ns (<= DF_POOL_MAX_SPIN_NS) before sleeping, yielding the
+ *     CPU between polls, so that back-to-back strokes skip the futex wake-up. It helps only with
+ *     idle cores (on the shared 2-core test machine: ~1 us of a 50 us round trip), hence
+ *     deformd's default 0 (config `spin_us`). A worker that ran a long task sleeps at once.
+ * The loop itself never busy-polls for results: measured, it took the core the worker needed
+ * (the scheduler wakes the worker on the loop's CPU) and made round trips slower, not faster. */
 #ifndef DF_SERVER_POOL_H
 #define DF_SERVER_POOL_H
 
