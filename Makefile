@@ -44,7 +44,7 @@ BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
 
-.PHONY: all deps test unit bench asan fuzz fuzz-build run clean
+.PHONY: all deps test unit bench asan fuzz fuzz-build run install clean
 all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need.
@@ -106,7 +106,7 @@ bench: all
 
 asan:
 	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
-	ASAN_OPTIONS=detect_leaks=1 BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
+	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
 # sources (compiled once into $(BUILD)/fuzz/obj). `make fuzz` mutates for FUZZ_SECONDS each, writing new
@@ -134,6 +134,25 @@ fuzz: fuzz-build
 
 run: all
 	bash tests/demo_run.sh
+
+# Installs the daemon, deformctl, the systemd units, libdeformclient (static, with the libraries it
+# needs), its header tree under include/deformd/ and a pkg-config file:
+#   cc app.c $$(pkg-config --cflags --libs deformclient)   with  #include <deformclient.h>
+PREFIX  ?= /usr/local
+DESTDIR ?=
+CLIENT_HEADERS := core/common/df_error.h core/mesh/mesh.h core/mesh/mesh_io.h \
+                  proto/frame.h proto/buf.h proto/frame_codec.h proto/wire_error.h proto/messages.h
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig \
+	  $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(PREFIX)/share/doc/deformd
+	install -m 755 $(BUILD)/bin/deformd $(BUILD)/bin/deformctl $(DESTDIR)$(PREFIX)/bin/
+	install -m 644 $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS) $(DESTDIR)$(PREFIX)/lib/
+	for h in $(CLIENT_HEADERS); do install -D -m 644 $$h $(DESTDIR)$(PREFIX)/include/deformd/$$h; done
+	install -m 644 client/deformclient.h $(DESTDIR)$(PREFIX)/include/deformd/deformclient.h
+	sed 's|@PREFIX@|$(PREFIX)|' client/deformclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/deformclient.pc
+	sed 's|/usr/local/bin/|$(PREFIX)/bin/|' systemd/deformd.service > $(DESTDIR)$(PREFIX)/lib/systemd/system/deformd.service
+	install -m 644 systemd/deformd.socket $(DESTDIR)$(PREFIX)/lib/systemd/system/
+	install -m 644 systemd/deformd.conf.example proto/PROTOCOL.md $(DESTDIR)$(PREFIX)/share/doc/deformd/
 
 clean:
 	rm -rf build build-asan
