@@ -84,11 +84,11 @@ int dc_cli_double(const char *s, const char *what, int allow_inf, double *out, d
 {
     if (!s || !*s)
         return df_error_set(err, DF_EINVAL, "%s: empty number", what);
-    const char *t = (*s == '+') ? s + 1 : s;
+    const char *t = (*s == '+' || *s == '-') ? s + 1 : s;
     if (strcasecmp(t, "inf") == 0 || strcasecmp(t, "infinity") == 0) {
         if (!allow_inf)
             return df_error_set(err, DF_EINVAL, "%s: '%s' must be finite", what, s);
-        *out = INFINITY;
+        *out = *s == '-' ? -INFINITY : INFINITY;
         return DF_OK;
     }
     errno = 0;

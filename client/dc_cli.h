@@ -44,7 +44,9 @@ int dc_cli_parse(int argc, char **argv, const dc_cli_opt *opts, int nopts, int m
 int dc_cli_find(const dc_cli_opt *opts, int nopts, const char *name);
 
 /* Parses a finite double (full string, no trailing junk). With `allow_inf` also accepts "inf",
- * "+inf", "infinity" (any case) as +INFINITY. `what` names the value in error messages. */
+ * "+inf", "infinity" (any case) as +INFINITY and "-inf", "-infinity" as -INFINITY. `what` names
+ * the value in error messages. Errors: DF_EINVAL (not a number, NaN, overflow, or an infinity
+ * without `allow_inf`); *out untouched. */
 int dc_cli_double(const char *s, const char *what, int allow_inf, double *out, df_error *err);
 
 /* Parses a decimal integer in [lo, hi] (full string). */

@@ -1,10 +1,18 @@
 /* cmd_brush.c — `deformctl brush`: one whole Kelvinlet stroke (begin with every parameter and
- * a zero load, one update carrying the load, end) committed as one session version. */
+ * a zero load, one update carrying the load, end) committed as one session version.
+ *
+ * Errors: a bad command line or pin file is a usage error (exit 2). The stroke is then checked
+ * locally with the Kelvinlet engine (dc_brush_check: e.g. a pinch matrix that is not symmetric
+ * and traceless, nu outside [-1, 0.5], coincident pins): the engine refusing it is a semantic
+ * error, reported as "deformctl brush: rejected: CODE: message" with exit 1, as are the
+ * daemon's refusals ("deformctl brush: server: CODE: message", exit 1). A stroke the daemon
+ * refuses after begin is cancelled, so the session keeps its shape. */
 #include <inttypes.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "client/dc_brush.h"
 #include "client/dc_files.h"
 #include "client/deformctl/ctl.h"
 
@@ -157,6 +165,12 @@ static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     } else {
         b.pin_flags = 0;
     }
+    if (dc_brush_check(&b, &u, &e)) {
+        fprintf(stderr, "%s %s: rejected: %s: %s\n", ctx->prog, cmd->name,
+                df_proto_error_name(e.code), e.msg[0] ? e.msg : "(no message)");
+        free(pins);
+        return CTL_EXIT_SERVER;
+    }
     df_client *c = ctl_connect(ctx, cmd);
     if (!c) {
         free(pins);
@@ -165,20 +179,27 @@ static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     df_msg_ack ack = {0, 0};
     int rc = ctl_session_id(c, a->pos[0], &b.session_id, &e);
     u.session_id = b.session_id;
+    int remote = 0; /* whether the failure was the daemon's (before the cancel resets it) */
     if (rc == DF_OK)
         rc = df_client_brush_begin(c, &b, NULL, &e);
     if (rc == DF_OK) {
         rc = df_client_brush_update(c, &u, NULL, &e);
-        if (rc == DF_OK)
+        if (rc == DF_OK) {
             rc = df_client_brush_end(c, b.session_id, &ack, &e);
-        else if (df_client_last_error_was_remote(c)) {
+        } else if ((remote = df_client_last_error_was_remote(c))) {
             df_error e2;
             df_client_brush_cancel(c, b.session_id, NULL, &e2);
         }
     }
     free(pins);
     if (rc) {
-        rc = ctl_fail(ctx, cmd, c, &e);
+        if (remote) {
+            fprintf(stderr, "%s %s: server: %s: %s\n", ctx->prog, cmd->name,
+                    df_proto_error_name(e.code), e.msg[0] ? e.msg : "(no message)");
+            rc = CTL_EXIT_SERVER;
+        } else {
+            rc = ctl_fail(ctx, cmd, c, &e);
+        }
         df_client_close(c);
         return rc;
     }

@@ -12,7 +12,9 @@ enum { G_OUT = CTL_NGLOBAL, G_COUNT };
 static const dc_cli_opt GET_OPTS[G_COUNT] = {
     CTL_GLOBAL_OPTS,
     {"out", 1, "--out FILE         output mesh; format from the extension: .obj .off .ply .node "
-               ".mesh (required)"},
+               ".mesh (required).\n                     A tet mesh written as .obj .off .ply "
+               "becomes its boundary surface\n                     over all vertices (a note on "
+               "stderr)"},
 };
 
 static const char *const OUT_EXTS[] = {".obj", ".off", ".ply", ".node", ".mesh", NULL};
@@ -46,21 +48,33 @@ static int run_get(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         return rc;
     }
     df_client_close(c);
+    int32_t surf = -1;
     rc = dc_meshout_write(out, m.kind, m.planar, m.nv, m.positions, m.ne, m.elements, m.nf,
-                          m.faces, &e);
+                          m.faces, &surf, &e);
     if (rc) {
         df_client_mesh_free(&m);
         fprintf(stderr, "%s %s: %s: %s\n", ctx->prog, cmd->name, df_error_name(e.code), e.msg);
         return e.code == DF_EINVAL || e.code == DF_EUNSUPPORTED ? CTL_EXIT_USAGE : CTL_EXIT_SERVER;
     }
+    if (surf >= 0)
+        fprintf(stderr, "%s %s: note: %s cannot hold tetrahedra; wrote the boundary surface of "
+                "the tet mesh (%d triangles over all %u vertices)\n", ctx->prog, cmd->name, out,
+                (int)surf, m.nv);
     if (ctx->json) {
-        printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 ",\"nv\":%u,\"ne\":%u,\"out\":",
+        printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 ",\"nv\":%u,\"ne\":%u,",
                m.session_id, m.version, m.nv, m.ne);
+        if (surf >= 0)
+            printf("\"boundary_faces\":%d,", (int)surf);
+        printf("\"out\":");
         ctl_json_str(stdout, out);
         printf("}\n");
     } else {
-        printf("wrote %s: %u vertices, %u elements (session %" PRIu64 " version %" PRIu64 ")\n",
-               out, m.nv, m.ne, m.session_id, m.version);
+        if (surf >= 0)
+            printf("wrote %s: %u vertices, %d boundary triangles of %u tets (session %" PRIu64
+                   " version %" PRIu64 ")\n", out, m.nv, (int)surf, m.ne, m.session_id, m.version);
+        else
+            printf("wrote %s: %u vertices, %u elements (session %" PRIu64 " version %" PRIu64
+                   ")\n", out, m.nv, m.ne, m.session_id, m.version);
     }
     df_client_mesh_free(&m);
     return CTL_EXIT_OK;

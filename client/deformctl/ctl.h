@@ -11,7 +11,8 @@
 
 /* Exit codes. */
 #define CTL_EXIT_OK 0
-#define CTL_EXIT_SERVER 1   /* the daemon refused the request, or the connection failed */
+#define CTL_EXIT_SERVER 1   /* the daemon (or the local engine check of `brush`) refused the
+                               request as meaningless, or the connection failed */
 #define CTL_EXIT_USAGE 2    /* bad command line or unreadable/malformed input file */
 
 /* The global options, accepted before the command or among its options. */

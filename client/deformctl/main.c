@@ -2,7 +2,8 @@
  *
  *   deformctl [--socket PATH | --tcp HOST:PORT] [--json] COMMAND [ARGS] [--help]
  *
- * Exit codes: 0 ok, 1 the daemon reported an error (or could not be reached), 2 usage error.
+ * Exit codes: 0 ok, 1 the request was refused as meaningless for the engine (by the daemon, or
+ * by the local Kelvinlet check of `brush`) or the daemon could not be reached, 2 usage error.
  * Results go to stdout (one JSON object with --json); diagnostics to stderr. */
 #include <inttypes.h>
 #include <stdlib.h>
@@ -28,7 +29,8 @@ static void usage_top(FILE *f)
             "  --tcp HOST:PORT    connect over TCP instead of the Unix socket\n"
             "  --json             machine-readable JSON output on stdout\n"
             "  --help             this text; `deformctl COMMAND --help` for a command\n"
-            "\nExit status: 0 success, 1 error reported by the daemon or connection failure,\n"
+            "\nExit status: 0 success, 1 error reported by the daemon (\"server: ...\"), a brush\n"
+            "the Kelvinlet engine rejects locally (\"rejected: ...\") or connection failure,\n"
             "2 usage error (bad options or input files).\n");
 }
 

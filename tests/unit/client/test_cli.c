@@ -82,6 +82,17 @@ static void test_numbers(void **state)
     assert_int_equal(dc_cli_double("inf", "--nu", 1, &d, &e), DF_OK);
     assert_true(isinf(d) && d > 0);
     assert_int_equal(dc_cli_double("Infinity", "--nu", 1, &d, &e), DF_OK);
+    assert_true(isinf(d) && d > 0);
+    assert_int_equal(dc_cli_double("+inf", "--nu", 1, &d, &e), DF_OK);
+    assert_true(isinf(d) && d > 0);
+    assert_int_equal(dc_cli_double("-inf", "--nu", 1, &d, &e), DF_OK);
+    assert_true(isinf(d) && d < 0);
+    assert_int_equal(dc_cli_double("-Infinity", "--nu", 1, &d, &e), DF_OK);
+    assert_true(isinf(d) && d < 0);
+    d = 7;
+    assert_int_equal(dc_cli_double("-inf", "--radius", 0, &d, &e), DF_EINVAL);
+    assert_string_equal(e.msg, "--radius: '-inf' must be finite");
+    assert_true(d == 7);
     d = 7;
     assert_int_equal(dc_cli_double("inf", "--radius", 0, &d, &e), DF_EINVAL);
     assert_string_equal(e.msg, "--radius: 'inf' must be finite");
