@@ -25,8 +25,16 @@
  * Local step 1 per element: polar rotation R of F_e + W_e (closed form, signed SVD fallback for
  * inverted or ill-conditioned elements); ARAP/ACAP/cloth then have closed-form X; Neo-Hookean solves
  * the prox of its energy on the 3 stretches by safeguarded Newton (core/admm/nh_prox.h: exact
- * Hessian, positivity kept by a fraction-to-boundary rule, Armijo backtracking), warm-started from
- * the element's previous stretches and eigenvectors. Per-vertex energies fit R_i (s_i) in closed
+ * Hessian, positivity kept by a fraction-to-boundary rule, Armijo backtracking when a full step does
+ * not halve the gradient), warm-started from the element's previous stretches and eigenvectors;
+ * the eigenvectors of S = R^T (F_e + W_e) come from warm-started Jacobi sweeps stopped at 1e-6
+ * relative off-diagonal size plus the exact first-order (Daleckii-Krein) correction of the rest
+ * (core/admm/nh_spectral.h; ~1e-12 relative error in X_e).
+ * Neo-Hookean handle steps are damped (core/admm/admm_damp.c): when new targets would make the
+ * global step's V invert an element, the targets applied to the handles move only by the largest
+ * fraction 1, 1/2, ..., 1/128 of the jump that keeps V uninverted (one extra solve per damped
+ * iteration); they reach the requested targets once that is feasible. Reported positions and
+ * objective are those of the last iterate without an inverted element (see df_admm_run). Per-vertex energies fit R_i (s_i) in closed
  * form (2x2 for planar meshes, signed 3x3 SVD otherwise).
  *
  * The SC-L1 prox uses the penalty rho (true ADMM), so `w` is the true loss weight; rho > w max(a_i)/s
@@ -129,8 +137,8 @@ typedef int (*df_admm_progress_fn)(void *user, const df_admm_progress *p);
 typedef struct df_admm_budget {
     int max_iters;         /* <= 0: params.max_iters */
     double max_ms;         /* wall-clock budget of this call in ms: no iteration is started that would
-                              end past it at the average iteration cost (the first always runs);
-                              <= 0: unlimited */
+                              end past it at 1.05 x the larger of the run's mean iteration cost and
+                              its last iteration's cost (the first always runs); <= 0: unlimited */
     int progress_every;    /* call `progress` every k iterations (and at the end); <= 0: never */
     df_admm_progress_fn progress;
     void *user;
@@ -163,9 +171,13 @@ typedef struct df_admm_result {
 
 /* Runs ADMM iterations from the current state until the residual drops below tol, the iteration or
  * time budget is spent, or the callback stops it. `budget` may be NULL (params.max_iters, no time
- * limit, no callback); `res` may be NULL. The objective is +inf while an element of the current
- * iterate is inverted under Neo-Hookean (intermediate ADMM iterates may invert; the residual is then
- * +inf and the run does not count as converged). Errors: DF_EINVAL (NULL solver), DF_ENOMEM
+ * limit, no callback); `res` may be NULL. Neo-Hookean: intermediate ADMM iterates may invert an
+ * element (infinite energy); such an iterate is not reported when the positions reported before it
+ * are uninverted: df_admm_positions, the progress V and the result keep the last uninverted iterate
+ * and its (finite) objective, the residual is +inf for that iteration and the run does not count as
+ * converged; the ADMM state itself continues from the actual iterate. The objective is +inf only
+ * when no uninverted iterate has been reported yet. While damped handle steps are pending (admm.h
+ * header comment) the reported handles lag behind their targets. Errors: DF_EINVAL (NULL solver), DF_ENOMEM
  * (Anderson work buffer), DF_EINTERNAL (CHOLMOD solve failure; positions then keep their last
  * values). */
 int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, df_error *err);

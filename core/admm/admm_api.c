@@ -98,6 +98,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->q = mesh->kind == DF_MESH_TET ? 3 : 2;
     df_admm_lame(params->youngs, params->poisson, &s->mu, &s->lambda);
     s->E_last = NAN;
+    s->el_last = s->lo_last = NAN;
     size_t nv3 = (size_t)s->nv * 3;
     s->n_state = 6 * (int64_t)s->nv + (s->family == ADMM_FAM_ELEMENT ? 9 * (int64_t)s->ne : 0);
     s->E = malloc((size_t)s->ne * s->esz * sizeof(int32_t));
@@ -107,6 +108,12 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->Z = calloc(nv3, sizeof(double));
     s->hidx = malloc((size_t)nh * sizeof(int32_t));
     s->target = malloc((size_t)nh * 3 * sizeof(double));
+    s->target_req = malloc((size_t)nh * 3 * sizeof(double));
+    s->damp = params->energy == DF_ADMM_NEOHOOKEAN;
+    if (s->damp) {
+        s->damp_va = malloc(nv3 * sizeof(double));
+        s->damp_dp = malloc((size_t)nh * 3 * sizeof(double));
+    }
     if (s->family == ADMM_FAM_ELEMENT) {
         s->RX = calloc((size_t)s->ne * 9, sizeof(double));
         s->Ce = calloc((size_t)s->ne * s->esz * 3, sizeof(double));
@@ -124,7 +131,8 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
             Q[0] = Q[4] = Q[8] = 1.0;
         }
     }
-    if (!s->E || !s->Vrest || !s->state || !s->Vout || !s->Z || !s->hidx || !s->target ||
+    if (!s->E || !s->Vrest || !s->state || !s->Vout || !s->Z || !s->hidx || !s->target || !s->target_req ||
+        (s->damp && (!s->damp_va || !s->damp_dp)) ||
         (s->family == ADMM_FAM_ELEMENT && (!s->RX || !s->Ce))) {
         df_admm_free(s);
         return df_error_set(err, DF_ENOMEM, "admm: out of memory");
@@ -139,6 +147,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->nh = nh;
     memcpy(s->hidx, handles, (size_t)nh * sizeof(int32_t));
     for (int32_t h = 0; h < nh; h++) memcpy(s->target + 3 * (size_t)h, mesh->V + 3 * (size_t)handles[h], 3 * sizeof(double));
+    memcpy(s->target_req, s->target, (size_t)nh * 3 * sizeof(double));
     if (n_affine > 0) {
         s->aff = calloc((size_t)n_affine, sizeof(df_admm_affine));
         if (!s->aff) { df_admm_free(s); return df_error_set(err, DF_ENOMEM, "admm: out of memory"); }
@@ -170,8 +179,15 @@ int df_admm_set_targets(df_admm *s, const double *targets, df_error *err)
     if (!s || !targets) return df_error_set(err, DF_EINVAL, "admm_set_targets: NULL argument");
     for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++)
         if (!isfinite(targets[i])) return df_error_set(err, DF_EINVAL, "admm_set_targets: target of handle %d is not finite", (int)(i / 3));
-    memcpy(s->target, targets, (size_t)s->nh * 3 * sizeof(double));
-    admm_update_kfhp(s);
+    memcpy(s->target_req, targets, (size_t)s->nh * 3 * sizeof(double));
+    if (s->damp) {
+        /* applied by the next global steps, damped (admm_damp.c) */
+        s->tgt_pending = memcmp(s->target_req, s->target, (size_t)s->nh * 3 * sizeof(double)) != 0;
+        s->damp_stall = 0;
+    } else {
+        memcpy(s->target, targets, (size_t)s->nh * 3 * sizeof(double));
+        admm_update_kfhp(s);
+    }
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     /* the objective does not depend on the targets: E_last (of the current positions) stays valid */
     return DF_OK;
@@ -241,6 +257,7 @@ void df_admm_free(df_admm *s)
     for (int k = 0; k < s->naff; k++) free((void *)s->aff[k].verts);
     free(s->aff);
     free(s->E); free(s->Vrest); free(s->state); free(s->Vout); free(s->Z); free(s->hidx); free(s->target);
+    free(s->target_req); free(s->damp_va); free(s->damp_dp);
     free(s->RX); free(s->Ce); free(s->Rv); free(s->nhQ); free(s->nhx);
     free(s);
 }

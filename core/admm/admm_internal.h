@@ -63,7 +63,12 @@ struct df_admm {
     /* handles */
     int32_t nh;
     int32_t *hidx;
-    double *target;          /* nh x 3 */
+    double *target;          /* nh x 3: the targets the global step applies */
+    double *target_req;      /* nh x 3: the targets set by df_admm_set_targets */
+    int damp;                /* Neo-Hookean: damped handle steps (admm_damp.c) */
+    int tgt_pending;         /* target != target_req */
+    int damp_stall;          /* consecutive damped steps that could not move the handles */
+    double *damp_va, *damp_dp; /* nv x 3 undamped global solution, nh x 3 pending handle step */
     int32_t nfree;
     int32_t *fidx;           /* nv -> free index or -1 */
     int32_t *fvert;          /* nfree -> vertex */
@@ -76,6 +81,7 @@ struct df_admm {
     int cc_started;
     cholmod_factor *L;
     cholmod_dense *rhs;      /* nfree x 3 column-major */
+    cholmod_dense *sol, *sol_y, *sol_e; /* cholmod_solve2 result and workspaces, reused */
     /* affine constraints: Schur complement on top of the factorization */
     int n_arows;             /* scalar rows M */
     int32_t *ar_col;         /* row -> column of Y (distinct constrained vertex) */
@@ -89,6 +95,7 @@ struct df_admm {
     int naff;
     df_admm_stats st;
     double E_last;           /* objective of Vout, NAN when unknown */
+    double el_last, lo_last; /* its elastic and locality parts, NAN when unknown */
     admm_anderson aa;
 };
 
@@ -103,6 +110,13 @@ int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df
 void admm_free_system(df_admm *s);
 void admm_update_kfhp(df_admm *s);
 int admm_global_solve(df_admm *s, df_error *err);
+/* solves K_ff x = rhs (s->rhs) with the affine correction towards A x = b (with_b = 1) or A x = 0;
+ * *x points to the nfree x 3 column-major answer (valid until the next solve) */
+int admm_solve_rhs(df_admm *s, int with_b, const double **x, df_error *err);
+
+/* admm_damp.c: the global step; for Neo-Hookean moves the applied handle targets towards the
+ * requested ones by the largest step (1, 1/2, ...) that leaves no element of V inverted */
+int admm_global_step(df_admm *s, df_error *err);
 
 /* admm_local.c: local steps and the global right-hand side. */
 void admm_local_x(df_admm *s);

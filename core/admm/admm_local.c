@@ -7,6 +7,7 @@
 
 #include "core/admm/admm_internal.h"
 #include "core/admm/nh_prox.h"
+#include "core/admm/nh_spectral.h"
 #include "core/admm/scl1.h"
 #include "core/admm/svd3.h"
 
@@ -105,7 +106,7 @@ static void local_x_element_one(df_admm *s, int32_t e)
         double *Q = s->nhQ + 9 * (size_t)e, *xp = s->nhx + 3 * (size_t)e;
         double R[9], x[3];
         if (df_admm_polar3(G, R) == 0) {
-            double S[9], lam[3];
+            double S[9];
             for (int i = 0; i < 3; i++)
                 for (int j = 0; j < 3; j++)
                     S[3 * i + j] = R[i] * G[j] + R[3 + i] * G[3 + j] + R[6 + i] * G[6 + j];
@@ -136,15 +137,15 @@ static void local_x_element_one(df_admm *s, int32_t e)
                 xp[0] = xp[1] = xp[2] = xm;
                 return;
             }
-            df_admm_sym3_eig_warm(S, lam, Q);
-            if (df_admm_nh_prox(lam, xp, vol, s->mu, s->lambda, gam, x) < 0) { x[0] = x[1] = x[2] = 1.0; }
-            double RQ[9];
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++) RQ[3 * i + j] = R[3 * i] * Q[j] + R[3 * i + 1] * Q[3 + j] + R[3 * i + 2] * Q[6 + j];
+            /* warm-started Jacobi to DF_ADMM_NH_SPECTRAL_OFF plus the first-order correction */
+            double X[9];
+            if (df_admm_nh_prox_sym(S, Q, xp, vol, s->mu, s->lambda, gam, X) < 0) {
+                memcpy(RX, R, sizeof(R)); /* invalid input cannot happen for finite G; identity X */
+                return;
+            }
             for (int r = 0; r < 3; r++)
                 for (int c = 0; c < 3; c++)
-                    RX[3 * r + c] = RQ[3 * r] * x[0] * Q[3 * c] + RQ[3 * r + 1] * x[1] * Q[3 * c + 1] + RQ[3 * r + 2] * x[2] * Q[3 * c + 2];
-            memcpy(xp, x, sizeof(x));
+                    RX[3 * r + c] = R[3 * r] * X[c] + R[3 * r + 1] * X[3 + c] + R[3 * r + 2] * X[6 + c];
             return;
         }
         double U[9], sg[3], Vm[9];

@@ -8,6 +8,9 @@
 
 #include "core/admm/admm_internal.h"
 
+/* safety factor on the predicted cost of the next iteration when a time budget is set */
+#define ADMM_BUDGET_MARGIN 1.05
+
 double admm_now(void)
 {
     struct timespec ts;
@@ -25,7 +28,7 @@ static int iterate(df_admm *s, df_admm_result *r, double *el_fused, df_error *er
     admm_local_z(s);
     double t2 = admm_now();
     admm_assemble_rhs(s);
-    int rc = admm_global_solve(s, err);
+    int rc = admm_global_step(s, err);
     if (rc) return rc;
     double ef = admm_dual_update(s);
     *el_fused = s->family == ADMM_FAM_ELEMENT ? ef : NAN;
@@ -52,36 +55,60 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         if (!x_before) return df_error_set(err, DF_ENOMEM, "admm_run: out of memory");
     }
     double E_prev = s->E_last;
-    if (!isfinite(E_prev)) E_prev = admm_elastic(s, s->Vout) + admm_locality(s, s->Vout);
+    if (!isfinite(E_prev)) {
+        double el0 = admm_elastic(s, s->Vout), lo0 = admm_locality(s, s->Vout);
+        E_prev = el0 + lo0;
+        s->E_last = E_prev;
+        s->el_last = el0;
+        s->lo_last = lo0;
+    }
     int rc = DF_OK;
     r.stop = DF_ADMM_STOP_ITERS;
+    double t_loop = admm_now(), t_it = t_loop, last_ms = 0.0;
     for (int it = 0; it < maxit; it++) {
         if (it > 0 && max_ms > 0) {
-            /* stop when the next iteration (at the average cost so far) would overrun the budget */
-            double el_ms = (admm_now() - tstart) * 1e3;
-            if (el_ms + el_ms / it > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
+            /* predictive stop: start the next iteration only if it ends within the budget at the
+             * larger of the mean iteration cost of this run and the last iteration's cost (a slow
+             * iteration on a loaded machine raises the estimate at once) */
+            double tn = admm_now(), el_ms = (tn - tstart) * 1e3;
+            double mean_ms = (tn - t_loop) * 1e3 / it, est = mean_ms > last_ms ? mean_ms : last_ms;
+            if (el_ms + est * ADMM_BUDGET_MARGIN > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
         }
         if (x_before) memcpy(x_before, s->state, (size_t)s->n_state * sizeof(double));
         double el_fused;
         rc = iterate(s, &r, &el_fused, err);
         if (rc) break;
-        memcpy(s->Vout, s->V, (size_t)s->nv * 3 * sizeof(double));
+        /* Neo-Hookean: an inverted iterate (infinite energy) is not reported while the positions
+         * reported so far are feasible; the ADMM state continues from it all the same */
+        int hold = s->damp && !isfinite(el_fused) && isfinite(s->E_last) && isfinite(s->el_last);
+        if (!hold) memcpy(s->Vout, s->V, (size_t)s->nv * 3 * sizeof(double));
         double ta = admm_now();
         if (x_before) r.anderson_accepted += admm_aa_step(&s->aa, x_before, s->state) && s->aa.pending;
         /* element family: the energy of Vout (= V before any Anderson extrapolation) came with the
          * dual update's F_e; only the bending part remains */
-        double el = s->family == ADMM_FAM_ELEMENT ? el_fused + admm_bending(s, s->Vout) : admm_elastic(s, s->Vout);
-        double lo = admm_locality(s, s->Vout);
-        double E = el + lo;
+        double el, lo;
+        if (hold) {
+            el = s->el_last;
+            lo = s->lo_last;
+        } else {
+            el = s->family == ADMM_FAM_ELEMENT ? el_fused + admm_bending(s, s->Vout) : admm_elastic(s, s->Vout);
+            lo = admm_locality(s, s->Vout);
+        }
+        double E = hold ? s->E_last : el + lo;
         r.t_other += admm_now() - ta;
         r.iterations++;
         s->st.iterations++;
+        double t_end = admm_now();
+        last_ms = (t_end - t_it) * 1e3;
+        t_it = t_end;
         r.elastic = el;
         r.locality = lo;
         r.objective = E;
-        r.residual = (isfinite(E) && isfinite(E_prev)) ? fabs(E - E_prev) / (E + 1.0) : INFINITY;
+        r.residual = (!hold && isfinite(E) && isfinite(E_prev)) ? fabs(E - E_prev) / (E + 1.0) : INFINITY;
         E_prev = E;
         s->E_last = E;
+        s->el_last = el;
+        s->lo_last = lo;
         int conv = r.residual < s->p.tol;
         if (every > 0 && (r.iterations % every == 0 || conv || it == maxit - 1)) {
             df_admm_progress pr = {r.iterations, E, r.residual, s->Vout, s->nv};

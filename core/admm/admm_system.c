@@ -39,6 +39,9 @@ void admm_free_system(df_admm *s)
     if (s->cc_started) {
         if (s->L) cholmod_free_factor(&s->L, &s->cc);
         if (s->rhs) cholmod_free_dense(&s->rhs, &s->cc);
+        if (s->sol) cholmod_free_dense(&s->sol, &s->cc);
+        if (s->sol_y) cholmod_free_dense(&s->sol_y, &s->cc);
+        if (s->sol_e) cholmod_free_dense(&s->sol_e, &s->cc);
     }
     free(s->fidx); free(s->fvert); free(s->cpl_f); free(s->cpl_h); free(s->cpl_v); free(s->KfhP);
     free(s->ar_col); free(s->ar_A); free(s->ar_b); free(s->yc_free); free(s->Y); free(s->Sch); free(s->lam);
@@ -228,11 +231,13 @@ int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df
     return build_affine(s, aff, naff, err);
 }
 
-int admm_global_solve(df_admm *s, df_error *err)
+int admm_solve_rhs(df_admm *s, int with_b, const double **xo, df_error *err)
 {
-    cholmod_dense *X = cholmod_solve(CHOLMOD_A, s->L, s->rhs, &s->cc);
+    /* cholmod_solve2 reuses the solution and its workspaces across iterations (no allocation) */
+    int ok = cholmod_solve2(CHOLMOD_A, s->L, s->rhs, NULL, &s->sol, NULL, &s->sol_y, &s->sol_e, &s->cc);
     s->st.solves++;
-    if (!X) return df_error_set(err, DF_EINTERNAL, "admm: cholmod_solve failed (status %d)", s->cc.status);
+    cholmod_dense *X = s->sol;
+    if (!ok || !X) return df_error_set(err, DF_EINTERNAL, "admm: cholmod_solve failed (status %d)", s->cc.status);
     int32_t nf = s->nfree;
     double *x = X->x;
     if (s->n_arows > 0) {
@@ -240,7 +245,7 @@ int admm_global_solve(df_admm *s, df_error *err)
         for (int r = 0; r < M; r++) {
             const double *A = s->ar_A + 3 * (size_t)r;
             size_t f = (size_t)s->yc_free[s->ar_col[r]];
-            s->lam[r] = A[0] * x[f] + A[1] * x[f + nf] + A[2] * x[f + 2 * (size_t)nf] - s->ar_b[r];
+            s->lam[r] = A[0] * x[f] + A[1] * x[f + nf] + A[2] * x[f + 2 * (size_t)nf] - (with_b ? s->ar_b[r] : 0.0);
         }
         LAPACKE_dpotrs(LAPACK_COL_MAJOR, 'L', M, 1, s->Sch, M, s->lam, M);
         for (int k = 0; k < 3; k++) {
@@ -253,11 +258,20 @@ int admm_global_solve(df_admm *s, df_error *err)
             }
         }
     }
+    *xo = x;
+    return DF_OK;
+}
+
+int admm_global_solve(df_admm *s, df_error *err)
+{
+    const double *x;
+    int rc = admm_solve_rhs(s, 1, &x, err);
+    if (rc) return rc;
+    int32_t nf = s->nfree;
     for (int32_t f = 0; f < nf; f++) {
         double *v = s->V + 3 * (size_t)s->fvert[f];
         v[0] = x[f]; v[1] = x[f + nf]; v[2] = x[f + 2 * (size_t)nf];
     }
     for (int32_t h = 0; h < s->nh; h++) memcpy(s->V + 3 * (size_t)s->hidx[h], s->target + 3 * (size_t)h, 3 * sizeof(double));
-    cholmod_free_dense(&X, &s->cc);
     return DF_OK;
 }

@@ -16,9 +16,10 @@ double df_admm_nh_psi(const double sig[3], double mu, double lambda);
  * on the 3 unknowns (exact Hessian, plus a diagonal shift when it is not positive definite),
  * started from `start` when it is non-NULL with positive finite entries (warm start: the previous
  * ADMM iteration's answer), else from |sig_i| clamped below at 0.03 max(mean |sig|, 1) + 1e-3, with
- * a fraction-to-boundary rule that keeps x_i > 0 and Armijo backtracking (full steps once the
- * Newton decrement is at roundoff level): each step decreases the objective (strictly convex near
- * the solution), so it cannot diverge. At most DF_ADMM_NH_MAX_NEWTON steps; stops when the gradient
+ * a fraction-to-boundary rule that keeps x_i > 0. A full, unshifted Newton step that at least halves
+ * the gradient norm is accepted at once (the Newton region: no objective evaluation, the gradient is
+ * the next step's); any other step is safeguarded by Armijo backtracking on the objective (full
+ * steps once the Newton decrement is at roundoff level), so it cannot diverge. At most DF_ADMM_NH_MAX_NEWTON steps; stops when the gradient
  * norm is below 1e-13 (vol mu + gamma) (1 + |x|). Returns the number of Newton steps taken, or -1
  * (out untouched) on invalid input. */
 #define DF_ADMM_NH_MAX_NEWTON 30
