@@ -1,6 +1,7 @@
 /* kelvinlet_apply.c — the float32 evaluation path: SoA blocks of BLOCK points, one fused
  * SIMD loop per load (orders 1-3 specialized at compile time so the scale loop unrolls),
- * Euler / RK4 per block, OpenMP over blocks.
+ * Euler / RK4 per block, OpenMP over blocks when more than one thread may run (a parallel
+ * region costs microseconds even with one thread: small meshes on a 1-thread caller skip it).
  *
  * SIMD: the block integrator carries __attribute__((target_clones("arch=x86-64-v4",
  * "arch=x86-64-v3", "default"))): gcc emits AVX-512 and AVX2/FMA clones next to the portable
@@ -10,6 +11,7 @@
  * 1/sqrt is computed as the bit-level estimate plus three Newton steps (relative error at
  * float rounding level): plain C that vectorizes, where sqrtf would not (errno semantics). */
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -431,20 +433,28 @@ static void integrate_block(const fplan *plans, int moving, int steps, int rk4, 
 
 /* ---- drivers ---------------------------------------------------------------------------- */
 
+/* 1 when xyz[lo..hi) holds a NaN, an infinity or a value beyond lim. */
+static int chunk_bad(const float *xyz, size_t lo, size_t hi, float lim)
+{
+    int flag = 0;
+#pragma omp simd reduction(| : flag)
+    for (size_t i = lo; i < hi; i++)
+        flag |= !(fabsf(xyz[i]) <= lim);              /* true for NaN, +-Inf, too large */
+    return flag;
+}
+
 int dfk_points_ok_f(const float *xyz, size_t n, size_t *bad)
 {
     const size_t m = 3 * n, chunk = 4096;
     const size_t nc = (m + chunk - 1) / chunk;
     const float lim = (float)DF_KELVINLET_MAX_VALUE;
     int any = 0;
-#pragma omp parallel for reduction(| : any) schedule(static) if (nc >= 16)
-    for (size_t c = 0; c < nc; c++) {
-        size_t lo = c * chunk, hi = lo + chunk < m ? lo + chunk : m;
-        int flag = 0;
-#pragma omp simd reduction(| : flag)
-        for (size_t i = lo; i < hi; i++)
-            flag |= !(fabsf(xyz[i]) <= lim);          /* true for NaN, +-Inf, too large */
-        any |= flag;
+    if (nc >= 16 && omp_get_max_threads() > 1) {
+#pragma omp parallel for reduction(| : any) schedule(static)
+        for (size_t c = 0; c < nc; c++)
+            any |= chunk_bad(xyz, c * chunk, c * chunk + chunk < m ? c * chunk + chunk : m, lim);
+    } else { /* no parallel region: it costs microseconds even with one thread */
+        any = chunk_bad(xyz, 0, m, lim);
     }
     if (!any)
         return 1;
@@ -486,11 +496,17 @@ static int run(const df_kelvinlet_prepared *p, const float *in, size_t n, float 
     if (rc == DF_OK) {
         int rk4 = p->brush.integrator == DF_KELVINLET_RK4, moving = mv != NULL;
         size_t nb = (n + BLOCK - 1) / BLOCK;
-#pragma omp parallel for schedule(dynamic, 8) if (nb >= PAR_MIN_BLOCKS)
-        for (size_t b = 0; b < nb; b++) {
-            size_t lo = b * BLOCK, cnt = n - lo < BLOCK ? n - lo : BLOCK;
-            integrate_block(plans, moving, steps, rk4, in + 3 * lo, (int)cnt, out + 3 * lo,
-                            want_disp);
+        if (nb >= PAR_MIN_BLOCKS && omp_get_max_threads() > 1) {
+#pragma omp parallel for schedule(dynamic, 8)
+            for (size_t b = 0; b < nb; b++) {
+                size_t lo = b * BLOCK, cnt = n - lo < BLOCK ? n - lo : BLOCK;
+                integrate_block(plans, moving, steps, rk4, in + 3 * lo, (int)cnt, out + 3 * lo,
+                                want_disp);
+            }
+        } else { /* one thread: skip the parallel region (microseconds even for 1 thread) */
+            for (size_t lo = 0; lo < n; lo += BLOCK)
+                integrate_block(plans, moving, steps, rk4, in + 3 * lo,
+                                (int)(n - lo < BLOCK ? n - lo : BLOCK), out + 3 * lo, want_disp);
         }
     }
     for (int i = 0; i < nplans; i++)
