@@ -14,7 +14,8 @@
  * After the 1k round trips it prints the daemon's side from STATS: compute-pool tasks, how many
  * woke the loop, how many a spinning worker took without a wake-up (deformd --spin-us), and the
  * worker time of the last brush update. DEFORMD_ARGS adds daemon options (e.g. "--spin-us 60").
- * Latencies and rates are the best of BENCH_REPEAT runs (the machine is shared and noisy).
+ * Latencies and rates are the best of BENCH_REPEAT runs (the machine is shared and noisy); the
+ * echo floor is measured before the daemon starts and again after the 1k runs, best of both.
  * Targets (issue): 1k p50 <= 3x echo; 100k p50 <= 2 ms; >= 60 1M frames/s; 32 subs <= 2x.
  * Exit status 0 when every measurement ran (targets are reported, not enforced), 1 otherwise. */
 #include <arpa/inet.h>
@@ -154,6 +155,22 @@ static int bench_echo(int family, const char *dir, stats *out)
     *out = stats_of(t, n);
     free(t);
     return n == ECHO_ROUNDS ? 0 : -1;
+}
+
+/* Lowers *eu / *et (unix / tcp echo; n == 0: unset) to the best p50 of BENCH_REPEAT more echo
+ * runs. Returns nonzero when a run failed. */
+static int echo_best(const char *dir, stats *eu, stats *et)
+{
+    int fail = 0;
+    for (int r = 0; r < BENCH_REPEAT; r++) {
+        stats a, b;
+        fail |= bench_echo(AF_UNIX, dir, &a) | bench_echo(AF_INET, dir, &b);
+        if (eu->n == 0 || a.p50 < eu->p50)
+            *eu = a;
+        if (et->n == 0 || b.p50 < et->p50)
+            *et = b;
+    }
+    return fail;
 }
 
 /* ---- daemon and meshes ---------------------------------------------------------------------- */
@@ -549,14 +566,7 @@ int main(int argc, char **argv)
            "shared machine)\n", ncpu, BENCH_REPEAT);
     int fail = 0;
     stats eu = {0, 0, 0, 0}, et = {0, 0, 0, 0};
-    for (int r = 0; r < BENCH_REPEAT; r++) {
-        stats a, b;
-        fail |= bench_echo(AF_UNIX, d.dir, &a) | bench_echo(AF_INET, d.dir, &b);
-        if (r == 0 || a.p50 < eu.p50)
-            eu = a;
-        if (r == 0 || b.p50 < et.p50)
-            et = b;
-    }
+    fail |= echo_best(d.dir, &eu, &et);
     printf("raw 16-byte echo (%d round trips)   unix: p50 %7.1f us  p99 %7.1f us\n", ECHO_ROUNDS,
            eu.p50, eu.p99);
     printf("                                    tcp : p50 %7.1f us  p99 %7.1f us\n", et.p50, et.p99);
@@ -624,6 +634,16 @@ int main(int argc, char **argv)
                "tasks taken by a spinning worker; last brush work %.1f us\n",
                pool1[0] - pool0[0], pool1[1] - pool0[1], pool1[2] - pool0[2], work_ms * 1e3);
     if (rt_ok[0]) {
+        /* The echo again, right after the 1k runs: the machine's load drifts, and a floor
+         * measured in a slow moment would flatter the ratio. The best of both sets counts. */
+        stats eu2 = {0, 0, 0, 0}, et2 = {0, 0, 0, 0};
+        fail |= echo_best(d.dir, &eu2, &et2);
+        if (eu2.p50 < eu.p50)
+            eu = eu2;
+        if (et2.p50 < et.p50)
+            et = et2;
+        printf("  raw echo again after the 1k runs: unix p50 %.1f us, tcp %.1f us; floor used: "
+               "%.1f / %.1f us\n", eu2.p50, et2.p50, eu.p50, et.p50);
         double r = rt[0][0].p50 / eu.p50, rtcp = rt[0][1].p50 / et.p50;
         printf("  target 1k p50 <= %.0fx raw echo: unix %.1fx %s, tcp %.1fx %s\n", TARGET_ECHO_RATIO,
                r, verdict(r <= TARGET_ECHO_RATIO), rtcp, verdict(rtcp <= TARGET_ECHO_RATIO));
