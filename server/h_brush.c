@@ -12,7 +12,8 @@
  * client's stroke, a move) lands between two updates of a stroke, base is rebased to
  * current - d_(k-1) first, so concurrent strokes add up instead of overwriting each other.
  * end commits the stroke as one undo step (no new version); cancel sets positions = base (one
- * version of kind BRUSH_CANCEL). Each begin/update is one version (kind BRUSH).
+ * version of kind BRUSH_CANCEL, or none when the stroke has applied nothing: then it changes
+ * nothing, e.g. after an update the engine rejected). Each begin/update is one version (kind BRUSH).
  * A begin whose loads are all zero publishes nothing (ack with the current version).
  * Knobs (set brush parameter: radius / nu / strength / falloff / ratio) change the client's open
  * stroke from its next update on (ESTATE without one). A client that disconnects with an open
@@ -135,6 +136,16 @@ static int stroke_publish(df_session *s, df_stroke *st, uint8_t kind, brush_req 
     return rc;
 }
 
+/* True when stroke `st` contributes no displacement (n floats of st->applied are all zero):
+ * it never published, or its loads were zero, so cancelling it changes nothing. */
+static int stroke_applied_nothing(const df_stroke *st, size_t n)
+{
+    if (!st->applied) return 1;
+    for (size_t i = 0; i < n; i++)
+        if (st->applied[i] != 0.0f) return 0;
+    return 1;
+}
+
 static void begin_work_inner(df_job *j);
 
 static void begin_work(df_job *j)
@@ -234,6 +245,7 @@ static void update_work_inner(df_job *j)
     if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
     float *disp = s->scratch_disp;
     if (j->type == DF_MSG_BRUSH_CANCEL) {
+        if (stroke_applied_nothing(st, n)) return; /* nothing to undo: no version */
         memset(disp, 0, n * sizeof *disp);
         j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
     } else {

@@ -460,10 +460,8 @@ def test_brush_rejected_by_the_daemon_says_server_and_exits_1(ctl, daemon, spot,
     assert "coincide" in p.stderr and p.stdout == ""
     v1, X1 = _state(daemon, sid)
     assert X1 == X0
-    # SERVER BUG (server/h_brush.c, owned by the server engineer): brush_cancel publishes a
-    # version (kind BRUSH_CANCEL) even when the stroke never changed the mesh, so a rejected
-    # stroke still bumps the session version by one. Tighten to `v1 == v0` once fixed.
-    assert v1 in (v0, v0 + 1), (v0, v1)
+    # the cancel of a stroke that never changed the mesh publishes no version
+    assert v1 == v0, (v0, v1)
     # the session still takes strokes afterwards (the rejected one left no open stroke)
     ctl("brush", sid, "--type", "grab", "--center", "0,0.1,0", "--move", "0,0,0.01",
         "--radius", 0.3)
