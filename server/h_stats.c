@@ -1,7 +1,5 @@
 /* h_stats.c — the stats request: daemon-wide or per-session counters (see handlers.h).
- * Keys: PROTOCOL.md's recommended names (frames_in, cache.admm_chol.hits, version, nv, ...) and,
- * for the same values, the dotted names of the first release (frames.in, cache.admm.hits,
- * session.version, ...), which existing tools read. */
+ * Keys are PROTOCOL.md's names (frames_in, cache.admm_chol.hits, version, nv, ...), one per value. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,40 +37,25 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "sessions", srv->n_sessions);
         put(&st, "clients", srv->n_conns);
         put(&st, "clients_total", (double)x->clients_total);
-        put(&st, "clients.total", (double)x->clients_total);
         put(&st, "clients_dropped", (double)x->clients_dropped);
-        put(&st, "clients.dropped", (double)x->clients_dropped);
         put(&st, "clients_refused", (double)x->clients_refused);
-        put(&st, "clients.refused", (double)x->clients_refused);
         put(&st, "frames_in", (double)x->frames_in);
-        put(&st, "frames.in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
-        put(&st, "frames.out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);
-        put(&st, "bytes.in", (double)x->bytes_in);
         put(&st, "bytes_out", (double)x->bytes_out);
-        put(&st, "bytes.out", (double)x->bytes_out);
         put(&st, "requests_ok", (double)x->requests_ok);
-        put(&st, "requests.ok", (double)x->requests_ok);
         put(&st, "requests_failed", (double)x->requests_failed);
-        put(&st, "requests.failed", (double)x->requests_failed);
         put(&st, "jobs_submitted", (double)x->jobs_submitted);
-        put(&st, "jobs.submitted", (double)x->jobs_submitted);
         put(&st, "jobs_completed", (double)x->jobs_completed);
-        put(&st, "jobs.completed", (double)x->jobs_completed);
         put(&st, "jobs_running", srv->jobs_running);
-        put(&st, "jobs.running", srv->jobs_running);
         put(&st, "jobs_superseded", (double)x->jobs_superseded);
-        put(&st, "jobs.superseded", (double)x->jobs_superseded);
         put(&st, "versions", (double)x->versions);
         put(&st, "cache.bytes", (double)srv->cache_bytes);
         put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));
         put(&st, "cache.kelvinlet_lu.hits", (double)x->kelvin_lu_hits);
         put(&st, "cache.kelvinlet_lu.misses", (double)x->kelvin_lu_misses);
         put(&st, "cache.admm_chol.hits", (double)x->admm_hits);
-        put(&st, "cache.admm.hits", (double)x->admm_hits);
         put(&st, "cache.admm_chol.misses", (double)x->admm_misses);
-        put(&st, "cache.admm.misses", (double)x->admm_misses);
         put(&st, "cache.lru_evictions", (double)x->lru_evictions);
         if (srv->pool) { /* compute pool hand-offs (pool.h) */
             df_pool_counters pc;
@@ -87,29 +70,17 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         int strokes = 0;
         for (df_stroke *k = s->strokes; k; k = k->next) strokes++;
         put(&st, "version", (double)atomic_load(&s->version));
-        put(&st, "session.version", (double)atomic_load(&s->version));
         put(&st, "nv", s->nv);
-        put(&st, "session.vertices", s->nv);
         put(&st, "ne", s->mesh.ne);
-        put(&st, "session.elements", s->mesh.ne);
         put(&st, "subscribers", s->nsubs);
-        put(&st, "session.subscribers", s->nsubs);
         put(&st, "undo_depth", df_history_can_undo(&s->hist));
-        put(&st, "session.undo_depth", df_history_can_undo(&s->hist));
         put(&st, "redo_depth", df_history_can_redo(&s->hist));
-        put(&st, "session.redo_depth", df_history_can_redo(&s->hist));
         put(&st, "history_bytes", (double)df_history_bytes(&s->hist));
-        put(&st, "session.history_bytes", (double)df_history_bytes(&s->hist));
         put(&st, "open_strokes", strokes);
-        put(&st, "session.open_strokes", strokes);
         put(&st, "job_running", s->running != NULL);
-        put(&st, "session.job_running", s->running != NULL);
         put(&st, "handles", s->hs ? s->hs->nh : 0);
-        put(&st, "session.handles", s->hs ? s->hs->nh : 0);
         put(&st, "cache.admm_chol.cached", s->hs && s->hs->solver);
-        put(&st, "session.admm_cached", s->hs && s->hs->solver);
         put(&st, "cache.kelvinlet_lu.cached", s->kc != NULL);
-        put(&st, "session.kelvinlet_lu_cached", s->kc != NULL);
         put(&st, "cache.bytes", (double)((s->hs ? s->hs->solver_bytes : 0) + s->kc_bytes));
         put(&st, "brush.last_ms", s->brush_last_ms);
         put(&st, "move.last_ms", s->move_last_ms);

@@ -304,7 +304,7 @@ def test_pinned_points_stay_and_the_lu_cache_hits(daemon, grid):
         assert max(abs(P[3 * pi + k] - pin[k]) for k in range(3)) < 1e-5
         assert abs(P[3 * ci + 2] - (X[3 * ci + 2] + 0.2)) < 1e-5
         s1 = c.stats()
-        assert c.stats(sid)["session.kelvinlet_lu_cached"] == 1
+        assert c.stats(sid)["cache.kelvinlet_lu.cached"] == 1
         c.stroke(sid, b)                 # same pins and kernel: the cached LU is reused
         s2 = c.stats()
     miss = "cache.kelvinlet_lu.misses"
