@@ -123,21 +123,11 @@ static void set_done(df_job *j)
     df_cache_enforce(j->srv);
 }
 
+/* A job for request h on session s with a fresh hs_req (NULL: error replied). */
 static df_job *new_job(df_conn *c, const df_frame_header *h, df_session *s, df_job_fn work,
                        df_job_fn done)
 {
-    hs_req *r = calloc(1, sizeof *r);
-    df_job *j = r ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
-    if (!j) {
-        free(r);
-        df_error e;
-        df_error_set(&e, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &e);
-        return NULL;
-    }
-    j->body = r;
-    j->cleanup = req_free;
-    return j;
+    return df_job_for_request(c, h, s, sizeof(hs_req), work, done, req_free);
 }
 
 void df_h_handles_set(df_conn *c, const df_frame_header *h, const uint8_t *p)

@@ -24,23 +24,12 @@ static void req_free(df_job *j)
     free(r);
 }
 
+/* A job for request h on session `session_id` with a fresh mesh_req (NULL: error replied). */
 static df_job *new_job(df_conn *c, const df_frame_header *h, uint64_t session_id,
                        df_job_fn work, df_job_fn done)
 {
     df_session *s = df_h_session(c, h, session_id);
-    if (!s) return NULL;
-    mesh_req *r = calloc(1, sizeof *r);
-    df_job *j = r ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
-    if (!j) {
-        free(r);
-        df_error e;
-        df_error_set(&e, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &e);
-        return NULL;
-    }
-    j->body = r;
-    j->cleanup = req_free;
-    return j;
+    return s ? df_job_for_request(c, h, s, sizeof(mesh_req), work, done, req_free) : NULL;
 }
 
 /* Sends the job's frames to the requester only: a multi-frame reply. */

@@ -29,6 +29,23 @@ df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uin
     return j;
 }
 
+df_job *df_job_for_request(df_conn *c, const df_frame_header *h, df_session *s, size_t body_size,
+                           df_job_fn work, df_job_fn done, df_job_fn cleanup)
+{
+    void *body = calloc(1, body_size);
+    df_job *j = body ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
+    if (!j) {
+        free(body);
+        df_error e;
+        df_error_set(&e, DF_ENOMEM, "out of memory");
+        df_reply_fail(c, h->type, h->request_id, &e);
+        return NULL;
+    }
+    j->body = body;
+    j->cleanup = cleanup;
+    return j;
+}
+
 static void job_free(df_job *j)
 {
     if (j->cleanup) j->cleanup(j);

@@ -16,6 +16,7 @@
 #include <uv.h>
 
 #include "core/common/df_error.h"
+#include "proto/frame.h"
 #include "server/pool.h"
 #include "server/sbuf.h"
 #include "server/server.h"
@@ -51,6 +52,12 @@ struct df_job {
  * NULL). Takes a reference on c. NULL when out of memory. */
 df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
                    df_job_fn work, df_job_fn done);
+
+/* Creates a job for request `h` from connection `c` on session `s` (as df_job_new) with a zeroed
+ * private body of `body_size` bytes in j->body, released by `cleanup` (which must free the body
+ * too). On allocation failure it replies ENOMEM to `c` itself and returns NULL. */
+df_job *df_job_for_request(df_conn *c, const df_frame_header *h, df_session *s, size_t body_size,
+                           df_job_fn work, df_job_fn done, df_job_fn cleanup);
 
 /* Queues the job (FIFO of j->s, or the pool when s is NULL). The job is freed after `done`. */
 void df_job_submit(df_job *j);

@@ -17,14 +17,14 @@
 #include <cmocka.h>
 
 #include "client/deformclient.h"
+#include "tests/unit/client/live_daemon.h"
 
 #define LIVE_CLIENTS 4      /* connections with a replica; clients 0 and 1 also write */
 #define LIVE_UPDATES 6      /* brush updates per writer */
 #define LIVE_WAIT_MS 10000  /* longest wait for the stream to catch up */
 
 typedef struct live {
-    pid_t pid;
-    char dir[64], sock[96];
+    live_daemon d;
     df_client *c[LIVE_CLIENTS];
     df_client_replica r[LIVE_CLIENTS];
     int feed_errors[LIVE_CLIENTS];
@@ -35,61 +35,6 @@ static void on_event(void *user, const df_frame_header *h, const uint8_t *p)
     df_client_replica *r = user;
     if (df_client_replica_feed(r, h, p, NULL) < 0)
         r->stale = 1;
-}
-
-/* Path of deformd relative to this binary: BUILD/tests/unit/client/test_live -> BUILD/bin. */
-static int daemon_path(char *out, size_t cap)
-{
-    char self[PATH_MAX];
-    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
-    if (n <= 0)
-        return -1;
-    self[n] = '\0';
-    for (int k = 0; k < 4; k++) {
-        char *s = strrchr(self, '/');
-        if (!s)
-            return -1;
-        *s = '\0';
-    }
-    return snprintf(out, cap, "%s/bin/deformd", self) < (int)cap && access(out, X_OK) == 0 ? 0 : -1;
-}
-
-static int start_daemon(live *L, const char *exe)
-{
-    snprintf(L->dir, sizeof L->dir, "/tmp/dc-live-XXXXXX");
-    if (!mkdtemp(L->dir))
-        return -1;
-    snprintf(L->sock, sizeof L->sock, "%s/d.sock", L->dir);
-    L->pid = fork();
-    if (L->pid == 0) {
-        prctl(PR_SET_PDEATHSIG, SIGTERM);
-        char log[128];
-        snprintf(log, sizeof log, "%s/deformd.log", L->dir);
-        FILE *f = freopen(log, "w", stderr); /* keep cmocka's output lines clean */
-        (void)f;
-        execl(exe, exe, "--foreground", "--socket", L->sock, "--log-level", "error", (char *)NULL);
-        _exit(127);
-    }
-    for (int i = 0; i < 100; i++) {
-        df_client *c;
-        if (df_client_connect_unix(L->sock, "live", &c, NULL) == DF_OK) {
-            df_client_close(c);
-            return 0;
-        }
-        usleep(50000);
-    }
-    return -1;
-}
-
-static void stop_daemon(live *L)
-{
-    kill(L->pid, SIGTERM);
-    waitpid(L->pid, NULL, 0);
-    char log[128];
-    snprintf(log, sizeof log, "%s/deformd.log", L->dir);
-    unlink(log);
-    unlink(L->sock);
-    rmdir(L->dir);
 }
 
 /* An n x n grid as OFF text (triangles), slightly curved. */
@@ -135,16 +80,16 @@ static void test_replicas_match_the_daemon(void **state)
 {
     (void)state;
     char exe[PATH_MAX];
-    if (daemon_path(exe, sizeof exe) != 0) {
+    if (live_daemon_path(exe, sizeof exe) != 0) {
         printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
         skip();
     }
     live L;
     memset(&L, 0, sizeof L);
-    assert_int_equal(start_daemon(&L, exe), 0);
+    assert_int_equal(live_daemon_start(&L.d, exe, "live"), 0);
     df_error e;
     for (int k = 0; k < LIVE_CLIENTS; k++)
-        assert_int_equal(df_client_connect_unix(L.sock, "live", &L.c[k], &e), DF_OK);
+        assert_int_equal(df_client_connect_unix(L.d.sock, "live", &L.c[k], &e), DF_OK);
     size_t len;
     char *off = grid_off(30, &len);
     df_msg_session_info info;
@@ -215,7 +160,7 @@ static void test_replicas_match_the_daemon(void **state)
         df_client_replica_free(&L.r[k]);
         df_client_close(L.c[k]);
     }
-    stop_daemon(&L);
+    live_daemon_stop(&L.d);
 }
 
 int main(void)

@@ -27,6 +27,7 @@
 #include <cmocka.h>
 
 #include "client/deformclient.h"
+#include "tests/unit/client/live_daemon.h"
 #include "core/admm/admm.h"
 #include "core/kelvinlet/kelvinlet.h"
 #include "core/mesh/mesh_io.h"
@@ -37,76 +38,18 @@
 #define PARITY_GRID 33       /* grid vertices per side (coordinates k / 32: dyadic) */
 #define PARITY_ADMM_ITERS 30 /* ADMM iterations per move */
 
-typedef struct daemon_proc {
-    pid_t pid;
-    char dir[64], sock[96];
-} daemon_proc;
-
-/* Path of deformd relative to this binary: BUILD/tests/unit/client/test_parity -> BUILD/bin. */
-static int daemon_path(char *out, size_t cap)
-{
-    char self[PATH_MAX];
-    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
-    if (n <= 0)
-        return -1;
-    self[n] = '\0';
-    for (int k = 0; k < 4; k++) {
-        char *s = strrchr(self, '/');
-        if (!s)
-            return -1;
-        *s = '\0';
-    }
-    return snprintf(out, cap, "%s/bin/deformd", self) < (int)cap && access(out, X_OK) == 0 ? 0 : -1;
-}
-
-static int start_daemon(daemon_proc *d, const char *exe)
-{
-    snprintf(d->dir, sizeof d->dir, "/tmp/dc-parity-XXXXXX");
-    if (!mkdtemp(d->dir))
-        return -1;
-    snprintf(d->sock, sizeof d->sock, "%s/d.sock", d->dir);
-    d->pid = fork();
-    if (d->pid == 0) {
-        prctl(PR_SET_PDEATHSIG, SIGTERM);
-        char log[128];
-        snprintf(log, sizeof log, "%s/deformd.log", d->dir);
-        FILE *f = freopen(log, "w", stderr);
-        (void)f;
-        execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error", (char *)NULL);
-        _exit(127);
-    }
-    for (int i = 0; i < 100; i++) {
-        df_client *c;
-        if (df_client_connect_unix(d->sock, "parity", &c, NULL) == DF_OK) {
-            df_client_close(c);
-            return 0;
-        }
-        usleep(50000);
-    }
-    return -1;
-}
-
-static void stop_daemon(daemon_proc *d)
-{
-    kill(d->pid, SIGTERM);
-    waitpid(d->pid, NULL, 0);
-    char log[128];
-    snprintf(log, sizeof log, "%s/deformd.log", d->dir);
-    unlink(log);
-    unlink(d->sock);
-    rmdir(d->dir);
-}
+typedef live_daemon daemon_proc;
 
 /* Starts the daemon and connects, or skips the test when deformd is not built. */
 static df_client *setup(daemon_proc *d)
 {
     char exe[PATH_MAX];
-    if (daemon_path(exe, sizeof exe) != 0) {
+    if (live_daemon_path(exe, sizeof exe) != 0) {
         printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
         skip();
     }
     memset(d, 0, sizeof *d);
-    assert_int_equal(start_daemon(d, exe), 0);
+    assert_int_equal(live_daemon_start(d, exe, "parity"), 0);
     df_client *c = NULL;
     df_error e;
     assert_int_equal(df_client_connect_unix(d->sock, "parity", &c, &e), DF_OK);
@@ -368,7 +311,7 @@ static void test_every_brush_matches_the_core(void **state)
     printf("parity: %d brush cases, worst |daemon - core| %.3g, worst |daemon - double ref| %.3g\n",
            n, worst, worst_ref);
     df_client_close(cl);
-    stop_daemon(&d);
+    live_daemon_stop(&d);
 }
 
 /* An n^3-vertex cube [0,1]^3 (coordinates k / (n-1), n - 1 a power of two) of 6 tets per cell as
@@ -502,7 +445,7 @@ static void test_handle_moves_match_the_core(void **state)
     df_admm_free(s);
     df_mesh_free(&mesh);
     df_client_close(cl);
-    stop_daemon(&d);
+    live_daemon_stop(&d);
 }
 
 int main(void)

@@ -1,0 +1,81 @@
+/* live_daemon.h — starts and stops the real build/bin/deformd for the client tests that talk to
+ * it (test_live.c, test_parity.c): a private temporary socket, its log kept out of cmocka's
+ * output, and the daemon killed with the test process (PR_SET_PDEATHSIG). */
+#ifndef DF_TEST_LIVE_DAEMON_H
+#define DF_TEST_LIVE_DAEMON_H
+
+#include <limits.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "client/deformclient.h"
+
+typedef struct live_daemon {
+    pid_t pid;
+    char dir[64], sock[96];
+} live_daemon;
+
+/* Path of deformd relative to this binary: BUILD/tests/unit/client/test_X -> BUILD/bin/deformd.
+ * 0 when it exists and is executable, -1 otherwise. */
+static inline int live_daemon_path(char *out, size_t cap)
+{
+    char self[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n <= 0)
+        return -1;
+    self[n] = '\0';
+    for (int k = 0; k < 4; k++) {
+        char *s = strrchr(self, '/');
+        if (!s)
+            return -1;
+        *s = '\0';
+    }
+    return snprintf(out, cap, "%s/bin/deformd", self) < (int)cap && access(out, X_OK) == 0 ? 0 : -1;
+}
+
+/* Starts `exe` on a socket in a fresh /tmp/dc-<tag>-XXXXXX directory and waits (<= 5 s) until a
+ * client named `tag` can connect. 0 on success, -1 otherwise. */
+static inline int live_daemon_start(live_daemon *d, const char *exe, const char *tag)
+{
+    snprintf(d->dir, sizeof d->dir, "/tmp/dc-%s-XXXXXX", tag);
+    if (!mkdtemp(d->dir))
+        return -1;
+    snprintf(d->sock, sizeof d->sock, "%s/d.sock", d->dir);
+    d->pid = fork();
+    if (d->pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGTERM);
+        char log[128];
+        snprintf(log, sizeof log, "%s/deformd.log", d->dir);
+        FILE *f = freopen(log, "w", stderr); /* keep cmocka's output lines clean */
+        (void)f;
+        execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error", (char *)NULL);
+        _exit(127);
+    }
+    for (int i = 0; i < 100; i++) {
+        df_client *c;
+        if (df_client_connect_unix(d->sock, tag, &c, NULL) == DF_OK) {
+            df_client_close(c);
+            return 0;
+        }
+        usleep(50000);
+    }
+    return -1;
+}
+
+/* Stops the daemon (SIGTERM, waits) and removes its directory. */
+static inline void live_daemon_stop(live_daemon *d)
+{
+    kill(d->pid, SIGTERM);
+    waitpid(d->pid, NULL, 0);
+    char log[128];
+    snprintf(log, sizeof log, "%s/deformd.log", d->dir);
+    unlink(log);
+    unlink(d->sock);
+    rmdir(d->dir);
+}
+
+#endif
