@@ -26,6 +26,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->max_sessions = DF_CONFIG_DEFAULT_MAX_SESSIONS;
     cfg->threads = DF_CONFIG_DEFAULT_THREADS;
     cfg->spin_us = DF_CONFIG_DEFAULT_SPIN_US;
+    cfg->inline_us = DF_CONFIG_DEFAULT_INLINE_US;
 }
 
 /* Parses a non-negative integer with an optional k/m/g (binary) suffix, <= max. */
@@ -185,6 +186,13 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         cfg->spin_us = (int)v;
         return DF_OK;
     }
+    if (strcmp(key, "inline_us") == 0) {
+        if (parse_size(value, DF_CONFIG_MAX_INLINE_US, &v))
+            return df_error_set(err, DF_EINVAL, "inline_us: '%s' not in 0..%d", value,
+                                DF_CONFIG_MAX_INLINE_US);
+        cfg->inline_us = (int)v;
+        return DF_OK;
+    }
     return df_error_set(err, DF_EINVAL, "unknown config key '%s'", key);
 }
 
@@ -297,12 +305,14 @@ static const char k_usage[] =
     "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port)\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us); command-line options override\n"
-    "                      the file\n"
+    "                      max_sessions, threads, spin_us, inline_us); command-line options\n"
+    "                      override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"
     "  --spin-us N         compute workers poll N us for the next short job before sleeping\n"
     "                      (default 0; helps stroke latency only when cores are idle)\n"
+    "  --inline-us N       run a brush update on the loop thread when its stroke's last update\n"
+    "                      took <= N us (default 50; 0 = always on the compute pool)\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
@@ -359,9 +369,9 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         }
         static const char *const map[][2] = {
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
-            {"--spin-us", "spin_us"}};
+            {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"}};
         int done = 0;
-        for (int k = 0; k < 4 && !done && rc == DF_OK; k++) {
+        for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);
             if (m < 0) rc = df_error_set(err, DF_EINVAL, "%s needs a value", map[k][0]);
             else if (m > 0) {

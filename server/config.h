@@ -18,8 +18,12 @@
  *   spin_us            microseconds a compute worker keeps polling for the next short job
  *                      before sleeping (0 .. DF_CONFIG_MAX_SPIN_US, default 0; see pool.h:
  *                      lowers stroke latency only when cores are idle)
+ *   inline_us          brush updates whose stroke's last update took at most this many
+ *                      microseconds run on the loop thread instead of the compute pool
+ *                      (0 .. DF_CONFIG_MAX_INLINE_US, default DF_CONFIG_DEFAULT_INLINE_US; 0 =
+ *                      never; see job.h)
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
- * --log-level LEVEL, --spin-us N, --help. */
+ * --log-level LEVEL, --spin-us N, --inline-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -35,6 +39,7 @@
 #define DF_CONFIG_MAX_CLIENTS_LIMIT 100000
 #define DF_CONFIG_MAX_THREADS 64
 #define DF_CONFIG_MAX_SPIN_US 1000
+#define DF_CONFIG_MAX_INLINE_US 1000
 
 #define DF_CONFIG_DEFAULT_MAX_CLIENTS 256
 #define DF_CONFIG_DEFAULT_QUEUE_LIMIT ((size_t)256 << 20) /* 256 MiB per client */
@@ -43,6 +48,7 @@
 #define DF_CONFIG_DEFAULT_MAX_SESSIONS 64
 #define DF_CONFIG_DEFAULT_THREADS 4
 #define DF_CONFIG_DEFAULT_SPIN_US 0
+#define DF_CONFIG_DEFAULT_INLINE_US 50 /* ~ two thread hand-offs on the 2-core test machine */
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -58,6 +64,7 @@ typedef struct df_server_config {
     int max_sessions;
     int threads;
     int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
+    int inline_us;               /* loop-thread budget of a cheap brush update, us (0 = off) */
     int foreground;              /* 1: do not daemonize */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;

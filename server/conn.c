@@ -129,6 +129,7 @@ static void kick_write(df_conn *c)
         c->wbufs[first].base += done;
         c->wbufs[first].len -= done;
         c->wcount = n;
+        c->srv->stats.writes_blocked++;
         c->wreq.data = c;
         df_conn_ref(c);
         int rc = uv_write(&c->wreq, &c->h.stream, c->wbufs + first, (unsigned)(n - first),

@@ -152,7 +152,12 @@ static void begin_work(df_job *j)
 {
     uint64_t t0 = uv_hrtime();
     begin_work_inner(j);
-    j->s->brush_last_ms = (double)(uv_hrtime() - t0) / 1e6;
+    uint64_t dt = uv_hrtime() - t0;
+    j->s->brush_last_ms = (double)dt / 1e6;
+    brush_req *r = j->body;
+    int evaluated = 0;
+    for (int i = 0; i < 16; i++) evaluated |= r->load[i] != 0.0;
+    if (r->created && evaluated && j->rc == DF_OK) r->created->work_ns = dt;
 }
 
 static void begin_work_inner(df_job *j)
@@ -228,7 +233,19 @@ static void update_work(df_job *j)
 {
     uint64_t t0 = uv_hrtime();
     update_work_inner(j);
-    j->s->brush_last_ms = (double)(uv_hrtime() - t0) / 1e6;
+    uint64_t dt = uv_hrtime() - t0;
+    j->s->brush_last_ms = (double)dt / 1e6;
+    df_stroke *st = df_session_stroke(j->s, j->conn_id);
+    if (st && j->type == DF_MSG_BRUSH_UPDATE) st->work_ns = j->rc == DF_OK ? dt : 0;
+}
+
+/* Predicted cost of a brush update at the head of its FIFO: the same stroke's last field
+ * evaluation. Pinned strokes never run inline (an evicted K_pp factorization would be rebuilt
+ * in the update), nor strokes not measured yet. */
+static uint64_t update_cost(const df_job *j)
+{
+    const df_stroke *st = df_session_stroke(j->s, j->conn_id);
+    return st && st->n_pins == 0 ? st->work_ns : 0;
 }
 
 static void update_work_inner(df_job *j)
@@ -322,6 +339,7 @@ void df_h_brush_update(df_conn *c, const df_frame_header *h, const uint8_t *p)
     df_session *s = df_h_session(c, h, m.session_id);
     df_job *j = s ? new_job(c, h, s, update_work, brush_done) : NULL;
     if (!j) return;
+    if (h->type == DF_MSG_BRUSH_UPDATE) j->inline_cost = update_cost;
     brush_req *r = j->body;
     memcpy(r->load, m.move, 3 * sizeof(double));
     memcpy(r->load + 3, m.twist, 3 * sizeof(double));

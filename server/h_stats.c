@@ -43,12 +43,15 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);
         put(&st, "bytes_out", (double)x->bytes_out);
+        put(&st, "writes_blocked", (double)x->writes_blocked);
         put(&st, "requests_ok", (double)x->requests_ok);
         put(&st, "requests_failed", (double)x->requests_failed);
         put(&st, "jobs_submitted", (double)x->jobs_submitted);
         put(&st, "jobs_completed", (double)x->jobs_completed);
         put(&st, "jobs_running", srv->jobs_running);
         put(&st, "jobs_superseded", (double)x->jobs_superseded);
+        put(&st, "jobs_inline", (double)x->jobs_inline);
+        put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
         put(&st, "cache.bytes", (double)srv->cache_bytes);
         put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));

@@ -128,6 +128,15 @@ static void task_after(df_task *t)
     completed((df_job *)((char *)t - offsetof(df_job, task)), 0);
 }
 
+/* 1 when the head job `j` may run its work on the loop thread (see job.h, "Inline jobs"). */
+static int runs_inline(const df_job *j)
+{
+    uint64_t budget_ns = (uint64_t)j->srv->cfg.inline_us * 1000u;
+    if (!j->inline_cost || budget_ns == 0 || j->srv->stopping) return 0;
+    uint64_t ns = j->inline_cost(j);
+    return ns > 0 && ns <= budget_ns;
+}
+
 /* Starts queued jobs until one is running on the pool or the FIFO is empty; frees a closed
  * session once it is idle. */
 static void pump(df_session *s)
@@ -138,6 +147,12 @@ static void pump(df_session *s)
         if (!s->jhead) s->jtail = NULL;
         j->next = NULL;
         s->running = j;
+        if (j->work && runs_inline(j)) { /* cheaper than two thread hand-offs */
+            j->work(j);
+            j->srv->stats.jobs_inline++;
+            finish(j);
+            continue;
+        }
         if (j->work && j->srv->pool) { /* the server's low-latency pool */
             j->srv->jobs_running++;
             j->task.work = task_work;

@@ -7,7 +7,16 @@
  * hand-off latency for interactive strokes), or on the libuv pool (uv_queue_work) when the
  * server has no pool. A job without `work` runs `done` directly on the loop thread when it
  * reaches the head of its FIFO. Jobs without a session (mesh loads) go straight to the libuv
- * pool. */
+ * pool.
+ *
+ * Inline jobs. Handing a job to a worker and its completion back costs two thread wake-ups:
+ * on the 2-core test machine ~20-25 us of latency and ~30 us of CPU, three times the work of a
+ * 1k-vertex brush update (bench_net). A job with an `inline_cost` therefore runs `work` on the
+ * loop thread when it reaches the head of its FIFO and inline_cost predicts at most the server's
+ * inline_us (config; 0 = never). The prediction is a measurement (the same stroke's previous
+ * update), so the loop is held for at most about that long; solves, factorizations, mesh loads,
+ * pinned strokes and anything not measured yet always go to the pool, so a slow job on one
+ * session still never stalls another session. */
 #ifndef DF_SERVER_JOB_H
 #define DF_SERVER_JOB_H
 
@@ -24,6 +33,9 @@
 
 typedef struct df_job df_job;
 typedef void (*df_job_fn)(df_job *j);
+/* Predicted work time in ns of a job at the head of its FIFO (the loop thread owns the session's
+ * state then); 0 = unknown or must not run inline. */
+typedef uint64_t (*df_job_cost_fn)(const df_job *j);
 
 struct df_job {
     df_server *srv;
@@ -35,6 +47,7 @@ struct df_job {
     df_job_fn work;           /* worker thread, may be NULL */
     df_job_fn done;           /* loop thread, required */
     df_job_fn cleanup;        /* frees `body`, may be NULL */
+    df_job_cost_fn inline_cost; /* may be NULL: never inline (see "Inline jobs" above) */
     void *body;               /* request data owned by the job */
     int rc;                   /* result of work (DF_OK or DF_E*) */
     df_error err;

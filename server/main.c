@@ -7,7 +7,9 @@
  * reassembled into frames, writes queued per client with a byte bound). Compute (mesh parsing,
  * Kelvinlet fields, ADMM factorizations and iterations, stream encoding) runs off the loop: session
  * jobs on the server's compute pool (pool.h: `threads` workers, eventfd completions, LIFO wake-ups,
- * optional bounded spin `spin_us`), mesh loads on the libuv pool (uv_queue_work). Replies go out
+ * optional bounded spin `spin_us`), mesh loads on the libuv pool (uv_queue_work). The one
+ * exception: a brush update whose stroke's previous update measured <= `inline_us` (default
+ * 50 us, cheaper than the two hand-offs; job.h) runs on the loop thread. Replies go out
  * with one uv_try_write when the socket takes them (uv_write for the rest), TCP with NODELAY.
  * Each session has a FIFO of jobs and only its head job
  * runs, so a worker touches only its job's private inputs plus the compute state of its session

@@ -38,6 +38,8 @@ typedef struct df_stroke {
     float *startf;               /* fl32(positions at begin): the points the field is evaluated at */
     float *applied;              /* displacement this stroke currently contributes, nv x 3 */
     uint64_t last_version;       /* session version this stroke produced last */
+    uint64_t work_ns;            /* time of its last field evaluation (begin or update), ns;
+                                  * 0 = none yet. Predicts the next update (job.h, inline) */
     struct df_stroke *next;
 } df_stroke;
 

@@ -11,8 +11,10 @@ typedef struct df_stats {
     uint64_t clients_refused;     /* refused at max_clients */
     uint64_t frames_in, bytes_in;
     uint64_t frames_out, bytes_out;
+    uint64_t writes_blocked;      /* writes a full socket left to uv_write (a slow reader) */
     uint64_t requests_ok, requests_failed;
     uint64_t jobs_submitted, jobs_completed, jobs_superseded;
+    uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
     uint64_t versions;            /* versions broadcast, all sessions */
     uint64_t kelvin_lu_hits, kelvin_lu_misses;
     uint64_t admm_hits, admm_misses;

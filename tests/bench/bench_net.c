@@ -16,9 +16,12 @@
  * worker time of the last brush update. DEFORMD_ARGS adds daemon options (e.g. "--spin-us 60").
  * Latencies and rates are the best of BENCH_REPEAT runs (the machine is shared and noisy); the
  * echo floor is measured before the daemon starts and again after the 1k runs, best of both.
+ * BENCH_NET_ONLY=rt,frames,writer runs only the named sections (for profiling one of them);
+ * BENCH_NET_VERBOSE=1 prints each writer run with the daemon's blocked writes.
  * Targets (issue): 1k p50 <= 3x echo; 100k p50 <= 2 ms; >= 60 1M frames/s; 32 subs <= 2x.
  * Exit status 0 when every measurement ran (targets are reported, not enforced), 1 otherwise. */
 #include <arpa/inet.h>
+#include <dirent.h>
 #include <errno.h>
 #include <limits.h>
 #include <netinet/in.h>
@@ -477,6 +480,38 @@ static void *subs_thread(void *arg)
     return NULL;
 }
 
+/* CPU seconds used so far by the threads of process `pid` (0: this process): the sum of their
+ * /proc/.../task/TID/schedstat run times (nanoseconds; threads that already exited are not
+ * counted, so sample while the threads of interest run). */
+static double cpu_seconds(pid_t pid)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/proc/%d/task", pid ? (int)pid : (int)getpid());
+    DIR *d = opendir(path);
+    double s = 0;
+    struct dirent *de;
+    while (d && (de = readdir(d)) != NULL) {
+        if (de->d_name[0] == '.')
+            continue;
+        char f[64 + 16 + sizeof de->d_name];
+        snprintf(f, sizeof f, "%s/%s/schedstat", path, de->d_name);
+        FILE *fp = fopen(f, "r");
+        unsigned long long ns = 0;
+        if (fp && fscanf(fp, "%llu", &ns) == 1)
+            s += (double)ns * 1e-9;
+        if (fp)
+            fclose(fp);
+    }
+    if (d)
+        closedir(d);
+    return s;
+}
+
+/* CPU microseconds per writer update spent by the daemon and by this bench (the subscribers'
+ * reading and the writer) in the last bench_writer run. */
+static double g_cpu_daemon_us, g_cpu_bench_us;
+static pid_t g_daemon_pid;
+
 /* Writer updates per second on `sid` (update -> ack) with `nsubs` subscriber connections. */
 static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs, double *rate,
                         long *min_seen)
@@ -499,7 +534,9 @@ static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs,
     pthread_create(&th, NULL, subs_thread, &s);
     df_msg_brush b;
     brush_msg(&b, sid, 0.2);
+    double blocked0 = stat_value(w, 0, "writes_blocked");
     int rc = df_client_brush_begin(w, &b, NULL, &e);
+    double cd0 = cpu_seconds(g_daemon_pid), cb0 = cpu_seconds(0);
     double t0 = now_us();
     for (int i = 0; rc == 0 && i < WRITER_UPDATES; i++) {
         df_msg_brush_update u;
@@ -509,6 +546,8 @@ static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs,
         rc = df_client_brush_update(w, &u, NULL, &e);
     }
     double secs = (now_us() - t0) / 1e6;
+    g_cpu_daemon_us = (cpu_seconds(g_daemon_pid) - cd0) * 1e6 / WRITER_UPDATES;
+    g_cpu_bench_us = (cpu_seconds(0) - cb0) * 1e6 / WRITER_UPDATES;
     if (rc == 0)
         rc = df_client_brush_end(w, sid, NULL, &e);
     if (rc)
@@ -529,7 +568,24 @@ static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs,
         df_client_close(s.c[i]);
     }
     *rate = WRITER_UPDATES / secs;
+    if (getenv("BENCH_NET_VERBOSE"))
+        printf("    %d subscribers: %.0f updates/s, %.0f writes blocked (full sockets)\n", nsubs,
+               *rate, stat_value(w, 0, "writes_blocked") - blocked0);
     return rc;
+}
+
+/* 1 when section `name` runs: all of them unless BENCH_NET_ONLY lists some (comma separated:
+ * rt, frames, writer; the echo and PING context always run). */
+static int section_on(const char *name)
+{
+    const char *only = getenv("BENCH_NET_ONLY");
+    if (!only || !*only)
+        return 1;
+    size_t n = strlen(name);
+    for (const char *p = only; (p = strstr(p, name)) != NULL; p += n)
+        if ((p == only || p[-1] == ',') && (p[n] == '\0' || p[n] == ','))
+            return 1;
+    return 0;
 }
 
 static const char *verdict(int ok)
@@ -606,7 +662,7 @@ int main(int argc, char **argv)
         int bad = !sid[m];
         for (int k = 0; m == 0 && k < 3; k++)
             pool0[k] = stat_value(cu, 0, pool_keys[k]);
-        for (int r = 0; !bad && r < BENCH_REPEAT; r++) {
+        for (int r = 0; !bad && section_on("rt") && r < BENCH_REPEAT; r++) {
             stats a, b;
             bad = bench_rt(cu, sid[m], &a) || bench_rt(ct, sid[m], &b);
             if (!bad && (r == 0 || a.p50 < rt[m][0].p50))
@@ -618,6 +674,8 @@ int main(int argc, char **argv)
             fail = 1;
             continue;
         }
+        if (!section_on("rt"))
+            continue;
         if (m == 0) {
             for (int k = 0; k < 3; k++)
                 pool1[k] = stat_value(cu, 0, pool_keys[k]);
@@ -652,9 +710,11 @@ int main(int argc, char **argv)
         printf("  target 100k p50 <= %.0f us: unix %.1f us %s, tcp %.1f us %s\n", TARGET_100K_P50_US,
                rt[1][0].p50, verdict(rt[1][0].p50 <= TARGET_100K_P50_US), rt[1][1].p50,
                verdict(rt[1][1].p50 <= TARGET_100K_P50_US));
-    uint64_t big = load_grid(cu, 1000, "grid-1M");
+    uint64_t big = section_on("frames") ? load_grid(cu, 1000, "grid-1M") : 0;
     double fps[2] = {0, 0}, mbps[2] = {0, 0};
-    if (!big || bench_full_frames(cu, big, 1000000, 0, &fps[0], &mbps[0]) ||
+    if (!section_on("frames"))
+        ;
+    else if (!big || bench_full_frames(cu, big, 1000000, 0, &fps[0], &mbps[0]) ||
         bench_full_frames(cu, big, 1000000, 1, &fps[1], &mbps[1]))
         fail = 1;
     else {
@@ -665,25 +725,32 @@ int main(int argc, char **argv)
         printf("  target >= %.0f frames/s: stream %s, brush-driven %s\n", TARGET_1M_FPS,
                verdict(fps[0] >= TARGET_1M_FPS), verdict(fps[1] >= TARGET_1M_FPS));
     }
-    double rate1 = 0, rate32 = 0;
+    double rate1 = 0, rate32 = 0, cpu1[2] = {0, 0}, cpu32[2] = {0, 0};
     long seen1 = 0, seen32 = 0;
-    int wbad = !sid[0];
+    g_daemon_pid = d.pid;
+    int wbad = !sid[0] || !section_on("writer");
     for (int r = 0; !wbad && r < BENCH_REPEAT; r++) {
         double a, b;
         long sa, sb;
-        wbad = bench_writer(d.sock, cu, sid[0], 1, &a, &sa) ||
-               bench_writer(d.sock, cu, sid[0], MANY_SUBS, &b, &sb);
+        wbad = bench_writer(d.sock, cu, sid[0], 1, &a, &sa);
+        double c1[2] = {g_cpu_daemon_us, g_cpu_bench_us};
+        wbad = wbad || bench_writer(d.sock, cu, sid[0], MANY_SUBS, &b, &sb);
         if (!wbad && (r == 0 || a > rate1))
-            rate1 = a, seen1 = sa;
+            rate1 = a, seen1 = sa, cpu1[0] = c1[0], cpu1[1] = c1[1];
         if (!wbad && (r == 0 || b > rate32))
-            rate32 = b, seen32 = sb;
+            rate32 = b, seen32 = sb, cpu32[0] = g_cpu_daemon_us, cpu32[1] = g_cpu_bench_us;
     }
-    if (wbad)
+    if (!section_on("writer"))
+        ;
+    else if (wbad)
         fail = 1;
     else {
         printf("writer updates/s (1k mesh, update -> ack): 1 subscriber %8.0f, %d subscribers %8.0f"
                " (each subscriber got >= %ld / %ld of %d versions)\n", rate1, MANY_SUBS, rate32,
                seen1, seen32, WRITER_UPDATES);
+        printf("  CPU per update: daemon %.0f / %.0f us, bench (writer + "
+               "subscribers) %.0f / %.0f us with 1 / %d subscribers\n", cpu1[0], cpu32[0], cpu1[1],
+               cpu32[1], MANY_SUBS);
         double cost = rate1 / rate32;
         printf("  target %d subscribers cost the writer <= %.0fx: %.2fx -> %s\n", MANY_SUBS,
                TARGET_SUB_COST, cost, verdict(cost <= TARGET_SUB_COST));

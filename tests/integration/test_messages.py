@@ -489,6 +489,14 @@ def test_stats_daemon_wide_and_per_session(daemon, grid):
         assert any(k.startswith("sessions") or k.startswith("clients") for k in s), sorted(s)
         ss = c.stats(info.session_id)
         assert ss and all(math.isfinite(v) for v in ss.values())
+    # Every key the daemon reports is documented (PROTOCOL.md 4.23), with its own name.
+    with open(os.path.join(os.path.dirname(__file__), "..", "..", "proto", "PROTOCOL.md")) as f:
+        spec = f.read()
+    prefixes = {"cache.kelvinlet_lu", "cache.admm_chol"}  # written "`x.hits` / `.misses`"
+    for key in sorted(set(s) | set(ss)):
+        head = key.rsplit(".", 1)[0]
+        assert "`%s`" % key in spec or (head in prefixes and "`." + key.rsplit(".", 1)[1] + "`"
+                                         in spec), "stats key %r is not in PROTOCOL.md" % key
 
 
 def test_unsubscribe_stops_the_stream(daemon, grid):

@@ -30,6 +30,8 @@ static void test_defaults(void **state)
     assert_true(c.output_queue_limit == DF_CONFIG_DEFAULT_QUEUE_LIMIT);
     assert_int_equal(c.log_level, DF_LOG_INFO);
     assert_int_equal(c.foreground, 0);
+    assert_int_equal(c.spin_us, DF_CONFIG_DEFAULT_SPIN_US);
+    assert_int_equal(c.inline_us, DF_CONFIG_DEFAULT_INLINE_US);
     /* An XDG dir too long for sun_path falls back to /run/deformd. */
     char longdir[200];
     memset(longdir, 'a', sizeof longdir - 1);
@@ -55,7 +57,9 @@ static void test_parse_file_text(void **state)
                        "log_level = debug\n"
                        "max_mesh_vertices = 2000\n"
                        "max_sessions = 3\n"
-                       "threads = 2\r\n";
+                       "threads = 2\r\n"
+                       "spin_us = 30\n"
+                       "inline_us = 0\n";
     df_error e;
     assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
     assert_string_equal(c.socket_path, "/tmp/x.sock");
@@ -70,6 +74,8 @@ static void test_parse_file_text(void **state)
     assert_int_equal(c.max_mesh_vertices, 2000);
     assert_int_equal(c.max_sessions, 3);
     assert_int_equal(c.threads, 2);
+    assert_int_equal(c.spin_us, 30);
+    assert_int_equal(c.inline_us, 0);
     /* IPv6 brackets and disabling. */
     assert_int_equal(df_config_set(&c, "tcp", "[::1]:0", &e), DF_OK);
     assert_string_equal(c.tcp_host, "::1");
@@ -91,6 +97,8 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "no_such_key = 1\n",          "just words\n",             " = 5\n",
         "threads = 0\n",              "threads = 65\n",           "max_mesh_vertices = 0\n",
         "max_sessions = 99999999\n",  "cache_memory_mb = lots\n",
+        "spin_us = 1001\n",           "inline_us = 1001\n",       "inline_us = -1\n",
+        "inline_us = fast\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
@@ -134,8 +142,10 @@ static void test_load_file_and_cli(void **state)
     df_cli_action act;
     df_error e;
     char *argv1[] = {"deformd", "--config", path, "--log-level=debug", "--tcp", "127.0.0.1:0",
-                     "--foreground", NULL};
-    assert_int_equal(df_config_from_args(&c, 7, argv1, "/run/user/7", &act, &e), DF_OK);
+                     "--foreground", "--inline-us", "120", "--spin-us=5", NULL};
+    assert_int_equal(df_config_from_args(&c, 10, argv1, "/run/user/7", &act, &e), DF_OK);
+    assert_int_equal(c.inline_us, 120);
+    assert_int_equal(c.spin_us, 5);
     assert_int_equal(act, DF_CLI_RUN);
     assert_string_equal(c.socket_path, "/tmp/from_file.sock");
     assert_int_equal(c.max_clients, 5);
@@ -159,11 +169,15 @@ static void test_load_file_and_cli(void **state)
     assert_int_equal(df_config_from_args(&c, 2, argv5, NULL, &act, &e), DF_EINVAL);
     char *argv6[] = {"deformd", "--log-level", "chatty", NULL};
     assert_int_equal(df_config_from_args(&c, 3, argv6, NULL, &act, &e), DF_EINVAL);
+    char *argv8[] = {"deformd", "--inline-us", "5000", NULL};
+    assert_int_equal(df_config_from_args(&c, 3, argv8, NULL, &act, &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "--inline-us"));
     assert_memory_equal(&c, &keep, sizeof c);
     char *argv7[] = {"deformd", "--bogus", "--help", NULL};
     assert_int_equal(df_config_from_args(&c, 3, argv7, NULL, &act, &e), DF_OK);
     assert_int_equal(act, DF_CLI_HELP);
     assert_non_null(strstr(df_config_usage(), "--foreground"));
+    assert_non_null(strstr(df_config_usage(), "--inline-us"));
 }
 
 static void test_allowed_paths(void **state)
