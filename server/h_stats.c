@@ -51,6 +51,7 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "jobs_running", srv->jobs_running);
         put(&st, "jobs_superseded", (double)x->jobs_superseded);
         put(&st, "jobs_inline", (double)x->jobs_inline);
+        put(&st, "jobs_inline_deferred", (double)x->jobs_inline_deferred);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
         put(&st, "cache.bytes", (double)srv->cache_bytes);

@@ -129,12 +129,17 @@ static void task_after(df_task *t)
 }
 
 /* 1 when the head job `j` may run its work on the loop thread (see job.h, "Inline jobs"). */
-static int runs_inline(const df_job *j)
+static int runs_inline(df_job *j)
 {
     uint64_t budget_ns = (uint64_t)j->srv->cfg.inline_us * 1000u;
     if (!j->inline_cost || budget_ns == 0 || j->srv->stopping) return 0;
     uint64_t ns = j->inline_cost(j);
-    return ns > 0 && ns <= budget_ns;
+    if (ns == 0 || ns > budget_ns) return 0;
+    if (j->srv->inline_spent_ns + ns > DF_JOB_INLINE_ITER_FACTOR * budget_ns) {
+        j->srv->stats.jobs_inline_deferred++; /* this iteration's inline budget is spent */
+        return 0;
+    }
+    return 1;
 }
 
 /* Starts queued jobs until one is running on the pool or the FIFO is empty; frees a closed
@@ -148,7 +153,9 @@ static void pump(df_session *s)
         j->next = NULL;
         s->running = j;
         if (j->work && runs_inline(j)) { /* cheaper than two thread hand-offs */
+            uint64_t t0 = uv_hrtime();
             j->work(j);
+            j->srv->inline_spent_ns += uv_hrtime() - t0;
             j->srv->stats.jobs_inline++;
             finish(j);
             continue;

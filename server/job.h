@@ -16,7 +16,10 @@
  * inline_us (config; 0 = never). The prediction is a measurement (the same stroke's previous
  * update), so the loop is held for at most about that long; solves, factorizations, mesh loads,
  * pinned strokes and anything not measured yet always go to the pool, so a slow job on one
- * session still never stalls another session. */
+ * session still never stalls another session. A client pipelining many cheap updates cannot
+ * hold the loop either: inline work is capped at DF_JOB_INLINE_ITER_FACTOR x inline_us per loop
+ * iteration (srv->inline_spent_ns, reset by the server's check handle); past that, jobs go to
+ * the pool until the next iteration. */
 #ifndef DF_SERVER_JOB_H
 #define DF_SERVER_JOB_H
 
@@ -30,6 +33,8 @@
 #include "server/sbuf.h"
 #include "server/server.h"
 #include "server/session.h"
+
+#define DF_JOB_INLINE_ITER_FACTOR 4 /* inline work per loop iteration <= this x inline_us */
 
 typedef struct df_job df_job;
 typedef void (*df_job_fn)(df_job *j);

@@ -54,7 +54,12 @@ void df_server_post(df_server *srv, struct df_job *job, df_sbuf *frame, uint64_t
 
 static void on_mail(uv_async_t *a) { df_server_drain_mail(a->data); }
 
-static void on_check(uv_check_t *h) { df_conn_flush_all(h->data, 0); }
+static void on_check(uv_check_t *h)
+{
+    df_server *srv = h->data;
+    srv->inline_spent_ns = 0; /* a new loop iteration: a new inline budget (job.h) */
+    df_conn_flush_all(srv, 0);
+}
 
 static void on_sweep(uv_timer_t *t) { df_conn_sweep(t->data); }
 

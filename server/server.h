@@ -74,6 +74,7 @@ typedef struct df_server {
     uint64_t next_session_id;
     struct df_pool *pool;    /* compute pool for session jobs (NULL: libuv pool) */
     int jobs_running;        /* jobs submitted to the thread pool and not completed */
+    uint64_t inline_spent_ns;/* job work run on the loop thread this iteration (job.h) */
     int stopping;
     size_t cache_bytes;      /* bytes of cached factorizations over all sessions */
     uint64_t lru_clock;

@@ -15,6 +15,7 @@ typedef struct df_stats {
     uint64_t requests_ok, requests_failed;
     uint64_t jobs_submitted, jobs_completed, jobs_superseded;
     uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
+    uint64_t jobs_inline_deferred;/* cheap enough, sent to the pool: iteration budget spent */
     uint64_t versions;            /* versions broadcast, all sessions */
     uint64_t kelvin_lu_hits, kelvin_lu_misses;
     uint64_t admm_hits, admm_misses;

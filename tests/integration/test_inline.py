@@ -2,8 +2,9 @@
 compute pool. Checked here: it happens for small meshes by default, never with inline_us = 0,
 never for expensive (big-mesh) or pinned strokes, and both paths give byte-identical streams and
 positions."""
-from deformd_client import Brush, MeshState
+from deformd_client import Brush, MeshState, frame as fr, messages as m
 from helpers import grid_obj, obj_bytes_positions
+from rawwire import read_frames
 
 UPDATES = 12
 
@@ -44,11 +45,11 @@ def test_cheap_updates_run_inline_and_match_the_pool_path(make_daemon):
         assert c.stats()["inline_us"] == 0
     for brush in (Brush(type="grab", center=X[0:3], move=(0.01, 0.0, 0.02), radius=0.3, nu=0.4),
                   Brush(type="twist", center=X[300:303], twist=(0, 0, 0.2), radius=0.25,
-                        falloff=3, integrator="rk4", steps=4)):
+                        falloff=3, integrator="rk4", steps=1)):
         a = _stroke_session(fast, data, brush)
         b = _stroke_session(pooled, data, brush)
-        # The begin (pool) measures the stroke; the updates then fit the 50 us budget on any
-        # machine this suite runs on (a 576-vertex field takes a few microseconds), but a
+        # The begin (pool) measures the stroke; the updates then fit the 50 us budget (a
+        # 576-vertex field takes ~3 us, ~10 us for tri-scale RK4, ~3x that under ASan), but a
         # descheduled measurement may push one update back to the pool: most must be inline.
         assert a[3] >= UPDATES // 2, "only %d of %d updates ran inline" % (a[3], UPDATES)
         assert b[3] == 0
@@ -69,3 +70,43 @@ def test_expensive_and_pinned_strokes_stay_on_the_pool(daemon):
     r = _stroke_session(daemon, small, pinned, updates=4)
     assert r[3] == 0, "a pinned stroke's update ran on the loop thread"
     assert r[0] == r[1]
+
+
+PIPELINED = 60  # below max_pending_requests (64)
+
+
+def _pipelined_stroke(d, data):
+    """Begins a stroke, then sends PIPELINED updates in one write on a raw socket; returns (final
+    positions bytes, jobs_inline delta, jobs_inline_deferred delta)."""
+    X = obj_bytes_positions(data)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data, fmt=".obj", name="pipelined").session_id
+        s0 = c.stats()
+        sock = d.raw_unix(hello=True)
+        begin = m.encode_brush(sid, Brush(center=X[0:3], move=(0.01, 0, 0), radius=0.3))
+        sock.sendall(fr.encode_frame(m.BRUSH_BEGIN, begin, request_id=1))
+        frames, _ = read_frames(sock, want=1)
+        assert frames and not frames[0].flags & fr.FLAG_ERROR
+        burst = b"".join(fr.encode_frame(m.BRUSH_UPDATE,
+                                         m.encode_brush_update(sid, move=(0.01 + 0.001 * u, 0, 0)),
+                                         request_id=2 + u) for u in range(PIPELINED))
+        sock.sendall(burst)
+        frames, _ = read_frames(sock, timeout=10.0, want=PIPELINED)
+        sock.close()
+        assert [f.request_id for f in frames] == list(range(2, 2 + PIPELINED))
+        assert not any(f.flags & fr.FLAG_ERROR for f in frames)
+        s1 = c.stats()
+        return (c.get_mesh(sid).positions.tobytes(), s1["jobs_inline"] - s0["jobs_inline"],
+                s1["jobs_inline_deferred"] - s0["jobs_inline_deferred"])
+
+
+def test_a_pipelined_burst_cannot_hold_the_loop(make_daemon):
+    """60 cheap updates arriving in one read: the loop runs at most DF_JOB_INLINE_ITER_FACTOR x
+    inline_us of them per iteration, the rest go to the pool, and the result is the same."""
+    data = grid_obj(48, 48)  # ~10 us an update: 60 of them are ~3x the 200 us iteration budget
+    fast, inline, deferred = _pipelined_stroke(make_daemon(), data)
+    pooled, none, none_deferred = _pipelined_stroke(make_daemon("inline_us = 0\n"), data)
+    assert none == none_deferred == 0
+    assert inline >= 1 and deferred >= 1, "inline %d, deferred %d" % (inline, deferred)
+    assert inline + deferred <= PIPELINED
+    assert fast == pooled
