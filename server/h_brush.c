@@ -146,6 +146,14 @@ static int stroke_applied_nothing(const df_stroke *st, size_t n)
     return 1;
 }
 
+/* 1 when all 16 load components of a request (move, twist, scale, matrix) are zero. */
+static int load_is_zero(const double *load)
+{
+    int zero = 1;
+    for (int i = 0; i < 16; i++) zero &= load[i] == 0.0;
+    return zero;
+}
+
 static void begin_work_inner(df_job *j);
 
 static void begin_work(df_job *j)
@@ -154,10 +162,8 @@ static void begin_work(df_job *j)
     begin_work_inner(j);
     uint64_t dt = uv_hrtime() - t0;
     j->s->brush_last_ms = (double)dt / 1e6;
-    brush_req *r = j->body;
-    int evaluated = 0;
-    for (int i = 0; i < 16; i++) evaluated |= r->load[i] != 0.0;
-    if (r->created && evaluated && j->rc == DF_OK) r->created->work_ns = dt;
+    brush_req *r = j->body; /* a zero-load begin evaluates no field: nothing measured */
+    if (r->created && !load_is_zero(r->load) && j->rc == DF_OK) r->created->work_ns = dt;
 }
 
 static void begin_work_inner(df_job *j)
@@ -214,9 +220,7 @@ static void begin_work_inner(df_job *j)
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
     st->last_version = atomic_load(&s->version);
-    int zero = 1;
-    for (int i = 0; i < 16; i++) zero &= r->load[i] == 0.0;
-    if (zero) { /* validate the brush, publish nothing */
+    if (load_is_zero(r->load)) { /* validate the brush, publish nothing */
         df_kelvinlet_prepared prep;
         if (st->n_pins) j->rc = DF_OK; /* pins are validated by the first update */
         else if ((j->rc = df_kelvinlet_prepare(&st->brush, &prep, &j->err)) == DF_OK)
