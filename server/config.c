@@ -2,6 +2,7 @@
 #include "server/config.h"
 
 #include <ctype.h>
+#include <stddef.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -113,10 +114,34 @@ static int add_allow(df_server_config *cfg, const char *value, df_error *err)
     return DF_OK;
 }
 
+/* The plain integer settings (an `int` field each): key, field, accepted range. */
+typedef struct int_key {
+    const char *key;
+    size_t offset;
+    int min, max;
+} int_key;
+
+static const int_key k_int_keys[] = {
+    {"max_clients", offsetof(df_server_config, max_clients), 1, DF_CONFIG_MAX_CLIENTS_LIMIT},
+    {"max_sessions", offsetof(df_server_config, max_sessions), 1, 1 << 20},
+    {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
+    {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
+    {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
+};
+
 int df_config_set(df_server_config *cfg, const char *key, const char *value, df_error *err)
 {
     unsigned long long v;
     if (!cfg || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    for (size_t i = 0; i < sizeof k_int_keys / sizeof k_int_keys[0]; i++) {
+        const int_key *ik = &k_int_keys[i];
+        if (strcmp(key, ik->key) != 0) continue;
+        if (parse_size(value, (unsigned long long)ik->max, &v) || v < (unsigned long long)ik->min)
+            return df_error_set(err, DF_EINVAL, "%s: '%s' not in %d..%d", key, value, ik->min,
+                                ik->max);
+        *(int *)((char *)cfg + ik->offset) = (int)v;
+        return DF_OK;
+    }
     if (strcmp(key, "socket") == 0) {
         if (strcmp(value, "none") == 0 || value[0] == '\0') {
             cfg->socket_path[0] = '\0';
@@ -138,13 +163,6 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         cfg->log_level = l;
         return DF_OK;
     }
-    if (strcmp(key, "max_clients") == 0) {
-        if (parse_size(value, DF_CONFIG_MAX_CLIENTS_LIMIT, &v) || v < 1)
-            return df_error_set(err, DF_EINVAL, "max_clients: '%s' not in 1..%d", value,
-                                DF_CONFIG_MAX_CLIENTS_LIMIT);
-        cfg->max_clients = (int)v;
-        return DF_OK;
-    }
     if (strcmp(key, "output_queue_limit") == 0) {
         if (parse_size(value, (unsigned long long)1 << 40, &v) || v < 4096)
             return df_error_set(err, DF_EINVAL, "output_queue_limit: '%s' not in 4096..1T",
@@ -163,34 +181,6 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
             return df_error_set(err, DF_EINVAL, "max_mesh_vertices: '%s' not in 1..%d", value,
                                 INT32_MAX / 3);
         cfg->max_mesh_vertices = (int32_t)v;
-        return DF_OK;
-    }
-    if (strcmp(key, "max_sessions") == 0) {
-        if (parse_size(value, 1u << 20, &v) || v < 1)
-            return df_error_set(err, DF_EINVAL, "max_sessions: '%s' not in 1..%u", value,
-                                1u << 20);
-        cfg->max_sessions = (int)v;
-        return DF_OK;
-    }
-    if (strcmp(key, "threads") == 0) {
-        if (parse_size(value, DF_CONFIG_MAX_THREADS, &v) || v < 1)
-            return df_error_set(err, DF_EINVAL, "threads: '%s' not in 1..%d", value,
-                                DF_CONFIG_MAX_THREADS);
-        cfg->threads = (int)v;
-        return DF_OK;
-    }
-    if (strcmp(key, "spin_us") == 0) {
-        if (parse_size(value, DF_CONFIG_MAX_SPIN_US, &v))
-            return df_error_set(err, DF_EINVAL, "spin_us: '%s' not in 0..%d", value,
-                                DF_CONFIG_MAX_SPIN_US);
-        cfg->spin_us = (int)v;
-        return DF_OK;
-    }
-    if (strcmp(key, "inline_us") == 0) {
-        if (parse_size(value, DF_CONFIG_MAX_INLINE_US, &v))
-            return df_error_set(err, DF_EINVAL, "inline_us: '%s' not in 0..%d", value,
-                                DF_CONFIG_MAX_INLINE_US);
-        cfg->inline_us = (int)v;
         return DF_OK;
     }
     return df_error_set(err, DF_EINVAL, "unknown config key '%s'", key);
