@@ -40,6 +40,17 @@ df_session *df_h_session(df_conn *c, const df_frame_header *h, uint64_t session_
     return s;
 }
 
+df_session *df_h_session_ref(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    df_msg_session_ref m;
+    df_error err;
+    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return NULL;
+    }
+    return df_h_session(c, h, m.session_id);
+}
+
 void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_msg_hello m;
@@ -163,16 +174,11 @@ static void close_done(df_job *j)
 /* Submits a loop-only job (no work) on the session of a session_ref request. */
 static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn done)
 {
-    df_msg_session_ref m;
-    df_error err;
-    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
+    df_session *s = df_h_session_ref(c, h, p);
     if (!s) return;
     df_job *j = df_job_new(c->srv, s, c, h->type, h->request_id, NULL, done);
     if (!j) {
+        df_error err;
         df_error_set(&err, DF_ENOMEM, "out of memory");
         df_reply_fail(c, h->type, h->request_id, &err);
         return;

@@ -289,16 +289,14 @@ static void brush_done(df_job *j)
         }
     }
     if (df_job_failed(j)) return;
-    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
-    if (r->frames.n) srv->stats.versions++;
+    df_job_broadcast(j, &r->frames);
     if (r->created) { /* link the new stroke */
         r->created->next = s->strokes;
         s->strokes = r->created;
         r->created = NULL;
     }
     if (j->type == DF_MSG_BRUSH_CANCEL) df_session_drop_stroke(s, j->conn_id);
-    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_job_ack(j);
     df_cache_enforce(srv);
 }
 
@@ -368,20 +366,13 @@ static void end_done(df_job *j)
         return;
     }
     df_session_drop_stroke(s, j->conn_id);
-    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_job_ack(j);
 }
 
 static void ref_request(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn work,
                         df_job_fn done)
 {
-    df_msg_session_ref m;
-    df_error err;
-    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
+    df_session *s = df_h_session_ref(c, h, p);
     df_job *j = s ? new_job(c, h, s, work, done) : NULL;
     if (j) df_job_submit(j);
 }

@@ -118,8 +118,7 @@ static void set_done(df_job *j)
     r->hs = NULL;
     j->srv->stats.admm_misses++;
     df_cache_install_solver(j->srv, s->hs, df_cache_estimate_admm(s->nv, s->mesh.ne));
-    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_job_ack(j);
     df_cache_enforce(j->srv);
 }
 
@@ -218,13 +217,7 @@ static void get_done(df_job *j)
 
 void df_h_handles_get(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    df_msg_session_ref m;
-    df_error err;
-    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
+    df_session *s = df_h_session_ref(c, h, p);
     df_job *j = s ? new_job(c, h, s, NULL, get_done) : NULL;
     if (j) df_job_submit(j);
 }
@@ -323,8 +316,7 @@ static void move_done(df_job *j)
         srv->stats.admm_hits++;
         df_cache_touch_solver(srv, s->hs);
     }
-    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
-    if (r->frames.n) srv->stats.versions++;
+    df_job_broadcast(j, &r->frames);
     df_msg_move_result res;
     memset(&res, 0, sizeof res);
     res.session_id = s->id;
@@ -393,27 +385,19 @@ static void reset_done(df_job *j)
     hs_req *r = j->body;
     df_session *s = j->s;
     if (df_job_failed(j)) return;
-    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
-    j->srv->stats.versions++;
+    df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
     if (s->hs) df_cache_drop_solver(j->srv, s->hs); /* rebuilt against the new rest */
     df_history h;
     if (df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, NULL) == DF_OK) {
         df_history_free(&s->hist); /* reset-rest clears undo/redo */
         s->hist = h;
     }
-    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_job_ack(j);
 }
 
 void df_h_reset_rest(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    df_msg_session_ref m;
-    df_error err;
-    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
+    df_session *s = df_h_session_ref(c, h, p);
     df_job *j = s ? new_job(c, h, s, reset_work, reset_done) : NULL;
     if (j) df_job_submit(j);
 }

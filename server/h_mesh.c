@@ -73,21 +73,16 @@ static void history_done(df_job *j)
     if (df_job_failed(j)) return;
     if (j->type == DF_MSG_UNDO) df_history_undo(&s->hist, NULL);
     else df_history_redo(&s->hist, NULL);
-    for (size_t i = 0; i < r->frames.n; i++) df_session_broadcast(s, r->frames.v[i]);
-    j->srv->stats.versions++;
-    df_msg_ack a = {.session_id = s->id, .version = atomic_load(&s->version)};
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
+    df_job_ack(j);
 }
 
 static void history_request(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    df_msg_session_ref m;
-    df_error err;
-    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_job *j = new_job(c, h, m.session_id, history_work, history_done);
+    df_session *s = df_h_session_ref(c, h, p);
+    df_job *j = s ? df_job_for_request(c, h, s, sizeof(mesh_req), history_work, history_done,
+                                       req_free)
+                  : NULL;
     if (j) df_job_submit(j);
 }
 

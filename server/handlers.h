@@ -45,6 +45,10 @@ void df_session_info_fill(const df_session *s, df_msg_session_info *out);
 /* Looks up a live session for request (h, c); on failure answers ENOTFOUND and returns NULL. */
 df_session *df_h_session(df_conn *c, const df_frame_header *h, uint64_t session_id);
 
+/* Decodes a session_ref request body `p` and looks its session up; on failure answers the
+ * decode error or ENOTFOUND and returns NULL. */
+df_session *df_h_session_ref(df_conn *c, const df_frame_header *h, const uint8_t *p);
+
 /* Frees a connection's unfinished upload (NULL-safe). */
 void df_upload_free(struct df_upload *u);
 

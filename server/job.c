@@ -49,35 +49,20 @@ df_job *df_job_for_request(df_conn *c, const df_frame_header *h, df_session *s, 
 static void job_free(df_job *j)
 {
     if (j->cleanup) j->cleanup(j);
-    for (size_t i = 0; i < j->nframes; i++) df_sbuf_unref(j->frames[i]);
-    free(j->frames);
     if (j->c) df_conn_unref(j->c);
     free(j);
 }
 
-int df_job_add_frame(df_job *j, df_sbuf *frame)
+void df_job_broadcast(df_job *j, const df_frames *f)
 {
-    if (j->nframes == j->capframes) {
-        size_t nc = j->capframes ? 2 * j->capframes : 4;
-        df_sbuf **n = realloc(j->frames, nc * sizeof *n);
-        if (!n) {
-            df_sbuf_unref(frame);
-            return DF_ENOMEM;
-        }
-        j->frames = n;
-        j->capframes = nc;
-    }
-    j->frames[j->nframes++] = frame;
-    return DF_OK;
+    for (size_t i = 0; i < f->n; i++) df_session_broadcast(j->s, f->v[i]);
+    if (f->n) j->srv->stats.versions++;
 }
 
-void df_job_publish(df_job *j)
+void df_job_ack(df_job *j)
 {
-    for (size_t i = 0; i < j->nframes; i++) {
-        if (j->s) df_session_broadcast(j->s, j->frames[i]);
-        df_sbuf_unref(j->frames[i]);
-    }
-    j->nframes = 0;
+    df_msg_ack a = {.session_id = j->s->id, .version = atomic_load(&j->s->version)};
+    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
 }
 
 static void pump(df_session *s);

@@ -33,6 +33,7 @@
 #include "server/sbuf.h"
 #include "server/server.h"
 #include "server/session.h"
+#include "server/stream.h"
 
 #define DF_JOB_INLINE_ITER_FACTOR 4 /* inline work per loop iteration <= this x inline_us */
 
@@ -60,8 +61,6 @@ struct df_job {
     int canceled;             /* the pool refused/cancelled the job (shutdown) */
     uv_work_t w;              /* session-less jobs, and every job of a server without a pool */
     df_task task;             /* session jobs on srv->pool */
-    df_sbuf **frames;         /* frames produced by work, broadcast in done */
-    size_t nframes, capframes;
     uint64_t version;         /* version after the job (for the ack) */
     struct df_job *next;
 };
@@ -84,12 +83,13 @@ void df_job_submit(df_job *j);
  * closed and idle (loop thread). */
 void df_job_pump(df_session *s);
 
-/* Appends a frame (reference moved in) to j->frames; worker or loop thread. DF_ENOMEM when the
- * list cannot grow (the frame is then released). */
-int df_job_add_frame(df_job *j, df_sbuf *frame);
+/* Broadcasts the frames of one new version (`f`, in order; the list keeps its references) to the
+ * subscribers of j's session and counts the version when there is any frame (loop thread). */
+void df_job_broadcast(df_job *j, const df_frames *f);
 
-/* Broadcasts j->frames in order to the session's subscribers and releases them (loop thread). */
-void df_job_publish(df_job *j);
+/* Answers the requester (if it is still there) with an ack carrying the session's current
+ * version (loop thread). */
+void df_job_ack(df_job *j);
 
 /* Removes queued (not started) jobs of session `s` for which pred(j, arg) is 1, running their
  * `done` with rc = DF_ESTATE and the given message first. Returns how many. */
