@@ -14,6 +14,7 @@
 #include "server/session.h"
 
 static void kick_write(df_conn *c);
+static void on_fanout_idle(uv_idle_t *h);
 
 void df_conn_ref(df_conn *c) { c->refs++; }
 
@@ -145,22 +146,51 @@ static void kick_write(df_conn *c)
     if (c->flush_close && c->outq.count == 0) df_conn_close(c, c->flush_why, 1);
 }
 
+/* Starts the writes of the connections on deferred-write list k, in list order, until the list
+ * is empty (returns 1) or uv_hrtime() passes deadline_ns (0: no deadline; returns 0). */
+static int flush_list(df_server *srv, int k, uint64_t deadline_ns)
+{
+    while (srv->kick_first[k]) {
+        if (deadline_ns && uv_hrtime() >= deadline_ns) return 0;
+        df_conn *c = srv->kick_first[k];
+        srv->kick_first[k] = c->kick_next;
+        if (!srv->kick_first[k]) srv->kick_last[k] = NULL;
+        c->kick_next = NULL;
+        c->kick_queued = 0;
+        if (!c->closing) kick_write(c);
+        df_conn_unref(c);
+    }
+    return 1;
+}
+
+/* One fan-out pass (cork timer or idle handle): the idle handle stays active, so the loop polls
+ * without blocking and reads requests between passes, while subscribers remain to be written. */
+static void fanout_pass(df_server *srv)
+{
+    int done = flush_list(srv, 1, uv_hrtime() + DF_CONN_FANOUT_SLICE_US * 1000ull);
+    if (done) uv_idle_stop(&srv->fanout_idle);
+    else if (!uv_is_active((uv_handle_t *)&srv->fanout_idle) && !srv->stopping)
+        uv_idle_start(&srv->fanout_idle, on_fanout_idle);
+}
+
+static void on_fanout_idle(uv_idle_t *h)
+{
+    df_server *srv = h->data;
+    srv->stats.fanout_resumed++;
+    fanout_pass(srv);
+}
+
 void df_conn_flush_all(df_server *srv, int which)
 {
-    for (int k = which == 1 ? 1 : 0; k < (which == 0 ? 1 : 2); k++) {
-        while (srv->kick_first[k]) {
-            df_conn *c = srv->kick_first[k];
-            srv->kick_first[k] = c->kick_next;
-            if (!srv->kick_first[k]) srv->kick_last[k] = NULL;
-            c->kick_next = NULL;
-            c->kick_queued = 0;
-            if (!c->closing) kick_write(c);
-            df_conn_unref(c);
-        }
+    if (which != 1) flush_list(srv, 0, 0);
+    if (which == 1) fanout_pass(srv);
+    if (which == 2) {
+        flush_list(srv, 1, 0);
+        uv_idle_stop(&srv->fanout_idle);
     }
 }
 
-static void on_cork(uv_timer_t *t) { df_conn_flush_all(t->data, 1); }
+static void on_cork(uv_timer_t *t) { fanout_pass(t->data); }
 
 /* Puts c on the deferred-write list (k = 0: it has a reply). */
 static void schedule_write(df_conn *c, int k)
@@ -186,7 +216,8 @@ static void schedule_write(df_conn *c, int k)
     if (srv->kick_last[k]) srv->kick_last[k]->kick_next = c;
     else srv->kick_first[k] = c;
     srv->kick_last[k] = c;
-    if (k == 1 && !uv_is_active((uv_handle_t *)&srv->cork_timer) && !srv->stopping)
+    if (k == 1 && !uv_is_active((uv_handle_t *)&srv->cork_timer) &&
+        !uv_is_active((uv_handle_t *)&srv->fanout_idle) && !srv->stopping)
         uv_timer_start(&srv->cork_timer, on_cork, DF_CONN_CORK_MS, 0);
 }
 
@@ -330,7 +361,12 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
         df_conn_close(c, "refused: max_clients reached", 1);
         return;
     }
-    if (is_tcp) uv_tcp_nodelay(&c->h.tcp, 1);
+    if (is_tcp) {
+        uv_tcp_nodelay(&c->h.tcp, 1);
+    } else {
+        int sndbuf = DF_CONN_UNIX_SNDBUF; /* best effort: the default works, only slower */
+        uv_send_buffer_size((uv_handle_t *)&c->h.stream, &sndbuf);
+    }
     srv->stats.clients_total++;
     df_log(DF_LOG_DEBUG, "client %llu connected (%s)", (unsigned long long)c->id,
            is_tcp ? "tcp" : "unix");

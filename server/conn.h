@@ -20,10 +20,23 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
  * versions go out in one writev per subscriber instead of one write per version. */
 #define DF_CONN_CORK_MS 1
 
+/* Loop time one pass over corked subscriber writes may take. A 1k-vertex version is 12 KB, so
+ * 32 subscribers with a millisecond of versions each are ~4 MB of socket copies (~0.5 ms); done
+ * in one go, every request arriving meanwhile waits for all of it. Passes of this length
+ * alternate with the loop's reading (through an idle handle) until every subscriber is written. */
+#define DF_CONN_FANOUT_SLICE_US 20
+
+/* Kernel send buffer asked for on Unix-socket connections (Linux doubles it, capped by
+ * net.core.wmem_max): room for a millisecond of versions to a subscriber even on large meshes,
+ * so a fan-out pass rarely finds a socket full (a full socket costs a queued uv_write, an
+ * EPOLLOUT round and a wake-up). TCP keeps the kernel's autotuning. */
+#define DF_CONN_UNIX_SNDBUF (1 << 20)
+
 /* Starts the writes of connections that received frames: `which` 0 = those that got a reply in
  * this loop iteration (run from the server's uv_check handle, so a requester's ack and its own
  * displacement frames are never delayed behind a broadcast), 1 = corked subscriber-only output
- * (run from the cork timer), 2 = both. */
+ * (run from the cork timer; stops after DF_CONN_FANOUT_SLICE_US and continues from the
+ * server's idle handle), 2 = both, to the end (shutdown). */
 void df_conn_flush_all(df_server *srv, int which);
 
 /* Queues `frame` (a reference is taken) for sending; the write starts at the end of the current

@@ -44,6 +44,7 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "bytes_in", (double)x->bytes_in);
         put(&st, "bytes_out", (double)x->bytes_out);
         put(&st, "writes_blocked", (double)x->writes_blocked);
+        put(&st, "fanout_resumed", (double)x->fanout_resumed);
         put(&st, "requests_ok", (double)x->requests_ok);
         put(&st, "requests_failed", (double)x->requests_failed);
         put(&st, "jobs_submitted", (double)x->jobs_submitted);

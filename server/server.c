@@ -84,6 +84,8 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     uv_check_start(&srv->kick_check, on_check);
     uv_timer_init(loop, &srv->cork_timer);
     srv->cork_timer.data = srv;
+    uv_idle_init(loop, &srv->fanout_idle);
+    srv->fanout_idle.data = srv;
     uv_timer_init(loop, &srv->sweep_timer);
     srv->sweep_timer.data = srv;
     uv_timer_start(&srv->sweep_timer, on_sweep, DF_SERVER_SWEEP_MS, DF_SERVER_SWEEP_MS);
@@ -99,6 +101,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
         uv_close((uv_handle_t *)&srv->mailbox, NULL);
         uv_close((uv_handle_t *)&srv->kick_check, NULL);
         uv_close((uv_handle_t *)&srv->cork_timer, NULL);
+        uv_close((uv_handle_t *)&srv->fanout_idle, NULL);
         uv_close((uv_handle_t *)&srv->sweep_timer, NULL);
         uv_close((uv_handle_t *)&srv->sig_int, NULL);
         uv_close((uv_handle_t *)&srv->sig_term, NULL);
@@ -147,6 +150,7 @@ static void on_stop_timer(uv_timer_t *h)
     uv_close((uv_handle_t *)&srv->kick_check, NULL);
     uv_timer_stop(&srv->cork_timer);
     uv_close((uv_handle_t *)&srv->cork_timer, NULL);
+    uv_close((uv_handle_t *)&srv->fanout_idle, NULL);
     uv_close((uv_handle_t *)&srv->sweep_timer, NULL);
     df_sd_notify("STOPPING=1");
 }

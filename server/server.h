@@ -64,6 +64,7 @@ typedef struct df_server {
     struct df_mail *mail_head, *mail_tail;
     uv_check_t kick_check;   /* starts the writes queued during this loop iteration */
     uv_timer_t cork_timer;   /* starts corked subscriber writes (DF_CONN_CORK_MS) */
+    uv_idle_t fanout_idle;   /* continues corked writes that overran their slice (conn.h) */
     uv_timer_t sweep_timer;  /* closes connections whose flush-close deadline passed */
     df_conn *kick_first[2], *kick_last[2]; /* [0] connections with replies, [1] the others */
     df_conn *conns;          /* doubly linked list */

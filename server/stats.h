@@ -12,6 +12,7 @@ typedef struct df_stats {
     uint64_t frames_in, bytes_in;
     uint64_t frames_out, bytes_out;
     uint64_t writes_blocked;      /* writes a full socket left to uv_write (a slow reader) */
+    uint64_t fanout_resumed;      /* subscriber-write passes continued after a slice (conn.h) */
     uint64_t requests_ok, requests_failed;
     uint64_t jobs_submitted, jobs_completed, jobs_superseded;
     uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
