@@ -271,5 +271,7 @@ int df_client_subscribe(df_client *c, uint64_t session_id, uint32_t flags,
 
 int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err)
 {
-    return dc_session_ref_call(c, DF_MSG_UNSUBSCRIBE, session_id, NULL, err);
+    int rc = dc_session_ref_call(c, DF_MSG_UNSUBSCRIBE, session_id, NULL, err);
+    if (rc == DF_OK) dc_shm_drop(c, session_id);
+    return rc;
 }

@@ -20,7 +20,27 @@ struct df_client {
     size_t pcap;
     df_buf out;                  /* encoded request scratch */
     df_msg_hello_reply server;   /* hello reply */
+    struct dc_shm *shm;          /* mapped shared-memory stream rings (dc_shm.c), nshm of them */
+    int nshm;
+    uint8_t *shm_frame;          /* copy of the frame an SHM_REF points at */
+    size_t shm_cap;
 };
+
+/* One mapped ring of a session this client streams through shared memory. */
+typedef struct dc_shm {
+    uint64_t session_id;
+    const uint8_t *base;         /* read-only mapping of the whole ring file */
+    size_t map_bytes;
+} dc_shm;
+
+/* Handles an SHM_REF event (dc_shm.c): copies the referenced frame out of the session's ring and
+ * passes it to the event callback as if it had come on the socket; a frame lost to the ring
+ * (overwritten), or a reference the client cannot resolve, reaches the callback as the SHM_REF
+ * event itself (the application resyncs with a snapshot). */
+void dc_shm_dispatch(df_client *c, const df_frame_header *h, const uint8_t *p);
+
+/* Unmaps session `session_id`'s ring (0: every ring). */
+void dc_shm_drop(df_client *c, uint64_t session_id);
 
 /* Encodes a request body with `enc` into c->out (reset first) and runs df_client_transact.
  * `enc` is a df_msg_X_encode function cast to this type together with its message. */

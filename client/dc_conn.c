@@ -69,6 +69,9 @@ void df_client_close(df_client *c)
         return;
     if (c->fd >= 0)
         close(c->fd);
+    dc_shm_drop(c, 0);
+    free(c->shm);
+    free(c->shm_frame);
     free(c->rbuf);
     free(c->pbuf);
     df_buf_free(&c->out);
@@ -204,6 +207,10 @@ int df_client_recv(df_client *c, int timeout_ms, df_frame_header *h, const uint8
 
 static void dispatch_event(df_client *c, const df_frame_header *h, const uint8_t *p)
 {
+    if (h->type == DF_MSG_SHM_REF && c->nshm > 0) {
+        dc_shm_dispatch(c, h, p);
+        return;
+    }
     if (c->on_event)
         c->on_event(c->event_user, h, p);
 }

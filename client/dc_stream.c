@@ -169,6 +169,14 @@ int df_client_replica_feed(df_client_replica *r, const df_frame_header *h, const
         df_msg_progress_free(&p);
         return rc;
     }
+    df_msg_shm_ref lost;
+    if (h->type == DF_MSG_SHM_REF &&
+        df_msg_shm_ref_decode(payload, h->payload_len, &lost, NULL) == DF_OK &&
+        lost.session_id == r->session_id) {
+        r->stale = 1;
+        return df_error_set(err, DF_ESTATE, "replica: a frame was lost to the shared-memory "
+                            "ring (overwritten before it was read); resync");
+    }
     return 0;
 }
 

@@ -148,6 +148,19 @@ int df_client_subscribe(df_client *c, uint64_t session_id, uint32_t flags,
                         df_msg_session_info *info, df_error *err);
 int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err);
 
+/* Switches this subscription to the shared-memory stream (PROTOCOL.md 6.1; Unix socket, same
+ * host, subscribed first): the daemon writes each broadcast frame once into a ring file that this
+ * client maps read-only, and sends a 24-byte SHM_REF in its place. The library resolves them:
+ * the event callback keeps receiving DISPLACEMENT / PROGRESS frames as before. A frame
+ * overwritten before this client read it (it fell more than the ring behind) reaches the
+ * callback as a DF_MSG_SHM_REF event instead: resync with df_client_snapshot. *info (may be NULL)
+ * receives the ring's description. Errors: the server's (DF_ESTATE not subscribed,
+ * DF_EUNSUPPORTED over TCP or disabled, DF_ENOTFOUND), DF_EIO when the ring file cannot be opened
+ * or mapped (e.g. the daemon runs as another user), DF_EFORMAT for a ring header that does not
+ * match the reply. Unsubscribing unmaps the ring. */
+int df_client_stream_shm(df_client *c, uint64_t session_id, df_msg_shm_info *info,
+                         df_error *err);
+
 /* Brush stroke: begin with every Kelvinlet parameter, cumulative updates, end (commits the
  * stroke as the session's change) or cancel (back to the stroke's start). *ack may be NULL. */
 int df_client_brush_begin(df_client *c, const df_msg_brush *b, df_msg_ack *ack, df_error *err);
@@ -244,8 +257,10 @@ void df_client_replica_free(df_client_replica *r);
  * to the replica. Frames of other sessions are ignored (returns 0). Returns 1 when the frame
  * completed a version (r->version updated), 0 when more chunks are needed or the frame was
  * ignored, or a negative error: DF_ESTATE for a version gap (r->stale set: resync with
- * df_client_replica_resync), DF_EFORMAT/DF_EINVAL for a bad chunk (r->stale set). A snapshot
- * (kind DF_CHANGE_SNAPSHOT) clears `stale`. */
+ * df_client_replica_resync), DF_EFORMAT/DF_EINVAL for a bad chunk (r->stale set). An SHM_REF
+ * event of the replica's session (a frame lost to the shared-memory ring, df_client_stream_shm)
+ * is a gap as well: DF_ESTATE with r->stale set. A snapshot (kind DF_CHANGE_SNAPSHOT) clears
+ * `stale`. */
 int df_client_replica_feed(df_client_replica *r, const df_frame_header *h, const uint8_t *payload,
                            df_error *err);
 

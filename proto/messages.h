@@ -71,6 +71,7 @@ typedef enum df_msg_type {
     DF_MSG_CLOSE_SESSION = 0x0013,  /* df_msg_session_ref      -> df_msg_ack */
     DF_MSG_SUBSCRIBE = 0x0014,      /* df_msg_subscribe        -> df_msg_session_info */
     DF_MSG_UNSUBSCRIBE = 0x0015,    /* df_msg_session_ref      -> df_msg_ack */
+    DF_MSG_STREAM_SHM = 0x0016,     /* df_msg_session_ref      -> df_msg_shm_info (shm_ring.h) */
     DF_MSG_BRUSH_BEGIN = 0x0020,    /* df_msg_brush            -> df_msg_ack */
     DF_MSG_BRUSH_UPDATE = 0x0021,   /* df_msg_brush_update     -> df_msg_ack */
     DF_MSG_BRUSH_END = 0x0022,      /* df_msg_session_ref      -> df_msg_ack */
@@ -89,6 +90,7 @@ typedef enum df_msg_type {
     DF_MSG_DISPLACEMENT = 0x0080,   /* event: df_msg_disp chunks (one session version) */
     DF_MSG_PROGRESS = 0x0081,       /* event: df_msg_progress chunks (one iterate = one version) */
     DF_MSG_SESSION_CLOSED = 0x0082, /* event: df_msg_session_ref (session destroyed) */
+    DF_MSG_SHM_REF = 0x0083,        /* event: df_msg_shm_ref (next event frame is in the ring) */
     DF_MSG_ERROR = 0x00FF           /* error body not tied to a request type (framing errors) */
 } df_msg_type;
 
@@ -106,9 +108,10 @@ typedef enum df_feature {            /* hello reply `features` bits */
     DF_FEAT_AUTH = 1u << 3,          /* auth is implemented (and may be required) */
     DF_FEAT_SPARSE_STREAM = 1u << 4, /* server sends sparse displacement frames */
     DF_FEAT_TCP = 1u << 5,           /* the daemon also listens on TCP */
-    DF_FEAT_HID = 1u << 6            /* the daemon drives HID knob devices */
+    DF_FEAT_HID = 1u << 6,           /* the daemon drives HID knob devices */
+    DF_FEAT_SHM_STREAM = 1u << 7     /* STREAM_SHM available to Unix-socket clients */
 } df_feature;
-#define DF_FEAT_ALL 0x7Fu
+#define DF_FEAT_ALL 0xFFu
 
 /* Load mesh `format`: the df_mesh_format values of core/mesh/mesh_io.h, 0..DF_FMT_MAX:
  * DF_FMT_AUTO 0 (sniff content / extension), DF_FMT_OBJ 1, DF_FMT_OFF 2, DF_FMT_PLY 3 (ASCII or
@@ -266,6 +269,20 @@ typedef struct df_msg_session_info {
     uint32_t redo_depth;               /* changes that redo can re-apply */
     char name[DF_MAX_NAME_LEN + 1];
 } df_msg_session_info;
+
+typedef struct df_msg_shm_info {       /* STREAM_SHM reply: where this session's ring is */
+    uint64_t session_id;               /* != 0 */
+    uint64_t capacity;                 /* ring data bytes, >= DF_SHM_MIN_CAPACITY */
+    uint32_t min_frame, max_frame;     /* event frames in [min, max] bytes go through the ring;
+                                        * DF_FRAME_HEADER_SIZE <= min <= max <= capacity */
+    char path[DF_MAX_PATH_LEN + 1];    /* absolute path of the ring file, non-empty */
+} df_msg_shm_info;
+
+typedef struct df_msg_shm_ref {        /* SHM_REF event: one event frame stored in the ring */
+    uint64_t session_id;               /* != 0 */
+    uint64_t position;                 /* stream position of the frame (shm_ring.h) */
+    uint32_t length;                   /* whole frame bytes, >= DF_FRAME_HEADER_SIZE */
+} df_msg_shm_ref;
 
 typedef struct df_msg_session_list {
     uint32_t count;                    /* 0..DF_MAX_SESSIONS */
@@ -462,6 +479,8 @@ DF_MSG_CODEC(disp)
 DF_MSG_CODEC(progress)
 DF_MSG_CODEC(stats_req)
 DF_MSG_CODEC(stats)
+DF_MSG_CODEC(shm_info)
+DF_MSG_CODEC(shm_ref)
 #undef DF_MSG_CODEC
 
 /* Fills `m` with the defaults clients should start from: GRAB, dim 3, falloff 1, ratio 1.1,
@@ -518,7 +537,8 @@ typedef enum df_body_kind {
     DF_BODY_SUBSCRIBE, DF_BODY_SESSION_INFO, DF_BODY_SESSION_LIST, DF_BODY_ACK, DF_BODY_BRUSH,
     DF_BODY_BRUSH_UPDATE, DF_BODY_BRUSH_PARAM, DF_BODY_HANDLES, DF_BODY_HANDLE_MOVE,
     DF_BODY_MOVE_RESULT, DF_BODY_GET_MESH, DF_BODY_MESH_CHUNK, DF_BODY_SNAPSHOT_REQ,
-    DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS
+    DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS, DF_BODY_SHM_INFO,
+    DF_BODY_SHM_REF
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -549,6 +569,8 @@ typedef struct df_msg_any {
         df_msg_progress progress;
         df_msg_stats_req stats_req;
         df_msg_stats stats;
+        df_msg_shm_info shm_info;
+        df_msg_shm_ref shm_ref;
     } u;
 } df_msg_any;
 

@@ -50,6 +50,8 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
     case DF_BODY_PROGRESS: rc = df_msg_progress_decode(p, n, &t.u.progress, err); break;
     case DF_BODY_STATS_REQ: rc = df_msg_stats_req_decode(p, n, &t.u.stats_req, err); break;
     case DF_BODY_STATS: rc = df_msg_stats_decode(p, n, &t.u.stats, err); break;
+    case DF_BODY_SHM_INFO: rc = df_msg_shm_info_decode(p, n, &t.u.shm_info, err); break;
+    case DF_BODY_SHM_REF: rc = df_msg_shm_ref_decode(p, n, &t.u.shm_ref, err); break;
     default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
     }
     if (rc)
@@ -105,6 +107,8 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
     case DF_BODY_PROGRESS: return df_msg_progress_encode(&m->u.progress, out, e);
     case DF_BODY_STATS_REQ: return df_msg_stats_req_encode(&m->u.stats_req, out, e);
     case DF_BODY_STATS: return df_msg_stats_encode(&m->u.stats, out, e);
+    case DF_BODY_SHM_INFO: return df_msg_shm_info_encode(&m->u.shm_info, out, e);
+    case DF_BODY_SHM_REF: return df_msg_shm_ref_encode(&m->u.shm_ref, out, e);
     }
     return DF_EINTERNAL;
 }

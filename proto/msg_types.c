@@ -21,6 +21,7 @@ static const type_row rows[] = {
     {DF_MSG_CLOSE_SESSION, "close_session", DF_BODY_SESSION_REF, DF_BODY_ACK, NONE},
     {DF_MSG_SUBSCRIBE, "subscribe", DF_BODY_SUBSCRIBE, DF_BODY_SESSION_INFO, NONE},
     {DF_MSG_UNSUBSCRIBE, "unsubscribe", DF_BODY_SESSION_REF, DF_BODY_ACK, NONE},
+    {DF_MSG_STREAM_SHM, "stream_shm", DF_BODY_SESSION_REF, DF_BODY_SHM_INFO, NONE},
     {DF_MSG_BRUSH_BEGIN, "brush_begin", DF_BODY_BRUSH, DF_BODY_ACK, NONE},
     {DF_MSG_BRUSH_UPDATE, "brush_update", DF_BODY_BRUSH_UPDATE, DF_BODY_ACK, NONE},
     {DF_MSG_BRUSH_END, "brush_end", DF_BODY_SESSION_REF, DF_BODY_ACK, NONE},
@@ -38,6 +39,7 @@ static const type_row rows[] = {
     {DF_MSG_DISPLACEMENT, "displacement", NONE, NONE, DF_BODY_DISP},
     {DF_MSG_PROGRESS, "progress", NONE, NONE, DF_BODY_PROGRESS},
     {DF_MSG_SESSION_CLOSED, "session_closed", NONE, NONE, DF_BODY_SESSION_REF},
+    {DF_MSG_SHM_REF, "shm_ref", NONE, NONE, DF_BODY_SHM_REF},
     {DF_MSG_ERROR, "error", NONE, NONE, NONE},
 };
 

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "proto/shm_ring.h"
 #include "server/log.h"
 
 void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
@@ -21,6 +22,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
         snprintf(cfg->socket_path, sizeof cfg->socket_path, "/run/deformd/deformd.sock");
     cfg->max_clients = DF_CONFIG_DEFAULT_MAX_CLIENTS;
     cfg->output_queue_limit = DF_CONFIG_DEFAULT_QUEUE_LIMIT;
+    cfg->shm_ring_bytes = DF_CONFIG_DEFAULT_SHM_RING;
     cfg->cache_memory_mb = DF_CONFIG_DEFAULT_CACHE_MB;
     cfg->log_level = DF_LOG_INFO;
     cfg->max_mesh_vertices = DF_CONFIG_DEFAULT_MAX_VERTICES;
@@ -170,6 +172,13 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         cfg->output_queue_limit = (size_t)v;
         return DF_OK;
     }
+    if (strcmp(key, "shm_ring_bytes") == 0) {
+        if (parse_size(value, DF_SHM_MAX_CAPACITY, &v) || (v && v < DF_CONFIG_MIN_SHM_RING))
+            return df_error_set(err, DF_EINVAL, "shm_ring_bytes: '%s' is not 0 or 64k..4g",
+                                value);
+        cfg->shm_ring_bytes = v;
+        return DF_OK;
+    }
     if (strcmp(key, "cache_memory_mb") == 0) {
         if (parse_size(value, (unsigned long long)1 << 30, &v))
             return df_error_set(err, DF_EINVAL, "cache_memory_mb: '%s' is not a size", value);
@@ -295,8 +304,8 @@ static const char k_usage[] =
     "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port)\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us); command-line options\n"
-    "                      override the file\n"
+    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes);\n"
+    "                      command-line options override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"
     "  --spin-us N         compute workers poll N us for the next short job before sleeping\n"

@@ -22,6 +22,9 @@
  *                      microseconds run on the loop thread instead of the compute pool
  *                      (0 .. DF_CONFIG_MAX_INLINE_US, default DF_CONFIG_DEFAULT_INLINE_US; 0 =
  *                      never; see job.h)
+ *   shm_ring_bytes     data bytes of a session's shared-memory stream ring (PROTOCOL.md 6.1;
+ *                      allocated in /dev/shm when its first subscriber attaches; suffix k/m/g
+ *                      ok; 0 disables STREAM_SHM, else 64k .. 4g; default 64m)
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
  * --log-level LEVEL, --spin-us N, --inline-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
@@ -49,6 +52,8 @@
 #define DF_CONFIG_DEFAULT_THREADS 4
 #define DF_CONFIG_DEFAULT_SPIN_US 0
 #define DF_CONFIG_DEFAULT_INLINE_US 50 /* ~ two thread hand-offs on the 2-core test machine */
+#define DF_CONFIG_DEFAULT_SHM_RING ((uint64_t)64 << 20) /* 64 MiB: ~5k 1k-vertex versions */
+#define DF_CONFIG_MIN_SHM_RING ((uint64_t)64 << 10)
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -65,6 +70,7 @@ typedef struct df_server_config {
     int threads;
     int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
     int inline_us;               /* loop-thread budget of a cheap brush update, us (0 = off) */
+    uint64_t shm_ring_bytes;     /* shared-memory stream ring per session, bytes (0 = off) */
     int foreground;              /* 1: do not daemonize */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;

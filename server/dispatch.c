@@ -21,6 +21,7 @@ static const struct {
     {DF_MSG_CLOSE_SESSION, df_h_close_session},
     {DF_MSG_SUBSCRIBE, df_h_subscribe},
     {DF_MSG_UNSUBSCRIBE, df_h_unsubscribe},
+    {DF_MSG_STREAM_SHM, df_h_stream_shm},
     {DF_MSG_BRUSH_BEGIN, df_h_brush_begin},
     {DF_MSG_BRUSH_UPDATE, df_h_brush_update},
     {DF_MSG_BRUSH_END, df_h_brush_end},

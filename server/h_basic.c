@@ -9,6 +9,8 @@
 #include "server/job.h"
 #include "server/log.h"
 #include "server/reply.h"
+#include "server/session.h"
+#include "server/shm.h"
 #include "server/stream.h"
 
 #define DF_SERVER_NAME "deformd 0.1"
@@ -72,7 +74,8 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
     r.version = (uint16_t)(m.max_version < DF_PROTO_VERSION ? m.max_version : DF_PROTO_VERSION);
     r.server_max_version = DF_PROTO_VERSION;
     r.features = DF_FEAT_KELVINLET | DF_FEAT_ADMM | DF_FEAT_SPARSE_STREAM |
-                 (cfg->n_allow ? DF_FEAT_PATH_LOAD : 0) | (c->srv->have_tcp ? DF_FEAT_TCP : 0);
+                 (cfg->n_allow ? DF_FEAT_PATH_LOAD : 0) | (c->srv->have_tcp ? DF_FEAT_TCP : 0) |
+                 (cfg->shm_ring_bytes && !c->is_tcp ? DF_FEAT_SHM_STREAM : 0);
     r.max_frame_payload = DF_MAX_FRAME_PAYLOAD;
     r.max_mesh_vertices = (uint32_t)cfg->max_mesh_vertices < DF_MAX_MESH_VERTICES
                               ? (uint32_t)cfg->max_mesh_vertices
@@ -202,6 +205,38 @@ static void unsubscribe_done(df_job *j)
 void df_h_unsubscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     ref_job(c, h, p, unsubscribe_done);
+}
+
+static void stream_shm_done(df_job *j)
+{
+    if (df_job_failed(j)) return;
+    df_session *s = j->s;
+    df_error err;
+    if (j->c->closing) return;
+    if (df_session_attach_shm(s, j->c, &err) != DF_OK) {
+        df_reply_fail(j->c, j->type, j->req_id, &err);
+        return;
+    }
+    df_msg_shm_info info = {.session_id = s->id, .capacity = s->shm->capacity,
+                            .min_frame = s->shm->min_frame, .max_frame = s->shm->max_frame};
+    snprintf(info.path, sizeof info.path, "%s", s->shm->path);
+    df_reply_shm_info(j->c, j->type, j->req_id, &info, 1);
+}
+
+/* STREAM_SHM (PROTOCOL.md 6.1): queued behind the session's earlier requests so that the reply
+ * marks the exact place in the stream from which this subscriber gets SHM_REFs. */
+void df_h_stream_shm(df_conn *c, const df_frame_header *h, const uint8_t *p)
+{
+    const char *why = c->is_tcp ? "needs a Unix-socket connection on the daemon's host"
+                      : c->srv->cfg.shm_ring_bytes == 0 ? "disabled (shm_ring_bytes = 0)"
+                                                        : NULL;
+    if (why) {
+        df_error err;
+        df_error_set(&err, DF_EUNSUPPORTED, "stream_shm: %s", why);
+        df_reply_fail(c, h->type, h->request_id, &err);
+        return;
+    }
+    ref_job(c, h, p, stream_shm_done);
 }
 
 static void subscribe_done(df_job *j)

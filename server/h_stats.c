@@ -7,6 +7,7 @@
 #include "server/handlers.h"
 #include "server/pool.h"
 #include "server/reply.h"
+#include "server/shm.h"
 
 #define DF_STATS_MAX 96 /* entries this server reports */
 
@@ -45,6 +46,8 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "bytes_out", (double)x->bytes_out);
         put(&st, "writes_blocked", (double)x->writes_blocked);
         put(&st, "fanout_resumed", (double)x->fanout_resumed);
+        put(&st, "shm_frames", (double)x->shm_frames);
+        put(&st, "shm_refs", (double)x->shm_refs);
         put(&st, "requests_ok", (double)x->requests_ok);
         put(&st, "requests_failed", (double)x->requests_failed);
         put(&st, "jobs_submitted", (double)x->jobs_submitted);
@@ -55,6 +58,7 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "jobs_inline_deferred", (double)x->jobs_inline_deferred);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
+        put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);
         put(&st, "cache.bytes", (double)srv->cache_bytes);
         put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));
         put(&st, "cache.kelvinlet_lu.hits", (double)x->kelvin_lu_hits);
@@ -78,6 +82,8 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "nv", s->nv);
         put(&st, "ne", s->mesh.ne);
         put(&st, "subscribers", s->nsubs);
+        put(&st, "shm_subscribers", s->nshm);
+        put(&st, "shm.ring_bytes", s->shm ? (double)s->shm->capacity : 0);
         put(&st, "undo_depth", df_history_can_undo(&s->hist));
         put(&st, "redo_depth", df_history_can_redo(&s->hist));
         put(&st, "history_bytes", (double)df_history_bytes(&s->hist));

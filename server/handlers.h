@@ -23,6 +23,7 @@ DF_HANDLER(open_session);
 DF_HANDLER(close_session);
 DF_HANDLER(subscribe);
 DF_HANDLER(unsubscribe);
+DF_HANDLER(stream_shm);
 DF_HANDLER(stats);
 DF_HANDLER(brush_begin);
 DF_HANDLER(brush_update);

@@ -35,6 +35,8 @@ DF_OUT_DECL(mesh_chunk)
 DF_OUT_DECL(disp)
 DF_OUT_DECL(progress)
 DF_OUT_DECL(stats)
+DF_OUT_DECL(shm_info)
+DF_OUT_DECL(shm_ref)
 #undef DF_OUT_DECL
 
 /* Sends an error reply to request (type, request_id) with wire code `code` and a printf-style

@@ -13,6 +13,7 @@
 #include "server/pool.h"
 #include "server/sd.h"
 #include "server/session.h"
+#include "server/shm.h"
 
 #define DF_SERVER_SWEEP_MS 1000 /* period of the flush-close deadline sweep */
 
@@ -107,6 +108,8 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
         uv_close((uv_handle_t *)&srv->sig_term, NULL);
         return rc;
     }
+    int stale = df_shm_sweep_stale();
+    if (stale) df_log(DF_LOG_INFO, "removed %d shared-memory ring(s) of daemons that died", stale);
     df_error perr;
     if (df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, &perr) !=
         DF_OK) {

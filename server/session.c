@@ -11,6 +11,7 @@
 #include "server/log.h"
 #include "server/meshload.h"
 #include "server/reply.h"
+#include "server/shm.h"
 
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err)
@@ -104,6 +105,8 @@ void df_session_destroy(df_session *s)
     srv->n_sessions--;
     for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
     free(s->subs);
+    free(s->sub_shm);
+    df_shm_destroy(s->shm);
     while (s->strokes) {
         df_stroke *st = s->strokes;
         s->strokes = st->next;
@@ -138,7 +141,7 @@ void df_session_close(df_session *s)
         df_sbuf_unref(f);
     }
     for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
-    s->nsubs = 0;
+    s->nsubs = s->nshm = 0;
     df_job_pump(s); /* destroys it when idle */
 }
 
@@ -154,9 +157,13 @@ int df_session_subscribe(df_session *s, df_conn *c, df_error *err)
         df_conn **n = realloc(s->subs, (size_t)nc * sizeof *n);
         if (!n) return df_error_set(err, DF_ENOMEM, "out of memory");
         s->subs = n;
+        uint8_t *f = realloc(s->sub_shm, (size_t)nc);
+        if (!f) return df_error_set(err, DF_ENOMEM, "out of memory");
+        s->sub_shm = f;
         s->capsubs = nc;
     }
     df_conn_ref(c);
+    s->sub_shm[s->nsubs] = 0;
     s->subs[s->nsubs++] = c;
     return DF_OK;
 }
@@ -165,12 +172,30 @@ int df_session_unsubscribe(df_session *s, df_conn *c)
 {
     for (int i = 0; i < s->nsubs; i++)
         if (s->subs[i] == c) {
+            s->nshm -= s->sub_shm[i];
             memmove(s->subs + i, s->subs + i + 1, (size_t)(s->nsubs - i - 1) * sizeof *s->subs);
+            memmove(s->sub_shm + i, s->sub_shm + i + 1, (size_t)(s->nsubs - i - 1));
             s->nsubs--;
             df_conn_unref(c);
             return 1;
         }
     return 0;
+}
+
+int df_session_attach_shm(df_session *s, df_conn *c, df_error *err)
+{
+    int i = 0;
+    while (i < s->nsubs && s->subs[i] != c) i++;
+    if (i == s->nsubs)
+        return df_error_set(err, DF_ESTATE, "stream_shm: not subscribed to session %llu; "
+                            "subscribe first", (unsigned long long)s->id);
+    if (!s->shm) {
+        int rc = df_shm_create(s->id, s->srv->cfg.shm_ring_bytes, &s->shm, err);
+        if (rc) return rc;
+    }
+    if (!s->sub_shm[i]) s->nshm++;
+    s->sub_shm[i] = 1;
+    return DF_OK;
 }
 
 /* Ends (commits) a departed client's stroke. */
@@ -205,22 +230,47 @@ void df_session_forget_conn(df_server *srv, df_conn *c)
     }
 }
 
+/* The SHM_REF frame standing for `frame` once it is copied into the session's ring; NULL when the
+ * frame stays on the socket (no ring subscriber, size outside the ring's bounds, out of memory). */
+static df_sbuf *shm_ref_for(df_session *s, df_sbuf *frame)
+{
+    if (s->nshm == 0 || !df_shm_takes(s->shm, frame->len)) return NULL;
+    df_msg_shm_ref m = {.session_id = s->id, .length = (uint32_t)frame->len};
+    m.position = df_shm_put(s->shm, frame->data, m.length);
+    df_error err;
+    df_sbuf *ref = df_out_shm_ref(DF_MSG_SHM_REF, DF_FLAG_EVENT, 0, &m, &err);
+    if (ref) s->srv->stats.shm_frames++;
+    return ref;
+}
+
 void df_session_broadcast(df_session *s, df_sbuf *frame)
 {
     /* df_conn_send may drop a subscriber (closing it unsubscribes it): iterate over a copy. */
     df_conn *local[64];
-    df_conn **subs = s->nsubs <= 64 ? local : malloc((size_t)s->nsubs * sizeof *subs);
-    if (!subs) return;
+    uint8_t local_shm[64];
     int n = s->nsubs;
+    df_conn **subs = n <= 64 ? local : malloc((size_t)n * sizeof *subs);
+    uint8_t *shm = n <= 64 ? local_shm : malloc((size_t)n);
+    if (!subs || !shm) {
+        if (subs != local) free(subs);
+        if (shm != local_shm) free(shm);
+        return;
+    }
     for (int i = 0; i < n; i++) {
         subs[i] = s->subs[i];
+        shm[i] = s->sub_shm[i];
         df_conn_ref(subs[i]);
     }
+    df_sbuf *ref = shm_ref_for(s, frame);
     for (int i = 0; i < n; i++) {
-        if (!subs[i]->closing) df_conn_send(subs[i], frame);
+        int by_ref = ref && shm[i];
+        if (!subs[i]->closing && df_conn_send(subs[i], by_ref ? ref : frame) == DF_OK && by_ref)
+            s->srv->stats.shm_refs++;
         df_conn_unref(subs[i]);
     }
+    df_sbuf_unref(ref);
     if (subs != local) free(subs);
+    if (shm != local_shm) free(shm);
 }
 
 df_stroke *df_session_stroke(df_session *s, uint64_t conn_id)

@@ -68,7 +68,9 @@ typedef struct df_session {
     atomic_uint_fast64_t version;
     df_history hist;
     df_conn **subs;              /* subscribers (each holds a conn reference) */
-    int nsubs, capsubs;
+    uint8_t *sub_shm;            /* sub_shm[i]: subs[i] reads frames from `shm` (STREAM_SHM) */
+    int nsubs, capsubs, nshm;    /* nshm: subscribers with sub_shm set */
+    struct df_shm_ring *shm;     /* shared-memory stream ring, made by the first STREAM_SHM */
     struct df_job *jhead, *jtail;/* queued jobs, not started */
     struct df_job *running;      /* the head job while it runs (or NULL) */
     df_stroke *strokes;
@@ -109,11 +111,18 @@ void df_session_destroy(df_session *s);
 int df_session_subscribe(df_session *s, df_conn *c, df_error *err);
 int df_session_unsubscribe(df_session *s, df_conn *c);
 
+/* Switches subscriber `c` to the shared-memory stream, creating the session's ring first if
+ * needed (server/shm.h). DF_OK (also when already switched), DF_ESTATE when c is not subscribed,
+ * or df_shm_create's error. */
+int df_session_attach_shm(df_session *s, df_conn *c, df_error *err);
+
 /* Called when a connection closes: unsubscribes it everywhere and drops its open strokes in
  * idle sessions (strokes of busy sessions are dropped by their next job). */
 void df_session_forget_conn(df_server *srv, df_conn *c);
 
-/* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for. */
+/* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for.
+ * Subscribers on the shared-memory stream get an SHM_REF to the frame's copy in the ring
+ * instead, when the frame's size qualifies (df_shm_takes). */
 void df_session_broadcast(df_session *s, df_sbuf *frame);
 
 /* Open stroke of connection `conn_id`, or NULL. */

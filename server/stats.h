@@ -18,6 +18,8 @@ typedef struct df_stats {
     uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
     uint64_t jobs_inline_deferred;/* cheap enough, sent to the pool: iteration budget spent */
     uint64_t versions;            /* versions broadcast, all sessions */
+    uint64_t shm_frames;          /* broadcast frames copied into a shared-memory ring */
+    uint64_t shm_refs;            /* SHM_REF events queued in their place */
     uint64_t kelvin_lu_hits, kelvin_lu_misses;
     uint64_t admm_hits, admm_misses;
     uint64_t lru_evictions;

@@ -37,14 +37,23 @@ static inline int live_daemon_path(char *out, size_t cap)
     return snprintf(out, cap, "%s/bin/deformd", self) < (int)cap && access(out, X_OK) == 0 ? 0 : -1;
 }
 
-/* Starts `exe` on a socket in a fresh /tmp/dc-<tag>-XXXXXX directory and waits (<= 5 s) until a
- * client named `tag` can connect. 0 on success, -1 otherwise. */
-static inline int live_daemon_start(live_daemon *d, const char *exe, const char *tag)
+/* Starts `exe` on a socket in a fresh /tmp/dc-<tag>-XXXXXX directory, with the config file text
+ * `config` when non-NULL, and waits (<= 5 s) until a client named `tag` can connect. 0 on
+ * success, -1 otherwise. */
+static inline int live_daemon_start_config(live_daemon *d, const char *exe, const char *tag,
+                                           const char *config)
 {
     snprintf(d->dir, sizeof d->dir, "/tmp/dc-%s-XXXXXX", tag);
     if (!mkdtemp(d->dir))
         return -1;
     snprintf(d->sock, sizeof d->sock, "%s/d.sock", d->dir);
+    char conf[128] = "";
+    if (config) {
+        snprintf(conf, sizeof conf, "%s/deformd.conf", d->dir);
+        FILE *f = fopen(conf, "w");
+        if (!f || fputs(config, f) < 0 || fclose(f) != 0)
+            return -1;
+    }
     d->pid = fork();
     if (d->pid == 0) {
         prctl(PR_SET_PDEATHSIG, SIGTERM);
@@ -52,7 +61,12 @@ static inline int live_daemon_start(live_daemon *d, const char *exe, const char 
         snprintf(log, sizeof log, "%s/deformd.log", d->dir);
         FILE *f = freopen(log, "w", stderr); /* keep cmocka's output lines clean */
         (void)f;
-        execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error", (char *)NULL);
+        if (conf[0])
+            execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error",
+                  "--config", conf, (char *)NULL);
+        else
+            execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error",
+                  (char *)NULL);
         _exit(127);
     }
     for (int i = 0; i < 100; i++) {
@@ -66,6 +80,12 @@ static inline int live_daemon_start(live_daemon *d, const char *exe, const char 
     return -1;
 }
 
+/* live_daemon_start_config without a config file. */
+static inline int live_daemon_start(live_daemon *d, const char *exe, const char *tag)
+{
+    return live_daemon_start_config(d, exe, tag, NULL);
+}
+
 /* Stops the daemon (SIGTERM, waits) and removes its directory. */
 static inline void live_daemon_stop(live_daemon *d)
 {
@@ -75,6 +95,8 @@ static inline void live_daemon_stop(live_daemon *d)
     snprintf(log, sizeof log, "%s/deformd.log", d->dir);
     unlink(log);
     unlink(d->sock);
+    snprintf(log, sizeof log, "%s/deformd.conf", d->dir);
+    unlink(log);
     rmdir(d->dir);
 }
 

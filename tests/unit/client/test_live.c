@@ -1,7 +1,9 @@
 /* Live test of libdeformclient against the real daemon ($BUILD/bin/deformd next to this test's
  * build tree; skipped when it is not built): two writers stroke one session concurrently while
- * four connections keep df_client_replica copies from the displacement stream; every replica must
- * end byte-identical to the daemon's positions, and a stale replica must resync by snapshot. */
+ * four connections keep df_client_replica copies from the displacement stream (two of them
+ * through the shared-memory ring, df_client_stream_shm); every replica must end byte-identical
+ * to the daemon's positions, and a stale replica must resync by snapshot. A replica reading too
+ * slowly for a small ring sees the lost frames as a gap and resyncs. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -29,6 +31,15 @@ typedef struct live {
     df_client_replica r[LIVE_CLIENTS];
     int feed_errors[LIVE_CLIENTS];
 } live;
+
+/* Value of stats key `key` (asserts it is present). */
+static double stat_of(const df_msg_stats *st, const char *key)
+{
+    for (uint32_t i = 0; i < st->count; i++)
+        if (strcmp(st->items[i].key, key) == 0) return st->items[i].value;
+    fail_msg("stats key %s missing", key);
+    return 0;
+}
 
 static void on_event(void *user, const df_frame_header *h, const uint8_t *p)
 {
@@ -107,6 +118,12 @@ static void test_replicas_match_the_daemon(void **state)
         df_client_mesh_free(&m);
         df_client_set_event_callback(L.c[k], on_event, &L.r[k]);
         assert_int_equal(df_client_subscribe(L.c[k], sid, DF_SUBSCRIBE_SNAPSHOT, NULL, &e), DF_OK);
+        if (k >= 2) { /* replicas 2 and 3 read the stream from the shared-memory ring */
+            df_msg_shm_info si;
+            assert_int_equal(df_client_stream_shm(L.c[k], sid, &si, &e), DF_OK);
+            assert_true(si.session_id == sid && si.capacity >= 4096);
+            assert_int_equal(si.path[0], '/');
+        }
     }
     /* two concurrent strokes, interleaved updates */
     df_msg_brush b;
@@ -152,8 +169,16 @@ static void test_replicas_match_the_daemon(void **state)
     df_client_replica_positions(&L.r[3], pos);
     assert_memory_equal(pos, m.positions, (size_t)m.nv * 3 * sizeof(float));
     assert_int_equal(L.r[3].version, final);
-    printf("live: %d replicas byte-identical at version %llu (%d coordinates moved)\n",
-           LIVE_CLIENTS, (unsigned long long)final, moved);
+    df_msg_stats st;
+    assert_int_equal(df_client_stats(L.c[0], 0, &st, &e), DF_OK);
+    double refs = stat_of(&st, "shm_refs");
+    df_msg_stats_free(&st);
+    /* 2 ring subscribers x every brush version (10.9 KB dense frames; the undo/redo frames here
+     * carry no rows and, under DF_SHM_MIN_FRAME, stay on the socket) */
+    assert_true(refs >= 2.0 * 2 * LIVE_UPDATES);
+    printf("live: %d replicas byte-identical at version %llu (%d coordinates moved, %.0f "
+           "versions read from the shared-memory ring)\n", LIVE_CLIENTS,
+           (unsigned long long)final, moved, refs);
     free(pos);
     df_client_mesh_free(&m);
     for (int k = 0; k < LIVE_CLIENTS; k++) {
@@ -163,11 +188,74 @@ static void test_replicas_match_the_daemon(void **state)
     live_daemon_stop(&L.d);
 }
 
+/* A ring subscriber that does not read while 12 versions of 19 KB go through a 64 KiB ring:
+ * the early frames are overwritten before it reads their SHM_REFs, so its replica goes stale
+ * (no wrong positions are ever applied) and a snapshot brings it back to the daemon's state. */
+static void test_shm_subscriber_too_slow_for_the_ring_resyncs(void **state)
+{
+    (void)state;
+    char exe[PATH_MAX];
+    if (live_daemon_path(exe, sizeof exe) != 0) {
+        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
+        skip();
+    }
+    live_daemon d;
+    assert_int_equal(live_daemon_start_config(&d, exe, "shm", "shm_ring_bytes = 64k\n"), 0);
+    df_client *w, *r;
+    df_error e;
+    assert_int_equal(df_client_connect_unix(d.sock, "writer", &w, &e), DF_OK);
+    assert_int_equal(df_client_connect_unix(d.sock, "reader", &r, &e), DF_OK);
+    size_t len;
+    char *off = grid_off(40, &len);
+    df_msg_session_info info;
+    assert_int_equal(df_client_load_mesh_bytes(w, "ring", DF_FMT_OFF, off, len, 0, &info, &e),
+                     DF_OK);
+    free(off);
+    uint64_t sid = info.session_id;
+    df_client_mesh m;
+    assert_int_equal(df_client_get_mesh(r, sid, DF_GET_MESH_BASE, &m, &e), DF_OK);
+    df_client_replica rep;
+    assert_int_equal(df_client_replica_init(&rep, sid, m.nv, m.base, NULL, m.version, &e), DF_OK);
+    df_client_mesh_free(&m);
+    df_client_set_event_callback(r, on_event, &rep);
+    assert_int_equal(df_client_subscribe(r, sid, 0, NULL, &e), DF_OK);
+    df_msg_shm_info si;
+    assert_int_equal(df_client_stream_shm(r, sid, &si, &e), DF_OK);
+    assert_true(si.capacity == 65536 && si.max_frame == 32768);
+    df_msg_brush b;
+    df_msg_brush_defaults(&b);
+    b.session_id = sid;
+    b.radius = 0.3;
+    b.center[0] = b.center[1] = 0.5;
+    assert_int_equal(df_client_brush_begin(w, &b, NULL, &e), DF_OK);
+    for (int i = 0; i < 12; i++) stroke_update(w, sid, 0, i);
+    df_msg_ack ack;
+    assert_int_equal(df_client_brush_end(w, sid, &ack, &e), DF_OK);
+    for (int t = 0; t < LIVE_WAIT_MS / 10 && !rep.stale; t++)
+        assert_true(df_client_pump(r, 10, NULL) >= 0);
+    assert_int_equal(rep.stale, 1);
+    assert_true(rep.version < ack.version); /* stopped at the gap */
+    assert_int_equal(df_client_replica_resync(r, &rep, &e), DF_OK);
+    assert_int_equal(rep.stale, 0);
+    assert_int_equal(df_client_get_mesh(w, sid, 0, &m, &e), DF_OK);
+    assert_int_equal(rep.version, m.version);
+    float *pos = malloc((size_t)m.nv * 3 * sizeof(float));
+    df_client_replica_positions(&rep, pos);
+    assert_memory_equal(pos, m.positions, (size_t)m.nv * 3 * sizeof(float));
+    free(pos);
+    df_client_mesh_free(&m);
+    df_client_replica_free(&rep);
+    df_client_close(r);
+    df_client_close(w);
+    live_daemon_stop(&d);
+}
+
 int main(void)
 {
     signal(SIGPIPE, SIG_IGN);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_replicas_match_the_daemon),
+        cmocka_unit_test(test_shm_subscriber_too_slow_for_the_ring_resyncs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES = 29 };
+enum { N_SAMPLES = 32 };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -189,6 +189,13 @@ static inline void build_samples(sample *s)
     df_msg_session_ref hg = {7};
     ADD("handles_get", DF_MSG_HANDLES_GET, 0, df_msg_session_ref_encode(&hg, out, &e));
     ADD("handles_reply", DF_MSG_HANDLES_GET, DF_FLAG_REPLY, df_msg_handles_encode(&hs, out, &e));
+    df_msg_session_ref ss = {9};
+    ADD("stream_shm", DF_MSG_STREAM_SHM, 0, df_msg_session_ref_encode(&ss, out, &e));
+    /* shm_info: session 9, capacity 64 KiB, frames 1024..32768 bytes, path "/run/d.shm-9" */
+    df_msg_shm_info shi = {9, 65536, 1024, 32768, "/run/d.shm-9"};
+    ADD("shm_info", DF_MSG_STREAM_SHM, DF_FLAG_REPLY, df_msg_shm_info_encode(&shi, out, &e));
+    df_msg_shm_ref shr = {9, 131072, 12356};
+    ADD("shm_ref", DF_MSG_SHM_REF, DF_FLAG_EVENT, df_msg_shm_ref_encode(&shr, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

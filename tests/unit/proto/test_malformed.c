@@ -210,6 +210,19 @@ static void test_session_bodies(void **state)
     u16("stats", 4, DF_MAX_STATS_KEY_LEN + 1, DF_ELIMIT, "key");
     f64("stats", 4 + 2 + 8, NAN, DF_EINVAL, "finite");
     f64("stats", 4 + 2 + 8, -INFINITY, DF_EINVAL, "finite");
+    u64("stream_shm", 0, 0, DF_EINVAL, "session_id 0");
+    u64("shm_info", 0, 0, DF_EINVAL, "session_id 0");
+    u64("shm_info", 8, 4095, DF_EINVAL, "capacity");
+    u64("shm_info", 8, (4ull << 30) + 1, DF_EINVAL, "capacity");
+    u32("shm_info", 16, 23, DF_EINVAL, "frame bounds");      /* min below a header */
+    u32("shm_info", 16, 40000, DF_EINVAL, "frame bounds");   /* min above max */
+    u32("shm_info", 20, 65537, DF_EINVAL, "frame bounds");   /* max above capacity */
+    u8("shm_info", 26, 'r', DF_EINVAL, "absolute");          /* "/run..." -> "rrun..." */
+    u16("shm_info", 24, 0, DF_EPROTO_TRAILING, NULL);        /* empty path, bytes left over */
+    u16("shm_info", 24, 200, DF_EPROTO_TRUNCATED, NULL);
+    u64("shm_ref", 0, 0, DF_EINVAL, "session_id 0");
+    u32("shm_ref", 16, 23, DF_EINVAL, "shorter than a frame header");
+    u32("shm_ref", 20, 1, DF_EPROTO_RESERVED, "reserved");
     u32("move_result", 0, 0, DF_EINVAL, "session_id");
     u8("move_result", 16, DF_MOVE_RUNNING, DF_EINVAL, "status 0");
     u8("move_result", 16, 5, DF_EINVAL, "status 5");

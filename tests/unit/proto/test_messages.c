@@ -299,7 +299,17 @@ static void test_body_kind_table(void **state)
     int known = 0;
     for (unsigned t = 0; t <= 0xFFFF; t++)
         known += df_msg_type_valid((uint16_t)t);
-    assert_int_equal(known, 27);
+    assert_int_equal(known, 29);
+    /* shared-memory stream: a session ref in, shm_info back; SHM_REF only as an event */
+    assert_int_equal(df_msg_body_kind(DF_MSG_STREAM_SHM, 0, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_SESSION_REF);
+    assert_int_equal(df_msg_body_kind(DF_MSG_STREAM_SHM, DF_FLAG_REPLY, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_SHM_INFO);
+    assert_int_equal(df_msg_body_kind(DF_MSG_SHM_REF, DF_FLAG_EVENT, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_SHM_REF);
+    assert_int_equal(df_msg_body_kind(DF_MSG_SHM_REF, 0, &k, &e), DF_EPROTO_BADTYPE);
+    assert_int_equal(DF_MSG_STREAM_SHM, 0x0016);
+    assert_int_equal(DF_MSG_SHM_REF, 0x0083);
 }
 
 static void test_defaults_are_valid(void **state)

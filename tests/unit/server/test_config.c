@@ -32,6 +32,7 @@ static void test_defaults(void **state)
     assert_int_equal(c.foreground, 0);
     assert_int_equal(c.spin_us, DF_CONFIG_DEFAULT_SPIN_US);
     assert_int_equal(c.inline_us, DF_CONFIG_DEFAULT_INLINE_US);
+    assert_true(c.shm_ring_bytes == (uint64_t)64 << 20);
     /* An XDG dir too long for sun_path falls back to /run/deformd. */
     char longdir[200];
     memset(longdir, 'a', sizeof longdir - 1);
@@ -59,7 +60,8 @@ static void test_parse_file_text(void **state)
                        "max_sessions = 3\n"
                        "threads = 2\r\n"
                        "spin_us = 30\n"
-                       "inline_us = 0\n";
+                       "inline_us = 0\n"
+                       "shm_ring_bytes = 64k\n";
     df_error e;
     assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
     assert_string_equal(c.socket_path, "/tmp/x.sock");
@@ -76,6 +78,11 @@ static void test_parse_file_text(void **state)
     assert_int_equal(c.threads, 2);
     assert_int_equal(c.spin_us, 30);
     assert_int_equal(c.inline_us, 0);
+    assert_true(c.shm_ring_bytes == 65536);
+    assert_int_equal(df_config_set(&c, "shm_ring_bytes", "0", &e), DF_OK); /* disabled */
+    assert_true(c.shm_ring_bytes == 0);
+    assert_int_equal(df_config_set(&c, "shm_ring_bytes", "4g", &e), DF_OK);
+    assert_true(c.shm_ring_bytes == (uint64_t)4 << 30);
     /* IPv6 brackets and disabling. */
     assert_int_equal(df_config_set(&c, "tcp", "[::1]:0", &e), DF_OK);
     assert_string_equal(c.tcp_host, "::1");
@@ -98,7 +105,8 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "threads = 0\n",              "threads = 65\n",           "max_mesh_vertices = 0\n",
         "max_sessions = 99999999\n",  "cache_memory_mb = lots\n",
         "spin_us = 1001\n",           "inline_us = 1001\n",       "inline_us = -1\n",
-        "inline_us = fast\n",
+        "inline_us = fast\n",       "shm_ring_bytes = 65535\n", "shm_ring_bytes = 5g\n",
+        "shm_ring_bytes = -1\n",     "shm_ring_bytes = big\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
