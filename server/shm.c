@@ -49,10 +49,14 @@ int df_shm_create(uint64_t session_id, uint64_t capacity, df_shm_ring **out, df_
     r->capacity = capacity;
     r->map_bytes = DF_SHM_HEADER_BYTES + (size_t)capacity;
     void *m = MAP_FAILED;
-    /* Allocated and mapped up front: no page faults on the loop thread while streaming. */
-    if (ftruncate(fd, (off_t)r->map_bytes) == 0)
+    /* Allocated and mapped up front: no page faults on the loop thread while streaming, and a
+     * /dev/shm too small for the ring is an error here, not a SIGBUS at a later write (a sparse
+     * tmpfs file reserves nothing). posix_fallocate returns its error instead of setting errno. */
+    int saved = posix_fallocate(fd, 0, (off_t)r->map_bytes);
+    if (saved == 0) {
         m = mmap(NULL, r->map_bytes, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
-    int saved = errno;
+        saved = errno;
+    }
     close(fd);
     if (m == MAP_FAILED) {
         unlink(r->path);

@@ -10,14 +10,21 @@
 Replies are matched to requests by request id; stream frames (displacements, progress, session
 closed) that arrive while waiting are assembled from their chunks and queued for events().
 Error replies raise DeformdError(code, name, message).
+
+On the Unix socket, stream_shm(sid) moves a subscribed session's large stream frames to a
+shared-memory ring the daemon writes once for all subscribers (PROTOCOL.md 6.1); events() reads
+them from the ring transparently, and reports frames overwritten before they were read as ShmLost
+events (resync with snapshot()).
 """
+import mmap
 import os
 import socket
+import struct
 import time
 from array import array
 from collections import deque
 from dataclasses import dataclass
-from typing import Deque, Dict, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
 from . import frame as fr
 from . import messages as m
@@ -58,7 +65,118 @@ class MeshData:
         return m.ELEM_SIZE.get(self.kind, 0)
 
 
-Event = Union[st.Disp, st.Progress, SessionClosed]
+@dataclass
+class ShmLost:
+    """Event: a frame of a session's shared-memory stream (Client.stream_shm) was overwritten in
+    the ring before this client read it (PROTOCOL.md 6.1: the client read too slowly). A version,
+    or part of one, is missed: resync the replica with snapshot(). Told apart from the other
+    events by `type` == messages.SHM_REF (the event that referenced the frame) or `lost` True;
+    MeshState.apply returns False for it (and changes nothing). The remaining chunks of a version
+    whose chunk was lost are dropped, so no partial version is ever queued."""
+    session_id: int
+    position: int
+    length: int
+    type: int = m.SHM_REF
+    lost: bool = True
+    kind_name: str = "shm_lost"
+
+
+Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost]
+
+_SHM_HEADER = struct.Struct("<8sIIQQQQ")   # magic, header_bytes, reserved, capacity, session,
+#                                            valid_from, head
+_U64 = struct.Struct("<Q")
+_SHM_OFF_VALID_FROM = 32
+_SHM_OFF_HEAD = 40
+
+
+class ShmRing:
+    """A read-only mapping of one session's shared-memory stream ring (PROTOCOL.md 6.1), made by
+    Client.stream_shm. `frames` and `lost` count the references read from it and the frames
+    found overwritten. Raises OSError when the file cannot be opened or mapped and
+    ProtocolError when its header does not match `info`."""
+
+    def __init__(self, info: m.ShmInfo) -> None:
+        self.info = info
+        self.frames = 0
+        self.lost = 0
+        fd = os.open(info.path, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
+        try:
+            size = os.fstat(fd).st_size
+            if size < m.SHM_HEADER_BYTES + info.capacity:
+                raise ProtocolError("shm ring %s: %d bytes, need %d header + %d data"
+                                    % (info.path, size, m.SHM_HEADER_BYTES, info.capacity))
+            self.map = mmap.mmap(fd, 0, access=mmap.ACCESS_READ)
+        finally:
+            os.close(fd)
+        try:
+            self._check()
+        except ProtocolError:
+            self.map.close()
+            raise
+
+    def _check(self) -> None:
+        magic, header_bytes, reserved, capacity, sid, _, _ = _SHM_HEADER.unpack_from(self.map, 0)
+        what = "shm ring %s" % self.info.path
+        if magic != m.SHM_MAGIC:
+            raise ProtocolError("%s: magic %r, not %r" % (what, magic, m.SHM_MAGIC))
+        if header_bytes != m.SHM_HEADER_BYTES or reserved != 0:
+            raise ProtocolError("%s: header_bytes %d (reserved %d), not %d"
+                                % (what, header_bytes, reserved, m.SHM_HEADER_BYTES))
+        if capacity != self.info.capacity:
+            raise ProtocolError("%s: capacity %d, the reply said %d"
+                                % (what, capacity, self.info.capacity))
+        if sid != self.info.session_id:
+            raise ProtocolError("%s: session %d, the reply said %d"
+                                % (what, sid, self.info.session_id))
+        if len(self.map) < header_bytes + capacity:
+            raise ProtocolError("%s: %d bytes mapped, need %d"
+                                % (what, len(self.map), header_bytes + capacity))
+
+    def valid_from(self) -> int:
+        """Stream positions below this may have been overwritten."""
+        return _U64.unpack_from(self.map, _SHM_OFF_VALID_FROM)[0]
+
+    def head(self) -> int:
+        """Stream position after the last frame the daemon wrote."""
+        return _U64.unpack_from(self.map, _SHM_OFF_HEAD)[0]
+
+    def read(self, position: int, length: int) -> Optional[fr.Frame]:
+        """The frame an SHM_REF (position, length) names, or None when it was overwritten before
+        or while it was copied (lost). ProtocolError when (position, length) cannot be a frame of
+        this ring or the bytes are not one whole frame.
+
+        Python issues no fences: the protocol's acquire loads are approximated by reading
+        valid_from with struct.unpack_from before and after copying the bytes."""
+        cap = self.info.capacity
+        off = position % cap
+        if off + length > cap:
+            raise ProtocolError("shm_ref: frame of %d bytes at %d crosses the end of the %d-byte"
+                                " ring" % (length, position, cap))
+        if position + length > self.head():
+            raise ProtocolError("shm_ref: frame [%d, +%d) beyond the ring's head %d"
+                                % (position, length, self.head()))
+        if position < self.valid_from():
+            self.lost += 1
+            return None
+        start = m.SHM_HEADER_BYTES + off
+        head = self.map[start:start + fr.HEADER_SIZE]
+        payload = self.map[start + fr.HEADER_SIZE:start + length]
+        if position < self.valid_from():
+            self.lost += 1
+            return None
+        try:
+            mtype, flags, rid, plen, ver = fr.decode_header(head)
+        except fr.FrameError as e:
+            raise ProtocolError("shm ring frame at %d: %s" % (position, e)) from None
+        if fr.HEADER_SIZE + plen != length:
+            raise ProtocolError("shm ring frame at %d: %d payload bytes, the reference says %d"
+                                % (position, plen, length - fr.HEADER_SIZE))
+        self.frames += 1
+        return fr.Frame(mtype, flags, rid, payload, ver)
+
+    def close(self) -> None:
+        self.map.close()
 
 
 class Client:
@@ -76,6 +194,9 @@ class Client:
         self._pending: Dict[int, List[fr.Frame]] = {}   # sent, not awaited: frames so far
         self._done: Dict[int, List[fr.Frame]] = {}      # complete replies not yet collected
         self._closed = False
+        self._shm: Dict[int, ShmRing] = {}          # session -> mapped ring (stream_shm)
+        self._shm_gap: Set[int] = set()             # sessions whose ring lost a chunk
+        self._shm_detaching: Set[int] = set()       # attach failed: refs count as lost
         self.server: Optional[m.HelloReply] = None
         if hello:
             self.server = self.hello(name)
@@ -101,9 +222,12 @@ class Client:
         return cls(s, timeout, hello, name)
 
     def close(self) -> None:
+        """Closes the socket and every shared-memory ring mapping."""
         if not self._closed:
             self._closed = True
             self.sock.close()
+            for sid in list(self._shm):
+                self._drop_shm(sid)
 
     def __enter__(self) -> "Client":
         return self
@@ -151,7 +275,8 @@ class Client:
         return True
 
     def recv_frame(self, timeout: Optional[float] = None) -> Optional[fr.Frame]:
-        """Next raw frame (None on timeout). Bypasses reply matching and event assembly."""
+        """Next raw frame (None on timeout). Bypasses reply matching and event assembly; an
+        SHM_REF comes as it is (shm_frame() reads the frame it references)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while not self._frames:
             if not self._read_more(deadline):
@@ -160,13 +285,26 @@ class Client:
 
     # ------------------------------------------------------------------ events
     def _take_event_frame(self, f: fr.Frame) -> None:
-        """Assembles stream chunks; completed events go to the event queue."""
+        """Assembles stream chunks; completed events go to the event queue. An SHM_REF is
+        replaced by the frame it references in the shared-memory ring (or a ShmLost event)."""
+        if f.type == m.SHM_REF:
+            sid, position, length = m.decode_shm_ref(f.payload)
+            inner = self.shm_frame(f)
+            if inner is None:
+                self._shm_lost(sid, position, length)
+            else:
+                self._take_event_frame(inner)
+            return
         if f.type == m.SESSION_CLOSED:
-            self._events.append(SessionClosed(m.decode_session_ref(f.payload)))
+            sid = m.decode_session_ref(f.payload)
+            self._drop_shm(sid)
+            self._events.append(SessionClosed(sid))
             return
         if f.type == m.DISPLACEMENT:
             d = st.decode_disp(f.payload)
             key = (f.type, d.session_id, d.version)
+            if self._orphan_chunk(key, d.offset):
+                return
             chunks = self._partial.setdefault(key, [])
             chunks.append(d)
             if not f.more:
@@ -176,6 +314,8 @@ class Client:
         if f.type == m.PROGRESS:
             p = st.decode_progress(f.payload)
             key = (f.type, p.disp.session_id, p.disp.version)
+            if self._orphan_chunk(key, p.disp.offset):
+                return
             chunks = self._partial.setdefault(key, [])
             chunks.append(p)
             if not f.more:
@@ -189,10 +329,58 @@ class Client:
             raise DeformdError(code, error_name(code), msg)
         raise ProtocolError("unexpected event type 0x%x" % f.type)
 
+    def shm_frame(self, f: fr.Frame) -> Optional[fr.Frame]:
+        """The event frame an SHM_REF frame `f` references, read from the session's ring, or
+        None when it was overwritten before it could be read (lost: resync with snapshot()).
+        ProtocolError for a malformed reference, a reference outside the ring, a session
+        without a ring (stream_shm not called) or a referenced frame that is not an event."""
+        sid, position, length = m.decode_shm_ref(f.payload)
+        ring = self._shm.get(sid)
+        if ring is None:
+            if sid in self._shm_detaching:
+                return None
+            raise ProtocolError("SHM_REF for session %d, which has no shared-memory stream"
+                                % sid)
+        inner = ring.read(position, length)
+        if inner is not None and (not inner.is_event or inner.type == m.SHM_REF):
+            raise ProtocolError("shm ring frame at %d is type 0x%x flags 0x%x, not an event"
+                                % (position, inner.type, inner.flags))
+        return inner
+
+    def _shm_lost(self, sid: int, position: int, length: int) -> None:
+        """A ring frame was overwritten: drops the session's partly assembled versions (their
+        remaining chunks are dropped too, see _orphan_chunk) and queues a ShmLost event."""
+        for key in [k for k in self._partial if k[1] == sid]:
+            del self._partial[key]
+        self._shm_gap.add(sid)
+        self._events.append(ShmLost(sid, position, length))
+
+    def _orphan_chunk(self, key: Tuple[int, int, int], offset: int) -> bool:
+        """True for a continuation chunk of a version whose earlier chunk was lost from the
+        shared-memory ring (dropped: a ShmLost event was queued instead)."""
+        sid = key[1]
+        if sid not in self._shm_gap or key in self._partial:
+            return False
+        if offset == 0:                 # a version starts: the gap is over
+            self._shm_gap.discard(sid)
+            return False
+        return True
+
+    def _drop_shm(self, session_id: int) -> None:
+        ring = self._shm.pop(session_id, None)
+        if ring is not None:
+            ring.close()
+        self._shm_gap.discard(session_id)
+
+    def shm_ring(self, session_id: int) -> Optional[ShmRing]:
+        """The session's mapped shared-memory ring (stream_shm), None when there is none."""
+        return self._shm.get(session_id)
+
     def events(self, timeout: float = 1.0, max_events: Optional[int] = None) -> Iterator[Event]:
-        """Yields queued and arriving events (Disp, Progress, SessionClosed) until none arrives
-        for `timeout` seconds (or max_events were yielded). Replies arriving meanwhile are kept
-        for wait_reply()."""
+        """Yields queued and arriving events (Disp, Progress, SessionClosed, ShmLost) until none
+        arrives for `timeout` seconds (or max_events were yielded). Frames of a shared-memory
+        stream (stream_shm) come as if they had arrived on the socket. Replies arriving
+        meanwhile are kept for wait_reply()."""
         n = 0
         while max_events is None or n < max_events:
             if self._events:
@@ -327,7 +515,48 @@ class Client:
             m.SUBSCRIBE, m.encode_subscribe(session_id, m.SUBSCRIBE_SNAPSHOT if snapshot else 0)))
 
     def unsubscribe(self, session_id: int) -> m.Ack:
-        return m.decode_ack(self._one(m.UNSUBSCRIBE, m.encode_session_ref(session_id)))
+        """Leaves the session's stream; this also ends its shared-memory stream, whose mapping
+        is closed once the reply arrived (references queued before it are still read)."""
+        try:
+            return m.decode_ack(self._one(m.UNSUBSCRIBE, m.encode_session_ref(session_id)))
+        finally:
+            self._drop_shm(session_id)
+
+    def stream_shm(self, session_id: int) -> m.ShmInfo:
+        """Moves the subscribed session's stream frames of [min_frame, max_frame] bytes to the
+        daemon's shared-memory ring (PROTOCOL.md 6.1; Unix socket on the daemon's host only):
+        maps the ring file read-only and from then on resolves each SHM_REF event to the frame
+        it references, so events() and MeshState work unchanged. A frame overwritten before it
+        was read (a slow reader) becomes a ShmLost event: resync with snapshot(). The mapping
+        lasts until unsubscribe(), SESSION_CLOSED or close(); calling again is a no-op.
+
+        DeformdError from the daemon: ESTATE (not subscribed), ENOTFOUND, EUNSUPPORTED (TCP, or
+        disabled: hello feature FEAT_SHM_STREAM clear), EIO. When the ring cannot be mapped
+        (OSError, e.g. a daemon of another user; ProtocolError for a bad header) the connection
+        is unsubscribed from the session before the error is raised, since the daemon would
+        otherwise keep sending references this client cannot read: subscribe() again to use the
+        socket stream."""
+        info = m.decode_shm_info(self._one(m.STREAM_SHM, m.encode_session_ref(session_id)))
+        old = self._shm.get(session_id)
+        if old is not None and (old.info.path, old.info.capacity) == (info.path, info.capacity):
+            old.info = info
+            return info
+        self._drop_shm(session_id)
+        try:
+            if info.session_id != session_id:
+                raise ProtocolError("shm_info for session %d, asked for %d"
+                                    % (info.session_id, session_id))
+            self._shm[session_id] = ShmRing(info)
+        except (OSError, ValueError):   # ValueError: ProtocolError, or mmap refusing the file
+            self._shm_detaching.add(session_id)
+            try:
+                self.unsubscribe(session_id)
+            except DeformdError:
+                pass
+            finally:
+                self._shm_detaching.discard(session_id)
+            raise
+        return info
 
     # ------------------------------------------------------------------ brush
     def brush_begin(self, session_id: int, brush: m.Brush) -> m.Ack:

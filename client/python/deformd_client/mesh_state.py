@@ -45,7 +45,11 @@ class MeshState:
         """Applies one whole version: a Disp from Client.events()/snapshot() or a Progress
         (its iterate). Returns False (and changes nothing) for a version already applied;
         raises OutOfSync when versions were missed (resync: apply(client.snapshot(sid))).
-        A SNAPSHOT (dense, kind 7) always applies."""
+        A SNAPSHOT (dense, kind 7) always applies. A Client ShmLost event (`lost` True: a
+        shared-memory stream frame was overwritten unread) returns False and changes nothing;
+        the next version then raises OutOfSync unless the replica was resynced."""
+        if getattr(d, "lost", False):
+            return False
         if isinstance(d, st.Progress):
             d = d.disp
         if d.nv != self.nv:

@@ -7,7 +7,7 @@ parameters float64; vertex indices u32.
 """
 import struct
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 from .wire import ProtocolError, Reader, f64_rows, pack_str, u32_array, vec
 
@@ -21,6 +21,7 @@ OPEN_SESSION = 0x0012
 CLOSE_SESSION = 0x0013
 SUBSCRIBE = 0x0014
 UNSUBSCRIBE = 0x0015
+STREAM_SHM = 0x0016
 BRUSH_BEGIN = 0x0020
 BRUSH_UPDATE = 0x0021
 BRUSH_END = 0x0022
@@ -38,6 +39,7 @@ STATS = 0x0042
 DISPLACEMENT = 0x0080
 PROGRESS = 0x0081
 SESSION_CLOSED = 0x0082
+SHM_REF = 0x0083
 ERROR = 0x00FF
 
 TYPE_NAMES = {v: k.lower() for k, v in dict(globals()).items()
@@ -59,7 +61,7 @@ LOAD_CHUNK_BYTES = 8 << 20     # bytes of mesh data per load chunk this client s
 
 # ------------------------------------------------------------------ enums
 FEAT_KELVINLET, FEAT_ADMM, FEAT_PATH_LOAD, FEAT_AUTH = 1, 2, 4, 8
-FEAT_SPARSE_STREAM, FEAT_TCP, FEAT_HID = 16, 32, 64
+FEAT_SPARSE_STREAM, FEAT_TCP, FEAT_HID, FEAT_SHM_STREAM = 16, 32, 64, 128
 
 FMT_AUTO, FMT_OBJ, FMT_OFF, FMT_PLY, FMT_MEDIT, FMT_TETGEN = range(6)
 FORMAT_BY_EXT = {".obj": FMT_OBJ, ".off": FMT_OFF, ".ply": FMT_PLY, ".mesh": FMT_MEDIT,
@@ -417,3 +419,76 @@ def decode_stats(p: bytes) -> Dict[str, float]:
         out[k] = r.take("d")
     r.end()
     return out
+
+
+# ------------------------------------------------------------------ shared-memory stream (6.1)
+SHM_MAGIC = b"DFSHMRG1"
+SHM_HEADER_BYTES = 4096
+SHM_MIN_CAPACITY = 4096
+SHM_REF_STRUCT = struct.Struct("<QQII")
+assert SHM_REF_STRUCT.size == 24
+
+
+@dataclass
+class ShmInfo:
+    """STREAM_SHM reply (PROTOCOL.md 4.24): the session's ring file and which event frames go
+    through it (those whose whole length, header included, is in [min_frame, max_frame])."""
+    session_id: int
+    capacity: int
+    min_frame: int
+    max_frame: int
+    path: str
+
+
+def decode_shm_info(p: bytes) -> ShmInfo:
+    """ProtocolError on a truncated/trailing body, session id 0, capacity below 4096, frame
+    bounds not min_frame <= max_frame <= capacity, or a path that is not 1..4095 bytes of
+    NUL-free UTF-8 starting with '/'."""
+    r = Reader(p, "shm_info")
+    sid, capacity, min_frame, max_frame = r.take("QQII")
+    n = r.take("H")
+    raw = r.raw(n)
+    r.end()
+    if sid == 0:
+        raise ProtocolError("shm_info: session_id 0 is not a session")
+    if capacity < SHM_MIN_CAPACITY:
+        raise ProtocolError("shm_info: capacity %d below %d" % (capacity, SHM_MIN_CAPACITY))
+    if not min_frame <= max_frame <= capacity:
+        raise ProtocolError("shm_info: frame bounds %d..%d not within capacity %d"
+                            % (min_frame, max_frame, capacity))
+    if not 1 <= n <= MAX_PATH_LEN:
+        raise ProtocolError("shm_info: path of %d bytes not in 1..%d" % (n, MAX_PATH_LEN))
+    try:
+        path = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ProtocolError("shm_info: path is not UTF-8 (%s)" % e) from None
+    if "\0" in path or not path.startswith("/"):
+        raise ProtocolError("shm_info: path %r is not an absolute path" % path)
+    return ShmInfo(sid, capacity, min_frame, max_frame, path)
+
+
+def encode_shm_info(info: ShmInfo) -> bytes:
+    """Body of a STREAM_SHM reply (used by tests to forge replies)."""
+    return (struct.pack("<QQII", info.session_id, info.capacity, info.min_frame, info.max_frame)
+            + pack_str(info.path))
+
+
+def encode_shm_ref(session_id: int, position: int, length: int) -> bytes:
+    """Body of an SHM_REF event (used by tests to forge stream frames)."""
+    return SHM_REF_STRUCT.pack(session_id, position, length, 0)
+
+
+def decode_shm_ref(p: bytes) -> Tuple[int, int, int]:
+    """SHM_REF body (PROTOCOL.md 4.25) -> (session_id, position, length). ProtocolError on a
+    truncated/trailing body, a non-zero reserved field, session id 0 or length below 24 (a
+    frame header)."""
+    r = Reader(p, "shm_ref")
+    sid, position, length, reserved = r.take("QQII")
+    r.end()
+    if reserved != 0:
+        raise ProtocolError("shm_ref: reserved field %d" % reserved)
+    if sid == 0:
+        raise ProtocolError("shm_ref: session_id 0 is not a session")
+    if length < 24:
+        raise ProtocolError("shm_ref: length %d shorter than a frame header" % length)
+    return sid, position, length
