@@ -32,6 +32,15 @@ typedef struct live {
     int feed_errors[LIVE_CLIENTS];
 } live;
 
+/* Fills `exe` with the deformd next to this test, or skips the test (naming why). */
+static void daemon_or_skip(char *exe, size_t cap)
+{
+    if (live_daemon_path(exe, cap) != 0) {
+        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
+        skip();
+    }
+}
+
 /* Value of stats key `key` (asserts it is present). */
 static double stat_of(const df_msg_stats *st, const char *key)
 {
@@ -91,10 +100,7 @@ static void test_replicas_match_the_daemon(void **state)
 {
     (void)state;
     char exe[PATH_MAX];
-    if (live_daemon_path(exe, sizeof exe) != 0) {
-        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
-        skip();
-    }
+    daemon_or_skip(exe, sizeof exe);
     live L;
     memset(&L, 0, sizeof L);
     assert_int_equal(live_daemon_start(&L.d, exe, "live"), 0);
@@ -195,10 +201,7 @@ static void test_shm_subscriber_too_slow_for_the_ring_resyncs(void **state)
 {
     (void)state;
     char exe[PATH_MAX];
-    if (live_daemon_path(exe, sizeof exe) != 0) {
-        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
-        skip();
-    }
+    daemon_or_skip(exe, sizeof exe);
     live_daemon d;
     assert_int_equal(live_daemon_start_config(&d, exe, "shm", "shm_ring_bytes = 64k\n"), 0);
     df_client *w, *r;
