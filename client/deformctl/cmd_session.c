@@ -158,6 +158,7 @@ typedef struct watch_state {
     long printed;        /* complete versions printed */
     int closed;          /* session closed event seen */
     int bad;             /* a malformed event was received */
+    long lost;           /* frames lost to the shared-memory ring (--shm) */
 } watch_state;
 
 static void watch_line(watch_state *w, const df_msg_disp *d, const df_msg_progress *p)
@@ -202,6 +203,14 @@ static void watch_event(void *user, const df_frame_header *h, const uint8_t *pay
                 printf("session %" PRIu64 " closed\n", r.session_id);
             fflush(stdout);
         }
+    } else if (h->type == DF_MSG_SHM_REF) { /* --shm: a frame overwritten before it was read */
+        w->lost++;
+        w->rows = 0;
+        if (w->ctx->json)
+            printf("{\"session\":%" PRIu64 ",\"kind\":\"lost\"}\n", w->session);
+        else
+            printf("lost a frame (the shared-memory ring overtook this watcher)\n");
+        fflush(stdout);
     } else if (h->type == DF_MSG_DISPLACEMENT) {
         df_msg_disp d;
         if (df_msg_disp_decode(payload, h->payload_len, &d, NULL) != DF_OK) {
@@ -242,16 +251,19 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     df_client *c = ctl_connect(ctx, cmd);
     if (!c)
         return CTL_EXIT_SERVER;
-    watch_state w = {ctx, 0, 0, 0, 0, 0};
+    watch_state w = {ctx, 0, 0, 0, 0, 0, 0};
     df_msg_session_info info;
     int rc = ctl_session_id(c, a->pos[0], &w.session, &e);
     if (rc == DF_OK) {
         df_client_set_event_callback(c, watch_event, &w);
         rc = df_client_subscribe(c, w.session, 0, &info, &e);
     }
+    if (rc == DF_OK && a->val[4]) /* --shm */
+        rc = df_client_stream_shm(c, w.session, NULL, &e);
     if (rc == DF_OK && !ctx->json) {
-        printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "\n", w.session,
-               info.name[0] ? info.name : "-", info.version);
+        printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "%s\n", w.session,
+               info.name[0] ? info.name : "-", info.version,
+               a->val[4] ? " through shared memory" : "");
         fflush(stdout);
     }
     while (rc == DF_OK && !w.closed && !w.bad && (count == 0 || w.printed < count)) {
@@ -282,6 +294,8 @@ static const dc_cli_opt STATS_OPTS[] = {
 static const dc_cli_opt WATCH_OPTS[] = {
     CTL_GLOBAL_OPTS,
     {"count", 1, "--count N          exit after N versions (default: until the session closes)"},
+    {"shm", 0, "--shm              read the stream from the daemon's shared-memory ring (Unix "
+               "socket, same host)"},
 };
 #define N(x) ((int)(sizeof x / sizeof x[0]))
 
@@ -296,7 +310,7 @@ const ctl_cmd ctl_cmds_session[] = {
     {"stats", "stats [--session SESSION]",
      "Print the daemon's (or one session's) counters, one 'key value' per line.", STATS_OPTS,
      N(STATS_OPTS), 0, run_stats},
-    {"watch", "watch SESSION [--count N]",
+    {"watch", "watch SESSION [--count N] [--shm]",
      "Subscribe to a session and print one line per version: version, kind, vertices changed.",
      WATCH_OPTS, N(WATCH_OPTS), 1, run_watch},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},

@@ -302,17 +302,22 @@ def test_undo_redo_reset_rest(ctl, daemon, tmp_path):
         c.close_session(sid)
 
 
-def test_watch_prints_one_line_per_version(ctl, daemon, tmp_path):
+@pytest.mark.parametrize("shm", [False, True])
+def test_watch_prints_one_line_per_version(ctl, daemon, tmp_path, shm):
     f = tmp_path / "g.obj"
     f.write_bytes(grid_obj(10, 10))
-    sid = int(ctl("load", f, "--name", "cli-watch").stdout)
-    w = subprocess.Popen([DEFORMCTL, "--socket", daemon.socket_path, "watch", "cli-watch",
-                          "--count", "3"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, stdin=subprocess.DEVNULL)
+    name = "cli-watch-shm" if shm else "cli-watch"
+    sid = int(ctl("load", f, "--name", name).stdout)
+    with daemon.unix_client() as c:
+        refs0 = c.stats()["shm_refs"]
+    w = subprocess.Popen([DEFORMCTL, "--socket", daemon.socket_path, "watch", name,
+                          "--count", "3"] + (["--shm"] if shm else []), stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
     try:
         with daemon.unix_client() as c:
-            for _ in range(100):           # wait until the watcher subscribed
-                if c.open_session(sid).subscribers == 1:
+            for _ in range(100):           # wait until the watcher subscribed (and attached)
+                if c.open_session(sid).subscribers == 1 and (
+                        not shm or c.stats(sid)["shm_subscribers"] == 1):
                     break
                 time.sleep(0.05)
             X = c.get_mesh(sid).positions
@@ -328,6 +333,11 @@ def test_watch_prints_one_line_per_version(ctl, daemon, tmp_path):
     assert [ln.split()[1] for ln in lines] == ["1", "2", "3"], out
     assert [ln.split()[2] for ln in lines] == ["brush", "undo", "redo"], out
     assert [int(ln.split()[3]) for ln in lines] == [100, 100, 100], out
+    # With --shm all three versions (1.3 KB dense frames, above the 1 KiB threshold) came
+    # through the ring.
+    with daemon.unix_client() as c:
+        refs = c.stats()["shm_refs"] - refs0
+    assert refs == (3 if shm else 0), out
 
 
 def test_stats_and_errors(ctl, daemon):
