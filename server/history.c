@@ -39,6 +39,7 @@ void df_history_free(df_history *h)
 int df_history_commit(df_history *h, const double *pos, df_error *err)
 {
     if (!h || !h->states || !pos) return df_error_set(err, DF_EINVAL, "history: NULL");
+    if (memcmp(h->states[h->cur], pos, h->n * sizeof *pos) == 0) return DF_OK; /* no change */
     double *s = malloc(h->n * sizeof *s);
     if (!s) return df_error_set(err, DF_ENOMEM, "history: out of memory");
     memcpy(s, pos, h->n * sizeof *s);

@@ -29,7 +29,10 @@ int df_history_init(df_history *h, const double *pos, size_t n, int max_states, 
 void df_history_free(df_history *h);
 
 /* Commits a copy of `pos` (h->n doubles) as the new current state, dropping the redo tail and,
- * when full, the oldest state. Errors: DF_EINVAL, DF_ENOMEM (history unchanged). */
+ * when full, the oldest state. A `pos` bitwise equal to the current state is no change and adds
+ * no step (the redo tail stays): two interleaved strokes are committed by whichever ends first,
+ * and the second must not leave an empty step for undo to "revert". Errors: DF_EINVAL,
+ * DF_ENOMEM (history unchanged). */
 int df_history_commit(df_history *h, const double *pos, df_error *err);
 
 /* Steps back: returns the now-current state (owned by h) or NULL with DF_ESTATE in *err when

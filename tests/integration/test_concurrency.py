@@ -213,3 +213,29 @@ def test_session_closed_reaching_a_subscriber_that_just_left(daemon):
         assert daemon.alive(), daemon.log()[-2000:]
     with daemon.unix_client() as fresh:
         assert fresh.ping(b"x") == b"x"
+
+
+def test_interleaved_strokes_make_one_undo_step(daemon):
+    """Two clients stroke at once and both end: the first end commits both strokes' updates, the
+    second finds nothing new and adds no empty step, so one undo restores the mesh as it was."""
+    data = grid_obj(12, 12)
+    X = obj_bytes_positions(data)
+    with daemon.unix_client() as a, daemon.unix_client() as b:
+        sid = a.load_mesh(data, fmt=".obj", name="interleaved").session_id
+        before = a.get_mesh(sid).positions.tobytes()
+        depth0 = a.stats(sid)["undo_depth"]
+        for k, c in enumerate((a, b)):
+            c.brush_begin(sid, Brush(center=X[3 * (40 + 50 * k):3 * (40 + 50 * k) + 3],
+                                     radius=0.2))
+        for u in range(1, 4):
+            a.brush_update(sid, move=(0.01 * u, 0, 0))
+            b.brush_update(sid, move=(0, 0.01 * u, 0))
+        a.brush_end(sid)
+        b.brush_end(sid)
+        after = a.get_mesh(sid).positions.tobytes()
+        assert after != before
+        assert a.stats(sid)["undo_depth"] == depth0 + 1
+        b.undo(sid)
+        assert a.get_mesh(sid).positions.tobytes() == before
+        a.redo(sid)
+        assert a.get_mesh(sid).positions.tobytes() == after

@@ -165,6 +165,14 @@ static void test_history_undo_redo(void **state)
     /* the commit copied the data: changing the caller's array changes nothing */
     s3[0] = 99;
     assert_true(h.states[h.cur][0] == 3.0);
+    /* committing the current state again adds no step and keeps the redo tail */
+    p = df_history_undo(&h, &e);
+    assert_true(p[0] == 1.0);
+    assert_int_equal(df_history_commit(&h, s1, &e), DF_OK);
+    assert_int_equal(df_history_can_undo(&h), 1);
+    assert_int_equal(df_history_can_redo(&h), 1);
+    p = df_history_redo(&h, &e);
+    assert_true(p[0] == 3.0);
     assert_int_equal(df_history_bytes(&h), 3 * 3 * sizeof(double));
     df_history_free(&h);
     assert_int_equal(df_history_can_undo(&h), 0);
