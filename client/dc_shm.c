@@ -98,7 +98,8 @@ static int resolve(df_client *c, const df_msg_shm_ref *r, df_frame_header *fh, d
         c->shm_frame = n;
         c->shm_cap = r->length;
     }
-    int rc = df_shm_ring_read(ring->base, r->position, r->length, c->shm_frame, err);
+    int rc = df_shm_ring_read(ring->base, ring->map_bytes - DF_SHM_HEADER_BYTES, r->position,
+                              r->length, c->shm_frame, err);
     if (rc) return rc;
     rc = df_frame_header_decode(c->shm_frame, r->length, fh, err);
     if (rc == DF_OK &&

@@ -14,8 +14,9 @@ static _Atomic uint64_t *word(const uint8_t *base, size_t off)
     return (_Atomic uint64_t *)(uintptr_t)(base + off);
 }
 
-void df_shm_ring_init(uint8_t *base, uint64_t capacity, uint64_t session_id)
+void df_shm_writer_init(df_shm_writer *w, uint8_t *base, uint64_t capacity, uint64_t session_id)
 {
+    *w = (df_shm_writer){.base = base, .capacity = capacity};
     memcpy(base, DF_SHM_MAGIC, 8);
     df_le32_store(base + DF_SHM_OFF_HEADER_BYTES, DF_SHM_HEADER_BYTES);
     df_le32_store(base + 12, 0);
@@ -46,25 +47,27 @@ int df_shm_ring_check(const uint8_t *base, size_t map_bytes, uint64_t capacity,
     return DF_OK;
 }
 
-uint64_t df_shm_ring_append(uint8_t *base, const uint8_t *frame, uint32_t len)
+uint64_t df_shm_writer_append(df_shm_writer *w, const uint8_t *frame, uint32_t len)
 {
-    uint64_t cap = df_le64_load(base + DF_SHM_OFF_CAPACITY);
-    uint64_t pos = atomic_load_explicit(word(base, DF_SHM_OFF_HEAD), memory_order_relaxed);
+    uint64_t cap = w->capacity, pos = w->head;
     if (pos % cap + len > cap) pos += cap - pos % cap; /* never wrap a frame: next lap */
-    _Atomic uint64_t *vf = word(base, DF_SHM_OFF_VALID_FROM);
     /* Positions [pos + len - cap, ...) of the previous lap are about to be overwritten. */
-    if (pos + len > cap && pos + len - cap > atomic_load_explicit(vf, memory_order_relaxed))
-        atomic_store_explicit(vf, pos + len - cap, memory_order_relaxed);
+    if (pos + len > cap && pos + len - cap > w->valid_from) {
+        w->valid_from = pos + len - cap;
+        atomic_store_explicit(word(w->base, DF_SHM_OFF_VALID_FROM), w->valid_from,
+                              memory_order_relaxed);
+    }
     atomic_thread_fence(memory_order_release); /* valid_from before any overwriting store */
-    memcpy(base + DF_SHM_HEADER_BYTES + pos % cap, frame, len);
-    atomic_store_explicit(word(base, DF_SHM_OFF_HEAD), pos + len, memory_order_release);
+    memcpy(w->base + DF_SHM_HEADER_BYTES + pos % cap, frame, len);
+    w->head = pos + len;
+    atomic_store_explicit(word(w->base, DF_SHM_OFF_HEAD), w->head, memory_order_release);
     return pos;
 }
 
-int df_shm_ring_read(const uint8_t *base, uint64_t pos, uint32_t len, uint8_t *out,
-                     df_error *err)
+int df_shm_ring_read(const uint8_t *base, uint64_t capacity, uint64_t pos, uint32_t len,
+                     uint8_t *out, df_error *err)
 {
-    uint64_t cap = df_le64_load(base + DF_SHM_OFF_CAPACITY);
+    uint64_t cap = capacity;
     if (len == 0 || len > cap || pos % cap + len > cap)
         return df_error_set(err, DF_EFORMAT, "shm ref: %u bytes at position %llu do not fit "
                             "a %llu-byte ring", len, (unsigned long long)pos,

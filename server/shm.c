@@ -64,11 +64,10 @@ int df_shm_create(uint64_t session_id, uint64_t capacity, df_shm_ring **out, df_
         free(r);
         return rc;
     }
-    r->base = m;
     r->min_frame = DF_SHM_MIN_FRAME;
     r->max_frame = capacity / 2 < UINT32_MAX ? (uint32_t)(capacity / 2) : UINT32_MAX;
     if (r->max_frame < r->min_frame) r->max_frame = r->min_frame;
-    df_shm_ring_init(r->base, capacity, session_id);
+    df_shm_writer_init(&r->w, m, capacity, session_id);
     *out = r;
     return DF_OK;
 }
@@ -101,13 +100,13 @@ int df_shm_takes(const df_shm_ring *r, size_t len)
 
 uint64_t df_shm_put(df_shm_ring *r, const uint8_t *frame, uint32_t len)
 {
-    return df_shm_ring_append(r->base, frame, len);
+    return df_shm_writer_append(&r->w, frame, len);
 }
 
 void df_shm_destroy(df_shm_ring *r)
 {
     if (!r) return;
-    munmap(r->base, r->map_bytes);
+    munmap(r->w.base, r->map_bytes);
     unlink(r->path);
     free(r);
 }

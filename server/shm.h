@@ -11,6 +11,7 @@
 
 #include "core/common/df_error.h"
 #include "proto/messages.h"
+#include "proto/shm_ring.h"
 
 /* Frames shorter than this stay on the socket: an SHM_REF (48 bytes with its header) would not
  * save a copy worth the reader's extra work. */
@@ -20,7 +21,7 @@
 
 typedef struct df_shm_ring {
     char path[DF_MAX_PATH_LEN + 1]; /* absolute */
-    uint8_t *base;                  /* mapping of the whole file, read-write */
+    df_shm_writer w;                /* w.base: mapping of the whole file, read-write */
     size_t map_bytes;               /* DF_SHM_HEADER_BYTES + capacity */
     uint64_t capacity;
     uint32_t min_frame, max_frame;  /* frames in [min, max] bytes go through the ring */
@@ -39,7 +40,7 @@ int df_shm_sweep_stale(void);
 /* 1 when a frame of `len` bytes goes through the ring. */
 int df_shm_takes(const df_shm_ring *r, size_t len);
 
-/* Appends one whole frame; returns its stream position (df_shm_ring_append). */
+/* Appends one whole frame; returns its stream position (df_shm_writer_append). */
 uint64_t df_shm_put(df_shm_ring *r, const uint8_t *frame, uint32_t len);
 
 /* Unmaps and removes the file (clients keep their own mappings). NULL-safe. */
