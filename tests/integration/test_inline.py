@@ -132,11 +132,19 @@ def test_a_pipelined_burst_cannot_hold_the_loop(daemon, make_daemon):
     data = grid_obj(32, 32)
     X = obj_bytes_positions(data)
     # Updates cost at most half the budget, so 60 of them are >= 7x the iteration cap (4x budget).
+    # The budget comes from a measurement, which a descheduled probe (sanitizer builds, a busy
+    # machine) can inflate past 15x the real cost; then the cap is never reached. So up to three
+    # attempts, each with a fresh measurement; without the cap no attempt can defer anything.
     grab = Brush(center=X[0:3], move=(0.01, 0, 0), radius=0.3)
-    budget = _budget_us(daemon, data, grab, 2.0)
-    fast, inline, deferred = _pipelined_stroke(make_daemon("inline_us = %d\n" % budget), data)
     pooled, none, none_deferred = _pipelined_stroke(make_daemon("inline_us = 0\n"), data)
     assert none == none_deferred == 0
-    assert inline >= 1 and deferred >= 1, "inline %d, deferred %d" % (inline, deferred)
-    assert inline + deferred <= PIPELINED
-    assert fast == pooled
+    seen = []
+    for _ in range(3):
+        budget = _budget_us(daemon, data, grab, 2.0)
+        fast, inline, deferred = _pipelined_stroke(make_daemon("inline_us = %d\n" % budget), data)
+        assert inline + deferred <= PIPELINED
+        assert fast == pooled
+        seen.append((budget, inline, deferred))
+        if inline >= 1 and deferred >= 1:
+            break
+    assert inline >= 1 and deferred >= 1, "(budget us, inline, deferred) per attempt: %s" % seen
