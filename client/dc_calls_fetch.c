@@ -217,11 +217,6 @@ static int reply_handles(void *user, const df_frame_header *h, const uint8_t *p,
     return df_msg_handles_decode(p, h->payload_len, t, err);
 }
 
-static int enc_ref(const void *m, df_buf *out, df_error *err)
-{
-    return df_msg_session_ref_encode(m, out, err);
-}
-
 int df_client_handles_get(df_client *c, uint64_t session_id, df_msg_handles *out, df_error *err)
 {
     if (!out)
@@ -229,7 +224,7 @@ int df_client_handles_get(df_client *c, uint64_t session_id, df_msg_handles *out
     df_msg_session_ref req = {session_id};
     df_msg_handles t;
     memset(&t, 0, sizeof t);
-    int rc = dc_request(c, DF_MSG_HANDLES_GET, enc_ref, &req, reply_handles, &t, err);
+    int rc = dc_request(c, DF_MSG_HANDLES_GET, dc_enc_session_ref, &req, reply_handles, &t, err);
     if (rc == DF_OK && t.session_id != session_id)
         rc = df_error_set(err, DF_EFORMAT, "handles get: reply is for session %llu, asked %llu",
                           (unsigned long long)t.session_id, (unsigned long long)session_id);

@@ -29,7 +29,7 @@ int dc_reply_session_info(void *user, const df_frame_header *h, const uint8_t *p
     return rc;
 }
 
-static int enc_ref(const void *m, df_buf *out, df_error *err)
+int dc_enc_session_ref(const void *m, df_buf *out, df_error *err)
 {
     return df_msg_session_ref_encode(m, out, err);
 }
@@ -38,7 +38,7 @@ int dc_session_ref_call(df_client *c, uint16_t type, uint64_t session_id, df_msg
                         df_error *err)
 {
     df_msg_session_ref r = {session_id};
-    return dc_request(c, type, enc_ref, &r, dc_reply_ack, ack, err);
+    return dc_request(c, type, dc_enc_session_ref, &r, dc_reply_ack, ack, err);
 }
 
 typedef struct ping_ctx {

@@ -58,6 +58,9 @@ int dc_wait_reply(df_client *c, uint16_t type, uint64_t id, df_client_reply_fn o
 int dc_reply_ack(void *user, const df_frame_header *h, const uint8_t *p, df_error *err);
 int dc_reply_session_info(void *user, const df_frame_header *h, const uint8_t *p, df_error *err);
 
+/* dc_encode_fn for a df_msg_session_ref body (requests made only of a session id). */
+int dc_enc_session_ref(const void *m, df_buf *out, df_error *err);
+
 /* Sends a request made only of a session id (brush end/cancel, undo, redo, reset rest, close,
  * unsubscribe) and decodes an ack reply into *ack (may be NULL). */
 int dc_session_ref_call(df_client *c, uint16_t type, uint64_t session_id, df_msg_ack *ack,

@@ -16,11 +16,6 @@ static int reply_shm_info(void *user, const df_frame_header *h, const uint8_t *p
     return df_msg_shm_info_decode(p, h->payload_len, user, err);
 }
 
-static int enc_ref(const void *m, df_buf *out, df_error *err)
-{
-    return df_msg_session_ref_encode(m, out, err);
-}
-
 static dc_shm *find(df_client *c, uint64_t session_id)
 {
     for (int i = 0; i < c->nshm; i++)
@@ -56,7 +51,7 @@ int df_client_stream_shm(df_client *c, uint64_t session_id, df_msg_shm_info *inf
 {
     df_msg_session_ref ref = {session_id};
     df_msg_shm_info got;
-    int rc = dc_request(c, DF_MSG_STREAM_SHM, enc_ref, &ref, reply_shm_info, &got, err);
+    int rc = dc_request(c, DF_MSG_STREAM_SHM, dc_enc_session_ref, &ref, reply_shm_info, &got, err);
     if (rc) return rc;
     if (!find(c, session_id)) {
         dc_shm ring;

@@ -180,11 +180,10 @@ static void on_fanout_idle(uv_idle_t *h)
     fanout_pass(srv);
 }
 
-void df_conn_flush_all(df_server *srv, int which)
+void df_conn_flush_all(df_server *srv, int everything)
 {
-    if (which != 1) flush_list(srv, 0, 0);
-    if (which == 1) fanout_pass(srv);
-    if (which == 2) {
+    flush_list(srv, 0, 0);
+    if (everything) {
         flush_list(srv, 1, 0);
         uv_idle_stop(&srv->fanout_idle);
     }

@@ -32,12 +32,12 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
  * EPOLLOUT round and a wake-up). TCP keeps the kernel's autotuning. */
 #define DF_CONN_UNIX_SNDBUF (1 << 20)
 
-/* Starts the writes of connections that received frames: `which` 0 = those that got a reply in
- * this loop iteration (run from the server's uv_check handle, so a requester's ack and its own
- * displacement frames are never delayed behind a broadcast), 1 = corked subscriber-only output
- * (run from the cork timer; stops after DF_CONN_FANOUT_SLICE_US and continues from the
- * server's idle handle), 2 = both, to the end (shutdown). */
-void df_conn_flush_all(df_server *srv, int which);
+/* Starts the writes of connections that got a reply in this loop iteration (run from the
+ * server's uv_check handle, so a requester's ack and its own displacement frames are never
+ * delayed behind a broadcast); with `everything` also every corked subscriber's, to the end
+ * (shutdown). Corked subscriber output otherwise goes out from the cork timer in passes of
+ * DF_CONN_FANOUT_SLICE_US, continued from the server's idle handle. */
+void df_conn_flush_all(df_server *srv, int everything);
 
 /* Queues `frame` (a reference is taken) for sending; the write starts at the end of the current
  * loop iteration (df_conn_flush_all), so frames queued together go out in one writev. Returns DF_OK, or DF_ELIMIT after dropping

@@ -147,7 +147,7 @@ static void on_stop_timer(uv_timer_t *h)
         df_session_destroy(s);
     }
     for (df_conn *c = srv->conns; c; c = c->next) df_conn_close(c, "server shutting down", 0);
-    df_conn_flush_all(srv, 2);
+    df_conn_flush_all(srv, 1);
     df_pool_close(srv->pool); /* idle: jobs_running is 0 */
     uv_close((uv_handle_t *)&srv->mailbox, NULL);
     uv_close((uv_handle_t *)&srv->kick_check, NULL);

@@ -526,15 +526,13 @@ typedef struct writer_run {
     long seen;
 } writer_run;
 
-/* CPU microseconds per writer update spent by the daemon and by this bench (the subscribers'
- * reading and the writer) in the last bench_writer run. */
-static double g_cpu_daemon_us, g_cpu_bench_us;
-static pid_t g_daemon_pid;
+static pid_t g_daemon_pid; /* whose CPU time bench_writer measures besides its own */
 
-/* Writer updates per second on `sid` (update -> ack) with `nsubs` subscriber connections, which
- * read the stream from their sockets or (shm = 1) from the session's shared-memory ring. */
+/* Measures the writer on `sid` (update -> ack) with `nsubs` subscriber connections, which read
+ * the stream from their sockets or (shm = 1) from the session's shared-memory ring: fills *out
+ * (updates/s, fewest versions a subscriber got, CPU per update). 0 on success, -1 otherwise. */
 static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs, int shm,
-                        double *rate, long *min_seen)
+                        writer_run *out)
 {
     subs s;
     memset(&s, 0, sizeof s);
@@ -567,8 +565,8 @@ static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs,
         rc = df_client_brush_update(w, &u, NULL, &e);
     }
     double secs = (now_us() - t0) / 1e6;
-    g_cpu_daemon_us = (cpu_seconds(g_daemon_pid) - cd0) * 1e6 / WRITER_UPDATES;
-    g_cpu_bench_us = (cpu_seconds(0) - cb0) * 1e6 / WRITER_UPDATES;
+    out->cpu_daemon = (cpu_seconds(g_daemon_pid) - cd0) * 1e6 / WRITER_UPDATES;
+    out->cpu_bench = (cpu_seconds(0) - cb0) * 1e6 / WRITER_UPDATES;
     if (rc == 0)
         rc = df_client_brush_end(w, sid, NULL, &e);
     if (rc)
@@ -583,15 +581,15 @@ static int bench_writer(const char *sock, df_client *w, uint64_t sid, int nsubs,
     }
     s.stop = 1;
     pthread_join(th, NULL);
-    *min_seen = LONG_MAX;
+    out->seen = LONG_MAX;
     for (int i = 0; i < s.n; i++) {
-        *min_seen = s.versions[i] < *min_seen ? s.versions[i] : *min_seen;
+        out->seen = s.versions[i] < out->seen ? s.versions[i] : out->seen;
         df_client_close(s.c[i]);
     }
-    *rate = WRITER_UPDATES / secs;
+    out->rate = WRITER_UPDATES / secs;
     if (getenv("BENCH_NET_VERBOSE"))
         printf("    %d %s subscribers: %.0f updates/s, %.0f writes blocked (full sockets), draining "
-               "thread %.1f us CPU per update\n", nsubs, shm ? "shm" : "socket", *rate,
+               "thread %.1f us CPU per update\n", nsubs, shm ? "shm" : "socket", out->rate,
                stat_value(w, 0, "writes_blocked") - blocked0, s.cpu_s * 1e6 / WRITER_UPDATES);
     return rc;
 }
@@ -757,9 +755,7 @@ int main(int argc, char **argv)
         for (int t = 0; !wbad && t < 2; t++)
             for (int k = 0; !wbad && k < 2; k++) {
                 writer_run x;
-                wbad = bench_writer(d.sock, cu, sid[0], k ? MANY_SUBS : 1, t, &x.rate, &x.seen);
-                x.cpu_daemon = g_cpu_daemon_us;
-                x.cpu_bench = g_cpu_bench_us;
+                wbad = bench_writer(d.sock, cu, sid[0], k ? MANY_SUBS : 1, t, &x);
                 if (!wbad && x.rate > best[t][k].rate) best[t][k] = x;
             }
     if (!section_on("writer"))
