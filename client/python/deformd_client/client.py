@@ -289,7 +289,7 @@ class Client:
         replaced by the frame it references in the shared-memory ring (or a ShmLost event)."""
         if f.type == m.SHM_REF:
             sid, position, length = m.decode_shm_ref(f.payload)
-            inner = self.shm_frame(f)
+            inner = self._resolve_ref(sid, position, length)
             if inner is None:
                 self._shm_lost(sid, position, length)
             else:
@@ -334,7 +334,10 @@ class Client:
         None when it was overwritten before it could be read (lost: resync with snapshot()).
         ProtocolError for a malformed reference, a reference outside the ring, a session
         without a ring (stream_shm not called) or a referenced frame that is not an event."""
-        sid, position, length = m.decode_shm_ref(f.payload)
+        return self._resolve_ref(*m.decode_shm_ref(f.payload))
+
+    def _resolve_ref(self, sid: int, position: int, length: int) -> Optional[fr.Frame]:
+        """shm_frame for an already decoded reference."""
         ring = self._shm.get(sid)
         if ring is None:
             if sid in self._shm_detaching:
