@@ -1,5 +1,5 @@
 /* cmd_session.c — deformctl commands about the daemon and its sessions: ping, load, list,
- * stats, watch. */
+ * close, stats, watch. */
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
@@ -109,6 +109,31 @@ static int run_list(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     if (ctx->json)
         printf("]}\n");
     df_msg_session_list_free(&l);
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
+/* ---- close --------------------------------------------------------------------------- */
+static int run_close(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c)
+        return CTL_EXIT_SERVER;
+    df_error e;
+    uint64_t sid = 0;
+    df_msg_ack ack = {0, 0};
+    int rc = ctl_session_id(c, a->pos[0], &sid, &e);
+    if (rc == DF_OK)
+        rc = df_client_close_session(c, sid, &ack, &e);
+    if (rc) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    if (ctx->json)
+        printf("{\"session\":%" PRIu64 ",\"closed\":true}\n", sid);
+    else
+        printf("closed session %" PRIu64 "\n", sid);
     df_client_close(c);
     return CTL_EXIT_OK;
 }
@@ -307,6 +332,9 @@ const ctl_cmd ctl_cmds_session[] = {
      LOAD_OPTS, N(LOAD_OPTS), 1, run_load},
     {"list", "list", "List the sessions: id, name, kind, sizes, version, subscribers.", PLAIN_OPTS,
      N(PLAIN_OPTS), 0, run_list},
+    {"close", "close SESSION",
+     "Close a session (id or name): its mesh, history and handle set are freed and every "
+     "subscriber is told.", PLAIN_OPTS, N(PLAIN_OPTS), 1, run_close},
     {"stats", "stats [--session SESSION]",
      "Print the daemon's (or one session's) counters, one 'key value' per line.", STATS_OPTS,
      N(STATS_OPTS), 0, run_stats},
