@@ -8,25 +8,60 @@
 #include "core/admm/admm_internal.h"
 #include "core/admm/nh_prox.h"
 
+/* Energy and mesh kind by their wire / deformctl names ("--energy polyline"). */
+static const char *energy_name(df_admm_energy e)
+{
+    switch (e) {
+    case DF_ADMM_ARAP: return "arap";
+    case DF_ADMM_ACAP: return "acap";
+    case DF_ADMM_NEOHOOKEAN: return "neohookean";
+    case DF_ADMM_CLOTH: return "cloth";
+    case DF_ADMM_POLYLINE: return "polyline";
+    }
+    return "unknown";
+}
+
+static const char *kind_name(df_mesh_kind k)
+{
+    return k == DF_MESH_POLYLINE ? "a polyline" : k == DF_MESH_TRIANGLE ? "a triangle mesh"
+           : k == DF_MESH_TET ? "a tet mesh" : "of unknown kind";
+}
+
+/* The energy that fits a mesh kind, to suggest in the error. */
+static const char *energy_for(df_mesh_kind k)
+{
+    return k == DF_MESH_POLYLINE ? "polyline" : k == DF_MESH_TRIANGLE ? "arap, acap or cloth"
+           : "arap, acap or neohookean";
+}
+
 static int check_kind(const df_admm_params *p, const df_mesh *m, df_error *err)
 {
     df_mesh_kind k = m->kind;
+    const char *needs = NULL;
     switch (p->energy) {
     case DF_ADMM_ARAP:
     case DF_ADMM_ACAP:
         if (k == DF_MESH_TRIANGLE || k == DF_MESH_TET) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: ARAP/ACAP need a triangle or tet mesh (use DF_ADMM_POLYLINE for polylines)");
+        needs = "triangles or tets";
+        break;
     case DF_ADMM_NEOHOOKEAN:
         if (k == DF_MESH_TET) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: Neo-Hookean needs a tet mesh");
+        needs = "tets";
+        break;
     case DF_ADMM_CLOTH:
         if (k == DF_MESH_TRIANGLE) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: cloth needs a triangle mesh");
+        needs = "triangles";
+        break;
     case DF_ADMM_POLYLINE:
         if (k == DF_MESH_POLYLINE) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: polyline energy needs a segment mesh");
+        needs = "a polyline (segments)";
+        break;
+    default:
+        return df_error_set(err, DF_EINVAL, "admm: unknown energy %d", (int)p->energy);
     }
-    return df_error_set(err, DF_EINVAL, "admm: unknown energy %d", (int)p->energy);
+    return df_error_set(err, DF_EINVAL, "admm: energy %s needs %s; this mesh is %s: use energy "
+                        "%s (deformctl --energy %s)", energy_name(p->energy), needs, kind_name(k),
+                        energy_for(k), k == DF_MESH_POLYLINE ? "polyline" : "arap");
 }
 
 static int check_inputs(const df_mesh *m, const df_admm_params *p, const int32_t *handles, int32_t nh,
