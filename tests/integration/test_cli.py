@@ -14,7 +14,7 @@ from deformd_client import Brush, DeformdError
 from helpers import (grab_displacement, grid_obj, read_indices, read_node_positions,
                      read_obj_positions, read_off_positions, tet_grid_medit)
 
-COMMANDS = ["ping", "load", "list", "brush", "handles", "move", "get", "undo", "redo",
+COMMANDS = ["ping", "load", "list", "close", "brush", "handles", "move", "get", "undo", "redo",
             "reset-rest", "watch", "stats"]
 
 
@@ -124,7 +124,7 @@ CLI_BRUSHES = [
     (["--type", "scale", "--scale", "0.2", "--radius", "0.3", "--nu", "0.3"],
      Brush(type="scale", scale=0.2, radius=0.3, nu=0.3)),
     (["--type", "pinch", "--matrix", "0.2,0,0,0,-0.2,0,0,0,0", "--radius", "0.3"],
-     Brush(type="pinch", matrix=(0.2, 0, 0, 0, -0.2, 0, 0, 0, 0), radius=0.3, nu=0.5)),
+     Brush(type="pinch", matrix=(0.2, 0, 0, 0, -0.2, 0, 0, 0, 0), radius=0.3, nu=0.45)),  # CLI default
     (["--type", "affine", "--matrix", "0.1,0.2,0,0,0.1,0,0,0,0.3", "--radius", "0.3",
       "--nu", "0.3"],
      Brush(type="affine", matrix=(0.1, 0.2, 0, 0, 0.1, 0, 0, 0, 0.3), radius=0.3, nu=0.3)),
