@@ -155,6 +155,9 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     size_t tl = strlen(tf);
     int is_node = tl >= 5 && strcasecmp(tf + tl - 5, ".node") == 0;
+    if (!is_node && a->val[M_HANDLES])
+        return ctl_usage_error(ctx, cmd, "--handles FILE only applies to a .node targets file "
+                               "(an 'x y z' targets file lists the handles in order)");
     /* Read every local file before connecting: a missing file is a usage error either way. */
     char *node_text = NULL;
     int32_t *hidx = NULL, nh = 0;

@@ -273,6 +273,8 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     df_error e;
     if (a->val[3] && dc_cli_int(a->val[3], "--count", 1, 1000000000, &count, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
+    if (a->val[4] && ctx->tcp)
+        return ctl_usage_error(ctx, cmd, "--shm needs the daemon's Unix socket, not --tcp");
     df_client *c = ctl_connect(ctx, cmd);
     if (!c)
         return CTL_EXIT_SERVER;

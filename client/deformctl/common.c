@@ -81,6 +81,8 @@ int ctl_session_id(df_client *c, const char *arg, uint64_t *id, df_error *err)
         *id = v;
         return DF_OK;
     }
+    if (arg[0] == '\0')
+        return df_error_set(err, DF_EINVAL, "SESSION is empty: give a session id or name");
     df_msg_session_info info;
     int rc = df_client_open_session(c, 0, arg, &info, err);
     if (rc)

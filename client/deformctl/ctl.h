@@ -86,7 +86,8 @@ int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const d
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd);
 
 /* Resolves SESSION (a decimal id, or else a session name looked up with open session) into
- * *id. Returns DF_OK or an error (printed by the caller via ctl_fail). */
+ * *id. Returns DF_OK or an error (printed by the caller via ctl_fail); an empty SESSION is
+ * DF_EINVAL without contacting the daemon (ctl_fail makes it a usage error). */
 int ctl_session_id(df_client *c, const char *arg, uint64_t *id, df_error *err);
 
 /* Writes `s` as a JSON string literal (quotes and escapes) to `f`. */

@@ -34,6 +34,7 @@ def sessions(daemon, tmp_path_factory):
     (d / "g.obj").write_bytes(grid_obj(6, 6))
     (d / "poly.obj").write_text(POLYLINE_OBJ)
     (d / "h.txt").write_text("0\n3\n")
+    (d / "t.txt").write_text("0 0 0.1\n1 0 0.1\n")
     tri = int(run(daemon, "load", d / "g.obj", "--name", "clierr-tri").stdout)
     poly = int(run(daemon, "load", d / "poly.obj", "--name", "clierr-poly").stdout)
     yield {"tri": tri, "poly": poly, "dir": d}
@@ -80,6 +81,11 @@ CASES = [
                      "0"], 2, "EINVAL", "usage", "--rho: 0 must be > 0"),
     ("move-missing-file", ["move", "TRI", "--targets", "DIR/missing.txt"], 2, "EINVAL", "usage",
      "missing.txt"),
+    ("move-handles-without-node", ["move", "TRI", "--targets", "DIR/t.txt", "--handles",
+                                   "DIR/h.txt"], 2, "EINVAL", "usage", ".node"),
+    ("watch-shm-over-tcp", ["--tcp", "127.0.0.1:1", "watch", "TRI", "--shm"], 2, "EINVAL",
+     "usage", "--shm"),
+    ("session-empty", ["undo", ""], 2, "EINVAL", "usage", "SESSION is empty"),
     # errors (1): from the daemon, the daemon unreachable, refused locally, local failures
     ("no-such-session", ["undo", "987654321"], 1, "ENOTFOUND", "server", "server: ENOTFOUND"),
     ("close-no-such-session", ["close", "987654321"], 1, "ENOTFOUND", "server",
