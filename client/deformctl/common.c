@@ -19,14 +19,12 @@ int ctl_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *source, int co
     else
         fprintf(stderr, "%s: %s%s: %s\n", ctx->prog, prefix, name, text);
     if (ctx->json)
-        ctl_json_error(ctx, source, code, text, exit_code);
+        ctl_json_error(source, code, text, exit_code);
     return exit_code;
 }
 
-void ctl_json_error(const ctl_ctx *ctx, const char *source, int code, const char *msg,
-                    int exit_code)
+void ctl_json_error(const char *source, int code, const char *msg, int exit_code)
 {
-    (void)ctx;
     printf("{\"ok\":false,\"exit\":%d,\"source\":\"%s\",\"code\":%d,\"name\":", exit_code,
            source, code);
     ctl_json_str(stdout, df_proto_error_name(code));

@@ -72,8 +72,7 @@ int ctl_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *source, int co
               const char *msg, int exit_code);
 
 /* Writes only the JSON error object of ctl_error to stdout (callers check ctx->json). */
-void ctl_json_error(const ctl_ctx *ctx, const char *source, int code, const char *msg,
-                    int exit_code);
+void ctl_json_error(const char *source, int code, const char *msg, int exit_code);
 
 /* Reports a failed client call via ctl_error ("deformctl CMD: server: ENOTFOUND: no session 7")
  * and maps it to an exit code: CTL_EXIT_SERVER for server and connection errors,

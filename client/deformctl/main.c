@@ -54,7 +54,7 @@ void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd)
 int ctl_usage_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *msg)
 {
     if (ctx->json)
-        ctl_json_error(ctx, "usage", DF_EINVAL, msg, CTL_EXIT_USAGE);
+        ctl_json_error("usage", DF_EINVAL, msg, CTL_EXIT_USAGE);
     if (cmd)
         fprintf(stderr, "%s %s: %s\nTry '%s %s --help'.\n", ctx->prog, cmd->name, msg, ctx->prog,
                 cmd->name);
