@@ -12,6 +12,7 @@
 
 #include "proto/frame.h"
 #include "server/config.h"
+#include "server/membudget.h"
 #include "server/outq.h"
 #include "server/stats.h"
 
@@ -78,6 +79,8 @@ typedef struct df_server {
     uint64_t inline_spent_ns;/* job work run on the loop thread this iteration (job.h) */
     int stopping;
     size_t cache_bytes;      /* bytes of cached factorizations over all sessions */
+    df_membudget mem;        /* memory_max_mb accounting: uploads, sessions, rings, history */
+    uint64_t history_dropped;/* undo steps dropped to history budgets, all sessions */
     uint64_t lru_clock;
     df_stats stats;
 } df_server;
