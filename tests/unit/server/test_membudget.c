@@ -1,6 +1,7 @@
 /* Unit tests for server/membudget.c: charges by kind against the total (memory_max_mb) and the
  * per-kind caps (uploads_max_mb, shm_total_bytes), refusals that name the limit and its config
- * key and charge nothing, release clamping, room, unchecked adjustment. */
+ * key and charge nothing, release clamping, room, unchecked adjustment; and the shared-memory
+ * ring size derived from the session (server/shm.c). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -9,6 +10,7 @@
 #include <cmocka.h>
 
 #include "server/membudget.h"
+#include "server/shm.h"
 
 #define MiB ((uint64_t)1 << 20)
 
@@ -66,6 +68,24 @@ static void test_kind_caps_name_their_config_keys(void **state)
     assert_int_equal(df_mem_charge(&b, DF_MEM_SESSIONS, 1, "load", &e), DF_ELIMIT);
 }
 
+/* Item 11: a ring holds DF_SHM_RING_VERSIONS dense versions of its session, not shm_ring_bytes. */
+static void test_ring_size_follows_the_session(void **state)
+{
+    (void)state;
+    const uint64_t cap = 64 * MiB;
+    assert_int_equal(df_shm_ring_size(1, cap), 64 << 10);             /* the minimum */
+    assert_int_equal(df_shm_ring_size(100, cap), 192 << 10);          /* 128 x 1328 B, rounded */
+    assert_int_equal(df_shm_ring_size(1000, cap), 1536 << 10);        /* 1k vertices: 1.5 MiB */
+    assert_int_equal(df_shm_ring_size(1000000, cap), cap);            /* capped */
+    assert_int_equal(df_shm_ring_size(1000, 64 << 10), 64 << 10);
+    assert_int_equal(df_shm_ring_size(1000, 0), 0);
+    for (int32_t nv = 1; nv < 5000000; nv = nv * 3 + 7) {
+        uint64_t r = df_shm_ring_size(nv, 4096 * MiB);
+        assert_int_equal(r % DF_SHM_RING_ROUND, 0);
+        assert_true(r >= (uint64_t)DF_SHM_RING_VERSIONS * 12 * (uint64_t)nv);
+    }
+}
+
 static void test_physical_memory_is_known(void **state)
 {
     (void)state;
@@ -77,6 +97,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_charge_release_and_total_cap),
         cmocka_unit_test(test_kind_caps_name_their_config_keys),
+        cmocka_unit_test(test_ring_size_follows_the_session),
         cmocka_unit_test(test_physical_memory_is_known),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
