@@ -41,7 +41,7 @@ typedef struct df_upload {
 void df_upload_free(struct df_upload *u)
 {
     if (!u) return;
-    if (u->srv) df_mem_release(&u->srv->mem, DF_MEM_UPLOADS, u->cap);
+    if (u->srv) df_mem_release(df_server_mem(u->srv), DF_MEM_UPLOADS, u->cap);
     free(u->data);
     free(u->path);
     df_meshload_free(&u->mesh);
@@ -173,7 +173,7 @@ static int upload_reserve(df_upload *u, uint64_t need, df_error *err)
     uint64_t ncap = u->cap ? 2 * u->cap : DF_UPLOAD_MIN_BUFFER;
     if (ncap < need) ncap = need;
     if (ncap > u->total) ncap = u->total;
-    df_membudget *b = &u->srv->mem;
+    df_membudget *b = df_server_mem(u->srv);
     if (ncap > need && df_mem_room(b, DF_MEM_UPLOADS) < ncap - u->cap) ncap = need;
     int rc = df_mem_charge(b, DF_MEM_UPLOADS, ncap - u->cap, "load_mesh", err);
     if (rc != DF_OK) return rc;

@@ -66,7 +66,7 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "cache.admm_chol.hits", (double)x->admm_hits);
         put(&st, "cache.admm_chol.misses", (double)x->admm_misses);
         put(&st, "cache.lru_evictions", (double)x->lru_evictions);
-        const df_membudget *mb = &srv->mem; /* membudget.h */
+        const df_membudget *mb = df_server_mem(srv); /* membudget.h */
         int uploads = 0;
         for (df_conn *k = srv->conns; k; k = k->next) uploads += k->upload != NULL;
         put(&st, "memory_used_bytes", (double)df_mem_used(mb));

@@ -11,13 +11,18 @@ static const char *const k_kind_name[DF_MEM_KINDS] = {"uploads in flight", "sess
 /* Config key of each kind's own cap ("" when it has none) and how it is written. */
 static const char *const k_kind_key[DF_MEM_KINDS] = {"uploads_max_mb", "", "shm_total_bytes", ""};
 
-void df_mem_init(df_membudget *b, uint64_t max, uint64_t uploads_max, uint64_t shm_max)
+void df_mem_set_limits(df_membudget *b, uint64_t max, uint64_t uploads_max, uint64_t shm_max)
 {
-    memset(b, 0, sizeof *b);
     b->max = max;
     for (int k = 0; k < DF_MEM_KINDS; k++) b->kind_max[k] = UINT64_MAX;
     b->kind_max[DF_MEM_UPLOADS] = uploads_max;
     b->kind_max[DF_MEM_SHM] = shm_max;
+}
+
+void df_mem_init(df_membudget *b, uint64_t max, uint64_t uploads_max, uint64_t shm_max)
+{
+    memset(b, 0, sizeof *b);
+    df_mem_set_limits(b, max, uploads_max, shm_max);
 }
 
 uint64_t df_mem_used(const df_membudget *b)

@@ -33,6 +33,9 @@ typedef struct df_membudget {
  * DF_MEM_UPLOADS / DF_MEM_SHM (UINT64_MAX = none). Never fails. */
 void df_mem_init(df_membudget *b, uint64_t max, uint64_t uploads_max, uint64_t shm_max);
 
+/* Sets the caps like df_mem_init, keeping the counters. */
+void df_mem_set_limits(df_membudget *b, uint64_t max, uint64_t uploads_max, uint64_t shm_max);
+
 /* Bytes charged in total. */
 uint64_t df_mem_used(const df_membudget *b);
 

@@ -77,8 +77,6 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     srv->loop = loop;
     srv->cfg = *cfg;
     srv->stats.start_ns = uv_hrtime();
-    df_mem_init(&srv->mem, (uint64_t)cfg->memory_max_mb << 20, (uint64_t)cfg->uploads_max_mb << 20,
-                cfg->shm_total_bytes);
     pthread_mutex_init(&srv->mailbox_lock, NULL);
     uv_async_init(loop, &srv->mailbox, on_mail);
     srv->mailbox.data = srv;

@@ -85,6 +85,16 @@ typedef struct df_server {
     df_stats stats;
 } df_server;
 
+/* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,
+ * uploads_max_mb, shm_total_bytes), so that a df_server set up without df_server_start (unit
+ * tests) charges against its config too. Loop thread. */
+static inline df_membudget *df_server_mem(df_server *srv)
+{
+    df_mem_set_limits(&srv->mem, (uint64_t)srv->cfg.memory_max_mb << 20,
+                      (uint64_t)srv->cfg.uploads_max_mb << 20, srv->cfg.shm_total_bytes);
+    return &srv->mem;
+}
+
 /* A message from a worker to the loop thread: a frame to broadcast to a session's subscribers. */
 typedef struct df_mail {
     struct df_job *job;      /* the running job (kept alive until its completion) */

@@ -25,7 +25,7 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh)
 static void history_recharge(df_session *s)
 {
     uint64_t now = df_history_bytes(&s->hist);
-    df_mem_adjust(&s->srv->mem, DF_MEM_HISTORY, s->hist_charged, now);
+    df_mem_adjust(df_server_mem(s->srv), DF_MEM_HISTORY, s->hist_charged, now);
     s->hist_charged = now;
 }
 
@@ -34,7 +34,7 @@ static void history_recharge(df_session *s)
 static size_t history_budget(const df_session *s)
 {
     uint64_t per = (uint64_t)s->srv->cfg.history_max_mb << 20;
-    uint64_t room = df_mem_room(&s->srv->mem, DF_MEM_HISTORY) + s->hist_charged;
+    uint64_t room = df_mem_room(df_server_mem(s->srv), DF_MEM_HISTORY) + s->hist_charged;
     uint64_t b = per < room ? per : room;
     return b < SIZE_MAX ? (size_t)b : SIZE_MAX;
 }
@@ -52,12 +52,13 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     uint64_t est = df_session_estimate_bytes(mesh);
     char what[64];
     snprintf(what, sizeof what, "session of %d vertices", mesh->nv);
-    if (df_mem_charge(&srv->mem, DF_MEM_SESSIONS, est, what, err) != DF_OK) {
+    df_membudget *mb = df_server_mem(srv);
+    if (df_mem_charge(mb, DF_MEM_SESSIONS, est, what, err) != DF_OK) {
         df_meshload_free(mesh);
         return err ? err->code : DF_ELIMIT;
     }
-    if (df_mem_charge(&srv->mem, DF_MEM_HISTORY, n * sizeof(double), what, err) != DF_OK) {
-        df_mem_release(&srv->mem, DF_MEM_SESSIONS, est);
+    if (df_mem_charge(mb, DF_MEM_HISTORY, n * sizeof(double), what, err) != DF_OK) {
+        df_mem_release(mb, DF_MEM_SESSIONS, est);
         df_meshload_free(mesh);
         return err ? err->code : DF_ELIMIT;
     }
@@ -77,8 +78,8 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
             free(s->uf);
             free(s);
         }
-        df_mem_release(&srv->mem, DF_MEM_SESSIONS, est);
-        df_mem_release(&srv->mem, DF_MEM_HISTORY, n * sizeof(double));
+        df_mem_release(mb, DF_MEM_SESSIONS, est);
+        df_mem_release(mb, DF_MEM_HISTORY, n * sizeof(double));
         df_meshload_free(mesh);
         return df_error_set(err, DF_ENOMEM, "out of memory creating a session (%d vertices)",
                             mesh->nv);
@@ -158,9 +159,10 @@ void df_session_destroy(df_session *s)
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
     df_history_free(&s->hist);
-    df_mem_release(&srv->mem, DF_MEM_HISTORY, s->hist_charged);
-    df_mem_release(&srv->mem, DF_MEM_SESSIONS, s->mem_bytes);
-    df_mem_release(&srv->mem, DF_MEM_SHM, s->shm_charged);
+    df_membudget *mb = df_server_mem(srv);
+    df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);
+    df_mem_release(mb, DF_MEM_SESSIONS, s->mem_bytes);
+    df_mem_release(mb, DF_MEM_SHM, s->shm_charged);
     df_meshload_free(&s->mesh);
     free(s->rest);
     free(s->cur);
@@ -238,11 +240,11 @@ int df_session_attach_shm(df_session *s, df_conn *c, df_error *err)
     if (!s->shm) {
         uint64_t cap = df_shm_ring_size(s->nv, s->srv->cfg.shm_ring_bytes);
         uint64_t bytes = cap + DF_SHM_HEADER_BYTES;
-        int rc = df_mem_charge(&s->srv->mem, DF_MEM_SHM, bytes, "stream_shm", err);
+        int rc = df_mem_charge(df_server_mem(s->srv), DF_MEM_SHM, bytes, "stream_shm", err);
         if (rc) return rc;
         rc = df_shm_create(s->id, cap, &s->shm, err);
         if (rc) {
-            df_mem_release(&s->srv->mem, DF_MEM_SHM, bytes);
+            df_mem_release(df_server_mem(s->srv), DF_MEM_SHM, bytes);
             return rc;
         }
         s->shm_charged = bytes;
