@@ -19,21 +19,31 @@ static void step_free(df_history_step *s)
     memset(s, 0, sizeof *s);
 }
 
+/* The bit pattern of a double and back (memcpy: no aliasing through other pointer types). */
+static inline uint64_t bits(const double *p)
+{
+    uint64_t u;
+    memcpy(&u, p, sizeof u);
+    return u;
+}
+
+static inline void xor_into(double *p, uint64_t x)
+{
+    uint64_t u = bits(p) ^ x;
+    memcpy(p, &u, sizeof u);
+}
+
 /* XORs step `s` into `state` (applies it forwards or backwards: the same operation). */
 static void step_apply(const df_history_step *s, double *state, size_t n)
 {
-    uint64_t *b = (uint64_t *)(void *)state; /* doubles are 8 bytes with 8-byte alignment */
     _Static_assert(sizeof(double) == sizeof(uint64_t), "double is 64 bits");
     if (!s->idx) {
-        for (size_t i = 0; i < n; i++) b[i] ^= s->x[i];
+        for (size_t i = 0; i < n; i++) xor_into(state + i, s->x[i]);
         return;
     }
-    for (uint32_t k = 0; k < s->count; k++) {
-        uint64_t *v = b + 3 * (size_t)s->idx[k];
-        v[0] ^= s->x[3 * (size_t)k];
-        v[1] ^= s->x[3 * (size_t)k + 1];
-        v[2] ^= s->x[3 * (size_t)k + 2];
-    }
+    for (uint32_t k = 0; k < s->count; k++)
+        for (int c = 0; c < 3; c++)
+            xor_into(state + 3 * (size_t)s->idx[k] + c, s->x[3 * (size_t)k + c]);
 }
 
 int df_history_init(df_history *h, const double *pos, size_t n, int max_states, df_error *err)
@@ -100,12 +110,11 @@ int df_history_set_max_bytes(df_history *h, size_t max_bytes)
 int df_history_commit(df_history *h, const double *pos, df_error *err)
 {
     if (!h || !h->state || !pos) return df_error_set(err, DF_EINVAL, "history: NULL");
-    const uint64_t *a = (const uint64_t *)(const void *)h->state;
-    const uint64_t *b = (const uint64_t *)(const void *)pos;
+    const double *a = h->state, *b = pos;
     size_t nv = h->n / 3, changed = 0;
-    for (size_t i = 0; i < nv; i++)
-        changed += (a[3 * i] ^ b[3 * i]) | (a[3 * i + 1] ^ b[3 * i + 1]) |
-                   (a[3 * i + 2] ^ b[3 * i + 2]) ? 1 : 0;
+    for (size_t i = 0; i < h->n; i += 3)
+        changed += ((bits(a + i) ^ bits(b + i)) | (bits(a + i + 1) ^ bits(b + i + 1)) |
+                    (bits(a + i + 2) ^ bits(b + i + 2))) != 0;
     if (changed == 0) return DF_OK; /* no change */
     df_history_step st = {.count = (uint32_t)changed};
     int dense = changed * (3 * sizeof(uint64_t) + sizeof(uint32_t)) >= h->n * sizeof(uint64_t);
@@ -118,12 +127,13 @@ int df_history_commit(df_history *h, const double *pos, df_error *err)
                             changed);
     }
     if (dense) {
-        for (size_t i = 0; i < h->n; i++) st.x[i] = a[i] ^ b[i];
+        for (size_t i = 0; i < h->n; i++) st.x[i] = bits(a + i) ^ bits(b + i);
     } else {
         uint32_t k = 0;
         for (size_t i = 0; i < nv; i++) {
-            uint64_t x0 = a[3 * i] ^ b[3 * i], x1 = a[3 * i + 1] ^ b[3 * i + 1],
-                     x2 = a[3 * i + 2] ^ b[3 * i + 2];
+            uint64_t x0 = bits(a + 3 * i) ^ bits(b + 3 * i),
+                     x1 = bits(a + 3 * i + 1) ^ bits(b + 3 * i + 1),
+                     x2 = bits(a + 3 * i + 2) ^ bits(b + 3 * i + 2);
             if (!(x0 | x1 | x2)) continue;
             st.idx[k] = (uint32_t)i;
             st.x[3 * (size_t)k] = x0;
