@@ -63,13 +63,17 @@ static void load_work(df_job *j)
                              DF_MAX_MESH_ELEMENTS);
     if (j->rc == DF_OK && u->mesh.nv < 1)
         j->rc = df_error_set(&j->err, DF_EFORMAT, "mesh has no vertices");
-    free(u->data); /* early: the parsed mesh replaces it (uncharged on the loop thread) */
+    free(u->data); /* early: the parsed mesh replaces it (uncharged in load_done) */
     u->data = NULL;
 }
 
 static void load_done(df_job *j)
 {
     df_upload *u = j->body;
+    if (u->srv) { /* the worker freed the buffer: return its charge before the session's */
+        df_mem_release(df_server_mem(u->srv), DF_MEM_UPLOADS, u->cap);
+        u->cap = 0;
+    }
     if (j->rc == DF_OK && j->srv->stopping)
         j->rc = df_error_set(&j->err, DF_ESTATE, "server shutting down");
     if (df_job_failed(j)) return;
@@ -175,7 +179,7 @@ static int upload_reserve(df_upload *u, uint64_t need, df_error *err)
     if (ncap > u->total) ncap = u->total;
     df_membudget *b = df_server_mem(u->srv);
     if (ncap > need && df_mem_room(b, DF_MEM_UPLOADS) < ncap - u->cap) ncap = need;
-    int rc = df_mem_charge(b, DF_MEM_UPLOADS, ncap - u->cap, "load_mesh", err);
+    int rc = df_session_mem_charge(u->srv, DF_MEM_UPLOADS, ncap - u->cap, "load_mesh", err);
     if (rc != DF_OK) return rc;
     uint8_t *d = realloc(u->data, (size_t)ncap);
     if (!d) {

@@ -5,7 +5,8 @@
  * df_session_estimate_bytes), shared-memory rings, and undo history. A charge that would take
  * the total above `max` (config memory_max_mb), or its kind above the kind's own cap (uploads:
  * uploads_max_mb, rings: shm_total_bytes), is refused with DF_ELIMIT and a message naming the
- * limit and its config key; nothing is charged then. Cached factorizations are not charged here:
+ * limit and its config key; nothing is charged then (session.h df_session_mem_charge first lets
+ * idle sessions' old undo steps give way). Cached factorizations are not charged here:
  * they have their own evicting cap (cache_memory_mb, cache.h). */
 #ifndef DF_SERVER_MEMBUDGET_H
 #define DF_SERVER_MEMBUDGET_H

@@ -39,6 +39,42 @@ static size_t history_budget(const df_session *s)
     return b < SIZE_MAX ? (size_t)b : SIZE_MAX;
 }
 
+/* Drops oldest undo steps of idle sessions, largest history first, until `want` bytes are
+ * freed or none is left; returns the bytes freed. */
+static uint64_t reclaim_history(df_server *srv, uint64_t want)
+{
+    uint64_t freed = 0;
+    while (freed < want) {
+        df_session *best = NULL;
+        for (df_session *s = srv->sessions; s; s = s->next)
+            if (!s->running && df_history_can_undo(&s->hist) > 0 &&
+                (!best || df_history_bytes(&s->hist) > df_history_bytes(&best->hist)))
+                best = s;
+        if (!best) break;
+        uint64_t before = best->hist_charged, d0 = best->hist.dropped;
+        df_history_set_max_bytes(&best->hist, df_history_bytes(&best->hist) - 1); /* one step */
+        srv->history_dropped += best->hist.dropped - d0;
+        history_recharge(best);
+        freed += before - best->hist_charged;
+    }
+    if (freed)
+        df_log(DF_LOG_INFO, "memory budget: dropped %llu bytes of old undo steps",
+               (unsigned long long)freed);
+    return freed;
+}
+
+int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
+                          df_error *err)
+{
+    df_membudget *mb = df_server_mem(srv);
+    if ((unsigned)kind < DF_MEM_KINDS && mb->used[kind] <= mb->kind_max[kind] &&
+        bytes <= mb->kind_max[kind] - mb->used[kind]) {
+        uint64_t used = df_mem_used(mb), room = used < mb->max ? mb->max - used : 0;
+        if (bytes > room) reclaim_history(srv, bytes - room);
+    }
+    return df_mem_charge(mb, kind, bytes, what, err);
+}
+
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err)
 {
@@ -52,16 +88,14 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     uint64_t est = df_session_estimate_bytes(mesh);
     char what[64];
     snprintf(what, sizeof what, "session of %d vertices", mesh->nv);
+    uint64_t state = n * sizeof(double); /* the history's first state */
+    if (df_session_mem_charge(srv, DF_MEM_SESSIONS, est + state, what, err) != DF_OK) {
+        df_meshload_free(mesh);
+        return err ? err->code : DF_ELIMIT;
+    }
     df_membudget *mb = df_server_mem(srv);
-    if (df_mem_charge(mb, DF_MEM_SESSIONS, est, what, err) != DF_OK) {
-        df_meshload_free(mesh);
-        return err ? err->code : DF_ELIMIT;
-    }
-    if (df_mem_charge(mb, DF_MEM_HISTORY, n * sizeof(double), what, err) != DF_OK) {
-        df_mem_release(mb, DF_MEM_SESSIONS, est);
-        df_meshload_free(mesh);
-        return err ? err->code : DF_ELIMIT;
-    }
+    df_mem_release(mb, DF_MEM_SESSIONS, state); /* charged as history: same total */
+    df_mem_adjust(mb, DF_MEM_HISTORY, 0, state);
     df_session *s = calloc(1, sizeof *s);
     if (s) {
         s->rest = malloc(n * sizeof *s->rest);
@@ -79,14 +113,14 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
             free(s);
         }
         df_mem_release(mb, DF_MEM_SESSIONS, est);
-        df_mem_release(mb, DF_MEM_HISTORY, n * sizeof(double));
+        df_mem_release(mb, DF_MEM_HISTORY, state);
         df_meshload_free(mesh);
         return df_error_set(err, DF_ENOMEM, "out of memory creating a session (%d vertices)",
                             mesh->nv);
     }
     s->srv = srv;
     s->mem_bytes = est;
-    s->hist_charged = n * sizeof(double);
+    s->hist_charged = state;
     history_recharge(s);
     s->mesh = *mesh;
     memset(mesh, 0, sizeof *mesh);
@@ -240,7 +274,7 @@ int df_session_attach_shm(df_session *s, df_conn *c, df_error *err)
     if (!s->shm) {
         uint64_t cap = df_shm_ring_size(s->nv, s->srv->cfg.shm_ring_bytes);
         uint64_t bytes = cap + DF_SHM_HEADER_BYTES;
-        int rc = df_mem_charge(df_server_mem(s->srv), DF_MEM_SHM, bytes, "stream_shm", err);
+        int rc = df_session_mem_charge(s->srv, DF_MEM_SHM, bytes, "stream_shm", err);
         if (rc) return rc;
         rc = df_shm_create(s->id, cap, &s->shm, err);
         if (rc) {

@@ -148,6 +148,13 @@ void df_session_drop_stroke(df_session *s, uint64_t conn_id);
  * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
 int df_session_history_commit(df_session *s, df_error *err);
 
+/* Charges `bytes` of `kind` to the memory budget (df_mem_charge). When only the total
+ * (memory_max_mb) is short, the undo history of idle sessions (no running job) gives way first:
+ * their oldest undo steps are dropped, largest history first, until the charge fits or no such
+ * step is left. Errors: df_mem_charge's DF_ELIMIT (nothing charged). Loop thread. */
+int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
+                          df_error *err);
+
 /* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
  * Errors: DF_ENOMEM (history unchanged). */
 int df_session_history_reset(df_session *s, df_error *err);

@@ -223,3 +223,38 @@ def test_history_budget_drops_the_oldest_steps_and_undo_stays_exact(make_daemon)
             c.redo(sid)
             assert c.get_mesh(sid).positions.tobytes() == shots[k]
         assert c.stats(sid)["redo_depth"] == 0
+
+
+def test_history_shrinks_to_the_memory_budget_and_gives_way_to_sessions(make_daemon):
+    """Items 12-13: when memory_max_mb (16) is tighter than history_max_mb, strokes still
+    commit: the history drops its oldest steps to stay within what the budget has left, the
+    total stays within memory_max_bytes, and undo/redo stay exact. A new session that only fits
+    without that history gets the room (old undo steps of idle sessions give way first); one that
+    does not fit even then is refused and nothing changes."""
+    d = make_daemon("memory_max_mb = 16\nhistory_max_mb = 1024\n")
+    strokes = 12
+    with d.unix_client() as c:
+        sid = c.load_mesh(grid_obj(200, 200), fmt=".obj", name="tight").session_id
+        shots = [c.get_mesh(sid).positions.tobytes()]
+        for k in range(1, strokes + 1):
+            c.stroke(sid, Brush(center=(0.5, 0.5, 0.0), move=(0.001 * k, 0.002, -0.001 * k),
+                                radius=5.0, nu=0.4))
+            shots.append(c.get_mesh(sid).positions.tobytes())
+        s, g = c.stats(sid), c.stats()
+        assert g["memory_used_bytes"] <= g["memory_max_bytes"] == 16 * MiB
+        assert s["history_steps_dropped"] >= 1 and s["undo_depth"] >= 1, s
+        assert s["undo_depth"] + s["history_steps_dropped"] == strokes
+        assert g["memory_refused"] == 0          # history never refuses: it drops
+        c.undo(sid)
+        assert c.get_mesh(sid).positions.tobytes() == shots[strokes - 1]
+        c.redo(sid)
+        assert c.get_mesh(sid).positions.tobytes() == shots[strokes]
+        # a second session of the same size fits only without the first one's undo steps
+        sid2 = c.load_mesh(grid_obj(200, 200), fmt=".obj", name="second").session_id
+        s, g = c.stats(sid), c.stats()
+        assert s["undo_depth"] == 0 and s["history_steps_dropped"] == strokes
+        assert g["memory_used_bytes"] <= g["memory_max_bytes"]
+        assert c.get_mesh(sid).positions.tobytes() == shots[strokes]      # positions kept
+        msg = elimit(lambda: c.load_mesh(grid_obj(200, 200), fmt=".obj", name="third"))
+        assert "memory_max_mb" in msg, msg
+        assert sorted(i.session_id for i in c.list_sessions()) == [sid, sid2]
