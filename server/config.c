@@ -11,6 +11,7 @@
 
 #include "proto/shm_ring.h"
 #include "server/log.h"
+#include "server/membudget.h"
 
 void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
 {
@@ -30,6 +31,18 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->threads = DF_CONFIG_DEFAULT_THREADS;
     cfg->spin_us = DF_CONFIG_DEFAULT_SPIN_US;
     cfg->inline_us = DF_CONFIG_DEFAULT_INLINE_US;
+    cfg->shm_total_bytes = DF_CONFIG_DEFAULT_SHM_TOTAL;
+    cfg->max_upload_mb = DF_CONFIG_DEFAULT_MAX_UPLOAD_MB;
+    cfg->uploads_max_mb = DF_CONFIG_DEFAULT_UPLOADS_MB;
+    uint64_t ram_mb = df_mem_physical_bytes() >> 20;
+    uint64_t hist = ram_mb / DF_CONFIG_HISTORY_RAM_DIVISOR;
+    if (hist < DF_CONFIG_HISTORY_MIN_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MIN_DEFAULT_MB;
+    if (hist > DF_CONFIG_HISTORY_MAX_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MAX_DEFAULT_MB;
+    cfg->history_max_mb = (int)hist;
+    uint64_t mem = ram_mb ? ram_mb / DF_CONFIG_MEMORY_RAM_DIVISOR : DF_CONFIG_MEMORY_UNKNOWN_RAM_MB;
+    if (mem < DF_CONFIG_MEMORY_MIN_DEFAULT_MB) mem = DF_CONFIG_MEMORY_MIN_DEFAULT_MB;
+    if (mem > DF_CONFIG_MAX_MEMORY_MB) mem = DF_CONFIG_MAX_MEMORY_MB;
+    cfg->memory_max_mb = (int)mem;
 }
 
 /* Parses a non-negative integer with an optional k/m/g (binary) suffix, <= max. */
@@ -129,6 +142,12 @@ static const int_key k_int_keys[] = {
     {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
     {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
     {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
+    {"max_upload_mb", offsetof(df_server_config, max_upload_mb), 1,
+     DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},
+    {"uploads_max_mb", offsetof(df_server_config, uploads_max_mb), 1, DF_CONFIG_MAX_UPLOADS_MB},
+    {"history_max_mb", offsetof(df_server_config, history_max_mb), 0, DF_CONFIG_MAX_HISTORY_MB},
+    {"memory_max_mb", offsetof(df_server_config, memory_max_mb), DF_CONFIG_MIN_MEMORY_MB,
+     DF_CONFIG_MAX_MEMORY_MB},
 };
 
 int df_config_set(df_server_config *cfg, const char *key, const char *value, df_error *err)
@@ -177,6 +196,12 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
             return df_error_set(err, DF_EINVAL, "shm_ring_bytes: '%s' is not 0 or 64k..4g",
                                 value);
         cfg->shm_ring_bytes = v;
+        return DF_OK;
+    }
+    if (strcmp(key, "shm_total_bytes") == 0) {
+        if (parse_size(value, DF_CONFIG_MAX_SHM_TOTAL, &v) || v < DF_CONFIG_MIN_SHM_RING)
+            return df_error_set(err, DF_EINVAL, "shm_total_bytes: '%s' is not in 64k..1t", value);
+        cfg->shm_total_bytes = v;
         return DF_OK;
     }
     if (strcmp(key, "cache_memory_mb") == 0) {
@@ -304,7 +329,9 @@ static const char k_usage[] =
     "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port)\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes);\n"
+    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes,\n"
+    "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
+    "                      memory_max_mb);\n"
     "                      command-line options override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"

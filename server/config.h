@@ -24,7 +24,16 @@
  *                      never; see job.h)
  *   shm_ring_bytes     data bytes of a session's shared-memory stream ring (PROTOCOL.md 6.1;
  *                      allocated in /dev/shm when its first subscriber attaches; suffix k/m/g
- *                      ok; 0 disables STREAM_SHM, else 64k .. 4g; default 64m)
+ *                      ok; 0 disables STREAM_SHM, else 64k .. 4g; default 64m). This is the
+ *                      cap: a ring is sized to its session's frames (shm.h, df_shm_ring_size)
+ *   shm_total_bytes    all rings together (64k .. 1t, default DF_CONFIG_DEFAULT_SHM_TOTAL)
+ *   max_upload_mb      largest inline upload (LOAD_MESH total_size), MiB (1 .. 1024, default 1024)
+ *   uploads_max_mb     buffers of all uploads in flight together, MiB (default 1024)
+ *   history_max_mb     undo history of one session, MiB; the oldest steps are dropped beyond it
+ *                      (0 .. 1048576; default physical RAM / 32, clamped to 64 .. 1024)
+ *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
+ *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
+ *                      membudget.h)
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
  * --log-level LEVEL, --spin-us N, --inline-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
@@ -54,6 +63,20 @@
 #define DF_CONFIG_DEFAULT_INLINE_US 50 /* ~ two thread hand-offs on the 2-core test machine */
 #define DF_CONFIG_DEFAULT_SHM_RING ((uint64_t)64 << 20) /* 64 MiB: ~5k 1k-vertex versions */
 #define DF_CONFIG_MIN_SHM_RING ((uint64_t)64 << 10)
+#define DF_CONFIG_DEFAULT_SHM_TOTAL ((uint64_t)256 << 20) /* all rings: 256 MiB */
+#define DF_CONFIG_MAX_SHM_TOTAL ((uint64_t)1 << 40)
+#define DF_CONFIG_DEFAULT_MAX_UPLOAD_MB 1024  /* = DF_MAX_MESH_BYTES, the protocol's limit */
+#define DF_CONFIG_DEFAULT_UPLOADS_MB 1024
+#define DF_CONFIG_MAX_UPLOADS_MB (1 << 20)
+#define DF_CONFIG_HISTORY_RAM_DIVISOR 32      /* default history_max_mb = RAM / 32 ... */
+#define DF_CONFIG_HISTORY_MIN_DEFAULT_MB 64   /* ... at least this ... */
+#define DF_CONFIG_HISTORY_MAX_DEFAULT_MB 1024 /* ... at most this */
+#define DF_CONFIG_MAX_HISTORY_MB (1 << 20)
+#define DF_CONFIG_MEMORY_RAM_DIVISOR 2        /* default memory_max_mb = RAM / 2 ... */
+#define DF_CONFIG_MEMORY_MIN_DEFAULT_MB 256   /* ... at least this */
+#define DF_CONFIG_MEMORY_UNKNOWN_RAM_MB 4096  /* when the RAM size is unknown */
+#define DF_CONFIG_MIN_MEMORY_MB 16
+#define DF_CONFIG_MAX_MEMORY_MB (1 << 30)
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -71,6 +94,11 @@ typedef struct df_server_config {
     int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
     int inline_us;               /* loop-thread budget of a cheap brush update, us (0 = off) */
     uint64_t shm_ring_bytes;     /* shared-memory stream ring per session, bytes (0 = off) */
+    uint64_t shm_total_bytes;    /* all rings together, bytes */
+    int max_upload_mb;           /* largest inline upload, MiB */
+    int uploads_max_mb;          /* all in-flight upload buffers together, MiB */
+    int history_max_mb;          /* undo history per session, MiB */
+    int memory_max_mb;           /* memory budget (membudget.h), MiB */
     int foreground;              /* 1: do not daemonize */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;

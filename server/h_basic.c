@@ -84,7 +84,9 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
     r.max_pending_requests = DF_MAX_PENDING_REQUESTS;
     r.max_sessions = (uint32_t)cfg->max_sessions < DF_MAX_SESSIONS ? (uint32_t)cfg->max_sessions
                                                                    : DF_MAX_SESSIONS;
-    r.max_mesh_bytes = DF_MAX_MESH_BYTES;
+    r.max_mesh_bytes = (uint64_t)cfg->max_upload_mb << 20 < DF_MAX_MESH_BYTES
+                           ? (uint64_t)cfg->max_upload_mb << 20
+                           : DF_MAX_MESH_BYTES;
     r.max_client_queue_bytes = cfg->output_queue_limit;
     r.auth_required = 0;
     snprintf(r.server_name, sizeof r.server_name, "%s", DF_SERVER_NAME);

@@ -326,7 +326,7 @@ static void move_done(df_job *j)
         if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
         return;
     }
-    if (r->frames.n && df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
+    if (r->frames.n && df_session_history_commit(s, NULL) != DF_OK)
         df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
                (unsigned long long)s->id);
     if (df_job_failed(j)) return;
@@ -387,11 +387,7 @@ static void reset_done(df_job *j)
     if (df_job_failed(j)) return;
     df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
     if (s->hs) df_cache_drop_solver(j->srv, s->hs); /* rebuilt against the new rest */
-    df_history h;
-    if (df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, NULL) == DF_OK) {
-        df_history_free(&s->hist); /* reset-rest clears undo/redo */
-        s->hist = h;
-    }
+    df_session_history_reset(s, NULL); /* reset-rest clears undo/redo */
     df_job_ack(j);
 }
 

@@ -2,7 +2,14 @@
  *
  * Inline uploads arrive as LOAD_MESH frames with the same request id, DF_FLAG_MORE on all but the
  * last; chunk offsets must be consecutive. Only the last chunk is answered (session_info); an
- * error in any chunk answers the request and drops the upload. Parsing runs on a worker. */
+ * error in any chunk answers the request and drops the upload. Parsing runs on a worker.
+ *
+ * Memory: total_size is checked against max_upload_mb (and uploads_max_mb, which it could never
+ * fit) at the first chunk, but the buffer is not allocated up front: it grows as chunks arrive
+ * (doubling, never beyond the bytes received so far times two nor total_size), and every growth
+ * is charged to the memory budget (DF_MEM_UPLOADS: uploads_max_mb, memory_max_mb) first. A
+ * refused growth fails the upload with DF_ELIMIT naming the limit; the charge is returned when
+ * the upload is freed. */
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -16,12 +23,17 @@
 #include "server/meshload.h"
 #include "server/reply.h"
 
+/* First buffer of an inline upload (smaller when total_size is). */
+#define DF_UPLOAD_MIN_BUFFER ((uint64_t)64 << 10)
+
 typedef struct df_upload {
+    df_server *srv;
     uint64_t req_id;
     uint8_t format;
     char name[DF_MAX_NAME_LEN + 1];
     uint64_t total, part2, received;
     uint8_t *data;
+    uint64_t cap;           /* bytes allocated for data (charged to srv->mem until freed) */
     char *path;             /* path loads: resolved absolute path */
     df_mesh mesh;           /* parsed by the worker */
 } df_upload;
@@ -29,6 +41,7 @@ typedef struct df_upload {
 void df_upload_free(struct df_upload *u)
 {
     if (!u) return;
+    if (u->srv) df_mem_release(df_server_mem(u->srv), DF_MEM_UPLOADS, u->cap);
     free(u->data);
     free(u->path);
     df_meshload_free(&u->mesh);
@@ -50,13 +63,17 @@ static void load_work(df_job *j)
                              DF_MAX_MESH_ELEMENTS);
     if (j->rc == DF_OK && u->mesh.nv < 1)
         j->rc = df_error_set(&j->err, DF_EFORMAT, "mesh has no vertices");
-    free(u->data);
+    free(u->data); /* early: the parsed mesh replaces it (uncharged in load_done) */
     u->data = NULL;
 }
 
 static void load_done(df_job *j)
 {
     df_upload *u = j->body;
+    if (u->srv) { /* the worker freed the buffer: return its charge before the session's */
+        df_mem_release(df_server_mem(u->srv), DF_MEM_UPLOADS, u->cap);
+        u->cap = 0;
+    }
     if (j->rc == DF_OK && j->srv->stopping)
         j->rc = df_error_set(&j->err, DF_ESTATE, "server shutting down");
     if (df_job_failed(j)) return;
@@ -136,6 +153,45 @@ static void load_path(df_conn *c, const df_frame_header *h, const df_msg_load_me
     submit_load(c, u);
 }
 
+/* Checks the announced total_size of a new upload against max_upload_mb and uploads_max_mb. */
+static int upload_size_ok(const df_server_config *cfg, uint64_t total, df_error *err)
+{
+    uint64_t max = (uint64_t)cfg->max_upload_mb << 20, all = (uint64_t)cfg->uploads_max_mb << 20;
+    if (total > max)
+        return df_error_set(err, DF_ELIMIT,
+                            "load_mesh: total_size %llu bytes exceeds max_upload_mb (%d MiB)",
+                            (unsigned long long)total, cfg->max_upload_mb);
+    if (total > all)
+        return df_error_set(err, DF_ELIMIT,
+                            "load_mesh: total_size %llu bytes exceeds uploads_max_mb (%d MiB, all "
+                            "uploads in flight together)",
+                            (unsigned long long)total, cfg->uploads_max_mb);
+    return DF_OK;
+}
+
+/* Makes room for `need` bytes of data: grows the buffer geometrically (capped by total_size and
+ * by `need` when the budget has no room for more), charging the growth first. */
+static int upload_reserve(df_upload *u, uint64_t need, df_error *err)
+{
+    if (need <= u->cap) return DF_OK;
+    uint64_t ncap = u->cap ? 2 * u->cap : DF_UPLOAD_MIN_BUFFER;
+    if (ncap < need) ncap = need;
+    if (ncap > u->total) ncap = u->total;
+    df_membudget *b = df_server_mem(u->srv);
+    if (ncap > need && df_mem_room(b, DF_MEM_UPLOADS) < ncap - u->cap) ncap = need;
+    int rc = df_session_mem_charge(u->srv, DF_MEM_UPLOADS, ncap - u->cap, "load_mesh", err);
+    if (rc != DF_OK) return rc;
+    uint8_t *d = realloc(u->data, (size_t)ncap);
+    if (!d) {
+        df_mem_release(b, DF_MEM_UPLOADS, ncap - u->cap);
+        return df_error_set(err, DF_ENOMEM, "load_mesh: cannot buffer %llu bytes",
+                            (unsigned long long)ncap);
+    }
+    u->data = d;
+    u->cap = ncap;
+    return DF_OK;
+}
+
 void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_msg_load_mesh m;
@@ -157,16 +213,19 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
     }
     df_upload *u = c->upload;
     if (m.offset == 0 && !u) {
-        u = calloc(1, sizeof *u);
-        if (u) u->data = malloc((size_t)m.total_size);
-        if (!u || !u->data) {
-            free(u);
+        if (upload_size_ok(&c->srv->cfg, m.total_size, &err) != DF_OK) {
             df_msg_load_mesh_free(&m);
-            df_error_set(&err, DF_ENOMEM, "load_mesh: cannot buffer %llu bytes",
-                         (unsigned long long)m.total_size);
             fail(c, h, &err);
             return;
         }
+        u = calloc(1, sizeof *u);
+        if (!u) {
+            df_msg_load_mesh_free(&m);
+            df_error_set(&err, DF_ENOMEM, "load_mesh: out of memory");
+            fail(c, h, &err);
+            return;
+        }
+        u->srv = c->srv;
         u->req_id = h->request_id;
         u->format = m.format;
         u->total = m.total_size;
@@ -181,6 +240,11 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
                      "offset %llu of request %llu)",
                      (unsigned long long)m.offset, (unsigned long long)(u ? u->received : 0),
                      (unsigned long long)(u ? u->req_id : h->request_id));
+        df_msg_load_mesh_free(&m);
+        fail(c, h, &err);
+        return;
+    }
+    if (upload_reserve(u, u->received + m.data_len, &err) != DF_OK) {
         df_msg_load_mesh_free(&m);
         fail(c, h, &err);
         return;

@@ -60,10 +60,17 @@ static void history_work(df_job *j)
                              (unsigned long long)s->id);
         return;
     }
-    const double *state = s->hist.states[s->hist.cur + (undo ? -1 : 1)];
+    /* The target state is rebuilt from the history's steps into the scratch positions, which
+     * then become s->cur (the history itself moves in history_done, on the loop thread). */
+    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
+    double *state = s->scratch_pos;
+    if ((j->rc = df_history_peek(&s->hist, undo ? -1 : 1, state, &j->err)) != DF_OK) return;
     j->rc = df_stream_publish(s, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL, 0,
                               &r->frames, NULL, &j->err);
-    if (j->rc == DF_OK) memcpy(s->cur, state, 3 * (size_t)s->nv * sizeof(double));
+    if (j->rc == DF_OK) {
+        s->scratch_pos = s->cur;
+        s->cur = state;
+    }
 }
 
 static void history_done(df_job *j)

@@ -139,6 +139,20 @@ static int run_close(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 }
 
 /* ---- stats --------------------------------------------------------------------------- */
+/* One closing line "memory: USED of MAX MiB (P%)" when the daemon reports its memory budget. */
+static void print_memory_summary(const df_msg_stats *st)
+{
+    double used = -1, max = -1;
+    for (uint32_t i = 0; i < st->count; i++) {
+        if (strcmp(st->items[i].key, "memory_used_bytes") == 0) used = st->items[i].value;
+        if (strcmp(st->items[i].key, "memory_max_bytes") == 0) max = st->items[i].value;
+    }
+    if (used < 0 || max <= 0)
+        return;
+    printf("memory: %.1f of %.1f MiB (%.1f%% of memory_max_mb)\n", used / 1048576.0,
+           max / 1048576.0, 100.0 * used / max);
+}
+
 static int run_stats(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
     df_client *c = ctl_connect(ctx, cmd);
@@ -170,6 +184,8 @@ static int run_stats(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     if (ctx->json)
         printf("}\n");
+    else
+        print_memory_summary(&st);
     df_msg_stats_free(&st);
     df_client_close(c);
     return CTL_EXIT_OK;
