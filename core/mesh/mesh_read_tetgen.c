@@ -126,12 +126,14 @@ int df_mesh_read_tetgen_memory(const void *node, size_t node_len, const void *el
     stem_names(name_for_errors, nn, en, sizeof nn);
     df_scan s;
     df_scan_init(&s, node, node_len, nn);
+    s.redact = o && o->redact_content;
     df_mesh_build b;
     df_mesh_build_init(&b, nn, 0, o);
     int base = 0;
     int rc = parse_nodes(&s, &b, &base, err);
     if (!rc) {
         df_scan_init(&s, ele, ele_len, en);
+        s.redact = o && o->redact_content;
         b.name = en;
         rc = parse_elements(&s, &b, base, err);
     }
