@@ -58,6 +58,8 @@ static void test_truncation_at_every_offset(void **state)
         if (s[i].type == DF_MSG_PING)
             continue; /* any byte string is a valid ping */
         for (size_t n = 0; n < s[i].payload.len; n++) {
+            if (!strcmp(s[i].name, "load_reply") && n == s[i].payload.len - 48)
+                continue; /* the 48-byte report is optional: a bare session_info is valid */
             df_msg_any m;
             df_error e = {0, ""};
             int rc = decode_copy(&s[i], n, &m, &e);
