@@ -117,7 +117,8 @@ int df_mesh_read_memory(const void *buf, size_t len, df_mesh_format fmt, const c
 
 /* Reads a TetGen pair from memory: `node` (node_len bytes) and `ele` (ele_len bytes). Element
  * indices use the base of the first node id. `name_for_errors` is the common stem ("pig" gives
- * messages about "pig.node" / "pig.ele"; NULL -> "<memory>"). Errors as df_mesh_read_file. */
+ * messages about "pig.node" / "pig.ele"; NULL -> "<memory>") or the name of either half, whose
+ * case is kept ("T1.NODE" gives "T1.NODE" / "T1.ELE"). Errors as df_mesh_read_file. */
 int df_mesh_read_tetgen_memory(const void *node, size_t node_len, const void *ele, size_t ele_len,
                                const char *name_for_errors, const df_mesh_read_opts *o,
                                df_mesh *out, df_mesh_report *rep, df_error *err);

@@ -130,7 +130,7 @@ int df_scan_parse_double(const char *t, size_t n, double *v)
 const char *df_scan_quote(const df_scan *s, const char *t, size_t n, char *buf, size_t bn)
 {
     if (s->redact)
-        snprintf(buf, bn, "a value");
+        snprintf(buf, bn, "(value not shown)");
     else
         snprintf(buf, bn, "'%.*s'", (int)(n > 32 ? 32 : n), t);
     return buf;
