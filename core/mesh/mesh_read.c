@@ -154,7 +154,8 @@ static int read_tetgen_file(const char *path, const df_mesh_read_opts *o, df_mes
         return df_error_set(err, DF_EINVAL, "%s: path too long", path);
     int is_node = !strcasecmp(strrchr(path, '.'), ".node");
     const char *np = is_node ? path : other, *ep = is_node ? other : path;
-    snprintf(stem, sizeof stem, "%.*s", (int)(strrchr(path, '.') - path), path);
+    const char *base = strrchr(path, '/');
+    snprintf(stem, sizeof stem, "%s", base ? base + 1 : path); /* keeps the extension's case */
     char *nb = NULL, *eb = NULL;
     size_t nl = 0, el = 0;
     int rc = load(np, &nb, &nl, err);
