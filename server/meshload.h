@@ -1,5 +1,5 @@
-/* meshload.h — the server's use of core/mesh I/O for load requests, behind an interface that
- * needs only mesh.h. Wire format numbers equal core/mesh/mesh_io.h's df_mesh_format values
+/* meshload.h — the server's parsing of inline uploads (server-side paths: pathload.h). Wire
+ * format numbers equal core/mesh/mesh_io.h's df_mesh_format values
  * (0 auto, 1 obj, 2 off, 3 ply, 4 medit, 5 tetgen; see proto/messages.h). Pure functions, safe on
  * worker threads. */
 #ifndef DF_SERVER_MESHLOAD_H
