@@ -312,6 +312,9 @@ static void test_body_kind_table(void **state)
     assert_int_equal(df_msg_body_kind(DF_MSG_SHM_REF, 0, &k, &e), DF_EPROTO_BADTYPE);
     assert_int_equal(DF_MSG_STREAM_SHM, 0x0016);
     assert_int_equal(DF_MSG_SHM_REF, 0x0083);
+    /* a LOAD_MESH reply is a load_reply: session_info, plus the report with options EXT */
+    assert_int_equal(df_msg_body_kind(DF_MSG_LOAD_MESH, DF_FLAG_REPLY, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_LOAD_REPLY);
 }
 
 static void test_defaults_are_valid(void **state)
