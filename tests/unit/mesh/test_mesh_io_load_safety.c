@@ -55,6 +55,25 @@ static void test_float32_overflow_is_refused_in_every_format(void **state)
     assert_int_equal(read_str("v 0 0 0\nv 3.4028234e38 0 0\nv 0 1 0\nf 1 2 3\n", DF_FMT_OBJ,
                               "ok.obj", NULL, &m, NULL, &e), DF_OK);
     df_mesh_free(&m);
+    /* binary little-endian PLY with double coordinates */
+    const char *hdr = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\n"
+                      "property double y\nproperty double z\nelement face 1\n"
+                      "property list uchar int vertex_indices\nend_header\n";
+    unsigned char bin[512];
+    size_t hl = strlen(hdr), n = hl;
+    memcpy(bin, hdr, hl);
+    const double xyz[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1e300};
+    memcpy(bin + n, xyz, sizeof xyz);
+    n += sizeof xyz;
+    bin[n++] = 3;
+    const int32_t tri[3] = {0, 1, 2};
+    memcpy(bin + n, tri, sizeof tri);
+    n += sizeof tri;
+    df_mesh_init(&m);
+    assert_int_equal(df_mesh_read_memory(bin, n, DF_FMT_PLY, "bin.ply", NULL, &m, NULL, &e),
+                     DF_EFORMAT);
+    assert_non_null(strstr(e.msg, "bin.ply: byte offset"));
+    assert_non_null(strstr(e.msg, "vertex 2 coordinate z is outside the float32 range"));
     /* TetGen .node */
     const char *node = "3 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1e39 0\n", *ele = "1 3 0\n1 1 2 3\n";
     df_mesh_init(&m);
