@@ -83,7 +83,8 @@ static void default_name(df_server *srv, const char *file, char *out, size_t n)
         unsigned char c = (unsigned char)b[i];
         size_t len = c < 0x80 ? 1 : (c & 0xE0) == 0xC0 ? 2 : (c & 0xF0) == 0xE0 ? 3
                    : (c & 0xF8) == 0xF0 ? 4 : 0;
-        int ok = len > 0 && i + len <= l && k + len <= DF_MAX_NAME_LEN - 8 && !(len == 2 && c < 0xC2);
+        int ok = len > 0 && i + len <= l && k + len <= DF_MAX_NAME_LEN - 8 &&
+                 !(len == 2 && c < 0xC2); /* no overlong 2-byte forms */
         for (size_t q = 1; ok && q < len; q++)
             ok = ((unsigned char)b[i + q] & 0xC0) == 0x80;
         if (ok && len == 1 && (c < 0x20 || c == 0x7F))

@@ -316,7 +316,8 @@ static int read_element(ply_ctx *c, const ply_elem *e, df_error *err)
         key[1] = find_prop(e, "vertex2");
         role = key[0] >= 0 && key[1] >= 0 ? 3 : 0;
     }
-    int rc = df_mesh_build_check_count(&c->b, loc(c), c->s.redact ? "element" : e->name, e->count, INT32_MAX, left,
+    const char *what = c->s.redact ? "element" : e->name; /* element names are file content */
+    int rc = df_mesh_build_check_count(&c->b, loc(c), what, e->count, INT32_MAX, left,
                                        min_row, err);
     for (int64_t r = 0; !rc && e->np > 0 && r < e->count; r++)
         rc = read_row(c, e, role, key, err);

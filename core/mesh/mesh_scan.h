@@ -26,8 +26,8 @@ typedef struct df_scan {
 void df_scan_init(df_scan *s, const void *buf, size_t len, const char *name);
 
 /* Formats the n-byte token t for an error message into buf (size bn >= 20): "'tok'" (cut at 32
- * bytes), or "(value not shown)" when s->redact is set (files a server reads for a client must never have
- * their content echoed). Returns buf. */
+ * bytes), or "(value not shown)" when s->redact is set (files a server reads for a client must
+ * never have their content echoed). Returns buf. */
 const char *df_scan_quote(const df_scan *s, const char *t, size_t n, char *buf, size_t bn);
 
 /* Skips spaces, tabs, CR, VT, FF on the current line (not newlines, not comments). */

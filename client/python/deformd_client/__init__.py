@@ -20,7 +20,8 @@ from .wire import ProtocolError
 __all__ = [
     "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "error_name",
     "Frame", "FrameDecoder", "FrameError", "encode_frame", "encode_header", "MeshState",
-    "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "LoadReport", "MoveResult",
+    "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "LoadReport",
+    "MoveResult",
     "Progress", "ProtocolError", "SessionInfo", "ShmInfo", "ShmLost", "ShmRing",
 ]
 __version__ = "0.1.0"
