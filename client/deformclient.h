@@ -122,8 +122,11 @@ int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, co
                               uint64_t len, uint64_t part2_offset, df_msg_session_info *info,
                               df_error *err);
 
-/* Reads the local file `path` (.obj .off .ply .mesh; X.node or X.ele: the X.node + X.ele pair)
- * and uploads it inline (see df_client_load_mesh_bytes). DF_EIO when a file cannot be read. */
+/* Reads the local file `path` (.obj .off .ply .mesh, any case; X.node or X.ele: the pair, the
+ * other half with the same case of extension, e.g. T1.NODE + T1.ELE) and uploads it inline with
+ * its base name as file_name (see df_client_load_mesh_bytes_ex). DF_EIO when a file cannot be
+ * read; DF_EINVAL for another extension (DF_CLIENT_FORMATS_MSG; use df_client_load_mesh_bytes
+ * with DF_FMT_AUTO to sniff the content). */
 int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
                              df_msg_session_info *info, df_error *err);
 
@@ -131,6 +134,25 @@ int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
  * config). */
 int df_client_load_mesh_path(df_client *c, const char *path, const char *name, uint8_t format,
                              df_msg_session_info *info, df_error *err);
+
+/* Message for a file name whose extension names no mesh format. */
+#define DF_CLIENT_FORMATS_MSG                                                                    \
+    "mesh format not recognised from the file name; formats: .obj, .off, .ply, .mesh (MEDIT), "  \
+    ".node + .ele (TetGen)"
+
+/* The same three loads with the LOAD_MESH EXT option (PROTOCOL.md 4.5): the server names errors
+ * after `file_name` (uploads; may be NULL/"": "upload"), names the session after the file when
+ * `name` is empty ("spot", "spot-2", ...), and *reply (may be NULL) receives the session and the
+ * reader's report (reply->has_report = 1): dropped lower-dimensional elements, duplicate,
+ * degenerate and inverted elements, non-manifold edges/faces, boundary, unused vertices. A server
+ * older than the option answers DF_EPROTO_RESERVED. Other arguments and errors as above. */
+int df_client_load_mesh_bytes_ex(df_client *c, const char *name, const char *file_name,
+                                 uint8_t format, const void *bytes, uint64_t len,
+                                 uint64_t part2_offset, df_msg_load_reply *reply, df_error *err);
+int df_client_load_mesh_file_ex(df_client *c, const char *path, const char *name,
+                                df_msg_load_reply *reply, df_error *err);
+int df_client_load_mesh_path_ex(df_client *c, const char *path, const char *name,
+                                uint8_t format, df_msg_load_reply *reply, df_error *err);
 
 /* Lists the sessions; free *out with df_msg_session_list_free. */
 int df_client_list_sessions(df_client *c, df_msg_session_list *out, df_error *err);

@@ -119,6 +119,12 @@ typedef enum df_feature {            /* hello reply `features` bits */
  * then the ele bytes). DF_FMT_PLY_BINARY (write-only) is not valid on the wire. */
 #define DF_FMT_MAX 5
 
+/* load_mesh `options` (the u16 at offset 2, reserved = 0 before this option existed; servers
+ * without it answer EPROTO_RESERVED). */
+#define DF_LOAD_OPT_EXT 0x0001u  /* a str file_name follows the data, and the reply is a
+                                  * load_reply: session_info + load_report */
+#define DF_LOAD_OPTS_ALL DF_LOAD_OPT_EXT
+
 typedef enum df_load_source {
     DF_LOAD_INLINE = 0,        /* file bytes are in the message(s) */
     DF_LOAD_PATH = 1           /* server reads `path` (only with DF_FEAT_PATH_LOAD) */
@@ -241,6 +247,9 @@ typedef struct df_msg_load_mesh {      /* one chunk of a mesh upload (or a path 
     uint64_t offset;                   /* byte offset of this chunk in the upload; PATH: 0 */
     uint32_t data_len;                 /* bytes in this chunk; offset + data_len <= total_size */
     const uint8_t *data;               /* points into the payload (decode) */
+    uint16_t options;                  /* DF_LOAD_OPT_* bits (0: the original layout and reply) */
+    char file_name[DF_MAX_NAME_LEN + 1]; /* DF_LOAD_OPT_EXT: the user's file name (base name, may be
+                                        * "") for messages and the default session name; else "" */
 } df_msg_load_mesh;
 
 typedef struct df_msg_session_ref {    /* any request/event that names just a session */
@@ -269,6 +278,29 @@ typedef struct df_msg_session_info {
     uint32_t redo_depth;               /* changes that redo can re-apply */
     char name[DF_MAX_NAME_LEN + 1];
 } df_msg_session_info;
+
+typedef struct df_msg_load_report {   /* what the reader found (core df_mesh_report) */
+    uint8_t format;                    /* 1..5: the format parsed */
+    uint8_t index_base;                /* 0 or 1 */
+    uint32_t input_polygons;           /* faces as written (before fan triangulation) */
+    uint32_t polygons_triangulated;    /* of those, quads and n-gons */
+    uint32_t dropped_elements;         /* lower-dimensional elements not kept (OBJ `l` lines beside
+                                        * faces, MEDIT Edges in a tet mesh, skipped sections) */
+    uint32_t duplicate_elements;       /* elements repeating an earlier element's vertex set */
+    uint32_t degenerate_elements;
+    uint32_t inverted_elements;
+    uint32_t nonmanifold_edges;
+    uint32_t nonmanifold_faces;
+    uint32_t boundary_edges;
+    uint32_t boundary_faces;
+    uint32_t unused_vertices;          /* vertices no element uses */
+} df_msg_load_report;
+
+typedef struct df_msg_load_reply {     /* LOAD_MESH reply */
+    df_msg_session_info info;
+    uint8_t has_report;                /* 1 iff the request set DF_LOAD_OPT_EXT (report follows) */
+    df_msg_load_report report;
+} df_msg_load_reply;
 
 typedef struct df_msg_shm_info {       /* STREAM_SHM reply: where this session's ring is */
     uint64_t session_id;               /* != 0 */
@@ -464,6 +496,7 @@ DF_MSG_CODEC(session_ref)
 DF_MSG_CODEC(open_session)
 DF_MSG_CODEC(subscribe)
 DF_MSG_CODEC(session_info)
+DF_MSG_CODEC(load_reply)
 DF_MSG_CODEC(session_list)
 DF_MSG_CODEC(ack)
 DF_MSG_CODEC(brush)
@@ -538,7 +571,7 @@ typedef enum df_body_kind {
     DF_BODY_BRUSH_UPDATE, DF_BODY_BRUSH_PARAM, DF_BODY_HANDLES, DF_BODY_HANDLE_MOVE,
     DF_BODY_MOVE_RESULT, DF_BODY_GET_MESH, DF_BODY_MESH_CHUNK, DF_BODY_SNAPSHOT_REQ,
     DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS, DF_BODY_SHM_INFO,
-    DF_BODY_SHM_REF
+    DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -571,6 +604,7 @@ typedef struct df_msg_any {
         df_msg_stats stats;
         df_msg_shm_info shm_info;
         df_msg_shm_ref shm_ref;
+        df_msg_load_reply load_reply;
     } u;
 } df_msg_any;
 

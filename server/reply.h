@@ -27,6 +27,7 @@ df_sbuf *df_sbuf_from_buf(df_buf *b);
 DF_OUT_DECL(hello_reply)
 DF_OUT_DECL(ping)
 DF_OUT_DECL(session_info)
+DF_OUT_DECL(load_reply)
 DF_OUT_DECL(session_list)
 DF_OUT_DECL(session_ref)
 DF_OUT_DECL(ack)

@@ -42,7 +42,8 @@ int df_mesh_build_check_count(const df_mesh_build *b, long long loc, const char 
 /* Reserves room for `nv` more vertices (already checked against the limit). */
 int df_mesh_build_reserve_vertices(df_mesh_build *b, int64_t nv, df_error *err);
 
-/* Appends one vertex. DF_ELIMIT past max_v, DF_EFORMAT when a coordinate is not finite. */
+/* Appends one vertex. DF_ELIMIT past max_v, DF_EFORMAT when a coordinate is not finite or is
+ * outside the float32 range (it would become +-inf when stored as float32). */
 int df_mesh_build_vertex(df_mesh_build *b, long long loc, double x, double y, double z,
                          df_error *err);
 

@@ -459,15 +459,19 @@ class Client:
     # ------------------------------------------------------------------ sessions
     def load_mesh(self, data: Optional[bytes] = None, path: Optional[str] = None,
                   fmt: Union[int, str] = m.FMT_AUTO, name: str = "",
-                  ele: Optional[bytes] = None) -> m.SessionInfo:
+                  ele: Optional[bytes] = None, file_name: str = "") -> m.SessionInfo:
         """Creates a session from inline file bytes (`data`; for TetGen pass the .node bytes as
         data and the .ele bytes as ele) or from a server-side `path`. fmt: a FMT_* value or a
-        file extension (".obj")."""
+        file extension (".obj"). file_name (uploads): the user's file name, which the daemon's
+        errors name and, without `name`, the session is named after ("spot", "spot-2", ...).
+        The returned SessionInfo carries the reader's LoadReport in .report (dropped,
+        duplicate, degenerate and inverted elements, non-manifold edges, unused vertices)."""
         if isinstance(fmt, str):
             fmt = m.FORMAT_BY_EXT[fmt.lower()]
+        ext = m.LOAD_OPT_EXT
         if path is not None:
-            return m.decode_session_info(self._one(m.LOAD_MESH, m.encode_load_mesh(
-                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"")))
+            return m.decode_load_reply(self._one(m.LOAD_MESH, m.encode_load_mesh(
+                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"", ext)))
         if data is None:
             raise ValueError("load_mesh needs data or path")
         part2 = 0
@@ -483,23 +487,35 @@ class Client:
             chunk = data[off:off + m.LOAD_CHUNK_BYTES]
             last = off + len(chunk) >= total
             self.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, fmt, name, "", total, part2,
-                                                      off, chunk),
+                                                      off, chunk, ext, file_name),
                       0 if last else fr.FLAG_MORE, rid)
             off += len(chunk)
             if last:
                 break
         parts = self.wait_reply(rid)
-        return m.decode_session_info(b"".join(p.payload for p in parts))
+        return m.decode_load_reply(b"".join(p.payload for p in parts))
 
     def load_file(self, filename: str, name: str = "") -> m.SessionInfo:
-        """Reads a local mesh file and uploads it inline (a .node brings its .ele along)."""
-        ext = os.path.splitext(filename)[1].lower()
+        """Reads a local mesh file and uploads it inline (X.node brings X.ele along, X.NODE
+        brings X.ELE: the case of the extension is kept). The daemon's errors name the file and,
+        without `name`, the session is named after it. Raises ValueError for an extension that
+        names no mesh format."""
+        stem, ext = os.path.splitext(filename)
+        base = os.path.basename(filename)
+        if ext.lower() in (".node", ".ele"):
+            upper = ext[1:].isupper()
+            node = stem + (".NODE" if upper else ".node")
+            other = stem + (".ELE" if upper else ".ele")
+            with open(node, "rb") as f:
+                data = f.read()
+            with open(other, "rb") as f:
+                return self.load_mesh(data, ele=f.read(), name=name, file_name=base)
+        if ext.lower() not in m.FORMAT_BY_EXT:
+            raise ValueError("%s: mesh format not recognised from the file name; formats: .obj, "
+                             ".off, .ply, .mesh (MEDIT), .node + .ele (TetGen)" % filename)
         with open(filename, "rb") as f:
             data = f.read()
-        if ext == ".node":
-            with open(filename[:-5] + ".ele", "rb") as f:
-                return self.load_mesh(data, ele=f.read(), name=name)
-        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT.get(ext, m.FMT_AUTO), name=name)
+        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT[ext.lower()], name=name, file_name=base)
 
     def list_sessions(self) -> List[m.SessionInfo]:
         return m.decode_session_list(self._one(m.LIST_SESSIONS))
