@@ -286,6 +286,9 @@ static void move_work(df_job *j)
     } else {
         r->hit = 1;
     }
+    /* Start from the session's current positions (PROTOCOL.md 6): an undo, a brush or another
+     * client's edit since the solver's last run invalidates its warm start there. */
+    if ((j->rc = df_admm_set_positions(hs->solver, s->cur, NULL, &j->err)) != DF_OK) return;
     if ((j->rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err)) != DF_OK) return;
     r->progress_every = r->mv.progress_every;
     df_admm_budget b = {.max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs->max_iters,
