@@ -143,6 +143,7 @@ void df_h_handles_set(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_msg_handles_free(&m);
         return;
     }
+    j->heavy = 1; /* a factorization */
     ((hs_req *)j->body)->m = m;
     df_job_submit(j);
 }
@@ -364,6 +365,7 @@ void df_h_handles_move(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_msg_handle_move_free(&m);
         return;
     }
+    j->heavy = 1;
     ((hs_req *)j->body)->mv = m;
     /* A newer move supersedes the running one and any queued ones. */
     if (s->running && s->running->type == DF_MSG_HANDLES_MOVE) {

@@ -74,6 +74,8 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
             put(&st, "pool.tasks", (double)pc.tasks);
             put(&st, "pool.spin_hits", (double)pc.spin_hits);
             put(&st, "pool.wakeups", (double)pc.wakeups);
+            put(&st, "pool.long_lane", pc.heavy_max);
+            put(&st, "pool.long_waits", (double)pc.heavy_waits);
         }
     } else {
         int strokes = 0;

@@ -149,6 +149,7 @@ static void pump(df_session *s)
             j->srv->jobs_running++;
             j->task.work = task_work;
             j->task.after = task_after;
+            j->task.heavy = j->heavy;
             df_pool_submit(j->srv->pool, &j->task);
             return;
         }

@@ -59,6 +59,7 @@ struct df_job {
     df_error err;
     atomic_int cancel;        /* set by the loop thread to supersede a running move */
     int canceled;             /* the pool refused/cancelled the job (shutdown) */
+    int heavy;                /* long work (moves, factorizations): the pool's long lane */
     uv_work_t w;              /* session-less jobs, and every job of a server without a pool */
     df_task task;             /* session jobs on srv->pool */
     uint64_t version;         /* version after the job (for the ack) */

@@ -12,6 +12,10 @@
  *     CPU between polls, so that back-to-back strokes skip the futex wake-up. It helps only with
  *     idle cores (on the shared 2-core test machine: ~1 us of a 50 us round trip), hence
  *     deformd's default 0 (config `spin_us`). A worker that ran a long task sleeps at once.
+ *   - long lane: tasks marked `heavy` (handle moves, factorizations: may run for seconds or
+ *     hours) occupy at most threads - 1 workers (1 with a single thread), so that short tasks
+ *     (brush strokes, reads) always find a worker while long solves run; heavy tasks beyond
+ *     that wait in their own FIFO, in submission order.
  * The loop itself never busy-polls for results: measured, it took the core the worker needed
  * (the scheduler wakes the worker on the loop's CPU) and made round trips slower, not faster. */
 #ifndef DF_SERVER_POOL_H
@@ -34,6 +38,7 @@ struct df_task {
     df_task_fn work;   /* worker thread; required */
     df_task_fn after;  /* loop thread, once work returned; required */
     uint64_t work_ns;  /* measured work time in ns, set before `after` runs */
+    int heavy;         /* 1: long-lane task (see above); set by the caller before submit */
     df_task *next;     /* pool-internal */
 };
 
@@ -61,9 +66,12 @@ void df_pool_close(df_pool *p);
 void df_pool_free(df_pool *p);
 
 /* Counters (loop thread): tasks completed, tasks a spinning worker picked up without a
- * wake-up, eventfd wake-ups of the loop (several completions may share one). */
+ * wake-up, eventfd wake-ups of the loop (several completions may share one); the long lane's
+ * size and the heavy tasks that had to wait for the lane. */
 typedef struct df_pool_counters {
     uint64_t tasks, spin_hits, wakeups;
+    int heavy_max;
+    uint64_t heavy_waits;
 } df_pool_counters;
 void df_pool_counters_get(const df_pool *p, df_pool_counters *out);
 

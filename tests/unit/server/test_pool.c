@@ -6,6 +6,7 @@
 #include <setjmp.h>
 #include <pthread.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -152,6 +153,62 @@ static void test_pool_slow_task_does_not_stall_short_one(void **state)
 }
 
 /* Back-to-back short tasks with spinning workers: some hand-offs need no wake-up. */
+/* Long lane: heavy tasks that block until a short task has completed. With 2 workers and
+ * 3 heavy tasks submitted first, at most one heavy task runs at a time and the short task,
+ * submitted last, still gets the other worker (without the lane both workers would block: the
+ * heavy tasks give up after a generous 20 s and record it). */
+#define LANE_HEAVY 3
+static atomic_int lane_released, lane_running, lane_max_running, lane_gave_up;
+
+static void lane_heavy_work(df_task *t)
+{
+    int n = atomic_fetch_add(&lane_running, 1) + 1;
+    int m = atomic_load(&lane_max_running);
+    while (n > m && !atomic_compare_exchange_weak(&lane_max_running, &m, n)) {
+    }
+    double give_up = now_ms() + 20000.0;
+    while (!atomic_load(&lane_released)) {
+        if (now_ms() > give_up) {
+            atomic_store(&lane_gave_up, 1);
+            break;
+        }
+        usleep(1000);
+    }
+    atomic_fetch_sub(&lane_running, 1);
+    item_work(t);
+}
+
+static void lane_short_after(df_task *t)
+{
+    atomic_store(&lane_released, 1);
+    item_after(t);
+}
+
+static void test_pool_long_lane_leaves_a_worker_for_short_tasks(void **state)
+{
+    (void)state;
+    static item v[LANE_HEAVY + 1];
+    items_init(v, LANE_HEAVY + 1);
+    for (int i = 0; i < LANE_HEAVY; i++) {
+        v[i].t.work = lane_heavy_work;
+        v[i].t.heavy = 1;
+    }
+    v[LANE_HEAVY].t.after = lane_short_after;
+    atomic_store(&lane_released, 0);
+    atomic_store(&lane_running, 0);
+    atomic_store(&lane_max_running, 0);
+    atomic_store(&lane_gave_up, 0);
+    ctx c;
+    df_pool_counters cnt;
+    run_items(&c, v, LANE_HEAVY + 1, 2, 0, 0, &cnt);
+    assert_int_equal(atomic_load(&lane_gave_up), 0);
+    assert_int_equal(c.order[0], LANE_HEAVY);     /* the short task finished first */
+    assert_int_equal(atomic_load(&lane_max_running), 1);
+    assert_int_equal(cnt.heavy_max, 1);
+    assert_true(cnt.heavy_waits >= LANE_HEAVY - 1);
+    for (int i = 0; i <= LANE_HEAVY; i++) assert_int_equal(v[i].ran, 1);
+}
+
 static void test_pool_spinning_worker_takes_back_to_back_tasks(void **state)
 {
     (void)state;
@@ -369,6 +426,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pool_runs_every_task_once_after_on_loop),
         cmocka_unit_test(test_pool_slow_task_does_not_stall_short_one),
+        cmocka_unit_test(test_pool_long_lane_leaves_a_worker_for_short_tasks),
         cmocka_unit_test(test_pool_spinning_worker_takes_back_to_back_tasks),
         cmocka_unit_test(test_pool_rejects_bad_arguments),
         cmocka_unit_test(test_jobs_on_pool_keep_session_fifo),
