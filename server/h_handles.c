@@ -28,7 +28,8 @@ typedef struct hs_req {
     uint8_t status;
     uint64_t progress_every;
     uint64_t t0;
-    df_frames frames;          /* final frame(s) */
+    int published;             /* move: the final iterate was published (posted) */
+    df_frames frames;          /* reset-rest: its frame(s) */
 } hs_req;
 
 static void req_free(df_job *j)
@@ -220,14 +221,18 @@ void df_h_handles_get(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_session *s = df_h_session_ref(c, h, p);
     df_job *j = s ? new_job(c, h, s, NULL, get_done) : NULL;
-    if (j) df_job_submit(j);
+    if (!j) return;
+    j->beside = DF_JOB_BESIDE_READ; /* the set cannot change while a move runs */
+    df_job_submit(j);
 }
 
 static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }
 
-/* Publishes the iterate V as the next version in progress frames. */
+/* Publishes the iterate V as the next version and posts its progress frames to the loop
+ * (worker), all under s->pub_lock: requests answered beside the move (job.h) then see a version
+ * exactly when its frames are on their way to the subscribers. */
 static int publish_iterate(df_job *j, const double *V, int iteration, double objective,
-                           double residual, uint8_t status, int final, df_frames *out)
+                           double residual, uint8_t status, int final)
 {
     hs_req *r = j->body;
     df_msg_progress pr;
@@ -239,8 +244,20 @@ static int publish_iterate(df_job *j, const double *V, int iteration, double obj
     pr.residual = finite_or(residual, DBL_MAX);
     if (pr.residual < 0) pr.residual = 0;
     pr.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
-    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, out, NULL, &j->err);
-    if (rc == DF_OK) memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
+    df_frames f = {0};
+    pthread_mutex_lock(&j->s->pub_lock);
+    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, &f, NULL, &j->err);
+    if (rc == DF_OK) {
+        memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
+        uint64_t v = atomic_load(&j->s->version);
+        for (size_t i = 0; i < f.n; i++) {
+            df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
+            f.v[i] = NULL;
+        }
+        f.n = 0;
+    }
+    pthread_mutex_unlock(&j->s->pub_lock);
+    df_frames_clear(&f);
     return rc;
 }
 
@@ -249,19 +266,8 @@ static int on_progress(void *user, const df_admm_progress *p)
     df_job *j = user;
     hs_req *r = j->body;
     if (atomic_load(&j->cancel)) return 1;
-    if (r->progress_every && p->iteration % (int)r->progress_every == 0) {
-        df_frames f = {0};
-        if (publish_iterate(j, p->V, p->iteration, p->objective, p->residual, DF_MOVE_RUNNING, 0,
-                            &f) == DF_OK) {
-            uint64_t v = atomic_load(&j->s->version);
-            for (size_t i = 0; i < f.n; i++) {
-                df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
-                f.v[i] = NULL;
-            }
-            f.n = 0;
-        }
-        df_frames_clear(&f);
-    }
+    if (r->progress_every && p->iteration % (int)r->progress_every == 0)
+        publish_iterate(j, p->V, p->iteration, p->objective, p->residual, DF_MOVE_RUNNING, 0);
     return 0;
 }
 
@@ -304,7 +310,8 @@ static void move_work(df_job *j)
     else r->status = DF_MOVE_BUDGET;
     s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
-                              r->res.objective, r->res.residual, r->status, 1, &r->frames);
+                              r->res.objective, r->res.residual, r->status, 1);
+    r->published = prc == DF_OK;
     j->rc = rc != DF_OK ? rc : prc;
 }
 
@@ -320,7 +327,7 @@ static void move_done(df_job *j)
         srv->stats.admm_hits++;
         df_cache_touch_solver(srv, s->hs);
     }
-    df_job_broadcast(j, &r->frames);
+    /* the final frames were posted by the worker and broadcast before this `done` (job.c) */
     df_msg_move_result res;
     memset(&res, 0, sizeof res);
     res.session_id = s->id;
@@ -330,7 +337,7 @@ static void move_done(df_job *j)
         if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
         return;
     }
-    if (r->frames.n && df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
+    if (r->published && df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
         df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
                (unsigned long long)s->id);
     if (df_job_failed(j)) return;
@@ -366,6 +373,7 @@ void df_h_handles_move(df_conn *c, const df_frame_header *h, const uint8_t *p)
         return;
     }
     j->heavy = 1;
+    j->preemptible = 1;
     ((hs_req *)j->body)->mv = m;
     /* A newer move supersedes the running one and any queued ones. */
     if (s->running && s->running->type == DF_MSG_HANDLES_MOVE) {
