@@ -144,7 +144,6 @@ void df_h_handles_set(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_msg_handles_free(&m);
         return;
     }
-    j->heavy = 1; /* a factorization */
     ((hs_req *)j->body)->m = m;
     df_job_submit(j);
 }

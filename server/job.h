@@ -72,7 +72,7 @@ struct df_job {
     df_error err;
     atomic_int cancel;        /* set by the loop thread to supersede a running move */
     int canceled;             /* the pool refused/cancelled the job (shutdown) */
-    int heavy;                /* long work (moves, factorizations): the pool's long lane */
+    int heavy;                /* long work (handle moves): the pool's long lane */
     int preemptible;          /* a move: cancelled when a request must queue behind it */
     int beside;               /* DF_JOB_BESIDE_*: behaviour while a move runs (see above) */
     uv_work_t w;              /* session-less jobs, and every job of a server without a pool */

@@ -12,8 +12,7 @@
  *     CPU between polls, so that back-to-back strokes skip the futex wake-up. It helps only with
  *     idle cores (on the shared 2-core test machine: ~1 us of a 50 us round trip), hence
  *     deformd's default 0 (config `spin_us`). A worker that ran a long task sleeps at once.
- *   - long lane: tasks marked `heavy` (handle moves, factorizations: may run for seconds or
- *     hours) occupy at most threads - 1 workers (1 with a single thread), so that short tasks
+ *   - long lane: tasks marked `heavy` (handle moves: may run for hours) occupy at most threads - 1 workers (1 with a single thread), so that short tasks
  *     (brush strokes, reads) always find a worker while long solves run; heavy tasks beyond
  *     that wait in their own FIFO, in submission order.
  * The loop itself never busy-polls for results: measured, it took the core the worker needed
