@@ -52,6 +52,7 @@ struct df_pool {
                               * thread is the one whose caches are warm)                 */
     int nq, nspinning, stopping;
     atomic_int qhint;        /* nq, read by spinners without the lock */
+    atomic_int hwait;        /* heavy tasks queued beyond the lane's room (df_pool_heavy_waiting) */
     atomic_int stop;
     /* completions, under dlock */
     pthread_mutex_t dlock;
@@ -75,6 +76,19 @@ static int nrunnable(const df_pool *p)
 {
     int room = p->heavy_max - p->nheavy;
     return p->nq + (p->nhq < room ? p->nhq : room);
+}
+
+/* Refreshes the lock-free hints after a queue or lane change (under lock). */
+static void update_hints(df_pool *p)
+{
+    int room = p->heavy_max - p->nheavy;
+    atomic_store_explicit(&p->qhint, nrunnable(p), memory_order_release);
+    atomic_store_explicit(&p->hwait, p->nhq > room ? p->nhq - room : 0, memory_order_relaxed);
+}
+
+int df_pool_heavy_waiting(const df_pool *p)
+{
+    return atomic_load_explicit(&((df_pool *)p)->hwait, memory_order_relaxed);
 }
 
 /* One spin step: a few pause instructions, then give the core to any runnable thread. */
@@ -142,7 +156,7 @@ static void *worker_main(void *arg)
             p->nhq--;
             p->nheavy++;
         }
-        atomic_store_explicit(&p->qhint, nrunnable(p), memory_order_release);
+        update_hints(p);
         pthread_mutex_unlock(&p->lock);
         if (spun) atomic_fetch_add_explicit(&p->spin_hits, 1, memory_order_relaxed);
         uint64_t t0 = uv_hrtime();
@@ -151,11 +165,23 @@ static void *worker_main(void *arg)
         t->work_ns = t1 - t0;
         spin_until = p->spin_ns && t->work_ns < DF_POOL_SHORT_TASK_NS ? t1 + p->spin_ns : 0;
         int heavy = t->heavy;
+        if (heavy && t->requeue) { /* yields: back to the tail of the long lane */
+            t->requeue = 0;
+            t->next = NULL;
+            pthread_mutex_lock(&p->lock);
+            p->nheavy--;
+            if (p->htail) p->htail->next = t;
+            else p->hhead = t;
+            p->htail = t;
+            p->nhq++;
+            update_hints(p);
+            continue;
+        }
         complete(p, t); /* t may be freed by the loop from here on */
         pthread_mutex_lock(&p->lock);
         if (heavy) {
             p->nheavy--;
-            atomic_store_explicit(&p->qhint, nrunnable(p), memory_order_release);
+            update_hints(p);
         }
     }
     pthread_mutex_unlock(&p->lock);
@@ -210,7 +236,7 @@ void df_pool_submit(df_pool *p, df_task *t)
         p->nq++;
     }
     int n = nrunnable(p);
-    atomic_store_explicit(&p->qhint, n, memory_order_release);
+    update_hints(p);
     if (p->idle && n > p->nspinning) { /* wake the most recently idle worker */
         worker *w = p->idle;
         p->idle = w->next_idle;
@@ -281,6 +307,7 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
     pthread_mutex_init(&p->lock, NULL);
     pthread_mutex_init(&p->dlock, NULL);
     atomic_init(&p->qhint, 0);
+    atomic_init(&p->hwait, 0);
     atomic_init(&p->stop, 0);
     atomic_init(&p->signaled, 0);
     atomic_init(&p->spin_hits, 0);

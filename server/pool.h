@@ -14,7 +14,10 @@
  *     deformd's default 0 (config `spin_us`). A worker that ran a long task sleeps at once.
  *   - long lane: tasks marked `heavy` (handle moves: may run for hours) occupy at most threads - 1 workers (1 with a single thread), so that short tasks
  *     (brush strokes, reads) always find a worker while long solves run; heavy tasks beyond
- *     that wait in their own FIFO, in submission order.
+ *     that wait in their own FIFO, in submission order. A heavy task may yield: its work sets
+ *     `requeue` and returns, and it goes back to the tail of the long lane instead of completing
+ *     (its `after` runs only once it really finished), so long tasks take turns.
+ *     df_pool_heavy_waiting tells a running heavy task that others wait for the lane.
  * The loop itself never busy-polls for results: measured, it took the core the worker needed
  * (the scheduler wakes the worker on the loop's CPU) and made round trips slower, not faster. */
 #ifndef DF_SERVER_POOL_H
@@ -38,6 +41,7 @@ struct df_task {
     df_task_fn after;  /* loop thread, once work returned; required */
     uint64_t work_ns;  /* measured work time in ns, set before `after` runs */
     int heavy;         /* 1: long-lane task (see above); set by the caller before submit */
+    int requeue;       /* set by a heavy task's work to yield (see above); the pool clears it */
     df_task *next;     /* pool-internal */
 };
 
@@ -52,6 +56,9 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
 
 /* Queues `t` (loop thread; t->work and t->after set). Never waits for running work. */
 void df_pool_submit(df_pool *p, df_task *t);
+
+/* Heavy tasks queued that cannot start now because the long lane is full (any thread). */
+int df_pool_heavy_waiting(const df_pool *p);
 
 /* Tasks submitted and whose `after` has not run yet. */
 int df_pool_inflight(const df_pool *p);

@@ -45,8 +45,9 @@ def wait_final(c, sid, timeout=END_S):
 
 def test_four_long_moves_leave_a_worker_for_other_clients(daemon):
     """Item 7: one client runs four never-ending moves on four sessions (the daemon has 4 compute
-    workers); another client's strokes and reads on a fifth session, and a read of a moving
-    session, are still answered. Closing the mover's connection then ends all four moves."""
+    workers); another client's strokes and reads on a fifth session, a read of a moving session,
+    a handle set and a short move on a sixth are still answered. Closing the mover's connection
+    then ends all four moves."""
     with daemon.unix_client() as mover, daemon.unix_client() as artist:
         moving = [long_move_session(mover) for _ in range(4)]
         data = grid_obj(30, 30)
@@ -68,6 +69,11 @@ def test_four_long_moves_leave_a_worker_for_other_clients(daemon):
         assert busy.nv == mover.stats(moving[0][0])["nv"]
         st = artist.stats()
         assert st["pool.long_lane"] == 3 and st["pool.long_waits"] >= 1, st
+        # another client's move gets its turn in the long lane (moves take time slices), and
+        # a handle-set factorization is not stuck behind the never-ending moves
+        own, own_targets = long_move_session(artist)
+        res = artist.move_handles(own, own_targets, max_iters=5, timeout=END_S)
+        assert res.status == m.MOVE_BUDGET and res.iterations == 5, res
         mover.close()                            # requester gone: every move ends
         ended = wait_finals(artist, {sid for sid, _ in moving})
         assert all(ev.status == m.MOVE_SUPERSEDED for ev in ended.values()), ended
@@ -75,6 +81,7 @@ def test_four_long_moves_leave_a_worker_for_other_clients(daemon):
         for sid, _ in moving:
             artist.close_session(sid)
         artist.close_session(other)
+        artist.close_session(own)
 
 
 def test_reads_undo_and_handles_get_during_a_move_then_the_orphan_ends(daemon):
