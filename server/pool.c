@@ -43,6 +43,7 @@ struct df_pool {
     uint64_t spin_ns;
     worker w[DF_POOL_MAX_THREADS];
     int nthreads;
+    int nworkers;            /* threads asked for (set before any worker starts) */
     /* queue, under lock */
     pthread_mutex_t lock;
     df_task *qhead, *qtail;  /* short tasks */
@@ -52,7 +53,7 @@ struct df_pool {
                               * thread is the one whose caches are warm)                 */
     int nq, nspinning, stopping;
     atomic_int qhint;        /* nq, read by spinners without the lock */
-    atomic_int hwait;        /* heavy tasks queued beyond the lane's room (df_pool_heavy_waiting) */
+    atomic_int hwait;        /* tasks a running heavy task keeps waiting (df_pool_heavy_waiting) */
     atomic_int stop;
     /* completions, under dlock */
     pthread_mutex_t dlock;
@@ -82,8 +83,10 @@ static int nrunnable(const df_pool *p)
 static void update_hints(df_pool *p)
 {
     int room = p->heavy_max - p->nheavy;
+    int wait = p->nhq > room ? p->nhq - room : 0;
+    if (p->heavy_max >= p->nworkers) wait += p->nq; /* one thread: short tasks wait for it too */
     atomic_store_explicit(&p->qhint, nrunnable(p), memory_order_release);
-    atomic_store_explicit(&p->hwait, p->nhq > room ? p->nhq - room : 0, memory_order_relaxed);
+    atomic_store_explicit(&p->hwait, wait, memory_order_relaxed);
 }
 
 int df_pool_heavy_waiting(const df_pool *p)
@@ -303,6 +306,7 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
     p->loop = loop;
     p->spin_ns = spin_ns;
     p->heavy_max = threads > 1 ? threads - 1 : 1;
+    p->nworkers = threads;
     p->efd = -1;
     pthread_mutex_init(&p->lock, NULL);
     pthread_mutex_init(&p->dlock, NULL);

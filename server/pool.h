@@ -16,7 +16,8 @@
  *     (brush strokes, reads) always find a worker while long solves run; heavy tasks beyond
  *     that wait in their own FIFO, in submission order. A heavy task may yield: its work sets
  *     `requeue` and returns, and it goes back to the tail of the long lane instead of completing
- *     (its `after` runs only once it really finished), so long tasks take turns.
+ *     (its `after` runs only once it really finished), so long tasks take turns (and with a
+ *     single thread, short tasks get it between turns).
  *     df_pool_heavy_waiting tells a running heavy task that others wait for the lane.
  * The loop itself never busy-polls for results: measured, it took the core the worker needed
  * (the scheduler wakes the worker on the loop's CPU) and made round trips slower, not faster. */
@@ -57,7 +58,9 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
 /* Queues `t` (loop thread; t->work and t->after set). Never waits for running work. */
 void df_pool_submit(df_pool *p, df_task *t);
 
-/* Heavy tasks queued that cannot start now because the long lane is full (any thread). */
+/* Tasks that wait because heavy tasks occupy workers (any thread): heavy tasks queued beyond
+ * the long lane's room, plus the queued short tasks when the pool has a single thread (its
+ * lane is then that thread). A running heavy task yields (requeue) when this is > 0. */
 int df_pool_heavy_waiting(const df_pool *p);
 
 /* Tasks submitted and whose `after` has not run yet. */

@@ -157,3 +157,26 @@ def test_handles_get_lets_a_new_move_supersede_a_running_one(daemon):
         assert res1.status == m.MOVE_SUPERSEDED, res1
         assert res2.status == m.MOVE_BUDGET and res2.iterations == 5, res2
         second.close_session(sid)
+
+
+def test_one_worker_is_shared_by_a_long_move_and_strokes(make_daemon):
+    """Item 7 with `threads = 1`: the single worker is the long lane too; a never-ending move
+    yields it between turns, so another client's strokes (through the pool: inline_us 0) and a
+    handle set on another session are still answered while it runs."""
+    d = make_daemon("threads = 1\ninline_us = 0\n")
+    with d.unix_client() as mover, d.unix_client() as artist:
+        sid, targets = long_move_session(mover)
+        rid = mover.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, progress_every=0))
+        mover.ping(b"move dispatched")
+        data = grid_obj(20, 20)
+        X = obj_bytes_positions(data)
+        other = artist.load_mesh(data, fmt=".obj").session_id
+        for k in range(3):
+            artist.stroke(other, Brush(type="grab", center=X[0:3], move=(0, 0, 0.01 * (k + 1)),
+                                       radius=0.3))
+        own, own_targets = long_move_session(artist)
+        assert artist.move_handles(own, own_targets, max_iters=3, timeout=END_S).iterations == 3
+        assert artist.stats()["pool.long_lane"] == 1
+        artist.close_session(sid)                # ends the move (a request queued behind it)
+        res = m.decode_move_result(mover.wait_reply(rid, END_S)[0].payload)
+        assert res.status == m.MOVE_SUPERSEDED, res
