@@ -176,8 +176,10 @@ static void close_done(df_job *j)
     if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
 }
 
-/* Submits a loop-only job (no work) on the session of a session_ref request. */
-static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn done)
+/* Submits a loop-only job (no work) on the session of a session_ref request; `beside`: its
+ * DF_JOB_BESIDE_* mode (job.h). */
+static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn done,
+                    int beside)
 {
     df_session *s = df_h_session_ref(c, h, p);
     if (!s) return;
@@ -188,12 +190,13 @@ static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_j
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
+    j->beside = beside;
     df_job_submit(j);
 }
 
 void df_h_close_session(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    ref_job(c, h, p, close_done);
+    ref_job(c, h, p, close_done, DF_JOB_BESIDE_NONE); /* ends a running move first */
 }
 
 static void unsubscribe_done(df_job *j)
@@ -206,7 +209,7 @@ static void unsubscribe_done(df_job *j)
 
 void df_h_unsubscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    ref_job(c, h, p, unsubscribe_done);
+    ref_job(c, h, p, unsubscribe_done, DF_JOB_BESIDE_READ);
 }
 
 static void stream_shm_done(df_job *j)
@@ -238,7 +241,7 @@ void df_h_stream_shm(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
-    ref_job(c, h, p, stream_shm_done);
+    ref_job(c, h, p, stream_shm_done, DF_JOB_BESIDE_READ);
 }
 
 static void subscribe_done(df_job *j)
@@ -281,6 +284,7 @@ void df_h_subscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
         return;
     }
     j->body = (void *)(uintptr_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
+    j->beside = DF_JOB_BESIDE_READ; /* watchers may join a running move */
     df_job_submit(j);
 }
 

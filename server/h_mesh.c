@@ -90,7 +90,9 @@ static void history_request(df_conn *c, const df_frame_header *h, const uint8_t 
     df_job *j = s ? df_job_for_request(c, h, s, sizeof(mesh_req), history_work, history_done,
                                        req_free)
                   : NULL;
-    if (j) df_job_submit(j);
+    if (!j) return;
+    j->beside = DF_JOB_BESIDE_REFUSE; /* ESTATE while a move runs (PROTOCOL.md 6) */
+    df_job_submit(j);
 }
 
 void df_h_undo(df_conn *c, const df_frame_header *h, const uint8_t *p)
@@ -187,6 +189,7 @@ void df_h_get_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
     }
     df_job *j = new_job(c, h, m.session_id, get_mesh_work, frames_done);
     if (!j) return;
+    j->beside = DF_JOB_BESIDE_READ; /* the last published version while a move runs */
     ((mesh_req *)j->body)->flags = m.flags;
     df_job_submit(j);
 }
@@ -217,6 +220,7 @@ void df_h_snapshot(df_conn *c, const df_frame_header *h, const uint8_t *p)
     }
     df_job *j = new_job(c, h, m.session_id, snapshot_work, frames_done);
     if (!j) return;
+    j->beside = DF_JOB_BESIDE_READ;
     ((mesh_req *)j->body)->version = m.version;
     df_job_submit(j);
 }

@@ -56,6 +56,9 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "jobs_superseded", (double)x->jobs_superseded);
         put(&st, "jobs_inline", (double)x->jobs_inline);
         put(&st, "jobs_inline_deferred", (double)x->jobs_inline_deferred);
+        put(&st, "jobs_beside_move", (double)x->jobs_beside_move);
+        put(&st, "moves_preempted", (double)x->moves_preempted);
+        put(&st, "moves_orphaned", (double)x->moves_orphaned);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
         put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);
@@ -90,6 +93,8 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
             put(&st, "pool.tasks", (double)pc.tasks);
             put(&st, "pool.spin_hits", (double)pc.spin_hits);
             put(&st, "pool.wakeups", (double)pc.wakeups);
+            put(&st, "pool.long_lane", pc.heavy_max);
+            put(&st, "pool.long_waits", (double)pc.heavy_waits);
         }
     } else {
         int strokes = 0;

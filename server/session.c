@@ -129,6 +129,7 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     memcpy(s->cur, s->mesh.V, n * sizeof(double));
     for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
     atomic_init(&s->version, 0);
+    pthread_mutex_init(&s->pub_lock, NULL);
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
@@ -208,6 +209,7 @@ void df_session_destroy(df_session *s)
     free(s->scratch_pos);
     free(s->scratch_disp);
     df_log(DF_LOG_INFO, "session %llu closed", (unsigned long long)s->id);
+    pthread_mutex_destroy(&s->pub_lock);
     free(s);
 }
 
@@ -302,10 +304,23 @@ static void drop_stroke_done(df_job *j)
     if (j->rc == DF_OK && df_session_stroke(j->s, j->conn_id)) end_stroke(j->s, j->conn_id);
 }
 
+/* A queued move of connection *arg. */
+static int pred_conn_move(const df_job *j, void *arg)
+{
+    return j->preemptible && j->conn_id == *(const uint64_t *)arg;
+}
+
 void df_session_forget_conn(df_server *srv, df_conn *c)
 {
     for (df_session *s = srv->sessions; s; s = s->next) {
         df_session_unsubscribe(s, c);
+        df_job *r = s->running;
+        if (r && r->preemptible && r->conn_id == c->id && !atomic_load(&r->cancel)) {
+            atomic_store(&r->cancel, 1); /* nobody waits for it any more */
+            srv->stats.moves_orphaned++;
+        }
+        uint64_t id = c->id;
+        df_job_drop_queued(s, pred_conn_move, &id, "requester disconnected");
         if (!df_session_stroke(s, c->id)) continue;
         if (!s->running) {
             end_stroke(s, c->id);

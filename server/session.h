@@ -14,6 +14,7 @@
 #ifndef DF_SERVER_SESSION_H
 #define DF_SERVER_SESSION_H
 
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
 
@@ -94,6 +95,8 @@ typedef struct df_session {
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
+    pthread_mutex_t pub_lock;    /* while a move runs: its worker publishes (uf, version, posted
+                                  * frames) under it; loop-thread reads beside it (job.h) too */
     struct df_session *next;
 } df_session;
 
@@ -128,8 +131,9 @@ int df_session_unsubscribe(df_session *s, df_conn *c);
  * or df_shm_create's error. */
 int df_session_attach_shm(df_session *s, df_conn *c, df_error *err);
 
-/* Called when a connection closes: unsubscribes it everywhere and drops its open strokes in
- * idle sessions (strokes of busy sessions are dropped by their next job). */
+/* Called when a connection closes: unsubscribes it everywhere, drops its open strokes in
+ * idle sessions (strokes of busy sessions are dropped by their next job), ends its running move
+ * (its last published iterate stays, as with supersession) and drops its queued moves. */
 void df_session_forget_conn(df_server *srv, df_conn *c);
 
 /* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for.

@@ -17,6 +17,9 @@ typedef struct df_stats {
     uint64_t jobs_submitted, jobs_completed, jobs_superseded;
     uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
     uint64_t jobs_inline_deferred;/* cheap enough, sent to the pool: iteration budget spent */
+    uint64_t jobs_beside_move;    /* reads answered (undo/redo refused) while a move ran (job.h) */
+    uint64_t moves_preempted;     /* moves ended early for a request queued behind them */
+    uint64_t moves_orphaned;      /* moves ended because their requester disconnected */
     uint64_t versions;            /* versions broadcast, all sessions */
     uint64_t shm_frames;          /* broadcast frames copied into a shared-memory ring */
     uint64_t shm_refs;            /* SHM_REF events queued in their place */

@@ -1,5 +1,5 @@
 /* admm_api.c — solver lifetime and state access: create (validation, operators, factorization),
- * set_targets, positions, evaluate, reset_rest (sculpting), stats, free. */
+ * set_targets, set_positions, positions, evaluate, reset_rest (sculpting), stats, free. */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -225,6 +225,47 @@ int df_admm_set_targets(df_admm *s, const double *targets, df_error *err)
     }
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     /* the objective does not depend on the targets: E_last (of the current positions) stays valid */
+    return DF_OK;
+}
+
+int df_admm_set_positions(df_admm *s, const double *V, int32_t *n_changed, df_error *err)
+{
+    if (!s || !V) return df_error_set(err, DF_EINVAL, "admm_set_positions: NULL argument");
+    size_t nv3 = (size_t)s->nv * 3;
+    for (size_t i = 0; i < nv3; i++)
+        if (!isfinite(V[i])) return df_error_set(err, DF_EINVAL, "admm_set_positions: vertex %d is not finite", (int)(i / 3));
+    int32_t changed = 0;
+    for (int32_t i = 0; i < s->nv; i++) {
+        size_t o = 3 * (size_t)i;
+        if (memcmp(V + o, s->Vout + o, 3 * sizeof(double)) == 0) continue;
+        changed++;
+        for (int k = 0; k < 3; k++) {
+            s->V[o + k] = V[o + k];
+            s->Z[o + k] = V[o + k] - s->Vrest[o + k];
+            s->U[o + k] = 0.0;
+        }
+    }
+    if (n_changed) *n_changed = changed;
+    if (changed == 0) return DF_OK;
+    if (s->W) /* element duals of elements touching a changed vertex */
+        for (int32_t e = 0; e < s->ne; e++) {
+            const int32_t *el = s->E + (size_t)e * s->esz;
+            for (int a = 0; a < s->esz; a++)
+                if (memcmp(V + 3 * (size_t)el[a], s->Vout + 3 * (size_t)el[a], 3 * sizeof(double))) {
+                    memset(s->W + 9 * (size_t)e, 0, 9 * sizeof(double));
+                    break;
+                }
+        }
+    memcpy(s->Vout, V, nv3 * sizeof(double));
+    if (s->damp) { /* damped handle steps restart from where the handles are now */
+        for (int32_t h = 0; h < s->nh; h++) memcpy(s->target + 3 * (size_t)h, V + 3 * (size_t)s->hidx[h], 3 * sizeof(double));
+        s->tgt_pending = memcmp(s->target_req, s->target, (size_t)s->nh * 3 * sizeof(double)) != 0;
+        s->damp_stall = 0;
+        admm_update_kfhp(s);
+    }
+    if (s->p.accelerate) admm_aa_reset(&s->aa);
+    s->E_last = NAN;
+    s->el_last = s->lo_last = NAN;
     return DF_OK;
 }
 

@@ -259,6 +259,29 @@ def test_move_node_targets_without_handles_uses_the_session_set(ctl, daemon, mes
         c.close_session(sid)
 
 
+def test_move_node_targets_supersedes_a_running_move(ctl, daemon, meshes):
+    """Issue 9 item 18: `move --targets X.node` without --handles fetches the handle set
+    (HANDLES_GET) while another client's never-ending move runs, and its move supersedes it."""
+    from deformd_client import messages as m
+    rest = os.path.join(meshes, "teaser_apple_rest.node")
+    hfile = os.path.join(meshes, "teaser_apple_handles.txt")
+    tfile = os.path.join(meshes, "teaser_apple_init1.node")
+    sid = int(ctl("load", rest).stdout)
+    ctl("handles", sid, "--energy", "neohookean", "--handles", hfile, "--rho", 1e3,
+        "--s", 0.01, "--w", 1, "--tol", 0, "--iters", 1000000)
+    handles = read_indices(hfile)
+    T = read_node_positions(tfile)
+    with daemon.unix_client() as c:
+        rid = c.send(m.HANDLES_MOVE, m.encode_handle_move(sid, [T[h] for h in handles]))
+        c.ping(b"move dispatched")
+        j = json.loads(ctl("--json", "move", sid, "--targets", tfile, "--max-iters", 3,
+                           timeout=60).stdout)
+        assert j["iterations"] <= 3 and j["status"] in ("converged", "budget"), j
+        first = m.decode_move_result(c.wait_reply(rid, 60)[0].payload)
+        assert first.status == m.MOVE_SUPERSEDED, first
+        c.close_session(sid)
+
+
 @pytest.mark.parametrize("ext", [".obj", ".off", ".ply", ".node", ".mesh"])
 def test_get_writes_every_format_readably(ctl, daemon, ext, tmp_path):
     """get --out in each format, after a brush; the file loads back into the same mesh."""
