@@ -290,8 +290,8 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
         if (hrc != DF_OK && (df_frame_error_is_fatal(hrc) || hrc == DF_EPROTO_TRUNCATED)) {
             df_log(DF_LOG_WARN, "client %llu: framing error: %s", (unsigned long long)c->id,
                    err.msg);
-            df_reply_error(c, DF_MSG_ERROR, hrc == DF_EPROTO_BADMAGIC ? 0 : h.request_id, hrc,
-                           "%s", err.msg);
+            /* PROTOCOL.md 7: an ERROR event (type ERROR, flags ERROR, request id 0) */
+            df_reply_error(c, DF_MSG_ERROR, 0, hrc, "%s", err.msg);
             c->srv->stats.clients_dropped++;
             df_conn_close_after_flush(c, "framing error");
             break;
@@ -299,8 +299,7 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
         size_t total = DF_FRAME_HEADER_SIZE + (size_t)h.payload_len;
         if (c->rlen - off < total) break;
         if (hrc != DF_OK) { /* answerable header error: reply, skip the payload */
-            df_reply_error(c, df_msg_type_valid(h.type) ? h.type : DF_MSG_ERROR, h.request_id,
-                           hrc, "%s", err.msg);
+            df_reply_error(c, h.type, h.request_id, hrc, "%s", err.msg);
             c->srv->stats.requests_failed++;
             off += total;
             continue;

@@ -66,6 +66,7 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
                      "hello: client speaks versions %u..%u, server %u..%u", m.min_version,
                      m.max_version, DF_PROTO_VERSION_MIN, DF_PROTO_VERSION);
         df_reply_fail(c, h->type, h->request_id, &err);
+        df_conn_close_after_flush(c, "hello: no common protocol version"); /* PROTOCOL.md 4.2b */
         return;
     }
     const df_server_config *cfg = &c->srv->cfg;
