@@ -12,6 +12,7 @@
 #include "server/session.h"
 #include "server/shm.h"
 #include "server/stream.h"
+#include "server/text.h"
 
 #define DF_SERVER_NAME "deformd 0.1"
 
@@ -57,7 +58,8 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_msg_hello m;
     df_error err;
-    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK) {
+    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK ||
+        df_text_check_name("hello: client_name", m.client_name, &err) != DF_OK) {
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }

@@ -22,6 +22,12 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
         df_meshload_free(mesh);
         return df_error_set(err, DF_ELIMIT, "too many sessions (max_sessions = %d)", max);
     }
+    if (name && name[0] && df_session_find_name(srv, name)) {
+        df_meshload_free(mesh);
+        return df_error_set(err, DF_EEXIST,
+                            "session name '%s' is already in use (close that session or pick "
+                            "another name)", name);
+    }
     df_session *s = calloc(1, sizeof *s);
     size_t n = (size_t)mesh->nv * 3;
     if (s) {

@@ -91,7 +91,8 @@ typedef struct df_session {
 } df_session;
 
 /* Creates a session owning `mesh` (moved in: the caller's struct is zeroed) named `name`
- * ("" -> "session-<id>") and links it into srv. Errors: DF_ELIMIT (max_sessions), DF_ENOMEM.
+ * ("" -> "session-<id>") and links it into srv. Names are unique among live sessions. Errors:
+ * DF_EEXIST (a live session already has `name`), DF_ELIMIT (max_sessions), DF_ENOMEM.
  * On error the mesh is freed. */
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err);
