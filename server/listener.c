@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "server/conn.h"
+#include "server/guard.h"
 #include "server/log.h"
 #include "server/sd.h"
 
@@ -21,7 +22,7 @@ static void on_unix_conn(uv_stream_t *s, int status)
 {
     df_server *srv = s->data;
     if (status < 0) {
-        df_log(DF_LOG_WARN, "accept (unix): %s", uv_strerror(status));
+        df_guard_accept_failed(srv, s, status, "unix");
         return;
     }
     df_conn_accept(srv, s, 0);
@@ -31,7 +32,7 @@ static void on_tcp_conn(uv_stream_t *s, int status)
 {
     df_server *srv = s->data;
     if (status < 0) {
-        df_log(DF_LOG_WARN, "accept (tcp): %s", uv_strerror(status));
+        df_guard_accept_failed(srv, s, status, "tcp");
         return;
     }
     df_conn_accept(srv, s, 1);
@@ -156,7 +157,8 @@ static int open_tcp(df_server *srv, df_error *err)
     hints.ai_family = AF_UNSPEC;
     hints.ai_socktype = SOCK_STREAM;
     hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
-    int g = getaddrinfo(host, port, &hints, &res);
+    /* "*" = every interface (the wildcard address) */
+    int g = getaddrinfo(strcmp(host, "*") == 0 ? NULL : host, port, &hints, &res);
     if (g != 0 || !res)
         return df_error_set(err, DF_EIO, "tcp:%s:%s: %s", host, port, gai_strerror(g));
     if (!df_listener_is_loopback(res->ai_addr)) {
