@@ -151,7 +151,6 @@ static void expire(df_conn *c, uint64_t *counter, const char *why, const char *k
     (*counter)++;
     df_reply_error(c, DF_MSG_ERROR, 0, DF_ELIMIT, "%s: %s after %d s (%s); closing", why,
                    c->hello_done ? "no request and no subscription" : "no HELLO", secs, key);
-    df_log(DF_LOG_INFO, "client %llu: %s", (unsigned long long)c->id, why);
     df_conn_close_after_flush(c, why);
 }
 
