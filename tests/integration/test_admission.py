@@ -12,7 +12,7 @@ import subprocess
 
 import pytest
 
-from conftest import DEFORMD
+from conftest import DEFORMCTL, DEFORMD
 from deformd_client import DeformdError, errors as E, frame as fr, messages as m
 from helpers import grid_obj
 from rawwire import read_frames, wait_closed
@@ -135,6 +135,16 @@ def test_python_client_reports_the_refusal(make_daemon):
         with pytest.raises(DeformdError) as ei:
             d.unix_client(timeout=10.0)
         assert ei.value.code == E.ELIMIT and "max_clients" in ei.value.message
+        assert c.ping(b"x") == b"x"
+
+
+def test_deformctl_reports_the_refusal(make_daemon):
+    d = make_daemon("max_clients = 1\n")
+    with d.unix_client() as c:
+        r = subprocess.run([DEFORMCTL, "--socket", d.socket_path, "list"], capture_output=True,
+                           text=True, timeout=30)
+        assert r.returncode == 1
+        assert "ELIMIT" in r.stderr and "max_clients (1)" in r.stderr, r.stderr
         assert c.ping(b"x") == b"x"
 
 
