@@ -165,10 +165,10 @@ static int open_tcp(df_server *srv, df_error *err)
         if (!srv->cfg.tcp_insecure) {
             freeaddrinfo(res);
             return df_error_set(err, DF_EINVAL,
-                                "tcp:%s:%s: refusing a non-loopback TCP address: TCP clients are "
+                                "tcp:%s:%s: refusing a non-loopback address without "
+                                "--tcp-insecure (config tcp_insecure = yes): TCP clients are "
                                 "not authenticated, so anyone who can reach it could load, edit "
-                                "and close every session; listen on 127.0.0.1 or ::1 (tunnel "
-                                "with ssh -L), or pass --tcp-insecure (tcp_insecure = yes)",
+                                "and close every session; listen on 127.0.0.1 or ::1 instead",
                                 host, port);
         }
         df_log(DF_LOG_WARN,
