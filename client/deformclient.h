@@ -78,7 +78,9 @@ int df_client_last_error_was_remote(const df_client *c);
 
 /* Sends one frame of `type` with `flags` (0 or DF_FLAG_MORE) and request id `id` (0: allocate
  * the next id) carrying `len` bytes of `payload`. *id_out (may be NULL) receives the id used.
- * Errors: DF_EINVAL (len > DF_MAX_FRAME_PAYLOAD), DF_EIO. */
+ * Errors: DF_EINVAL (len > DF_MAX_FRAME_PAYLOAD), DF_EIO; when the server had closed the
+ * connection after a connection-level ERROR event (refused at max_clients, a timeout), that
+ * event's code and message (df_client_last_error_was_remote then returns 1). */
 int df_client_send(df_client *c, uint16_t type, uint16_t flags, uint64_t id, const void *payload,
                    size_t len, uint64_t *id_out, df_error *err);
 

@@ -547,9 +547,10 @@ int df_msg_empty_decode(const uint8_t *p, size_t n, df_error *err);
 int df_msg_error_encode(const df_error *e, df_buf *out, df_error *err);
 int df_msg_error_decode(const uint8_t *p, size_t n, df_error *out, df_error *err);
 
-/* Convenience for servers: appends a whole error frame (type = request type, or DF_MSG_ERROR;
- * flags REPLY|ERROR, or just ERROR when request_id == 0 and type == DF_MSG_ERROR) carrying
- * `code` and the printf-style message. DF_OK or DF_ENOMEM. */
+/* Convenience for servers: appends a whole error frame carrying `code` and the printf-style
+ * message: an error reply (type = the request's type, even one unknown to this build; flags
+ * REPLY|ERROR) when request_id != 0, else a connection-level ERROR event (type DF_MSG_ERROR,
+ * flags ERROR, request id 0). Type 0 becomes DF_MSG_ERROR. DF_OK or DF_ENOMEM. */
 int df_msg_error_frame(df_buf *out, uint16_t type, uint64_t request_id, int code,
                        df_error *err, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
 

@@ -4,7 +4,19 @@
  * Keys (all optional):
  *   socket             Unix socket path (default $XDG_RUNTIME_DIR/deformd.sock else
  *                      /run/deformd/deformd.sock); "none" disables the Unix listener
- *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it
+ *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it.
+ *                      Only a loopback address (127.0.0.0/8, ::1, localhost) is accepted:
+ *                      TCP has no authentication yet; see tcp_insecure
+ *   tcp_insecure       yes | no (default no): also listen on a non-loopback TCP address (0,
+ *                      *, [::], a LAN address), letting anyone who reaches it in
+ *   socket_mode        permission bits of the Unix socket file, octal (default 0660; not
+ *                      applied to a socket-activated fd: the unit's SocketMode= decides)
+ *   socket_group       group (name or number) of the Unix socket file (default: the daemon's)
+ *   handshake_timeout_s a connection that has not completed HELLO after this many seconds
+ *                      gets an ERROR frame and is closed (0 = off, default 10)
+ *   idle_timeout_s     a connection with no subscription, no unanswered request and no
+ *                      upload that sent nothing for this many seconds gets an ERROR frame
+ *                      and is closed (0 = off, default 300; subscribers may stay silent)
  *   allow_paths        directories whose files may be loaded by server-side path; a
  *                      colon- or comma-separated list; repeated lines append
  *   max_clients        simultaneous connections (1 .. DF_CONFIG_MAX_CLIENTS_LIMIT)
@@ -34,8 +46,8 @@
  *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
  *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
  *                      membudget.h)
- * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
- * --log-level LEVEL, --spin-us N, --inline-us N, --help. */
+ * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
+ * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -77,6 +89,11 @@
 #define DF_CONFIG_MEMORY_UNKNOWN_RAM_MB 4096  /* when the RAM size is unknown */
 #define DF_CONFIG_MIN_MEMORY_MB 16
 #define DF_CONFIG_MAX_MEMORY_MB (1 << 30)
+#define DF_CONFIG_DEFAULT_SOCKET_MODE 0660
+#define DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S 10
+#define DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S 300
+#define DF_CONFIG_MAX_TIMEOUT_S 86400    /* one day */
+#define DF_CONFIG_GROUP_MAX 64
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -99,6 +116,11 @@ typedef struct df_server_config {
     int uploads_max_mb;          /* all in-flight upload buffers together, MiB */
     int history_max_mb;          /* undo history per session, MiB */
     int memory_max_mb;           /* memory budget (membudget.h), MiB */
+    int tcp_insecure;            /* 1: a non-loopback TCP address is allowed */
+    int socket_mode;             /* Unix socket file permissions (e.g. 0660) */
+    char socket_group[DF_CONFIG_GROUP_MAX]; /* "" = the daemon's group */
+    int handshake_timeout_s;     /* HELLO deadline after accept, s (0 = off) */
+    int idle_timeout_s;          /* silent unsubscribed connection deadline, s (0 = off) */
     int foreground;              /* 1: do not daemonize */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;

@@ -12,6 +12,7 @@
 #include "server/session.h"
 #include "server/shm.h"
 #include "server/stream.h"
+#include "server/text.h"
 
 #define DF_SERVER_NAME "deformd 0.1"
 
@@ -57,7 +58,8 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_msg_hello m;
     df_error err;
-    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK) {
+    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK ||
+        df_text_check_name("hello: client_name", m.client_name, &err) != DF_OK) {
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
@@ -66,6 +68,7 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
                      "hello: client speaks versions %u..%u, server %u..%u", m.min_version,
                      m.max_version, DF_PROTO_VERSION_MIN, DF_PROTO_VERSION);
         df_reply_fail(c, h->type, h->request_id, &err);
+        df_conn_close_after_flush(c, "hello: no common protocol version"); /* PROTOCOL.md 4.2b */
         return;
     }
     const df_server_config *cfg = &c->srv->cfg;

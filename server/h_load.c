@@ -28,6 +28,7 @@
 #include "server/meshload.h"
 #include "server/pathload.h"
 #include "server/reply.h"
+#include "server/text.h"
 
 /* First buffer of an inline upload (smaller when total_size is). */
 #define DF_UPLOAD_MIN_BUFFER ((uint64_t)64 << 10)
@@ -266,6 +267,11 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
         fail(c, h, &err);
         return;
     }
+    if (df_text_check_name("load_mesh: name", m.name, &err) != DF_OK) {
+        df_msg_load_mesh_free(&m);
+        fail(c, h, &err);
+        return;
+    }
     if (m.source == DF_LOAD_PATH) {
         if (c->upload || (h->flags & DF_FLAG_MORE)) {
             df_msg_load_mesh_free(&m);
@@ -303,10 +309,11 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
     } else if (!u || u->req_id != h->request_id || m.offset != u->received ||
                m.total_size != u->total || m.format != u->format ||
                m.part2_offset != u->part2 || m.options != u->options ||
-               strcmp(m.file_name, u->file_name) != 0) {
+               strcmp(m.file_name, u->file_name) != 0 || strcmp(m.name, u->name) != 0) {
         df_error_set(&err, DF_EPROTO_CHUNK,
                      "load_mesh: chunk at offset %llu does not continue the upload (expected "
-                     "offset %llu of request %llu)",
+                     "offset %llu of request %llu, with the first chunk's total_size, format, "
+                     "part2_offset and name)",
                      (unsigned long long)m.offset, (unsigned long long)(u ? u->received : 0),
                      (unsigned long long)(u ? u->req_id : h->request_id));
         df_msg_load_mesh_free(&m);

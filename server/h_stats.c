@@ -40,6 +40,9 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "clients_total", (double)x->clients_total);
         put(&st, "clients_dropped", (double)x->clients_dropped);
         put(&st, "clients_refused", (double)x->clients_refused);
+        put(&st, "clients_refused_fds", (double)x->clients_refused_fds);
+        put(&st, "clients_handshake_timeout", (double)x->clients_handshake_timeout);
+        put(&st, "clients_idle_timeout", (double)x->clients_idle_timeout);
         put(&st, "frames_in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);

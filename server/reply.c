@@ -72,7 +72,6 @@ void df_reply_error(df_conn *c, uint16_t type, uint64_t request_id, int code, co
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     if (!df_proto_error_valid(code)) code = DF_EINTERNAL;
-    if (!df_msg_type_valid(type)) type = DF_MSG_ERROR;
     df_buf b;
     df_buf_init(&b);
     df_error err;

@@ -84,6 +84,12 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
         df_meshload_free(mesh);
         return df_error_set(err, DF_ELIMIT, "too many sessions (max_sessions = %d)", max);
     }
+    if (name && name[0] && df_session_find_name(srv, name)) {
+        df_meshload_free(mesh);
+        return df_error_set(err, DF_EEXIST,
+                            "session name '%s' is already in use (close that session or pick "
+                            "another name)", name);
+    }
     size_t n = (size_t)mesh->nv * 3;
     uint64_t est = df_session_estimate_bytes(mesh);
     char what[64];

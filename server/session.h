@@ -105,8 +105,9 @@ typedef struct df_session {
 uint64_t df_session_estimate_bytes(const df_mesh *mesh);
 
 /* Creates a session owning `mesh` (moved in: the caller's struct is zeroed) named `name`
- * ("" -> "session-<id>") and links it into srv. The estimate and the history's first state are
- * charged to srv->mem first. Errors: DF_ELIMIT (max_sessions, or memory_max_mb: the message
+ * ("" -> "session-<id>") and links it into srv. Names are unique among live sessions. The
+ * estimate and the history's first state are charged to srv->mem first. Errors: DF_EEXIST (a
+ * live session already has `name`), DF_ELIMIT (max_sessions, or memory_max_mb: the message
  * names it), DF_ENOMEM. On error the mesh is freed. */
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err);

@@ -243,9 +243,27 @@ class Client:
         if request_id is None:
             request_id = self._next_id
             self._next_id += 1
-        self.sock.sendall(fr.encode_frame(msg_type, payload, request_id, flags))
+        try:
+            self.sock.sendall(fr.encode_frame(msg_type, payload, request_id, flags))
+        except (BrokenPipeError, ConnectionResetError) as e:
+            self._raise_why_closed(e)
         self._pending.setdefault(request_id, [])
         return request_id
+
+    def _raise_why_closed(self, cause: BaseException) -> None:
+        """The daemon closed the connection under a send: raises the DeformdError of the
+        ERROR event it sent before closing (e.g. refused at max_clients, a timeout), else
+        ConnectionClosed."""
+        try:
+            while self._read_more(time.monotonic()):
+                pass
+        except ConnectionClosed:
+            pass
+        for f in self._frames:
+            if f.is_error and f.type == m.ERROR and f.request_id == 0:
+                code, msg = m.decode_error(f.payload)
+                raise DeformdError(code, error_name(code), msg) from cause
+        raise ConnectionClosed("deformd closed the connection") from cause
 
     def _keep_reply(self, f: fr.Frame) -> None:
         """Files a reply frame of a request nobody is waiting for yet (dropped if unknown)."""
