@@ -146,6 +146,51 @@ static int stroke_applied_nothing(const df_stroke *st, size_t n)
     return 1;
 }
 
+/* The checks a stroke's fixed parameters must pass whatever its loads: strength within
+ * +-DF_BRUSH_MAX_STRENGTH, pins only on a 3D, unmirrored, stationary brush (what the pinned
+ * solver supports), and the Kelvinlet engine's own rules (nu, radii, ratio, order; a scale brush
+ * at nu 0.5 is singular). `what` names the request in messages. */
+static int stroke_params_check(const df_stroke *st, const char *what, df_error *err)
+{
+    const df_kelvinlet_brush *b = &st->brush;
+    if (!isfinite(st->strength) || fabs(st->strength) > DF_BRUSH_MAX_STRENGTH)
+        return df_error_set(err, DF_EINVAL, "%s: strength %g outside [-%g, %g]", what,
+                            st->strength, DF_BRUSH_MAX_STRENGTH, DF_BRUSH_MAX_STRENGTH);
+    if (st->n_pins && (b->dim != 3 || b->mirror || b->moving))
+        return df_error_set(err, DF_EUNSUPPORTED, "%s: pinned points need a 3D, unmirrored, "
+                            "stationary brush (dim %d, mirror %d, moving %d)", what, b->dim,
+                            b->mirror, b->moving);
+    df_kelvinlet_prepared prep;
+    df_error e;
+    int rc = df_kelvinlet_prepare(b, &prep, &e);
+    if (rc != DF_OK)
+        return df_error_set(err, rc, "%s: %s", what, e.msg);
+    df_kelvinlet_prepared_free(&prep);
+    return DF_OK;
+}
+
+int df_h_brush_knob_check(const df_stroke *st, uint8_t param, double value, df_error *err)
+{
+    df_stroke t = *st;  /* shallow: only the scalar parameters change */
+    const char *name = "?";
+    switch (param) {
+    case DF_BP_RADIUS: t.brush.radius = value; name = "radius"; break;
+    case DF_BP_NU: t.brush.nu = value; name = "nu"; break;
+    case DF_BP_STRENGTH: t.strength = value; name = "strength"; break;
+    case DF_BP_FALLOFF: t.brush.order = (int)value; name = "falloff"; break;
+    case DF_BP_RATIO: t.brush.ratio = value; name = "ratio"; break;
+    default:
+        return df_error_set(err, DF_EINVAL, "set_brush_param: param %u not in 1..%u", param,
+                            DF_BP_MAX);
+    }
+    df_error e;
+    int rc = stroke_params_check(&t, "set_brush_param", &e);
+    if (rc != DF_OK)
+        return df_error_set(err, rc, "set_brush_param: %s %g refused, stroke unchanged (%s)",
+                            name, value, e.msg + strlen("set_brush_param: "));
+    return DF_OK;
+}
+
 /* 1 when all 16 load components of a request (move, twist, scale, matrix) are zero. */
 static int load_is_zero(const double *load)
 {
@@ -220,13 +265,10 @@ static void begin_work_inner(df_job *j)
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
     st->last_version = atomic_load(&s->version);
-    if (load_is_zero(r->load)) { /* validate the brush, publish nothing */
-        df_kelvinlet_prepared prep;
-        if (st->n_pins) j->rc = DF_OK; /* pins are validated by the first update */
-        else if ((j->rc = df_kelvinlet_prepare(&st->brush, &prep, &j->err)) == DF_OK)
-            df_kelvinlet_prepared_free(&prep);
-        return;
-    }
+    /* validate the brush (a zero-load begin publishes nothing; the pin LU is built and
+     * checked by the first update) */
+    if ((j->rc = stroke_params_check(st, "brush_begin", &j->err)) != DF_OK) return;
+    if (load_is_zero(r->load)) return;
     j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
     if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
 }
