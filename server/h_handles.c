@@ -28,6 +28,7 @@ typedef struct hs_req {
     uint8_t status;
     uint64_t progress_every;
     uint64_t t0;
+    int publish_failed;        /* move: an iterate was refused (j->err says why): stop, fail */
     df_frames frames;          /* final frame(s) */
 } hs_req;
 
@@ -250,18 +251,40 @@ static int on_progress(void *user, const df_admm_progress *p)
     if (atomic_load(&j->cancel)) return 1;
     if (r->progress_every && p->iteration % (int)r->progress_every == 0) {
         df_frames f = {0};
-        if (publish_iterate(j, p->V, p->iteration, p->objective, p->residual, DF_MOVE_RUNNING, 0,
-                            &f) == DF_OK) {
-            uint64_t v = atomic_load(&j->s->version);
-            for (size_t i = 0; i < f.n; i++) {
-                df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
-                f.v[i] = NULL;
-            }
-            f.n = 0;
+        int prc = publish_iterate(j, p->V, p->iteration, p->objective, p->residual,
+                                  DF_MOVE_RUNNING, 0, &f);
+        if (prc != DF_OK) { /* e.g. an iterate not finite in float32: the move fails */
+            df_frames_clear(&f);
+            r->publish_failed = prc;
+            return 1;
         }
+        uint64_t v = atomic_load(&j->s->version);
+        for (size_t i = 0; i < f.n; i++) {
+            df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
+            f.v[i] = NULL;
+        }
+        f.n = 0;
         df_frames_clear(&f);
     }
     return 0;
+}
+
+/* Refuses targets whose handle would leave float32 range: the position a client holds is the
+ * load-time float32 position plus a float32 displacement, and both must stay finite. */
+static int targets_check(const df_session *s, const df_handleset *hs, const double *t,
+                         df_error *err)
+{
+    for (int32_t k = 0; k < hs->nh; k++)
+        for (int c = 0; c < 3; c++) {
+            size_t i = 3 * (size_t)hs->handles[k] + (size_t)c;
+            float u = (float)(t[3 * (size_t)k + c] - s->mesh.V[i]);
+            if (!isfinite(u) || !isfinite(s->basef[i] + u))
+                return df_error_set(err, DF_EINVAL, "handles_move: target %d (vertex %d) "
+                                    "component %d = %g is not finite in float32 (|x| <= "
+                                    "3.4e38); nothing changed", k, hs->handles[k], c,
+                                    t[3 * (size_t)k + c]);
+        }
+    return DF_OK;
 }
 
 static void move_work(df_job *j)
@@ -280,6 +303,7 @@ static void move_work(df_job *j)
                              r->mv.n_targets, hs->nh);
         return;
     }
+    if ((j->rc = targets_check(s, hs, r->mv.targets, &j->err)) != DF_OK) return;
     if (!hs->solver) {
         if ((j->rc = build_solver(s, hs, &j->err)) != DF_OK) return;
         r->created = 1;
@@ -294,6 +318,12 @@ static void move_work(df_job *j)
                         .progress = on_progress,
                         .user = j};
     int rc = df_admm_run(hs->solver, &b, &r->res, &j->err);
+    if (r->publish_failed) { /* j->err holds the refusal; the iterates before it stay */
+        r->status = DF_MOVE_FAILED;
+        s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+        j->rc = r->publish_failed;
+        return;
+    }
     if (rc != DF_OK) r->status = DF_MOVE_FAILED;
     else if (r->res.converged) r->status = DF_MOVE_CONVERGED;
     else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
