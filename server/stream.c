@@ -152,7 +152,6 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
     size_t nv = (size_t)s->nv;
     const double *X = s->mesh.V;
     const float *uf = s->uf;
-    const float *bf = s->basef;
     float *newu = s->scratch_u;
     int32_t *idx = s->scratch_idx;
     /* Pass 1: new displacements, their finiteness, changed components. `omp simd` because
@@ -168,13 +167,14 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
         memcpy(&b, uf + i, 4);
         newu[i] = u;
         /* NaN or infinite: the float32 displacement, or the float32 position a client gets
-         * (load-time float32 position + displacement, as GET_MESH and replicas compute it) */
-        bad |= !(fabsf(u) <= FLT_MAX) | !(fabsf(bf[i] + u) <= FLT_MAX);
+         * (load-time float32 position fl32(X) = s->basef + displacement, as GET_MESH and
+         * replicas compute it) */
+        bad |= !(fabsf(u) <= FLT_MAX) | !(fabsf((float)X[i] + u) <= FLT_MAX);
         ne += a != b;
     }
     if (bad) {
         for (size_t i = 0; i < m; i++)
-            if (!isfinite(newu[i]) || !isfinite(bf[i] + newu[i]))
+            if (!isfinite(newu[i]) || !isfinite((float)X[i] + newu[i]))
                 return df_error_set(err, DF_EINVAL, "the result is refused: vertex %zu "
                                     "component %zu would be %g, not finite in float32 "
                                     "(|x| <= 3.4e38); nothing changed", i / 3, i % 3, pos[i]);
