@@ -99,6 +99,7 @@ int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, co
     memset(&m, 0, sizeof m);
     m.source = DF_LOAD_INLINE;
     m.format = format;
+    m.flags = c->load_flags;
     size_t nl = name ? strlen(name) : 0;
     if (nl > DF_MAX_NAME_LEN)
         return df_error_set(err, DF_EINVAL, "load mesh: name longer than %u bytes", DF_MAX_NAME_LEN);
@@ -193,6 +194,12 @@ int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
     return rc;
 }
 
+void df_client_set_load_flags(df_client *c, uint16_t flags)
+{
+    if (c)
+        c->load_flags = flags;
+}
+
 static int enc_load(const void *m, df_buf *out, df_error *err)
 {
     return df_msg_load_mesh_encode(m, out, err);
@@ -205,6 +212,7 @@ int df_client_load_mesh_path(df_client *c, const char *path, const char *name, u
     memset(&m, 0, sizeof m);
     m.source = DF_LOAD_PATH;
     m.format = format;
+    m.flags = c->load_flags;
     m.path = (char *)path;
     size_t nl = name ? strlen(name) : 0;
     if (nl > DF_MAX_NAME_LEN)

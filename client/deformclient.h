@@ -114,6 +114,10 @@ int df_client_ping(df_client *c, const void *data, uint32_t len, double *rtt_us,
  * DF_EUNSUPPORTED. */
 int df_client_auth(df_client *c, uint16_t method, const void *token, uint32_t len, df_error *err);
 
+/* Sets the DF_LOAD_* flags (0 or DF_LOAD_2D: a 2D session even if the file gives z) sent with
+ * every later load on `c` (df_client_load_mesh_bytes / _file / _path); 0 at connect. */
+void df_client_set_load_flags(df_client *c, uint16_t flags);
+
 /* Uploads `len` bytes of a mesh file in `format` (DF_FMT_*, DF_FMT_AUTO sniffs) as session
  * `name` (may be NULL/""), in chunks that fit the server's max frame payload. For DF_FMT_TETGEN
  * `bytes` holds the .node bytes then the .ele bytes, the .ele starting at `part2_offset`

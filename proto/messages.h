@@ -124,6 +124,12 @@ typedef enum df_load_source {
     DF_LOAD_PATH = 1           /* server reads `path` (only with DF_FEAT_PATH_LOAD) */
 } df_load_source;
 
+#define DF_LOAD_2D 0x0001u     /* load_mesh flags: a 2D session even if the file gives z
+                                * (every z must be 0, no tetrahedra); without it a mesh is 2D
+                                * only when its file declares 2D (OBJ `v x y`, MEDIT Dimension
+                                * 2, TetGen .node dimension 2, PLY without z) */
+#define DF_LOAD_FLAGS_ALL DF_LOAD_2D
+
 typedef enum df_brush_type {
     DF_BRUSH_GRAB = 1,         /* uses move[] (tip displacement) */
     DF_BRUSH_TWIST = 2,        /* uses twist[] (rotation vector: centre vorticity) */
@@ -241,6 +247,8 @@ typedef struct df_msg_load_mesh {      /* one chunk of a mesh upload (or a path 
     uint64_t offset;                   /* byte offset of this chunk in the upload; PATH: 0 */
     uint32_t data_len;                 /* bytes in this chunk; offset + data_len <= total_size */
     const uint8_t *data;               /* points into the payload (decode) */
+    uint16_t flags;                    /* DF_LOAD_* bits (DF_LOAD_2D), the same in every chunk;
+                                        * unknown bits are EINVAL (wire offset 2, after format) */
 } df_msg_load_mesh;
 
 typedef struct df_msg_session_ref {    /* any request/event that names just a session */

@@ -1,5 +1,5 @@
 /* msg_load.c — load mesh request body (messages.h).
- * u8 source, u8 format, u16 reserved, u64 total_size, u64 part2_offset, u64 offset,
+ * u8 source, u8 format, u16 flags, u64 total_size, u64 part2_offset, u64 offset,
  * str name, str path (u16 length <= DF_MAX_PATH_LEN), u32 data_len, data bytes */
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +13,9 @@ static int load_check(const df_msg_load_mesh *m, df_error *err)
     if (m->format > DF_FMT_MAX)
         return df_error_set(err, DF_EINVAL, "%s: format %u not in 0..%u", M, m->format,
                             DF_FMT_MAX);
+    if (m->flags & ~DF_LOAD_FLAGS_ALL)
+        return df_error_set(err, DF_EINVAL, "%s: flags 0x%x has unknown bits (only 0x%x)", M,
+                            m->flags, DF_LOAD_FLAGS_ALL);
     int rc = df_check_str(m->name, DF_MAX_NAME_LEN, M, "name", err);
     if (rc)
         return rc;
@@ -63,7 +66,7 @@ int df_msg_load_mesh_encode(const df_msg_load_mesh *m, df_buf *out, df_error *er
         return rc;
     df_buf_put_u8(out, m->source);
     df_buf_put_u8(out, m->format);
-    df_buf_put_u16(out, 0);
+    df_buf_put_u16(out, m->flags);
     df_buf_put_u64(out, m->total_size);
     df_buf_put_u64(out, m->part2_offset);
     df_buf_put_u64(out, m->offset);
@@ -81,7 +84,7 @@ int df_msg_load_mesh_decode(const uint8_t *p, size_t n, df_msg_load_mesh *m, df_
     df_rd_init(&r, p, n, "load_mesh", err);
     t.source = df_rd_u8(&r, "source");
     t.format = df_rd_u8(&r, "format");
-    df_rd_reserved16(&r, "reserved");
+    t.flags = df_rd_u16(&r, "flags");
     t.total_size = df_rd_u64(&r, "total_size");
     t.part2_offset = df_rd_u64(&r, "part2_offset");
     t.offset = df_rd_u64(&r, "offset");

@@ -101,6 +101,12 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     if (rc != DF_OK) return rc;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
+    if (rc == DF_OK && s->mesh.planar) /* 2D session: z stays 0 (planar_check), verified */
+        for (int32_t i = 0; i < s->nv; i++)
+            if (disp[3 * (size_t)i + 2] != 0.0f)
+                return df_error_set(err, DF_EINVAL, "brush: the field would move vertex %d "
+                                    "off the plane of this 2D session (z %g)", i,
+                                    (double)disp[3 * (size_t)i + 2]);
     return rc;
 }
 
@@ -191,6 +197,40 @@ int df_h_brush_knob_check(const df_stroke *st, uint8_t param, double value, df_e
     return DF_OK;
 }
 
+/* A 2D session (mesh declared 2D) keeps every z at 0: a load that would move z is refused
+ * rather than having its z part dropped. Loads: move z, twist about x or y, a gradient with a
+ * z row or column; with a 3D brush also a centre, mirror normal or pin off the z = 0 plane
+ * (those make the 3D field move z). `b` may be NULL (updates: the loads only). */
+static int planar_check(const df_session *s, const df_kelvinlet_brush *b, const df_stroke *st,
+                        const double *load, const char *what, df_error *err)
+{
+    if (!s->mesh.planar) return DF_OK;
+    static const char *const hint = "the session is 2D (load the mesh as 3D to move z)";
+    if (load[2] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: move z = %g would leave the plane: %s", what,
+                            load[2], hint);
+    if (load[3] != 0.0 || load[4] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: twist (%g, %g, _) about x/y would leave the "
+                            "plane: %s", what, load[3], load[4], hint);
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            if ((i == 2 || k == 2) && load[7 + 3 * i + k] != 0.0)
+                return df_error_set(err, DF_EINVAL, "%s: matrix[%d][%d] = %g would move z: %s",
+                                    what, i, k, load[7 + 3 * i + k], hint);
+    if (!b || b->dim != 3) return DF_OK;
+    if (b->centre[2] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: a 3D brush centred at z = %g would move z: %s "
+                            "(or use dim 2)", what, b->centre[2], hint);
+    if (b->mirror && b->mirror_normal[2] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: mirror normal z = %g would move z: %s", what,
+                            b->mirror_normal[2], hint);
+    for (uint32_t k = 0; k < st->n_pins; k++)
+        if (st->pins[3 * (size_t)k + 2] != 0.0)
+            return df_error_set(err, DF_EINVAL, "%s: pinned point %u at z = %g would move z: %s",
+                                what, k, st->pins[3 * (size_t)k + 2], hint);
+    return DF_OK;
+}
+
 /* 1 when all 16 load components of a request (move, twist, scale, matrix) are zero. */
 static int load_is_zero(const double *load)
 {
@@ -268,6 +308,8 @@ static void begin_work_inner(df_job *j)
     /* validate the brush (a zero-load begin publishes nothing; the pin LU is built and
      * checked by the first update) */
     if ((j->rc = stroke_params_check(st, "brush_begin", &j->err)) != DF_OK) return;
+    if ((j->rc = planar_check(s, &st->brush, st, r->load, "brush_begin", &j->err)) != DF_OK)
+        return;
     if (load_is_zero(r->load)) return;
     j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
     if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
@@ -312,7 +354,8 @@ static void update_work_inner(df_job *j)
         memset(disp, 0, n * sizeof *disp);
         j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
     } else {
-        j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
+        j->rc = planar_check(s, NULL, st, r->load, "brush_update", &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
         if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
     }
 }

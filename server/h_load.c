@@ -19,6 +19,7 @@
 typedef struct df_upload {
     uint64_t req_id;
     uint8_t format;
+    uint16_t flags;         /* DF_LOAD_* of the request (DF_LOAD_2D) */
     char name[DF_MAX_NAME_LEN + 1];
     uint64_t total, part2, received;
     uint8_t *data;
@@ -41,9 +42,11 @@ static void load_work(df_job *j)
     int32_t maxv = j->srv->cfg.max_mesh_vertices;
     if ((uint32_t)maxv > DF_MAX_MESH_VERTICES) maxv = (int32_t)DF_MAX_MESH_VERTICES;
     if (u->path)
-        j->rc = df_meshload_file(u->path, u->format, maxv, &u->mesh, &j->err);
+        j->rc = df_meshload_file(u->path, u->format, maxv, (u->flags & DF_LOAD_2D) != 0,
+                                 &u->mesh, &j->err);
     else
         j->rc = df_meshload_memory(u->data, (size_t)u->total, u->format, (size_t)u->part2, maxv,
+                                   (u->flags & DF_LOAD_2D) != 0,
                                    u->name[0] ? u->name : "upload", &u->mesh, &j->err);
     if (j->rc == DF_OK && (uint32_t)u->mesh.ne > DF_MAX_MESH_ELEMENTS)
         j->rc = df_error_set(&j->err, DF_ELIMIT, "mesh has %d elements (max %u)", u->mesh.ne,
@@ -131,6 +134,7 @@ static void load_path(df_conn *c, const df_frame_header *h, const df_msg_load_me
     }
     u->req_id = h->request_id;
     u->format = m->format;
+    u->flags = m->flags;
     u->path = real;
     snprintf(u->name, sizeof u->name, "%s", m->name);
     submit_load(c, u);
@@ -169,12 +173,13 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
         }
         u->req_id = h->request_id;
         u->format = m.format;
+        u->flags = m.flags;
         u->total = m.total_size;
         u->part2 = m.part2_offset;
         snprintf(u->name, sizeof u->name, "%s", m.name);
         c->upload = u;
     } else if (!u || u->req_id != h->request_id || m.offset != u->received ||
-               m.total_size != u->total || m.format != u->format ||
+               m.total_size != u->total || m.format != u->format || m.flags != u->flags ||
                m.part2_offset != u->part2) {
         df_error_set(&err, DF_EPROTO_CHUNK,
                      "load_mesh: chunk at offset %llu does not continue the upload (expected "

@@ -53,6 +53,7 @@ static int run_load(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         return CTL_EXIT_SERVER;
     df_error e;
     df_msg_session_info info;
+    df_client_set_load_flags(c, a->val[4] ? DF_LOAD_2D : 0);
     int rc = df_client_load_mesh_file(c, file, name, &info, &e);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);
@@ -286,6 +287,9 @@ static const dc_cli_opt PLAIN_OPTS[] = {CTL_GLOBAL_OPTS};
 static const dc_cli_opt LOAD_OPTS[] = {
     CTL_GLOBAL_OPTS,
     {"name", 1, "--name NAME        session name (default: chosen by the daemon)"},
+    {"2d", 0, "--2d               a 2D session even if the file gives z (every z must be 0); "
+              "else 2D only when the file is (OBJ `v x y`, MEDIT Dimension 2, 2D .node, PLY "
+              "without z)"},
 };
 static const dc_cli_opt STATS_OPTS[] = {
     CTL_GLOBAL_OPTS,
@@ -302,7 +306,7 @@ static const dc_cli_opt WATCH_OPTS[] = {
 const ctl_cmd ctl_cmds_session[] = {
     {"ping", "ping", "Check that the daemon answers; prints the round trip.", PLAIN_OPTS,
      N(PLAIN_OPTS), 0, run_ping},
-    {"load", "load FILE [--name NAME]",
+    {"load", "load FILE [--name NAME] [--2d]",
      "Upload a mesh (.obj .off .ply .mesh, or X.node with X.ele); prints the new session id.",
      LOAD_OPTS, N(LOAD_OPTS), 1, run_load},
     {"list", "list", "List the sessions: id, name, kind, sizes, version, subscribers.", PLAIN_OPTS,

@@ -459,15 +459,17 @@ class Client:
     # ------------------------------------------------------------------ sessions
     def load_mesh(self, data: Optional[bytes] = None, path: Optional[str] = None,
                   fmt: Union[int, str] = m.FMT_AUTO, name: str = "",
-                  ele: Optional[bytes] = None) -> m.SessionInfo:
+                  ele: Optional[bytes] = None, two_d: bool = False) -> m.SessionInfo:
         """Creates a session from inline file bytes (`data`; for TetGen pass the .node bytes as
         data and the .ele bytes as ele) or from a server-side `path`. fmt: a FMT_* value or a
-        file extension (".obj")."""
+        file extension (".obj"). two_d: a 2D session even if the file gives z (every z must be
+        0); otherwise the session is 2D only when the file declares it (OBJ `v x y`, ...)."""
         if isinstance(fmt, str):
             fmt = m.FORMAT_BY_EXT[fmt.lower()]
+        flags = m.LOAD_2D if two_d else 0
         if path is not None:
             return m.decode_session_info(self._one(m.LOAD_MESH, m.encode_load_mesh(
-                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"")))
+                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"", flags)))
         if data is None:
             raise ValueError("load_mesh needs data or path")
         part2 = 0
@@ -483,7 +485,7 @@ class Client:
             chunk = data[off:off + m.LOAD_CHUNK_BYTES]
             last = off + len(chunk) >= total
             self.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, fmt, name, "", total, part2,
-                                                      off, chunk),
+                                                      off, chunk, flags),
                       0 if last else fr.FLAG_MORE, rid)
             off += len(chunk)
             if last:
@@ -491,15 +493,17 @@ class Client:
         parts = self.wait_reply(rid)
         return m.decode_session_info(b"".join(p.payload for p in parts))
 
-    def load_file(self, filename: str, name: str = "") -> m.SessionInfo:
-        """Reads a local mesh file and uploads it inline (a .node brings its .ele along)."""
+    def load_file(self, filename: str, name: str = "", two_d: bool = False) -> m.SessionInfo:
+        """Reads a local mesh file and uploads it inline (a .node brings its .ele along);
+        two_d as in load_mesh."""
         ext = os.path.splitext(filename)[1].lower()
         with open(filename, "rb") as f:
             data = f.read()
         if ext == ".node":
             with open(filename[:-5] + ".ele", "rb") as f:
-                return self.load_mesh(data, ele=f.read(), name=name)
-        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT.get(ext, m.FMT_AUTO), name=name)
+                return self.load_mesh(data, ele=f.read(), name=name, two_d=two_d)
+        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT.get(ext, m.FMT_AUTO), name=name,
+                              two_d=two_d)
 
     def list_sessions(self) -> List[m.SessionInfo]:
         return m.decode_session_list(self._one(m.LIST_SESSIONS))

@@ -129,9 +129,12 @@ def decode_error(p: bytes):
     return code, msg
 
 
+LOAD_2D = 0x0001   # load_mesh flags: a 2D session even if the file gives z (every z must be 0)
+
+
 def encode_load_mesh(source: int, fmt: int, name: str, path: str, total_size: int,
-                     part2_offset: int, offset: int, data: bytes) -> bytes:
-    return (struct.pack("<BBHQQQ", source, fmt, 0, total_size, part2_offset, offset)
+                     part2_offset: int, offset: int, data: bytes, flags: int = 0) -> bytes:
+    return (struct.pack("<BBHQQQ", source, fmt, flags, total_size, part2_offset, offset)
             + pack_str(name) + pack_str(path) + struct.pack("<I", len(data)) + bytes(data))
 
 

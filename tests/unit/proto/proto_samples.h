@@ -131,10 +131,11 @@ static inline void build_samples(sample *s)
     df_msg_ping ping = {3, tok};
     ADD("ping", DF_MSG_PING, 0, df_msg_ping_encode(&ping, out, &e));
     df_msg_load_mesh lm = {DF_LOAD_INLINE, DF_FMT_OFF, "tri", NULL, sizeof sample_blob - 1, 0,
-                           0, sizeof sample_blob - 1, sample_blob};
+                           0, sizeof sample_blob - 1, sample_blob, 0};
     ADD("load_mesh", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lm, out, &e));
     char path[] = "/work/shared/meshes/spot.obj";
-    df_msg_load_mesh lp = {DF_LOAD_PATH, DF_FMT_AUTO, "spot", path, 0, 0, 0, 0, NULL};
+    df_msg_load_mesh lp = {DF_LOAD_PATH, DF_FMT_AUTO, "spot", path, 0, 0, 0, 0, NULL,
+                           DF_LOAD_2D};
     ADD("load_path", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lp, out, &e));
     df_msg_session_ref ref = {0x1122334455667788ull};
     ADD("session_ref", DF_MSG_UNDO, 0, df_msg_session_ref_encode(&ref, out, &e));

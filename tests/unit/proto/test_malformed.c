@@ -151,7 +151,7 @@ static void test_load_mesh_bodies(void **state)
      * data_len at 35, data at 39 */
     u8("load_mesh", 0, 2, DF_EINVAL, "source");
     u8("load_mesh", 1, 6, DF_EINVAL, "format 6");
-    u16("load_mesh", 2, 7, DF_EPROTO_RESERVED, "reserved");
+    u16("load_mesh", 2, 6, DF_EINVAL, "flags");   /* only DF_LOAD_2D (1) is defined */
     u64("load_mesh", 4, 0, DF_ELIMIT, "total_size");
     u64("load_mesh", 4, DF_MAX_MESH_BYTES + 1, DF_ELIMIT, "total_size");
     u64("load_mesh", 4, 10, DF_EINVAL, "chunk");
@@ -172,9 +172,9 @@ static void test_load_mesh_bodies(void **state)
     df_buf b;
     df_buf_init(&b);
     df_error e;
-    df_msg_load_mesh lp = {DF_LOAD_PATH, 0, "", NULL, 0, 0, 0, 0, NULL};
+    df_msg_load_mesh lp = {DF_LOAD_PATH, 0, "", NULL, 0, 0, 0, 0, NULL, 0};
     assert_int_equal(df_msg_load_mesh_encode(&lp, &b, &e), DF_EINVAL);
-    df_msg_load_mesh li = {DF_LOAD_INLINE, 0, "", NULL, 10, 0, 0, 10, NULL};
+    df_msg_load_mesh li = {DF_LOAD_INLINE, 0, "", NULL, 10, 0, 0, 10, NULL, 0};
     assert_int_equal(df_msg_load_mesh_encode(&li, &b, &e), DF_EINVAL);
     assert_int_equal(b.len, 0);
     df_buf_free(&b);
