@@ -2,11 +2,13 @@
  * auth, load mesh (chunked inline upload or server path), list/open/close, subscribe. */
 #include "client/dc_client.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
 #include "client/dc_files.h"
+#include "core/mesh/mesh_io.h"
 
 /* Bytes of a load-mesh chunk body besides the data (fixed fields + name + empty path). */
 #define DC_LOAD_OVERHEAD (64u + DF_MAX_NAME_LEN)
@@ -85,9 +87,29 @@ int df_client_auth(df_client *c, uint16_t method, const void *token, uint32_t le
     return dc_request(c, DF_MSG_AUTH, enc_auth, &m, NULL, NULL, err);
 }
 
-int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, const void *bytes,
-                              uint64_t len, uint64_t part2_offset, df_msg_session_info *info,
-                              df_error *err)
+static int reply_load(void *user, const df_frame_header *h, const uint8_t *p, df_error *err)
+{
+    df_msg_load_reply r;
+    int rc = df_msg_load_reply_decode(p, h->payload_len, &r, err);
+    if (rc == DF_OK && user)
+        *(df_msg_load_reply *)user = r;
+    return rc;
+}
+
+/* Copies `s` (may be NULL) into dst (DF_MAX_NAME_LEN + 1 bytes); DF_EINVAL when too long. */
+static int put_name(char *dst, const char *s, const char *what, df_error *err)
+{
+    size_t nl = s ? strlen(s) : 0;
+    if (nl > DF_MAX_NAME_LEN)
+        return df_error_set(err, DF_EINVAL, "load mesh: %s longer than %u bytes", what,
+                            DF_MAX_NAME_LEN);
+    memcpy(dst, s ? s : "", nl + 1);
+    return DF_OK;
+}
+
+int df_client_load_mesh_bytes_ex(df_client *c, const char *name, const char *file_name,
+                                 uint8_t format, const void *bytes, uint64_t len,
+                                 uint64_t part2_offset, df_msg_load_reply *reply, df_error *err)
 {
     c->remote_err = 0;
     if (!bytes || len == 0)
@@ -99,12 +121,12 @@ int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, co
     memset(&m, 0, sizeof m);
     m.source = DF_LOAD_INLINE;
     m.format = format;
-    m.flags = c->load_flags;
-    size_t nl = name ? strlen(name) : 0;
-    if (nl > DF_MAX_NAME_LEN)
-        return df_error_set(err, DF_EINVAL, "load mesh: name longer than %u bytes", DF_MAX_NAME_LEN);
-    if (nl)
-        memcpy(m.name, name, nl + 1);
+    m.options = (uint16_t)(DF_LOAD_OPT_EXT | c->load_flags);
+    int rc = put_name(m.name, name, "name", err);
+    if (!rc)
+        rc = put_name(m.file_name, file_name, "file name", err);
+    if (rc)
+        return rc;
     m.total_size = len;
     m.part2_offset = part2_offset;
     uint32_t maxp = c->server.max_frame_payload ? c->server.max_frame_payload : DF_MAX_FRAME_PAYLOAD;
@@ -118,7 +140,7 @@ int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, co
         m.data_len = (uint32_t)n;
         m.data = (const uint8_t *)bytes + off;
         df_buf_reset(&c->out);
-        int rc = df_msg_load_mesh_encode(&m, &c->out, err);
+        rc = df_msg_load_mesh_encode(&m, &c->out, err);
         if (rc)
             return rc;
         uint16_t flags = off + n < len ? DF_FLAG_MORE : 0;
@@ -126,7 +148,22 @@ int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, co
         if (rc)
             return rc;
     }
-    return dc_wait_reply(c, DF_MSG_LOAD_MESH, id, dc_reply_session_info, info, err);
+    df_msg_load_reply r;
+    rc = dc_wait_reply(c, DF_MSG_LOAD_MESH, id, reply_load, &r, err);
+    if (rc == DF_OK && reply)
+        *reply = r;
+    return rc;
+}
+
+int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, const void *bytes,
+                              uint64_t len, uint64_t part2_offset, df_msg_session_info *info,
+                              df_error *err)
+{
+    df_msg_load_reply r;
+    int rc = df_client_load_mesh_bytes_ex(c, name, NULL, format, bytes, len, part2_offset, &r, err);
+    if (rc == DF_OK && info)
+        *info = r.info;
+    return rc;
 }
 
 static int ends_with(const char *s, const char *suf)
@@ -135,34 +172,36 @@ static int ends_with(const char *s, const char *suf)
     return a >= b && strcasecmp(s + a - b, suf) == 0;
 }
 
-int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
-                             df_msg_session_info *info, df_error *err)
+static const char *base_name(const char *path)
+{
+    const char *b = strrchr(path, '/');
+    return b ? b + 1 : path;
+}
+
+int df_client_load_mesh_file_ex(df_client *c, const char *path, const char *name,
+                                df_msg_load_reply *reply, df_error *err)
 {
     c->remote_err = 0;
     if (!path || !*path)
         return df_error_set(err, DF_EINVAL, "load mesh: empty path");
+    char fname[DF_MAX_NAME_LEN + 1];
+    snprintf(fname, sizeof fname, "%s", base_name(path));
     char *data = NULL;
     long long len = 0;
     int rc;
     if (ends_with(path, ".node") || ends_with(path, ".ele")) {
-        size_t stem = strlen(path) - (ends_with(path, ".node") ? 5 : 4);
-        char *np = malloc(stem + 6), *ep = malloc(stem + 6);
+        size_t pl = strlen(path) + 8;
+        char *other = malloc(pl);
         char *nt = NULL, *et = NULL;
         long long nlen = 0, elen = 0;
-        if (!np || !ep) {
-            free(np);
-            free(ep);
+        if (!other)
             return df_error_set(err, DF_ENOMEM, "out of memory");
-        }
-        memcpy(np, path, stem);
-        memcpy(ep, path, stem);
-        strcpy(np + stem, ".node");
-        strcpy(ep + stem, ".ele");
-        rc = dc_read_file(np, &nt, &nlen, err);
+        df_mesh_tetgen_sibling(path, other, pl); /* keeps the case: T1.NODE -> T1.ELE */
+        int is_node = ends_with(path, ".node");
+        rc = dc_read_file(is_node ? path : other, &nt, &nlen, err);
         if (rc == DF_OK)
-            rc = dc_read_file(ep, &et, &elen, err);
-        free(np);
-        free(ep);
+            rc = dc_read_file(is_node ? other : path, &et, &elen, err);
+        free(other);
         if (rc == DF_OK && (nlen == 0 || elen == 0))
             rc = df_error_set(err, DF_EFORMAT, "%s: empty .node or .ele file", path);
         if (rc == DF_OK && !(data = malloc((size_t)(nlen + elen))))
@@ -170,26 +209,26 @@ int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
         if (rc == DF_OK) {
             memcpy(data, nt, (size_t)nlen);
             memcpy(data + nlen, et, (size_t)elen);
-            rc = df_client_load_mesh_bytes(c, name, DF_FMT_TETGEN, data, (uint64_t)(nlen + elen),
-                                           (uint64_t)nlen, info, err);
+            rc = df_client_load_mesh_bytes_ex(c, name, fname, DF_FMT_TETGEN, data,
+                                              (uint64_t)(nlen + elen), (uint64_t)nlen, reply,
+                                              err);
         }
         free(nt);
         free(et);
         free(data);
         return rc;
     }
-    uint8_t fmt = ends_with(path, ".obj")    ? DF_FMT_OBJ
-                  : ends_with(path, ".off")  ? DF_FMT_OFF
-                  : ends_with(path, ".ply")  ? DF_FMT_PLY
-                  : ends_with(path, ".mesh") ? DF_FMT_MEDIT
-                                             : DF_FMT_AUTO;
+    df_mesh_format fmt = df_mesh_format_from_path(path);
+    if (fmt == DF_FMT_AUTO)
+        return df_error_set(err, DF_EINVAL, "%s: %s", path, DF_CLIENT_FORMATS_MSG);
     rc = dc_read_file(path, &data, &len, err);
     if (rc)
         return rc;
     if (len == 0)
         rc = df_error_set(err, DF_EFORMAT, "%s: empty file", path);
     else
-        rc = df_client_load_mesh_bytes(c, name, fmt, data, (uint64_t)len, 0, info, err);
+        rc = df_client_load_mesh_bytes_ex(c, name, fname, (uint8_t)fmt, data, (uint64_t)len, 0,
+                                          reply, err);
     free(data);
     return rc;
 }
@@ -200,26 +239,48 @@ void df_client_set_load_flags(df_client *c, uint16_t flags)
         c->load_flags = flags;
 }
 
+int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
+                             df_msg_session_info *info, df_error *err)
+{
+    df_msg_load_reply r;
+    int rc = df_client_load_mesh_file_ex(c, path, name, &r, err);
+    if (rc == DF_OK && info)
+        *info = r.info;
+    return rc;
+}
+
 static int enc_load(const void *m, df_buf *out, df_error *err)
 {
     return df_msg_load_mesh_encode(m, out, err);
 }
 
-int df_client_load_mesh_path(df_client *c, const char *path, const char *name, uint8_t format,
-                             df_msg_session_info *info, df_error *err)
+int df_client_load_mesh_path_ex(df_client *c, const char *path, const char *name,
+                                uint8_t format, df_msg_load_reply *reply, df_error *err)
 {
     df_msg_load_mesh m;
     memset(&m, 0, sizeof m);
     m.source = DF_LOAD_PATH;
     m.format = format;
-    m.flags = c->load_flags;
+    m.options = (uint16_t)(DF_LOAD_OPT_EXT | c->load_flags);
     m.path = (char *)path;
-    size_t nl = name ? strlen(name) : 0;
-    if (nl > DF_MAX_NAME_LEN)
-        return df_error_set(err, DF_EINVAL, "load mesh: name longer than %u bytes", DF_MAX_NAME_LEN);
-    if (nl)
-        memcpy(m.name, name, nl + 1);
-    return dc_request(c, DF_MSG_LOAD_MESH, enc_load, &m, dc_reply_session_info, info, err);
+    int rc = put_name(m.name, name, "name", err);
+    if (rc)
+        return rc;
+    df_msg_load_reply r;
+    rc = dc_request(c, DF_MSG_LOAD_MESH, enc_load, &m, reply_load, &r, err);
+    if (rc == DF_OK && reply)
+        *reply = r;
+    return rc;
+}
+
+int df_client_load_mesh_path(df_client *c, const char *path, const char *name, uint8_t format,
+                             df_msg_session_info *info, df_error *err)
+{
+    df_msg_load_reply r;
+    int rc = df_client_load_mesh_path_ex(c, path, name, format, &r, err);
+    if (rc == DF_OK && info)
+        *info = r.info;
+    return rc;
 }
 
 static int reply_list(void *user, const df_frame_header *h, const uint8_t *p, df_error *err)

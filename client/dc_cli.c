@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/un.h>
 
 int dc_cli_find(const dc_cli_opt *opts, int nopts, const char *name)
 {
@@ -185,8 +186,12 @@ int dc_cli_hostport(const char *s, char *host, int host_cap, int *port, df_error
         he = colon;
     }
     size_t hl = (size_t)(he - hs);
-    if (hl == 0 || (int)hl >= host_cap)
-        return df_error_set(err, DF_EINVAL, "--tcp: bad host in '%s'", s);
+    if (hl == 0)
+        return df_error_set(err, DF_EINVAL, "--tcp: '%s' has no host (HOST:PORT, e.g. "
+                            "127.0.0.1:7878)", s);
+    if ((int)hl >= host_cap)
+        return df_error_set(err, DF_EINVAL, "--tcp: the host in '%s' is longer than %d bytes", s,
+                            host_cap - 1);
     long long p;
     int rc = dc_cli_int(colon + 1, "--tcp port", 1, 65535, &p, err);
     if (rc)
@@ -194,6 +199,18 @@ int dc_cli_hostport(const char *s, char *host, int host_cap, int *port, df_error
     memcpy(host, hs, hl);
     host[hl] = '\0';
     *port = (int)p;
+    return DF_OK;
+}
+
+int dc_cli_socket_path(const char *s, df_error *err)
+{
+    struct sockaddr_un sa;
+    if (!s || !*s)
+        return df_error_set(err, DF_EINVAL, "--socket: empty path");
+    size_t n = strlen(s);
+    if (n >= sizeof sa.sun_path)
+        return df_error_set(err, DF_EINVAL, "--socket: path of %zu bytes is too long (at most "
+                            "%zu)", n, sizeof sa.sun_path - 1);
     return DF_OK;
 }
 

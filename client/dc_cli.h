@@ -61,8 +61,13 @@ int dc_cli_vec(const char *s, const char *what, int n, double *out, df_error *er
 int dc_cli_choice(const char *s, const char *what, const char *const *choices, df_error *err);
 
 /* Splits "HOST:PORT" ("[::1]:7000" for IPv6) into host (NUL-terminated, at most host_cap - 1
- * chars) and port 1..65535. */
+ * chars) and port 1..65535. Errors: DF_EINVAL naming --tcp (no port, empty host, a port that is
+ * not an integer in 1..65535); outputs untouched. */
 int dc_cli_hostport(const char *s, char *host, int host_cap, int *port, df_error *err);
+
+/* Checks a --socket PATH: non-empty and short enough for a Unix socket address (sun_path).
+ * Errors: DF_EINVAL naming --socket. */
+int dc_cli_socket_path(const char *s, df_error *err);
 
 /* Writes the default daemon socket path into buf (cap bytes): $DEFORMD_SOCKET when set, else
  * $XDG_RUNTIME_DIR/deformd.sock when XDG_RUNTIME_DIR is set, else /run/deformd/deformd.sock.

@@ -104,6 +104,26 @@ int df_client_last_error_was_remote(const df_client *c)
     return c->remote_err;
 }
 
+/* The server closed the connection under a write: finds the connection-level ERROR event it
+ * sent before closing (refused at max_clients, a timeout) among the bytes still unread. Returns
+ * its code (err filled, remote_err set), or 0 when there is none. */
+static int why_closed(df_client *c, df_error *err)
+{
+    df_frame_header h;
+    const uint8_t *p;
+    df_error ignore;
+    while (df_client_recv(c, 0, &h, &p, &ignore) == DF_OK) {
+        if (h.type == DF_MSG_ERROR && (h.flags & DF_FLAG_ERROR) && h.request_id == 0) {
+            df_error e;
+            df_error_clear(&e);
+            df_msg_error_decode(p, h.payload_len, &e, NULL);
+            c->remote_err = 1;
+            return df_error_set(err, e.code ? e.code : DF_EINTERNAL, "%s", e.msg);
+        }
+    }
+    return 0;
+}
+
 int df_client_send(df_client *c, uint16_t type, uint16_t flags, uint64_t id, const void *payload,
                    size_t len, uint64_t *id_out, df_error *err)
 {
@@ -121,8 +141,9 @@ int df_client_send(df_client *c, uint16_t type, uint16_t flags, uint64_t id, con
         return rc;
     rc = dc_net_write2(c->fd, raw, sizeof raw, payload, len, err);
     if (rc) {
+        int why = why_closed(c, err);
         c->broken = 1;
-        return rc;
+        return why ? why : rc;
     }
     if (id_out)
         *id_out = id;

@@ -78,7 +78,9 @@ int df_client_last_error_was_remote(const df_client *c);
 
 /* Sends one frame of `type` with `flags` (0 or DF_FLAG_MORE) and request id `id` (0: allocate
  * the next id) carrying `len` bytes of `payload`. *id_out (may be NULL) receives the id used.
- * Errors: DF_EINVAL (len > DF_MAX_FRAME_PAYLOAD), DF_EIO. */
+ * Errors: DF_EINVAL (len > DF_MAX_FRAME_PAYLOAD), DF_EIO; when the server had closed the
+ * connection after a connection-level ERROR event (refused at max_clients, a timeout), that
+ * event's code and message (df_client_last_error_was_remote then returns 1). */
 int df_client_send(df_client *c, uint16_t type, uint16_t flags, uint64_t id, const void *payload,
                    size_t len, uint64_t *id_out, df_error *err);
 
@@ -114,8 +116,10 @@ int df_client_ping(df_client *c, const void *data, uint32_t len, double *rtt_us,
  * DF_EUNSUPPORTED. */
 int df_client_auth(df_client *c, uint16_t method, const void *token, uint32_t len, df_error *err);
 
-/* Sets the DF_LOAD_* flags (0 or DF_LOAD_2D: a 2D session even if the file gives z) sent with
- * every later load on `c` (df_client_load_mesh_bytes / _file / _path); 0 at connect. */
+/* Sets extra load_mesh option bits (0 or DF_LOAD_OPT_2D: a 2D session even if the file gives z)
+ * ORed into the options of every later load on `c` (df_client_load_mesh_bytes / _file / _path
+ * and their _ex forms, which always set DF_LOAD_OPT_EXT themselves); 0 at connect. Unknown bits
+ * are refused by the server (DF_EPROTO_RESERVED). */
 void df_client_set_load_flags(df_client *c, uint16_t flags);
 
 /* Uploads `len` bytes of a mesh file in `format` (DF_FMT_*, DF_FMT_AUTO sniffs) as session
@@ -126,8 +130,11 @@ int df_client_load_mesh_bytes(df_client *c, const char *name, uint8_t format, co
                               uint64_t len, uint64_t part2_offset, df_msg_session_info *info,
                               df_error *err);
 
-/* Reads the local file `path` (.obj .off .ply .mesh; X.node or X.ele: the X.node + X.ele pair)
- * and uploads it inline (see df_client_load_mesh_bytes). DF_EIO when a file cannot be read. */
+/* Reads the local file `path` (.obj .off .ply .mesh, any case; X.node or X.ele: the pair, the
+ * other half with the same case of extension, e.g. T1.NODE + T1.ELE) and uploads it inline with
+ * its base name as file_name (see df_client_load_mesh_bytes_ex). DF_EIO when a file cannot be
+ * read; DF_EINVAL for another extension (DF_CLIENT_FORMATS_MSG; use df_client_load_mesh_bytes
+ * with DF_FMT_AUTO to sniff the content). */
 int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
                              df_msg_session_info *info, df_error *err);
 
@@ -135,6 +142,25 @@ int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
  * config). */
 int df_client_load_mesh_path(df_client *c, const char *path, const char *name, uint8_t format,
                              df_msg_session_info *info, df_error *err);
+
+/* Message for a file name whose extension names no mesh format. */
+#define DF_CLIENT_FORMATS_MSG                                                                    \
+    "mesh format not recognised from the file name; formats: .obj, .off, .ply, .mesh (MEDIT), "  \
+    ".node + .ele (TetGen)"
+
+/* The same three loads with the LOAD_MESH EXT option (PROTOCOL.md 4.5): the server names errors
+ * after `file_name` (uploads; may be NULL/"": "upload"), names the session after the file when
+ * `name` is empty ("spot", "spot-2", ...), and *reply (may be NULL) receives the session and the
+ * reader's report (reply->has_report = 1): dropped lower-dimensional elements, duplicate,
+ * degenerate and inverted elements, non-manifold edges/faces, boundary, unused vertices. A server
+ * older than the option answers DF_EPROTO_RESERVED. Other arguments and errors as above. */
+int df_client_load_mesh_bytes_ex(df_client *c, const char *name, const char *file_name,
+                                 uint8_t format, const void *bytes, uint64_t len,
+                                 uint64_t part2_offset, df_msg_load_reply *reply, df_error *err);
+int df_client_load_mesh_file_ex(df_client *c, const char *path, const char *name,
+                                df_msg_load_reply *reply, df_error *err);
+int df_client_load_mesh_path_ex(df_client *c, const char *path, const char *name,
+                                uint8_t format, df_msg_load_reply *reply, df_error *err);
 
 /* Lists the sessions; free *out with df_msg_session_list_free. */
 int df_client_list_sessions(df_client *c, df_msg_session_list *out, df_error *err);

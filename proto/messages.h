@@ -119,16 +119,21 @@ typedef enum df_feature {            /* hello reply `features` bits */
  * then the ele bytes). DF_FMT_PLY_BINARY (write-only) is not valid on the wire. */
 #define DF_FMT_MAX 5
 
+/* load_mesh `options` (the u16 at offset 2, reserved = 0 before these bits existed; the same in
+ * every chunk of an upload). Unknown bits are refused with EPROTO_RESERVED (a server without a
+ * bit answers that way too, so a client can tell and load without it). */
+#define DF_LOAD_OPT_EXT 0x0001u  /* a str file_name follows the data, and the reply is a
+                                  * load_reply: session_info + load_report */
+#define DF_LOAD_OPT_2D 0x0002u   /* a 2D session even if the file gives z (every z must be 0,
+                                  * no tetrahedra); without it a mesh is 2D only when its file
+                                  * declares 2D (OBJ `v x y`, MEDIT Dimension 2, TetGen .node
+                                  * dimension 2, PLY without z) */
+#define DF_LOAD_OPTS_ALL (DF_LOAD_OPT_EXT | DF_LOAD_OPT_2D)
+
 typedef enum df_load_source {
     DF_LOAD_INLINE = 0,        /* file bytes are in the message(s) */
     DF_LOAD_PATH = 1           /* server reads `path` (only with DF_FEAT_PATH_LOAD) */
 } df_load_source;
-
-#define DF_LOAD_2D 0x0001u     /* load_mesh flags: a 2D session even if the file gives z
-                                * (every z must be 0, no tetrahedra); without it a mesh is 2D
-                                * only when its file declares 2D (OBJ `v x y`, MEDIT Dimension
-                                * 2, TetGen .node dimension 2, PLY without z) */
-#define DF_LOAD_FLAGS_ALL DF_LOAD_2D
 
 typedef enum df_brush_type {
     DF_BRUSH_GRAB = 1,         /* uses move[] (tip displacement) */
@@ -247,8 +252,10 @@ typedef struct df_msg_load_mesh {      /* one chunk of a mesh upload (or a path 
     uint64_t offset;                   /* byte offset of this chunk in the upload; PATH: 0 */
     uint32_t data_len;                 /* bytes in this chunk; offset + data_len <= total_size */
     const uint8_t *data;               /* points into the payload (decode) */
-    uint16_t flags;                    /* DF_LOAD_* bits (DF_LOAD_2D), the same in every chunk;
-                                        * unknown bits are EINVAL (wire offset 2, after format) */
+    uint16_t options;                  /* DF_LOAD_OPT_* bits (0: the original layout and reply),
+                                        * the same in every chunk (wire offset 2, after format) */
+    char file_name[DF_MAX_NAME_LEN + 1]; /* DF_LOAD_OPT_EXT: the user's file name (base name, may be
+                                        * "") for messages and the default session name; else "" */
 } df_msg_load_mesh;
 
 typedef struct df_msg_session_ref {    /* any request/event that names just a session */
@@ -277,6 +284,29 @@ typedef struct df_msg_session_info {
     uint32_t redo_depth;               /* changes that redo can re-apply */
     char name[DF_MAX_NAME_LEN + 1];
 } df_msg_session_info;
+
+typedef struct df_msg_load_report {   /* what the reader found (core df_mesh_report) */
+    uint8_t format;                    /* 1..5: the format parsed */
+    uint8_t index_base;                /* 0 or 1 */
+    uint32_t input_polygons;           /* faces as written (before fan triangulation) */
+    uint32_t polygons_triangulated;    /* of those, quads and n-gons */
+    uint32_t dropped_elements;         /* lower-dimensional elements not kept (OBJ `l` lines beside
+                                        * faces, MEDIT Edges in a tet mesh, skipped sections) */
+    uint32_t duplicate_elements;       /* elements repeating an earlier element's vertex set */
+    uint32_t degenerate_elements;
+    uint32_t inverted_elements;
+    uint32_t nonmanifold_edges;
+    uint32_t nonmanifold_faces;
+    uint32_t boundary_edges;
+    uint32_t boundary_faces;
+    uint32_t unused_vertices;          /* vertices no element uses */
+} df_msg_load_report;
+
+typedef struct df_msg_load_reply {     /* LOAD_MESH reply */
+    df_msg_session_info info;
+    uint8_t has_report;                /* 1 iff the request set DF_LOAD_OPT_EXT (report follows) */
+    df_msg_load_report report;
+} df_msg_load_reply;
 
 typedef struct df_msg_shm_info {       /* STREAM_SHM reply: where this session's ring is */
     uint64_t session_id;               /* != 0 */
@@ -472,6 +502,7 @@ DF_MSG_CODEC(session_ref)
 DF_MSG_CODEC(open_session)
 DF_MSG_CODEC(subscribe)
 DF_MSG_CODEC(session_info)
+DF_MSG_CODEC(load_reply)
 DF_MSG_CODEC(session_list)
 DF_MSG_CODEC(ack)
 DF_MSG_CODEC(brush)
@@ -522,9 +553,10 @@ int df_msg_empty_decode(const uint8_t *p, size_t n, df_error *err);
 int df_msg_error_encode(const df_error *e, df_buf *out, df_error *err);
 int df_msg_error_decode(const uint8_t *p, size_t n, df_error *out, df_error *err);
 
-/* Convenience for servers: appends a whole error frame (type = request type, or DF_MSG_ERROR;
- * flags REPLY|ERROR, or just ERROR when request_id == 0 and type == DF_MSG_ERROR) carrying
- * `code` and the printf-style message. DF_OK or DF_ENOMEM. */
+/* Convenience for servers: appends a whole error frame carrying `code` and the printf-style
+ * message: an error reply (type = the request's type, even one unknown to this build; flags
+ * REPLY|ERROR) when request_id != 0, else a connection-level ERROR event (type DF_MSG_ERROR,
+ * flags ERROR, request id 0). Type 0 becomes DF_MSG_ERROR. DF_OK or DF_ENOMEM. */
 int df_msg_error_frame(df_buf *out, uint16_t type, uint64_t request_id, int code,
                        df_error *err, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
 
@@ -546,7 +578,7 @@ typedef enum df_body_kind {
     DF_BODY_BRUSH_UPDATE, DF_BODY_BRUSH_PARAM, DF_BODY_HANDLES, DF_BODY_HANDLE_MOVE,
     DF_BODY_MOVE_RESULT, DF_BODY_GET_MESH, DF_BODY_MESH_CHUNK, DF_BODY_SNAPSHOT_REQ,
     DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS, DF_BODY_SHM_INFO,
-    DF_BODY_SHM_REF
+    DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -579,6 +611,7 @@ typedef struct df_msg_any {
         df_msg_stats stats;
         df_msg_shm_info shm_info;
         df_msg_shm_ref shm_ref;
+        df_msg_load_reply load_reply;
     } u;
 } df_msg_any;
 

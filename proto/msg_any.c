@@ -21,6 +21,7 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
     case DF_BODY_AUTH: rc = df_msg_auth_decode(p, n, &t.u.auth, err); break;
     case DF_BODY_PING: rc = df_msg_ping_decode(p, n, &t.u.ping, err); break;
     case DF_BODY_LOAD_MESH: rc = df_msg_load_mesh_decode(p, n, &t.u.load_mesh, err); break;
+    case DF_BODY_LOAD_REPLY: rc = df_msg_load_reply_decode(p, n, &t.u.load_reply, err); break;
     case DF_BODY_SESSION_REF: rc = df_msg_session_ref_decode(p, n, &t.u.session_ref, err); break;
     case DF_BODY_OPEN_SESSION:
         rc = df_msg_open_session_decode(p, n, &t.u.open_session, err);
@@ -88,6 +89,7 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
     case DF_BODY_AUTH: return df_msg_auth_encode(&m->u.auth, out, e);
     case DF_BODY_PING: return df_msg_ping_encode(&m->u.ping, out, e);
     case DF_BODY_LOAD_MESH: return df_msg_load_mesh_encode(&m->u.load_mesh, out, e);
+    case DF_BODY_LOAD_REPLY: return df_msg_load_reply_encode(&m->u.load_reply, out, e);
     case DF_BODY_SESSION_REF: return df_msg_session_ref_encode(&m->u.session_ref, out, e);
     case DF_BODY_OPEN_SESSION: return df_msg_open_session_encode(&m->u.open_session, out, e);
     case DF_BODY_SUBSCRIBE: return df_msg_subscribe_encode(&m->u.subscribe, out, e);

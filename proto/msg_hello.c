@@ -224,10 +224,12 @@ int df_msg_error_frame(df_buf *out, uint16_t type, uint64_t request_id, int code
     va_start(ap, fmt);
     vsnprintf(body.msg, sizeof body.msg, fmt, ap);
     va_end(ap);
-    if (!df_msg_type_valid(type))
+    /* Request id 0 is never a request's (PROTOCOL.md 1.3): connection-level ERROR event. Any
+     * other error answers its request with the request's own type, known or not. */
+    if (request_id == 0 || type == 0)
         type = DF_MSG_ERROR;
     uint16_t flags = DF_FLAG_ERROR;
-    if (!(type == DF_MSG_ERROR && request_id == 0))
+    if (request_id != 0)
         flags |= DF_FLAG_REPLY;
     size_t start, len0 = out->len;
     int rc = df_frame_begin(out, type, flags, request_id, &start, err);

@@ -1,6 +1,6 @@
 /* wire_error.h — the error codes that travel in error bodies (proto/PROTOCOL.md, "Errors").
  *
- * The wire carries the DF_E* codes of core/common/df_error.h (-1 .. -10) plus the protocol
+ * The wire carries the DF_E* codes of core/common/df_error.h (-1 .. -11) plus the protocol
  * codes below (-100 ..). Codes are stable: never renumber, only append. */
 #ifndef DF_PROTO_WIRE_ERROR_H
 #define DF_PROTO_WIRE_ERROR_H

@@ -11,6 +11,7 @@
 
 #include "proto/shm_ring.h"
 #include "server/log.h"
+#include "server/membudget.h"
 
 void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
 {
@@ -30,6 +31,21 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->threads = DF_CONFIG_DEFAULT_THREADS;
     cfg->spin_us = DF_CONFIG_DEFAULT_SPIN_US;
     cfg->inline_us = DF_CONFIG_DEFAULT_INLINE_US;
+    cfg->shm_total_bytes = DF_CONFIG_DEFAULT_SHM_TOTAL;
+    cfg->max_upload_mb = DF_CONFIG_DEFAULT_MAX_UPLOAD_MB;
+    cfg->uploads_max_mb = DF_CONFIG_DEFAULT_UPLOADS_MB;
+    uint64_t ram_mb = df_mem_physical_bytes() >> 20;
+    uint64_t hist = ram_mb / DF_CONFIG_HISTORY_RAM_DIVISOR;
+    if (hist < DF_CONFIG_HISTORY_MIN_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MIN_DEFAULT_MB;
+    if (hist > DF_CONFIG_HISTORY_MAX_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MAX_DEFAULT_MB;
+    cfg->history_max_mb = (int)hist;
+    uint64_t mem = ram_mb ? ram_mb / DF_CONFIG_MEMORY_RAM_DIVISOR : DF_CONFIG_MEMORY_UNKNOWN_RAM_MB;
+    if (mem < DF_CONFIG_MEMORY_MIN_DEFAULT_MB) mem = DF_CONFIG_MEMORY_MIN_DEFAULT_MB;
+    if (mem > DF_CONFIG_MAX_MEMORY_MB) mem = DF_CONFIG_MAX_MEMORY_MB;
+    cfg->memory_max_mb = (int)mem;
+    cfg->socket_mode = DF_CONFIG_DEFAULT_SOCKET_MODE;
+    cfg->handshake_timeout_s = DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S;
+    cfg->idle_timeout_s = DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S;
 }
 
 /* Parses a non-negative integer with an optional k/m/g (binary) suffix, <= max. */
@@ -129,7 +145,41 @@ static const int_key k_int_keys[] = {
     {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
     {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
     {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
+    {"max_upload_mb", offsetof(df_server_config, max_upload_mb), 1,
+     DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},
+    {"uploads_max_mb", offsetof(df_server_config, uploads_max_mb), 1, DF_CONFIG_MAX_UPLOADS_MB},
+    {"history_max_mb", offsetof(df_server_config, history_max_mb), 0, DF_CONFIG_MAX_HISTORY_MB},
+    {"memory_max_mb", offsetof(df_server_config, memory_max_mb), DF_CONFIG_MIN_MEMORY_MB,
+     DF_CONFIG_MAX_MEMORY_MB},
+    {"handshake_timeout_s", offsetof(df_server_config, handshake_timeout_s), 0,
+     DF_CONFIG_MAX_TIMEOUT_S},
+    {"idle_timeout_s", offsetof(df_server_config, idle_timeout_s), 0, DF_CONFIG_MAX_TIMEOUT_S},
 };
+
+/* Parses yes/no, true/false, on/off, 1/0 (case-insensitive) into *out. */
+static int parse_bool(const char *s, int *out)
+{
+    static const char *const yes[] = {"yes", "true", "on", "1"}, *const no[] = {"no", "false",
+                                                                                 "off", "0"};
+    for (int i = 0; i < 4; i++) {
+        if (strcasecmp(s, yes[i]) == 0) return *out = 1, DF_OK;
+        if (strcasecmp(s, no[i]) == 0) return *out = 0, DF_OK;
+    }
+    return DF_EINVAL;
+}
+
+/* socket_mode: octal permission bits, 0..0777, with or without a leading 0. */
+static int set_socket_mode(df_server_config *cfg, const char *value, df_error *err)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = value[0] >= '0' && value[0] <= '7' ? strtol(value, &end, 8) : -1;
+    if (errno || v < 0 || v > 0777 || !end || *end)
+        return df_error_set(err, DF_EINVAL, "socket_mode: '%s' is not an octal mode 0..0777",
+                            value);
+    cfg->socket_mode = (int)v;
+    return DF_OK;
+}
 
 int df_config_set(df_server_config *cfg, const char *key, const char *value, df_error *err)
 {
@@ -156,6 +206,19 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         return DF_OK;
     }
     if (strcmp(key, "tcp") == 0) return set_tcp(cfg, value, err);
+    if (strcmp(key, "tcp_insecure") == 0) {
+        if (parse_bool(value, &cfg->tcp_insecure) != DF_OK)
+            return df_error_set(err, DF_EINVAL, "tcp_insecure: '%s' is not yes or no", value);
+        return DF_OK;
+    }
+    if (strcmp(key, "socket_mode") == 0) return set_socket_mode(cfg, value, err);
+    if (strcmp(key, "socket_group") == 0) {
+        if (strlen(value) >= sizeof cfg->socket_group || strpbrk(value, " \t:/"))
+            return df_error_set(err, DF_EINVAL, "socket_group: '%s' is not a group name or id",
+                                value);
+        strcpy(cfg->socket_group, value);
+        return DF_OK;
+    }
     if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
     if (strcmp(key, "log_level") == 0) {
         int l;
@@ -177,6 +240,12 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
             return df_error_set(err, DF_EINVAL, "shm_ring_bytes: '%s' is not 0 or 64k..4g",
                                 value);
         cfg->shm_ring_bytes = v;
+        return DF_OK;
+    }
+    if (strcmp(key, "shm_total_bytes") == 0) {
+        if (parse_size(value, DF_CONFIG_MAX_SHM_TOTAL, &v) || v < DF_CONFIG_MIN_SHM_RING)
+            return df_error_set(err, DF_EINVAL, "shm_total_bytes: '%s' is not in 64k..1t", value);
+        cfg->shm_total_bytes = v;
         return DF_OK;
     }
     if (strcmp(key, "cache_memory_mb") == 0) {
@@ -301,10 +370,16 @@ static const char k_usage[] =
     "\n"
     "  --socket PATH       Unix socket to listen on (default $XDG_RUNTIME_DIR/deformd.sock,\n"
     "                      else /run/deformd/deformd.sock); 'none' disables it\n"
-    "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port)\n"
+    "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port);\n"
+    "                      loopback addresses only: TCP has no authentication yet\n"
+    "  --tcp-insecure      allow a non-loopback --tcp address (0, *, [::], LAN): anyone\n"
+    "                      who can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes);\n"
+    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes,\n"
+    "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
+    "                      memory_max_mb, tcp_insecure, socket_mode, socket_group,\n"
+    "                      handshake_timeout_s, idle_timeout_s);\n"
     "                      command-line options override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"
@@ -364,6 +439,10 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         if ((m = opt_value(argc, argv, &i, "--config", &v)) != 0) continue;
         if (strcmp(argv[i], "--foreground") == 0 || strcmp(argv[i], "-f") == 0) {
             tmp->foreground = 1;
+            continue;
+        }
+        if (strcmp(argv[i], "--tcp-insecure") == 0) {
+            tmp->tcp_insecure = 1;
             continue;
         }
         static const char *const map[][2] = {

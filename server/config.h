@@ -4,7 +4,19 @@
  * Keys (all optional):
  *   socket             Unix socket path (default $XDG_RUNTIME_DIR/deformd.sock else
  *                      /run/deformd/deformd.sock); "none" disables the Unix listener
- *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it
+ *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it.
+ *                      Only a loopback address (127.0.0.0/8, ::1, localhost) is accepted:
+ *                      TCP has no authentication yet; see tcp_insecure
+ *   tcp_insecure       yes | no (default no): also listen on a non-loopback TCP address (0,
+ *                      *, [::], a LAN address), letting anyone who reaches it in
+ *   socket_mode        permission bits of the Unix socket file, octal (default 0660; not
+ *                      applied to a socket-activated fd: the unit's SocketMode= decides)
+ *   socket_group       group (name or number) of the Unix socket file (default: the daemon's)
+ *   handshake_timeout_s a connection that has not completed HELLO after this many seconds
+ *                      gets an ERROR frame and is closed (0 = off, default 10)
+ *   idle_timeout_s     a connection with no subscription, no unanswered request and no
+ *                      upload that sent nothing for this many seconds gets an ERROR frame
+ *                      and is closed (0 = off, default 300; subscribers may stay silent)
  *   allow_paths        directories whose files may be loaded by server-side path; a
  *                      colon- or comma-separated list; repeated lines append
  *   max_clients        simultaneous connections (1 .. DF_CONFIG_MAX_CLIENTS_LIMIT)
@@ -24,9 +36,18 @@
  *                      never; see job.h)
  *   shm_ring_bytes     data bytes of a session's shared-memory stream ring (PROTOCOL.md 6.1;
  *                      allocated in /dev/shm when its first subscriber attaches; suffix k/m/g
- *                      ok; 0 disables STREAM_SHM, else 64k .. 4g; default 64m)
- * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --config FILE, --foreground,
- * --log-level LEVEL, --spin-us N, --inline-us N, --help. */
+ *                      ok; 0 disables STREAM_SHM, else 64k .. 4g; default 64m). This is the
+ *                      cap: a ring is sized to its session's frames (shm.h, df_shm_ring_size)
+ *   shm_total_bytes    all rings together (64k .. 1t, default DF_CONFIG_DEFAULT_SHM_TOTAL)
+ *   max_upload_mb      largest inline upload (LOAD_MESH total_size), MiB (1 .. 1024, default 1024)
+ *   uploads_max_mb     buffers of all uploads in flight together, MiB (default 1024)
+ *   history_max_mb     undo history of one session, MiB; the oldest steps are dropped beyond it
+ *                      (0 .. 1048576; default physical RAM / 32, clamped to 64 .. 1024)
+ *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
+ *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
+ *                      membudget.h)
+ * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
+ * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -54,6 +75,25 @@
 #define DF_CONFIG_DEFAULT_INLINE_US 50 /* ~ two thread hand-offs on the 2-core test machine */
 #define DF_CONFIG_DEFAULT_SHM_RING ((uint64_t)64 << 20) /* 64 MiB: ~5k 1k-vertex versions */
 #define DF_CONFIG_MIN_SHM_RING ((uint64_t)64 << 10)
+#define DF_CONFIG_DEFAULT_SHM_TOTAL ((uint64_t)256 << 20) /* all rings: 256 MiB */
+#define DF_CONFIG_MAX_SHM_TOTAL ((uint64_t)1 << 40)
+#define DF_CONFIG_DEFAULT_MAX_UPLOAD_MB 1024  /* = DF_MAX_MESH_BYTES, the protocol's limit */
+#define DF_CONFIG_DEFAULT_UPLOADS_MB 1024
+#define DF_CONFIG_MAX_UPLOADS_MB (1 << 20)
+#define DF_CONFIG_HISTORY_RAM_DIVISOR 32      /* default history_max_mb = RAM / 32 ... */
+#define DF_CONFIG_HISTORY_MIN_DEFAULT_MB 64   /* ... at least this ... */
+#define DF_CONFIG_HISTORY_MAX_DEFAULT_MB 1024 /* ... at most this */
+#define DF_CONFIG_MAX_HISTORY_MB (1 << 20)
+#define DF_CONFIG_MEMORY_RAM_DIVISOR 2        /* default memory_max_mb = RAM / 2 ... */
+#define DF_CONFIG_MEMORY_MIN_DEFAULT_MB 256   /* ... at least this */
+#define DF_CONFIG_MEMORY_UNKNOWN_RAM_MB 4096  /* when the RAM size is unknown */
+#define DF_CONFIG_MIN_MEMORY_MB 16
+#define DF_CONFIG_MAX_MEMORY_MB (1 << 30)
+#define DF_CONFIG_DEFAULT_SOCKET_MODE 0660
+#define DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S 10
+#define DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S 300
+#define DF_CONFIG_MAX_TIMEOUT_S 86400    /* one day */
+#define DF_CONFIG_GROUP_MAX 64
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -71,6 +111,16 @@ typedef struct df_server_config {
     int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
     int inline_us;               /* loop-thread budget of a cheap brush update, us (0 = off) */
     uint64_t shm_ring_bytes;     /* shared-memory stream ring per session, bytes (0 = off) */
+    uint64_t shm_total_bytes;    /* all rings together, bytes */
+    int max_upload_mb;           /* largest inline upload, MiB */
+    int uploads_max_mb;          /* all in-flight upload buffers together, MiB */
+    int history_max_mb;          /* undo history per session, MiB */
+    int memory_max_mb;           /* memory budget (membudget.h), MiB */
+    int tcp_insecure;            /* 1: a non-loopback TCP address is allowed */
+    int socket_mode;             /* Unix socket file permissions (e.g. 0660) */
+    char socket_group[DF_CONFIG_GROUP_MAX]; /* "" = the daemon's group */
+    int handshake_timeout_s;     /* HELLO deadline after accept, s (0 = off) */
+    int idle_timeout_s;          /* silent unsubscribed connection deadline, s (0 = off) */
     int foreground;              /* 1: do not daemonize */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;

@@ -8,6 +8,7 @@
 #include "proto/frame_codec.h"
 #include "proto/messages.h"
 #include "server/dispatch.h"
+#include "server/guard.h"
 #include "server/handlers.h"
 #include "server/log.h"
 #include "server/reply.h"
@@ -36,6 +37,7 @@ static void on_closed(uv_handle_t *h)
     else srv->conns = c->next;
     if (c->next) c->next->prev = c->prev;
     srv->n_conns--;
+    if (c->refused) srv->n_refusing--;
     df_outq_clear(&c->outq);
     df_conn_unref(c);
 }
@@ -44,8 +46,9 @@ void df_conn_close(df_conn *c, const char *why, int warn)
 {
     if (c->closing) return;
     c->closing = 1;
-    df_log(warn ? DF_LOG_WARN : DF_LOG_INFO, "client %llu closed: %s", (unsigned long long)c->id,
-           why ? why : "closed");
+    /* refused connections are logged by guard.c's rate limit, not one line each */
+    df_log(c->refused ? DF_LOG_DEBUG : warn ? DF_LOG_WARN : DF_LOG_INFO, "client %llu closed: %s",
+           (unsigned long long)c->id, why ? why : "closed");
     df_session_forget_conn(c->srv, c);
     uv_read_stop(&c->h.stream);
     uv_close((uv_handle_t *)&c->h.stream, on_closed);
@@ -279,6 +282,7 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
     if (nread == 0) return;
     c->rlen += (size_t)nread;
     c->bytes_in += (size_t)nread;
+    c->last_rx_ms = uv_now(c->srv->loop);
     c->srv->stats.bytes_in += (size_t)nread;
     size_t off = 0;
     df_conn_ref(c); /* dispatch may close c */
@@ -290,8 +294,8 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
         if (hrc != DF_OK && (df_frame_error_is_fatal(hrc) || hrc == DF_EPROTO_TRUNCATED)) {
             df_log(DF_LOG_WARN, "client %llu: framing error: %s", (unsigned long long)c->id,
                    err.msg);
-            df_reply_error(c, DF_MSG_ERROR, hrc == DF_EPROTO_BADMAGIC ? 0 : h.request_id, hrc,
-                           "%s", err.msg);
+            /* PROTOCOL.md 7: an ERROR event (type ERROR, flags ERROR, request id 0) */
+            df_reply_error(c, DF_MSG_ERROR, 0, hrc, "%s", err.msg);
             c->srv->stats.clients_dropped++;
             df_conn_close_after_flush(c, "framing error");
             break;
@@ -299,8 +303,7 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
         size_t total = DF_FRAME_HEADER_SIZE + (size_t)h.payload_len;
         if (c->rlen - off < total) break;
         if (hrc != DF_OK) { /* answerable header error: reply, skip the payload */
-            df_reply_error(c, df_msg_type_valid(h.type) ? h.type : DF_MSG_ERROR, h.request_id,
-                           hrc, "%s", err.msg);
+            df_reply_error(c, h.type, h.request_id, hrc, "%s", err.msg);
             c->srv->stats.requests_failed++;
             off += total;
             continue;
@@ -341,6 +344,7 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
     c->is_tcp = is_tcp;
     c->h.stream.data = c;
     c->id = ++srv->next_conn_id;
+    c->accepted_ms = c->last_rx_ms = uv_now(srv->loop);
     df_outq_init(&c->outq, srv->cfg.output_queue_limit);
     c->next = srv->conns;
     if (srv->conns) srv->conns->prev = c;
@@ -355,11 +359,7 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
         df_conn_close(c, "server shutting down", 0);
         return;
     }
-    if (srv->n_conns > srv->cfg.max_clients) {
-        srv->stats.clients_refused++;
-        df_conn_close(c, "refused: max_clients reached", 1);
-        return;
-    }
+    if (df_guard_admit(c)) return; /* max_clients, out of descriptors: ERROR frame, close */
     if (is_tcp) {
         uv_tcp_nodelay(&c->h.tcp, 1);
     } else {

@@ -13,7 +13,8 @@
 #include "server/server.h"
 
 /* Accepts one pending connection on `listener` (is_tcp: 1 for TCP) and starts reading.
- * Refuses (accepts then closes) when max_clients are connected. */
+ * Refuses it (accepts, sends an ERROR event saying why, closes) when max_clients are connected
+ * or no file descriptor is left (guard.h). */
 void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
 
 /* Subscriber-only output (events, no reply) is corked for up to this long so that consecutive

@@ -43,12 +43,28 @@ void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payl
     df_handler_fn fn = NULL;
     for (size_t i = 0; i < sizeof k_routes / sizeof k_routes[0]; i++)
         if (k_routes[i].type == h->type) fn = k_routes[i].fn;
-    if (!fn || (h->flags & (DF_FLAG_REPLY | DF_FLAG_EVENT | DF_FLAG_ERROR))) {
+    if (h->request_id == 0) { /* PROTOCOL.md 1.3: id 0 is reserved for events */
         c->srv->stats.requests_failed++;
-        df_reply_error(c, df_msg_type_valid(h->type) ? h->type : DF_MSG_ERROR, h->request_id,
-                       DF_EPROTO_BADTYPE, "%s 0x%04x (flags 0x%04x) is not a request",
+        df_reply_error(c, DF_MSG_ERROR, 0, DF_EINVAL,
+                       "request id 0 is reserved for events: %s 0x%04x needs a non-zero "
+                       "request id (not executed)",
                        df_msg_type_valid(h->type) ? df_msg_type_name(h->type) : "message type",
-                       (unsigned)h->type, (unsigned)h->flags);
+                       (unsigned)h->type);
+        return;
+    }
+    if (h->flags & (DF_FLAG_REPLY | DF_FLAG_EVENT | DF_FLAG_ERROR)) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_EPROTO_BADFLAGS,
+                       "frame flags 0x%04x: REPLY, EVENT and ERROR are not valid on a request",
+                       (unsigned)h->flags);
+        return;
+    }
+    if (!fn) {
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_EPROTO_BADTYPE,
+                       "%s 0x%04x is not a request",
+                       df_msg_type_valid(h->type) ? df_msg_type_name(h->type) : "message type",
+                       (unsigned)h->type);
         return;
     }
     if ((h->flags & DF_FLAG_MORE) && h->type != DF_MSG_LOAD_MESH) {

@@ -13,7 +13,9 @@
 #include "server/server.h"
 
 /* Handles one complete, framing-valid frame of connection `c`: hdr is decoded, payload has
- * hdr->payload_len bytes (valid only during the call). */
+ * hdr->payload_len bytes (valid only during the call). Refused, not executed: request id 0
+ * (EINVAL as an ERROR event), REPLY/EVENT/ERROR flags (EPROTO_BADFLAGS), a type that is not a
+ * request (EPROTO_BADTYPE, answered with that type). */
 void df_dispatch_frame(df_conn *c, const df_frame_header *hdr, const uint8_t *payload);
 
 #endif

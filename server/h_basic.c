@@ -12,6 +12,7 @@
 #include "server/session.h"
 #include "server/shm.h"
 #include "server/stream.h"
+#include "server/text.h"
 
 #define DF_SERVER_NAME "deformd 0.1"
 
@@ -57,7 +58,8 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_msg_hello m;
     df_error err;
-    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK) {
+    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK ||
+        df_text_check_name("hello: client_name", m.client_name, &err) != DF_OK) {
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
@@ -66,6 +68,7 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
                      "hello: client speaks versions %u..%u, server %u..%u", m.min_version,
                      m.max_version, DF_PROTO_VERSION_MIN, DF_PROTO_VERSION);
         df_reply_fail(c, h->type, h->request_id, &err);
+        df_conn_close_after_flush(c, "hello: no common protocol version"); /* PROTOCOL.md 4.2b */
         return;
     }
     const df_server_config *cfg = &c->srv->cfg;
@@ -84,7 +87,9 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
     r.max_pending_requests = DF_MAX_PENDING_REQUESTS;
     r.max_sessions = (uint32_t)cfg->max_sessions < DF_MAX_SESSIONS ? (uint32_t)cfg->max_sessions
                                                                    : DF_MAX_SESSIONS;
-    r.max_mesh_bytes = DF_MAX_MESH_BYTES;
+    r.max_mesh_bytes = (uint64_t)cfg->max_upload_mb << 20 < DF_MAX_MESH_BYTES
+                           ? (uint64_t)cfg->max_upload_mb << 20
+                           : DF_MAX_MESH_BYTES;
     r.max_client_queue_bytes = cfg->output_queue_limit;
     r.auth_required = 0;
     snprintf(r.server_name, sizeof r.server_name, "%s", DF_SERVER_NAME);
@@ -174,8 +179,10 @@ static void close_done(df_job *j)
     if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
 }
 
-/* Submits a loop-only job (no work) on the session of a session_ref request. */
-static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn done)
+/* Submits a loop-only job (no work) on the session of a session_ref request; `beside`: its
+ * DF_JOB_BESIDE_* mode (job.h). */
+static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn done,
+                    int beside)
 {
     df_session *s = df_h_session_ref(c, h, p);
     if (!s) return;
@@ -186,12 +193,13 @@ static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_j
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
+    j->beside = beside;
     df_job_submit(j);
 }
 
 void df_h_close_session(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    ref_job(c, h, p, close_done);
+    ref_job(c, h, p, close_done, DF_JOB_BESIDE_NONE); /* ends a running move first */
 }
 
 static void unsubscribe_done(df_job *j)
@@ -204,7 +212,7 @@ static void unsubscribe_done(df_job *j)
 
 void df_h_unsubscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
-    ref_job(c, h, p, unsubscribe_done);
+    ref_job(c, h, p, unsubscribe_done, DF_JOB_BESIDE_READ);
 }
 
 static void stream_shm_done(df_job *j)
@@ -236,7 +244,7 @@ void df_h_stream_shm(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_reply_fail(c, h->type, h->request_id, &err);
         return;
     }
-    ref_job(c, h, p, stream_shm_done);
+    ref_job(c, h, p, stream_shm_done, DF_JOB_BESIDE_READ);
 }
 
 static void subscribe_done(df_job *j)
@@ -279,6 +287,7 @@ void df_h_subscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
         return;
     }
     j->body = (void *)(uintptr_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
+    j->beside = DF_JOB_BESIDE_READ; /* watchers may join a running move */
     df_job_submit(j);
 }
 

@@ -445,7 +445,7 @@ static void end_done(df_job *j)
         df_job_failed(j);
         return;
     }
-    if (df_history_commit(&s->hist, s->cur, &j->err) != DF_OK) {
+    if (df_session_history_commit(s, &j->err) != DF_OK) {
         j->rc = j->err.code;
         df_job_failed(j);
         return;

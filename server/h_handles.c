@@ -18,6 +18,8 @@
 #include "server/reply.h"
 #include "server/stream.h"
 
+#define DF_MOVE_SLICE_MS 100 /* a move yields its worker after this long when others wait */
+
 typedef struct hs_req {
     df_msg_handles m;          /* handles_set: the message */
     df_handleset *hs;          /* handles_set: the new set (installed in done) */
@@ -29,7 +31,12 @@ typedef struct hs_req {
     uint64_t progress_every;
     uint64_t t0;
     int publish_failed;        /* move: an iterate was refused (j->err says why): stop, fail */
-    df_frames frames;          /* final frame(s) */
+    int published;             /* move: an iterate of it was published (posted): one undo step */
+    int resumed;               /* move: it yielded its worker and runs again (time slices) */
+    int yield;                 /* move: on_progress asked to yield */
+    int iters_done;            /* move: iterations of the earlier slices */
+    uint64_t slice_t0;         /* move: start of the current slice (uv_hrtime) */
+    df_frames frames;          /* reset-rest: its frame(s) */
 } hs_req;
 
 static void req_free(df_job *j)
@@ -220,14 +227,18 @@ void df_h_handles_get(df_conn *c, const df_frame_header *h, const uint8_t *p)
 {
     df_session *s = df_h_session_ref(c, h, p);
     df_job *j = s ? new_job(c, h, s, NULL, get_done) : NULL;
-    if (j) df_job_submit(j);
+    if (!j) return;
+    j->beside = DF_JOB_BESIDE_READ; /* the set cannot change while a move runs */
+    df_job_submit(j);
 }
 
 static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }
 
-/* Publishes the iterate V as the next version in progress frames. */
+/* Publishes the iterate V as the next version and posts its progress frames to the loop
+ * (worker), all under s->pub_lock: requests answered beside the move (job.h) then see a version
+ * exactly when its frames are on their way to the subscribers. */
 static int publish_iterate(df_job *j, const double *V, int iteration, double objective,
-                           double residual, uint8_t status, int final, df_frames *out)
+                           double residual, uint8_t status, int final)
 {
     hs_req *r = j->body;
     df_msg_progress pr;
@@ -239,8 +250,21 @@ static int publish_iterate(df_job *j, const double *V, int iteration, double obj
     pr.residual = finite_or(residual, DBL_MAX);
     if (pr.residual < 0) pr.residual = 0;
     pr.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
-    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, out, NULL, &j->err);
-    if (rc == DF_OK) memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
+    df_frames f = {0};
+    pthread_mutex_lock(&j->s->pub_lock);
+    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, &f, NULL, &j->err);
+    if (rc == DF_OK) {
+        r->published = 1;
+        memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
+        uint64_t v = atomic_load(&j->s->version);
+        for (size_t i = 0; i < f.n; i++) {
+            df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
+            f.v[i] = NULL;
+        }
+        f.n = 0;
+    }
+    pthread_mutex_unlock(&j->s->pub_lock);
+    df_frames_clear(&f);
     return rc;
 }
 
@@ -249,22 +273,19 @@ static int on_progress(void *user, const df_admm_progress *p)
     df_job *j = user;
     hs_req *r = j->body;
     if (atomic_load(&j->cancel)) return 1;
-    if (r->progress_every && p->iteration % (int)r->progress_every == 0) {
-        df_frames f = {0};
-        int prc = publish_iterate(j, p->V, p->iteration, p->objective, p->residual,
-                                  DF_MOVE_RUNNING, 0, &f);
+    int it = r->iters_done + p->iteration;
+    if (r->progress_every && it % (int)r->progress_every == 0) {
+        int prc = publish_iterate(j, p->V, it, p->objective, p->residual, DF_MOVE_RUNNING, 0);
         if (prc != DF_OK) { /* e.g. an iterate not finite in float32: the move fails */
-            df_frames_clear(&f);
             r->publish_failed = prc;
             return 1;
         }
-        uint64_t v = atomic_load(&j->s->version);
-        for (size_t i = 0; i < f.n; i++) {
-            df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
-            f.v[i] = NULL;
-        }
-        f.n = 0;
-        df_frames_clear(&f);
+    }
+    /* Time slices: another move waits for the long lane (pool.h) and this one had its turn. */
+    if (j->srv->pool && df_pool_heavy_waiting(j->srv->pool) > 0 &&
+        uv_hrtime() - r->slice_t0 >= DF_MOVE_SLICE_MS * 1000000ull) {
+        r->yield = 1;
+        return 1;
     }
     return 0;
 }
@@ -287,33 +308,56 @@ static int targets_check(const df_session *s, const df_handleset *hs, const doub
     return DF_OK;
 }
 
+/* Checks the request and prepares the solver for the first slice of a move: the handle set's
+ * solver (rebuilt when evicted), the session's current positions, the targets. */
+static int move_setup(df_job *j)
+{
+    hs_req *r = j->body;
+    df_session *s = j->s;
+    df_handleset *hs = s->hs;
+    if (!hs)
+        return df_error_set(&j->err, DF_ESTATE, "handles_move: session %llu has no handle set "
+                            "(send handles_set first)", (unsigned long long)s->id);
+    if ((int32_t)r->mv.n_targets != hs->nh)
+        return df_error_set(&j->err, DF_EINVAL, "handles_move: %u targets for %d handles",
+                            r->mv.n_targets, hs->nh);
+    int rc = targets_check(s, hs, r->mv.targets, &j->err);
+    if (rc != DF_OK) return rc;
+    if (!hs->solver) {
+        rc = build_solver(s, hs, &j->err);
+        if (rc != DF_OK) return rc;
+        r->created = 1;
+    } else {
+        r->hit = 1;
+    }
+    /* Start from the session's current positions (PROTOCOL.md 6): an undo, a brush or another
+     * client's edit since the solver's last run invalidates its warm start there. A target
+     * with z != 0 on a 2D session is refused here (df_admm_set_targets, EINVAL). */
+    rc = df_admm_set_positions(hs->solver, s->cur, NULL, &j->err);
+    if (rc == DF_OK) rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err);
+    r->progress_every = r->mv.progress_every;
+    return rc;
+}
+
 static void move_work(df_job *j)
 {
     hs_req *r = j->body;
     df_session *s = j->s;
     df_handleset *hs = s->hs;
-    r->t0 = uv_hrtime();
-    if (!hs) {
-        j->rc = df_error_set(&j->err, DF_ESTATE, "handles_move: session %llu has no handle set "
-                             "(send handles_set first)", (unsigned long long)s->id);
-        return;
+    if (!r->resumed) {
+        r->t0 = uv_hrtime();
+        if ((j->rc = move_setup(j)) != DF_OK) return;
     }
-    if ((int32_t)r->mv.n_targets != hs->nh) {
-        j->rc = df_error_set(&j->err, DF_EINVAL, "handles_move: %u targets for %d handles",
-                             r->mv.n_targets, hs->nh);
-        return;
+    r->slice_t0 = uv_hrtime();
+    r->yield = 0;
+    int max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs->max_iters;
+    double max_ms = 0;
+    if (r->mv.max_ms) { /* the budget counts from the move's start, waits included */
+        max_ms = (double)r->mv.max_ms - (double)(r->slice_t0 - r->t0) / 1e6;
+        if (max_ms <= 0) max_ms = 1e-3; /* one more iteration, then the budget stops it */
     }
-    if ((j->rc = targets_check(s, hs, r->mv.targets, &j->err)) != DF_OK) return;
-    if (!hs->solver) {
-        if ((j->rc = build_solver(s, hs, &j->err)) != DF_OK) return;
-        r->created = 1;
-    } else {
-        r->hit = 1;
-    }
-    if ((j->rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err)) != DF_OK) return;
-    r->progress_every = r->mv.progress_every;
-    df_admm_budget b = {.max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs->max_iters,
-                        .max_ms = r->mv.max_ms,
+    df_admm_budget b = {.max_iters = max_iters - r->iters_done,
+                        .max_ms = max_ms,
                         .progress_every = 1, /* every iteration: prompt supersede checks */
                         .progress = on_progress,
                         .user = j};
@@ -324,13 +368,29 @@ static void move_work(df_job *j)
         j->rc = r->publish_failed;
         return;
     }
+    r->iters_done += r->res.iterations;
+    r->res.iterations = r->iters_done;
+    if (rc == DF_OK && r->yield) {
+        if (!(r->res.residual < hs->params.tol) && r->iters_done < max_iters) {
+            r->resumed = 1; /* back to the tail of the long lane; continues from here */
+            j->task.requeue = 1;
+            s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+            return;
+        }
+        if (r->res.residual < hs->params.tol) { /* it converged at the yielding iteration */
+            r->res.converged = 1;
+            r->res.stop = DF_ADMM_STOP_CONVERGED;
+        } else {
+            r->res.stop = DF_ADMM_STOP_ITERS; /* its last slice ended the budget */
+        }
+    }
     if (rc != DF_OK) r->status = DF_MOVE_FAILED;
     else if (r->res.converged) r->status = DF_MOVE_CONVERGED;
     else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
     else r->status = DF_MOVE_BUDGET;
     s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
-                              r->res.objective, r->res.residual, r->status, 1, &r->frames);
+                              r->res.objective, r->res.residual, r->status, 1);
     j->rc = rc != DF_OK ? rc : prc;
 }
 
@@ -346,7 +406,7 @@ static void move_done(df_job *j)
         srv->stats.admm_hits++;
         df_cache_touch_solver(srv, s->hs);
     }
-    df_job_broadcast(j, &r->frames);
+    /* the final frames were posted by the worker and broadcast before this `done` (job.c) */
     df_msg_move_result res;
     memset(&res, 0, sizeof res);
     res.session_id = s->id;
@@ -356,7 +416,7 @@ static void move_done(df_job *j)
         if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
         return;
     }
-    if (r->frames.n && df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
+    if (r->published && df_session_history_commit(s, NULL) != DF_OK)
         df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
                (unsigned long long)s->id);
     if (df_job_failed(j)) return;
@@ -391,6 +451,8 @@ void df_h_handles_move(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_msg_handle_move_free(&m);
         return;
     }
+    j->heavy = 1;
+    j->preemptible = 1;
     ((hs_req *)j->body)->mv = m;
     /* A newer move supersedes the running one and any queued ones. */
     if (s->running && s->running->type == DF_MSG_HANDLES_MOVE) {
@@ -417,11 +479,7 @@ static void reset_done(df_job *j)
     if (df_job_failed(j)) return;
     df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
     if (s->hs) df_cache_drop_solver(j->srv, s->hs); /* rebuilt against the new rest */
-    df_history h;
-    if (df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, NULL) == DF_OK) {
-        df_history_free(&s->hist); /* reset-rest clears undo/redo */
-        s->hist = h;
-    }
+    df_session_history_reset(s, NULL); /* reset-rest clears undo/redo */
     df_job_ack(j);
 }
 

@@ -60,10 +60,17 @@ static void history_work(df_job *j)
                              (unsigned long long)s->id);
         return;
     }
-    const double *state = s->hist.states[s->hist.cur + (undo ? -1 : 1)];
+    /* The target state is rebuilt from the history's steps into the scratch positions, which
+     * then become s->cur (the history itself moves in history_done, on the loop thread). */
+    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
+    double *state = s->scratch_pos;
+    if ((j->rc = df_history_peek(&s->hist, undo ? -1 : 1, state, &j->err)) != DF_OK) return;
     j->rc = df_stream_publish(s, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL, 0,
                               &r->frames, NULL, &j->err);
-    if (j->rc == DF_OK) memcpy(s->cur, state, 3 * (size_t)s->nv * sizeof(double));
+    if (j->rc == DF_OK) {
+        s->scratch_pos = s->cur;
+        s->cur = state;
+    }
 }
 
 static void history_done(df_job *j)
@@ -83,7 +90,9 @@ static void history_request(df_conn *c, const df_frame_header *h, const uint8_t 
     df_job *j = s ? df_job_for_request(c, h, s, sizeof(mesh_req), history_work, history_done,
                                        req_free)
                   : NULL;
-    if (j) df_job_submit(j);
+    if (!j) return;
+    j->beside = DF_JOB_BESIDE_REFUSE; /* ESTATE while a move runs (PROTOCOL.md 6) */
+    df_job_submit(j);
 }
 
 void df_h_undo(df_conn *c, const df_frame_header *h, const uint8_t *p)
@@ -180,6 +189,7 @@ void df_h_get_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
     }
     df_job *j = new_job(c, h, m.session_id, get_mesh_work, frames_done);
     if (!j) return;
+    j->beside = DF_JOB_BESIDE_READ; /* the last published version while a move runs */
     ((mesh_req *)j->body)->flags = m.flags;
     df_job_submit(j);
 }
@@ -210,6 +220,7 @@ void df_h_snapshot(df_conn *c, const df_frame_header *h, const uint8_t *p)
     }
     df_job *j = new_job(c, h, m.session_id, snapshot_work, frames_done);
     if (!j) return;
+    j->beside = DF_JOB_BESIDE_READ;
     ((mesh_req *)j->body)->version = m.version;
     df_job_submit(j);
 }

@@ -40,6 +40,9 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "clients_total", (double)x->clients_total);
         put(&st, "clients_dropped", (double)x->clients_dropped);
         put(&st, "clients_refused", (double)x->clients_refused);
+        put(&st, "clients_refused_fds", (double)x->clients_refused_fds);
+        put(&st, "clients_handshake_timeout", (double)x->clients_handshake_timeout);
+        put(&st, "clients_idle_timeout", (double)x->clients_idle_timeout);
         put(&st, "frames_in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);
@@ -56,6 +59,9 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "jobs_superseded", (double)x->jobs_superseded);
         put(&st, "jobs_inline", (double)x->jobs_inline);
         put(&st, "jobs_inline_deferred", (double)x->jobs_inline_deferred);
+        put(&st, "jobs_beside_move", (double)x->jobs_beside_move);
+        put(&st, "moves_preempted", (double)x->moves_preempted);
+        put(&st, "moves_orphaned", (double)x->moves_orphaned);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
         put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);
@@ -66,6 +72,22 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "cache.admm_chol.hits", (double)x->admm_hits);
         put(&st, "cache.admm_chol.misses", (double)x->admm_misses);
         put(&st, "cache.lru_evictions", (double)x->lru_evictions);
+        const df_membudget *mb = df_server_mem(srv); /* membudget.h */
+        int uploads = 0;
+        for (df_conn *k = srv->conns; k; k = k->next) uploads += k->upload != NULL;
+        put(&st, "memory_used_bytes", (double)df_mem_used(mb));
+        put(&st, "memory_max_bytes", (double)mb->max);
+        put(&st, "memory_refused", (double)mb->refused);
+        put(&st, "memory.uploads_bytes", (double)mb->used[DF_MEM_UPLOADS]);
+        put(&st, "memory.sessions_bytes", (double)mb->used[DF_MEM_SESSIONS]);
+        put(&st, "memory.shm_bytes", (double)mb->used[DF_MEM_SHM]);
+        put(&st, "memory.history_bytes", (double)mb->used[DF_MEM_HISTORY]);
+        put(&st, "uploads_in_flight", uploads);
+        put(&st, "uploads_max_bytes", (double)((uint64_t)srv->cfg.uploads_max_mb << 20));
+        put(&st, "max_upload_bytes", (double)((uint64_t)srv->cfg.max_upload_mb << 20));
+        put(&st, "shm_total_bytes", (double)srv->cfg.shm_total_bytes);
+        put(&st, "history.limit_bytes", (double)((uint64_t)srv->cfg.history_max_mb << 20));
+        put(&st, "history.steps_dropped", (double)srv->history_dropped);
         if (srv->pool) { /* compute pool hand-offs (pool.h) */
             df_pool_counters pc;
             df_pool_counters_get(srv->pool, &pc);
@@ -74,6 +96,8 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
             put(&st, "pool.tasks", (double)pc.tasks);
             put(&st, "pool.spin_hits", (double)pc.spin_hits);
             put(&st, "pool.wakeups", (double)pc.wakeups);
+            put(&st, "pool.long_lane", pc.heavy_max);
+            put(&st, "pool.long_waits", (double)pc.heavy_waits);
         }
     } else {
         int strokes = 0;
@@ -87,6 +111,8 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "undo_depth", df_history_can_undo(&s->hist));
         put(&st, "redo_depth", df_history_can_redo(&s->hist));
         put(&st, "history_bytes", (double)df_history_bytes(&s->hist));
+        put(&st, "history_steps_dropped", (double)s->hist.dropped);
+        put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
         put(&st, "open_strokes", strokes);
         put(&st, "job_running", s->running != NULL);
         put(&st, "handles", s->hs ? s->hs->nh : 0);

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/messages.h"
 #include "server/conn.h"
 #include "server/log.h"
 #include "server/reply.h"
@@ -66,6 +67,39 @@ void df_job_ack(df_job *j)
 }
 
 static void pump(df_session *s);
+
+int df_job_move_running(const df_session *s)
+{
+    return s->running && s->running->preemptible && !s->jhead;
+}
+
+/* Ends the running move early (loop thread): a request has to wait for it. */
+static void preempt(df_session *s)
+{
+    df_job *r = s->running;
+    if (!r || !r->preemptible || atomic_load(&r->cancel)) return;
+    atomic_store(&r->cancel, 1);
+    s->srv->stats.moves_preempted++;
+}
+
+/* Answers `j` beside the running move (see job.h, "Moves"); loop thread. */
+static void run_beside(df_job *j)
+{
+    df_session *s = j->s;
+    df_server *srv = j->srv;
+    pthread_mutex_lock(&s->pub_lock);
+    df_server_drain_mail(srv); /* subscribers have every version the move published so far */
+    if (j->beside == DF_JOB_BESIDE_REFUSE)
+        j->rc = df_error_set(&j->err, DF_ESTATE, "%s: a handle move is running on session %llu",
+                             df_msg_type_name(j->type), (unsigned long long)s->id);
+    else if (j->work)
+        j->work(j);
+    j->done(j);
+    pthread_mutex_unlock(&s->pub_lock);
+    job_free(j);
+    srv->stats.jobs_completed++;
+    srv->stats.jobs_beside_move++;
+}
 
 /* Runs `done`, frees the job and clears the session's running slot (loop thread). */
 static void finish(df_job *j)
@@ -137,6 +171,7 @@ static void pump(df_session *s)
         if (!s->jhead) s->jtail = NULL;
         j->next = NULL;
         s->running = j;
+        if (j->preemptible && s->jhead) preempt(s); /* requests already wait behind it */
         if (j->work && runs_inline(j)) { /* cheaper than two thread hand-offs */
             uint64_t t0 = uv_hrtime();
             j->work(j);
@@ -149,6 +184,7 @@ static void pump(df_session *s)
             j->srv->jobs_running++;
             j->task.work = task_work;
             j->task.after = task_after;
+            j->task.heavy = j->heavy;
             df_pool_submit(j->srv->pool, &j->task);
             return;
         }
@@ -183,6 +219,11 @@ void df_job_submit(df_job *j)
         }
         return;
     }
+    if (j->beside != DF_JOB_BESIDE_NONE && df_job_move_running(s)) {
+        run_beside(j);
+        return;
+    }
+    if (j->c) preempt(s); /* a requester must not wait for a move: it ends at its next iteration */
     if (s->jtail) s->jtail->next = j;
     else s->jhead = j;
     s->jtail = j;

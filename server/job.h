@@ -19,7 +19,17 @@
  * session still never stalls another session. A client pipelining many cheap updates cannot
  * hold the loop either: inline work is capped at DF_JOB_INLINE_ITER_FACTOR x inline_us per loop
  * iteration (srv->inline_spent_ns, reset by the server's check handle); past that, jobs go to
- * the pool until the next iteration. */
+ * the pool until the next iteration.
+ *
+ * Moves never lock a session out (a handle move may run for hours). A `preemptible` job (a
+ * HANDLES_MOVE) ends at its next iteration (j->cancel, status superseded, its last published
+ * iterate stays and is one undo step) as soon as a request with a requester has to queue behind
+ * it. Requests that need not wait are answered beside it when they arrive and nothing else is
+ * queued (`beside`): DF_JOB_BESIDE_READ jobs (get-mesh, snapshot, handles-get, subscribe,
+ * unsubscribe, stream-shm) run their work and done on the loop thread at once against the last
+ * published version (under s->pub_lock, after broadcasting what the move posted, so they see
+ * exactly the versions subscribers have been sent); DF_JOB_BESIDE_REFUSE jobs (undo, redo) fail
+ * with ESTATE at once. A move whose requester disconnects ends too (df_session_forget_conn). */
 #ifndef DF_SERVER_JOB_H
 #define DF_SERVER_JOB_H
 
@@ -36,6 +46,9 @@
 #include "server/stream.h"
 
 #define DF_JOB_INLINE_ITER_FACTOR 4 /* inline work per loop iteration <= this x inline_us */
+
+/* What a job does when it arrives while a preemptible move runs on its session (see above). */
+enum { DF_JOB_BESIDE_NONE = 0, DF_JOB_BESIDE_READ = 1, DF_JOB_BESIDE_REFUSE = 2 };
 
 typedef struct df_job df_job;
 typedef void (*df_job_fn)(df_job *j);
@@ -59,6 +72,9 @@ struct df_job {
     df_error err;
     atomic_int cancel;        /* set by the loop thread to supersede a running move */
     int canceled;             /* the pool refused/cancelled the job (shutdown) */
+    int heavy;                /* long work (handle moves): the pool's long lane */
+    int preemptible;          /* a move: cancelled when a request must queue behind it */
+    int beside;               /* DF_JOB_BESIDE_*: behaviour while a move runs (see above) */
     uv_work_t w;              /* session-less jobs, and every job of a server without a pool */
     df_task task;             /* session jobs on srv->pool */
     uint64_t version;         /* version after the job (for the ack) */
@@ -99,6 +115,10 @@ int df_job_drop_queued(df_session *s, int (*pred)(const df_job *j, void *arg), v
 /* When j->rc is an error: answers the requester (if any) with j->err and returns 1; else 0.
  * Every `done` starts with `if (df_job_failed(j)) return;` unless it needs to clean up. */
 int df_job_failed(df_job *j);
+
+/* 1 when the session's running job is a move that a request arriving now could be answered
+ * beside (nothing queued behind it): see "Moves" above (loop thread). */
+int df_job_move_running(const df_session *s);
 
 /* Predicate matching every job (for df_job_drop_queued at shutdown). */
 int df_job_pred_all(const df_job *j, void *arg);

@@ -2,7 +2,10 @@
 #include "server/listener.h"
 
 #include <errno.h>
+#include <grp.h>
 #include <netdb.h>
+#include <netinet/in.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -11,6 +14,7 @@
 #include <unistd.h>
 
 #include "server/conn.h"
+#include "server/guard.h"
 #include "server/log.h"
 #include "server/sd.h"
 
@@ -18,7 +22,7 @@ static void on_unix_conn(uv_stream_t *s, int status)
 {
     df_server *srv = s->data;
     if (status < 0) {
-        df_log(DF_LOG_WARN, "accept (unix): %s", uv_strerror(status));
+        df_guard_accept_failed(srv, s, status, "unix");
         return;
     }
     df_conn_accept(srv, s, 0);
@@ -28,7 +32,7 @@ static void on_tcp_conn(uv_stream_t *s, int status)
 {
     df_server *srv = s->data;
     if (status < 0) {
-        df_log(DF_LOG_WARN, "accept (tcp): %s", uv_strerror(status));
+        df_guard_accept_failed(srv, s, status, "tcp");
         return;
     }
     df_conn_accept(srv, s, 1);
@@ -48,9 +52,35 @@ static int unix_alive(const char *path)
     return ok;
 }
 
+/* Resolves cfg->socket_group (a name or a number) into *gid; (gid_t)-1 when unset. */
+static int socket_gid(const df_server_config *cfg, gid_t *gid, df_error *err)
+{
+    *gid = (gid_t)-1;
+    if (!cfg->socket_group[0]) return DF_OK;
+    char buf[4096];
+    struct group gr, *res = NULL;
+    if (getgrnam_r(cfg->socket_group, &gr, buf, sizeof buf, &res) == 0 && res) {
+        *gid = res->gr_gid;
+        return DF_OK;
+    }
+    char *end = NULL;
+    errno = 0;
+    unsigned long v = strtoul(cfg->socket_group, &end, 10);
+    if (!errno && end && !*end && cfg->socket_group[0] >= '0' && cfg->socket_group[0] <= '9' &&
+        v < (unsigned long)(gid_t)-1) {
+        *gid = (gid_t)v;
+        return DF_OK;
+    }
+    return df_error_set(err, DF_EINVAL, "socket_group: no group '%s'", cfg->socket_group);
+}
+
 static int open_unix(df_server *srv, df_error *err)
 {
     const char *path = srv->cfg.socket_path;
+    mode_t mode = (mode_t)srv->cfg.socket_mode & 0777;
+    gid_t gid;
+    int grc = socket_gid(&srv->cfg, &gid, err);
+    if (grc != DF_OK) return grc;
     char dir[DF_CONFIG_SOCKET_MAX];
     snprintf(dir, sizeof dir, "%s", path);
     char *slash = strrchr(dir, '/');
@@ -73,9 +103,20 @@ static int open_unix(df_server *srv, df_error *err)
     if (rc < 0) return df_error_set(err, DF_EIO, "unix:%s: %s", path, uv_strerror(rc));
     srv->unix_srv.data = srv;
     srv->have_unix = 1;
+    /* The socket file is created by bind with 0777 & ~umask: narrow the umask around it so the
+     * file never exists with more than `mode`, then set `mode` exactly (the loop has no other
+     * threads yet, so the process-wide umask change is safe). */
+    mode_t old_mask = umask(0777 & ~mode);
     rc = uv_pipe_bind(&srv->unix_srv, path);
+    umask(old_mask);
     if (rc < 0) return df_error_set(err, DF_EIO, "unix:%s: bind: %s", path, uv_strerror(rc));
     srv->unix_owned = 1;
+    if (gid != (gid_t)-1 && chown(path, (uid_t)-1, gid) != 0)
+        return df_error_set(err, DF_EIO, "unix:%s: socket_group %s: %s", path,
+                            srv->cfg.socket_group, strerror(errno));
+    if (chmod(path, mode) != 0)
+        return df_error_set(err, DF_EIO, "unix:%s: socket_mode %04o: %s", path, (unsigned)mode,
+                            strerror(errno));
     rc = uv_listen((uv_stream_t *)&srv->unix_srv, DF_LISTEN_BACKLOG, on_unix_conn);
     if (rc < 0) return df_error_set(err, DF_EIO, "unix:%s: listen: %s", path, uv_strerror(rc));
     return DF_OK;
@@ -91,6 +132,21 @@ static int tcp_port_of(uv_tcp_t *t)
     return 0;
 }
 
+int df_listener_is_loopback(const struct sockaddr *sa)
+{
+    if (!sa) return 0;
+    if (sa->sa_family == AF_INET) {
+        uint32_t a = ntohl(((const struct sockaddr_in *)sa)->sin_addr.s_addr);
+        return (a >> 24) == 127;
+    }
+    if (sa->sa_family == AF_INET6) {
+        const struct in6_addr *a = &((const struct sockaddr_in6 *)sa)->sin6_addr;
+        if (IN6_IS_ADDR_LOOPBACK(a)) return 1;
+        return IN6_IS_ADDR_V4MAPPED(a) && a->s6_addr[12] == 127;
+    }
+    return 0;
+}
+
 static int open_tcp(df_server *srv, df_error *err)
 {
     const char *host = srv->cfg.tcp_host;
@@ -101,9 +157,25 @@ static int open_tcp(df_server *srv, df_error *err)
     hints.ai_family = AF_UNSPEC;
     hints.ai_socktype = SOCK_STREAM;
     hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
-    int g = getaddrinfo(host, port, &hints, &res);
+    /* "*" = every interface (the wildcard address) */
+    int g = getaddrinfo(strcmp(host, "*") == 0 ? NULL : host, port, &hints, &res);
     if (g != 0 || !res)
         return df_error_set(err, DF_EIO, "tcp:%s:%s: %s", host, port, gai_strerror(g));
+    if (!df_listener_is_loopback(res->ai_addr)) {
+        if (!srv->cfg.tcp_insecure) {
+            freeaddrinfo(res);
+            return df_error_set(err, DF_EINVAL,
+                                "tcp:%s:%s: refusing a non-loopback address without "
+                                "--tcp-insecure (config tcp_insecure = yes): TCP clients are "
+                                "not authenticated, so anyone who can reach it could load, edit "
+                                "and close every session; listen on 127.0.0.1 or ::1 instead",
+                                host, port);
+        }
+        df_log(DF_LOG_WARN,
+               "tcp:%s:%s: listening on a non-loopback address without authentication "
+               "(tcp_insecure): anyone who can reach it controls every session",
+               host, port);
+    }
     int rc = uv_tcp_init(srv->loop, &srv->tcp_srv);
     if (rc < 0) {
         freeaddrinfo(res);

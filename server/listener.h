@@ -8,11 +8,19 @@
 #define DF_LISTEN_BACKLOG 128
 
 /* Opens the listeners described by srv->cfg (after adopting LISTEN_FDS sockets: a socket-activated
- * Unix or TCP socket replaces the configured one of the same family). For the Unix socket: creates
- * the parent directory when missing (0755), removes a stale socket file nobody listens on, refuses
- * to replace a live one or a non-socket file. Errors: DF_EIO naming the address and the reason;
- * DF_EINVAL when no listener at all is configured. */
+ * Unix or TCP socket replaces the configured one of the same family, and keeps the mode and
+ * group its unit gave it). For the Unix socket: creates the parent directory when missing (0755),
+ * removes a stale socket file nobody listens on, refuses to replace a live one or a non-socket
+ * file, creates the socket with cfg->socket_mode (never wider, whatever the umask) and
+ * cfg->socket_group. A configured TCP address must be loopback unless cfg->tcp_insecure (then a
+ * warning is logged). Errors: DF_EIO naming the address and the reason; DF_EINVAL when no
+ * listener at all is configured, for a non-loopback TCP address without tcp_insecure, or an
+ * unknown socket_group. */
 int df_listener_open(df_server *srv, df_error *err);
+
+/* 1 when `sa` is an IPv4 127.0.0.0/8, IPv6 ::1 or IPv4-mapped 127.x address, else 0. */
+struct sockaddr;
+int df_listener_is_loopback(const struct sockaddr *sa);
 
 /* Closes the listeners (and unlinks the socket file we created). Idempotent. */
 void df_listener_close(df_server *srv);

@@ -9,6 +9,7 @@
 #include <strings.h>
 
 #include "core/common/df_error.h"
+#include "server/text.h"
 
 static atomic_int g_level = DF_LOG_INFO;
 static pthread_mutex_t g_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -42,13 +43,16 @@ int df_log_parse_level(const char *s, int *level)
 void df_log(int level, const char *fmt, ...)
 {
     if (level > atomic_load(&g_level) || level < DF_LOG_ERROR) return;
-    char line[1024];
+    char line[1024], safe[4 * sizeof line];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
+    /* Client-chosen text (names, paths) may be part of the message: one log line stays one line,
+     * without terminal escapes (text.h). */
+    df_text_escape(safe, sizeof safe, line);
     pthread_mutex_lock(&g_lock);
-    fprintf(stderr, "deformd[%s]: %s\n", k_names[level], line);
+    fprintf(stderr, "deformd[%s]: %s\n", k_names[level], safe);
     fflush(stderr);
     pthread_mutex_unlock(&g_lock);
 }

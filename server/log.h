@@ -21,7 +21,9 @@ int df_log_get_level(void);
  * Returns DF_OK, or DF_EINVAL (and *level untouched) for anything else. */
 int df_log_parse_level(const char *s, int *level);
 
-/* Prints one line at `level` when it is enabled: "deformd[<level>]: <message>\n". */
+/* Prints one line at `level` when it is enabled: "deformd[<level>]: <message>\n". Control
+ * characters and bytes that are not UTF-8 in the message are written as \xNN (df_text_escape),
+ * so a logged client-chosen string can never forge a line or reach the terminal raw. */
 void df_log(int level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 #endif

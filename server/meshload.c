@@ -5,6 +5,7 @@
 
 int df_meshload_memory(const uint8_t *data, size_t len, int fmt, size_t part2,
                        int32_t max_vertices, int want_2d, const char *name, df_mesh *out,
+                       df_mesh_report *rep,
                        df_error *err)
 {
     df_mesh_read_opts o = df_mesh_read_opts_default();
@@ -17,20 +18,9 @@ int df_meshload_memory(const uint8_t *data, size_t len, int fmt, size_t part2,
         if (part2 == 0 || part2 >= len)
             return df_error_set(err, DF_EINVAL, "load: tetgen upload needs .node and .ele parts");
         return df_mesh_read_tetgen_memory(data, part2, data + part2, len - part2, name, &o, out,
-                                          NULL, err);
+                                          rep, err);
     }
-    return df_mesh_read_memory(data, len, (df_mesh_format)fmt, name, &o, out, NULL, err);
-}
-
-int df_meshload_file(const char *path, int fmt, int32_t max_vertices, int want_2d, df_mesh *out,
-                     df_error *err)
-{
-    df_mesh_read_opts o = df_mesh_read_opts_default();
-    o.max_vertices = max_vertices;
-    o.want_2d = want_2d;
-    (void)fmt; /* the extension decides; content sniffing covers unknown extensions */
-    df_mesh_init(out);
-    return df_mesh_read_file(path, &o, out, NULL, err);
+    return df_mesh_read_memory(data, len, (df_mesh_format)fmt, name, &o, out, rep, err);
 }
 
 void df_meshload_free(df_mesh *m) { df_mesh_free(m); }

@@ -8,7 +8,10 @@
  * queue under it, so a submit that counted it as spinning (and did not signal) is still seen.
  * Sleeping workers form a LIFO stack, each with its own condition variable: a submit wakes the
  * worker that went idle last, so one stroke after another keeps landing on the same (cache-warm)
- * thread instead of rotating through the pool. */
+ * thread instead of rotating through the pool.
+ * Long lane: heavy tasks wait in their own FIFO and at most `heavy_max` (threads - 1, at least 1)
+ * of them run at once; a worker takes a short task first, a heavy one only while the lane has
+ * room, so with two or more threads one worker is always left for short tasks. */
 #include "server/pool.h"
 
 #include <errno.h>
@@ -40,13 +43,17 @@ struct df_pool {
     uint64_t spin_ns;
     worker w[DF_POOL_MAX_THREADS];
     int nthreads;
+    int nworkers;            /* threads asked for (set before any worker starts) */
     /* queue, under lock */
     pthread_mutex_t lock;
-    df_task *qhead, *qtail;
+    df_task *qhead, *qtail;  /* short tasks */
+    df_task *hhead, *htail;  /* heavy tasks (long lane) */
+    int nhq, nheavy, heavy_max; /* heavy tasks queued / running (at most heavy_max) */
     worker *idle;            /* sleeping workers, most recently idle first (LIFO: the woken
                               * thread is the one whose caches are warm)                 */
     int nq, nspinning, stopping;
     atomic_int qhint;        /* nq, read by spinners without the lock */
+    atomic_int hwait;        /* tasks a running heavy task keeps waiting (df_pool_heavy_waiting) */
     atomic_int stop;
     /* completions, under dlock */
     pthread_mutex_t dlock;
@@ -56,7 +63,36 @@ struct df_pool {
     /* loop thread only */
     int inflight;
     uint64_t tasks, wakeups;
+    uint64_t heavy_waits;    /* heavy tasks queued while the lane was full (written in submit) */
 };
+
+/* 1 when a worker may take a task now (under lock). */
+static int runnable(const df_pool *p)
+{
+    return p->qhead || (p->hhead && p->nheavy < p->heavy_max);
+}
+
+/* Tasks a worker may take now, for the spinners' hint and the wake-up decision (under lock). */
+static int nrunnable(const df_pool *p)
+{
+    int room = p->heavy_max - p->nheavy;
+    return p->nq + (p->nhq < room ? p->nhq : room);
+}
+
+/* Refreshes the lock-free hints after a queue or lane change (under lock). */
+static void update_hints(df_pool *p)
+{
+    int room = p->heavy_max - p->nheavy;
+    int wait = p->nhq > room ? p->nhq - room : 0;
+    if (p->heavy_max >= p->nworkers) wait += p->nq; /* one thread: short tasks wait for it too */
+    atomic_store_explicit(&p->qhint, nrunnable(p), memory_order_release);
+    atomic_store_explicit(&p->hwait, wait, memory_order_relaxed);
+}
+
+int df_pool_heavy_waiting(const df_pool *p)
+{
+    return atomic_load_explicit(&((df_pool *)p)->hwait, memory_order_relaxed);
+}
 
 /* One spin step: a few pause instructions, then give the core to any runnable thread. */
 static inline void relax(void)
@@ -90,7 +126,7 @@ static void *worker_main(void *arg)
     pthread_mutex_lock(&p->lock);
     for (;;) {
         int spun = 0;
-        while (!p->qhead && !p->stopping) {
+        while (!runnable(p) && !p->stopping) {
             if (spin_until && uv_hrtime() < spin_until) {
                 p->nspinning++;
                 pthread_mutex_unlock(&p->lock);
@@ -110,11 +146,20 @@ static void *worker_main(void *arg)
             while (!me->woken && !p->stopping) pthread_cond_wait(&me->cond, &p->lock);
         }
         if (p->stopping) break;
-        df_task *t = p->qhead;
-        p->qhead = t->next;
-        if (!p->qhead) p->qtail = NULL;
-        p->nq--;
-        atomic_store_explicit(&p->qhint, p->nq, memory_order_release);
+        df_task *t;
+        if (p->qhead) { /* short tasks first */
+            t = p->qhead;
+            p->qhead = t->next;
+            if (!p->qhead) p->qtail = NULL;
+            p->nq--;
+        } else {
+            t = p->hhead;
+            p->hhead = t->next;
+            if (!p->hhead) p->htail = NULL;
+            p->nhq--;
+            p->nheavy++;
+        }
+        update_hints(p);
         pthread_mutex_unlock(&p->lock);
         if (spun) atomic_fetch_add_explicit(&p->spin_hits, 1, memory_order_relaxed);
         uint64_t t0 = uv_hrtime();
@@ -122,8 +167,25 @@ static void *worker_main(void *arg)
         uint64_t t1 = uv_hrtime();
         t->work_ns = t1 - t0;
         spin_until = p->spin_ns && t->work_ns < DF_POOL_SHORT_TASK_NS ? t1 + p->spin_ns : 0;
-        complete(p, t);
+        int heavy = t->heavy;
+        if (heavy && t->requeue) { /* yields: back to the tail of the long lane */
+            t->requeue = 0;
+            t->next = NULL;
+            pthread_mutex_lock(&p->lock);
+            p->nheavy--;
+            if (p->htail) p->htail->next = t;
+            else p->hhead = t;
+            p->htail = t;
+            p->nhq++;
+            update_hints(p);
+            continue;
+        }
+        complete(p, t); /* t may be freed by the loop from here on */
         pthread_mutex_lock(&p->lock);
+        if (heavy) {
+            p->nheavy--;
+            update_hints(p);
+        }
     }
     pthread_mutex_unlock(&p->lock);
     return NULL;
@@ -164,12 +226,21 @@ void df_pool_submit(df_pool *p, df_task *t)
     t->next = NULL;
     t->work_ns = 0;
     pthread_mutex_lock(&p->lock);
-    if (p->qtail) p->qtail->next = t;
-    else p->qhead = t;
-    p->qtail = t;
-    p->nq++;
-    atomic_store_explicit(&p->qhint, p->nq, memory_order_release);
-    if (p->idle && p->nq > p->nspinning) { /* wake the most recently idle worker */
+    if (t->heavy) {
+        if (p->htail) p->htail->next = t;
+        else p->hhead = t;
+        p->htail = t;
+        p->nhq++;
+        if (p->nheavy + p->nhq > p->heavy_max) p->heavy_waits++; /* the lane is full: t waits */
+    } else {
+        if (p->qtail) p->qtail->next = t;
+        else p->qhead = t;
+        p->qtail = t;
+        p->nq++;
+    }
+    int n = nrunnable(p);
+    update_hints(p);
+    if (p->idle && n > p->nspinning) { /* wake the most recently idle worker */
         worker *w = p->idle;
         p->idle = w->next_idle;
         w->woken = 1;
@@ -185,6 +256,8 @@ void df_pool_counters_get(const df_pool *p, df_pool_counters *out)
     out->tasks = p->tasks;
     out->spin_hits = atomic_load_explicit(&p->spin_hits, memory_order_relaxed);
     out->wakeups = p->wakeups;
+    out->heavy_max = p->heavy_max;
+    out->heavy_waits = p->heavy_waits;
 }
 
 static void stop_threads(df_pool *p)
@@ -232,10 +305,13 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
     if (!p) return df_error_set(err, DF_ENOMEM, "pool: out of memory");
     p->loop = loop;
     p->spin_ns = spin_ns;
+    p->heavy_max = threads > 1 ? threads - 1 : 1;
+    p->nworkers = threads;
     p->efd = -1;
     pthread_mutex_init(&p->lock, NULL);
     pthread_mutex_init(&p->dlock, NULL);
     atomic_init(&p->qhint, 0);
+    atomic_init(&p->hwait, 0);
     atomic_init(&p->stop, 0);
     atomic_init(&p->signaled, 0);
     atomic_init(&p->spin_hits, 0);

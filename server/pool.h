@@ -12,6 +12,13 @@
  *     CPU between polls, so that back-to-back strokes skip the futex wake-up. It helps only with
  *     idle cores (on the shared 2-core test machine: ~1 us of a 50 us round trip), hence
  *     deformd's default 0 (config `spin_us`). A worker that ran a long task sleeps at once.
+ *   - long lane: tasks marked `heavy` (handle moves: may run for hours) occupy at most threads - 1 workers (1 with a single thread), so that short tasks
+ *     (brush strokes, reads) always find a worker while long solves run; heavy tasks beyond
+ *     that wait in their own FIFO, in submission order. A heavy task may yield: its work sets
+ *     `requeue` and returns, and it goes back to the tail of the long lane instead of completing
+ *     (its `after` runs only once it really finished), so long tasks take turns (and with a
+ *     single thread, short tasks get it between turns).
+ *     df_pool_heavy_waiting tells a running heavy task that others wait for the lane.
  * The loop itself never busy-polls for results: measured, it took the core the worker needed
  * (the scheduler wakes the worker on the loop's CPU) and made round trips slower, not faster. */
 #ifndef DF_SERVER_POOL_H
@@ -34,6 +41,8 @@ struct df_task {
     df_task_fn work;   /* worker thread; required */
     df_task_fn after;  /* loop thread, once work returned; required */
     uint64_t work_ns;  /* measured work time in ns, set before `after` runs */
+    int heavy;         /* 1: long-lane task (see above); set by the caller before submit */
+    int requeue;       /* set by a heavy task's work to yield (see above); the pool clears it */
     df_task *next;     /* pool-internal */
 };
 
@@ -49,6 +58,11 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
 /* Queues `t` (loop thread; t->work and t->after set). Never waits for running work. */
 void df_pool_submit(df_pool *p, df_task *t);
 
+/* Tasks that wait because heavy tasks occupy workers (any thread): heavy tasks queued beyond
+ * the long lane's room, plus the queued short tasks when the pool has a single thread (its
+ * lane is then that thread). A running heavy task yields (requeue) when this is > 0. */
+int df_pool_heavy_waiting(const df_pool *p);
+
 /* Tasks submitted and whose `after` has not run yet. */
 int df_pool_inflight(const df_pool *p);
 
@@ -61,9 +75,12 @@ void df_pool_close(df_pool *p);
 void df_pool_free(df_pool *p);
 
 /* Counters (loop thread): tasks completed, tasks a spinning worker picked up without a
- * wake-up, eventfd wake-ups of the loop (several completions may share one). */
+ * wake-up, eventfd wake-ups of the loop (several completions may share one); the long lane's
+ * size and the heavy tasks that had to wait for the lane. */
 typedef struct df_pool_counters {
     uint64_t tasks, spin_hits, wakeups;
+    int heavy_max;
+    uint64_t heavy_waits;
 } df_pool_counters;
 void df_pool_counters_get(const df_pool *p, df_pool_counters *out);
 

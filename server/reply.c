@@ -52,6 +52,7 @@ df_sbuf *df_sbuf_from_buf(df_buf *b)
 DF_OUT_DEF(hello_reply)
 DF_OUT_DEF(ping)
 DF_OUT_DEF(session_info)
+DF_OUT_DEF(load_reply)
 DF_OUT_DEF(session_list)
 DF_OUT_DEF(session_ref)
 DF_OUT_DEF(ack)
@@ -71,7 +72,6 @@ void df_reply_error(df_conn *c, uint16_t type, uint64_t request_id, int code, co
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     if (!df_proto_error_valid(code)) code = DF_EINTERNAL;
-    if (!df_msg_type_valid(type)) type = DF_MSG_ERROR;
     df_buf b;
     df_buf_init(&b);
     df_error err;

@@ -27,6 +27,7 @@ df_sbuf *df_sbuf_from_buf(df_buf *b);
 DF_OUT_DECL(hello_reply)
 DF_OUT_DECL(ping)
 DF_OUT_DECL(session_info)
+DF_OUT_DECL(load_reply)
 DF_OUT_DECL(session_list)
 DF_OUT_DECL(session_ref)
 DF_OUT_DECL(ack)
@@ -40,7 +41,9 @@ DF_OUT_DECL(shm_ref)
 #undef DF_OUT_DECL
 
 /* Sends an error reply to request (type, request_id) with wire code `code` and a printf-style
- * message (truncated to DF_MAX_ERROR_MSG_LEN). Decrements nothing. */
+ * message (truncated to DF_MAX_ERROR_MSG_LEN): flags REPLY|ERROR and the request's type (also an
+ * unknown one), or, for request_id 0, a connection-level ERROR event (type ERROR, flags ERROR;
+ * df_msg_error_frame). Decrements nothing. */
 void df_reply_error(df_conn *c, uint16_t type, uint64_t request_id, int code, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
 

@@ -7,6 +7,7 @@
 
 #include "server/cache.h"
 #include "server/conn.h"
+#include "server/guard.h"
 #include "server/job.h"
 #include "server/listener.h"
 #include "server/log.h"
@@ -62,7 +63,11 @@ static void on_check(uv_check_t *h)
     df_conn_flush_all(srv, 0);
 }
 
-static void on_sweep(uv_timer_t *t) { df_conn_sweep(t->data); }
+static void on_sweep(uv_timer_t *t)
+{
+    df_conn_sweep(t->data);
+    df_guard_sweep(t->data);
+}
 
 static void on_signal(uv_signal_t *h, int signum)
 {
@@ -77,6 +82,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     srv->loop = loop;
     srv->cfg = *cfg;
     srv->stats.start_ns = uv_hrtime();
+    srv->reserve_fd = -1;
     pthread_mutex_init(&srv->mailbox_lock, NULL);
     uv_async_init(loop, &srv->mailbox, on_mail);
     srv->mailbox.data = srv;
@@ -97,6 +103,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     uv_signal_start(&srv->sig_int, on_signal, SIGINT);
     uv_signal_start(&srv->sig_term, on_signal, SIGTERM);
     int rc = df_listener_open(srv, err);
+    if (rc == DF_OK && (rc = df_guard_init(srv, err)) != DF_OK) df_listener_close(srv);
     if (rc != DF_OK) {
         srv->stopping = 1;
         uv_close((uv_handle_t *)&srv->mailbox, NULL);
@@ -194,4 +201,5 @@ void df_server_free(df_server *srv)
     pthread_mutex_destroy(&srv->mailbox_lock);
     df_pool_free(srv->pool);
     srv->pool = NULL;
+    df_guard_free(srv);
 }

@@ -12,6 +12,7 @@
 
 #include "proto/frame.h"
 #include "server/config.h"
+#include "server/membudget.h"
 #include "server/outq.h"
 #include "server/stats.h"
 
@@ -45,6 +46,10 @@ typedef struct df_conn {
     int hello_done;          /* a HELLO succeeded (required before most requests) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
+    int refused;             /* refused at admission (guard.h): closes quietly */
+    uint64_t accepted_ms;    /* uv_now() at accept (handshake timeout) */
+    uint64_t last_rx_ms;     /* uv_now() when bytes last arrived (idle timeout) */
+    uint64_t sub_epoch;      /* == srv->sweep_epoch: subscribed somewhere at the last sweep */
     int kick_queued;         /* on the server's deferred-write list */
     struct df_conn *kick_next;
     struct df_conn *prev, *next;
@@ -78,9 +83,26 @@ typedef struct df_server {
     uint64_t inline_spent_ns;/* job work run on the loop thread this iteration (job.h) */
     int stopping;
     size_t cache_bytes;      /* bytes of cached factorizations over all sessions */
+    df_membudget mem;        /* memory_max_mb accounting: uploads, sessions, rings, history */
+    uint64_t history_dropped;/* undo steps dropped to history budgets, all sessions */
     uint64_t lru_clock;
+    int reserve_fd;          /* spare descriptor (guard.h), -1 when none */
+    int n_refusing;          /* refused connections still flushing their ERROR frame */
+    int refuse_logged;       /* a refusal was logged at refuse_log_ms */
+    uint64_t refuse_log_ms, refuse_suppressed; /* refusal log rate limit (guard.h) */
+    uint64_t sweep_epoch;
     df_stats stats;
 } df_server;
+
+/* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,
+ * uploads_max_mb, shm_total_bytes), so that a df_server set up without df_server_start (unit
+ * tests) charges against its config too. Loop thread. */
+static inline df_membudget *df_server_mem(df_server *srv)
+{
+    df_mem_set_limits(&srv->mem, (uint64_t)srv->cfg.memory_max_mb << 20,
+                      (uint64_t)srv->cfg.uploads_max_mb << 20, srv->cfg.shm_total_bytes);
+    return &srv->mem;
+}
 
 /* A message from a worker to the loop thread: a frame to broadcast to a session's subscribers. */
 typedef struct df_mail {

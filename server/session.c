@@ -13,6 +13,68 @@
 #include "server/reply.h"
 #include "server/shm.h"
 
+uint64_t df_session_estimate_bytes(const df_mesh *mesh)
+{
+    int es = df_mesh_elem_size(mesh->kind);
+    return (uint64_t)(mesh->nv > 0 ? mesh->nv : 0) * DF_SESSION_BYTES_PER_VERTEX +
+           (uint64_t)(mesh->ne > 0 ? mesh->ne : 0) * (uint64_t)es * sizeof(int32_t) +
+           (uint64_t)(mesh->nf > 0 ? mesh->nf : 0) * 3 * sizeof(int32_t) + sizeof(df_session);
+}
+
+/* Recharges the history's bytes after a change (it bounded itself against df_mem_room). */
+static void history_recharge(df_session *s)
+{
+    uint64_t now = df_history_bytes(&s->hist);
+    df_mem_adjust(df_server_mem(s->srv), DF_MEM_HISTORY, s->hist_charged, now);
+    s->hist_charged = now;
+}
+
+/* The budget of this session's history: history_max_mb, or less when the memory budget has less
+ * room (counting what the history already holds). */
+static size_t history_budget(const df_session *s)
+{
+    uint64_t per = (uint64_t)s->srv->cfg.history_max_mb << 20;
+    uint64_t room = df_mem_room(df_server_mem(s->srv), DF_MEM_HISTORY) + s->hist_charged;
+    uint64_t b = per < room ? per : room;
+    return b < SIZE_MAX ? (size_t)b : SIZE_MAX;
+}
+
+/* Drops oldest undo steps of idle sessions, largest history first, until `want` bytes are
+ * freed or none is left; returns the bytes freed. */
+static uint64_t reclaim_history(df_server *srv, uint64_t want)
+{
+    uint64_t freed = 0;
+    while (freed < want) {
+        df_session *best = NULL;
+        for (df_session *s = srv->sessions; s; s = s->next)
+            if (!s->running && df_history_can_undo(&s->hist) > 0 &&
+                (!best || df_history_bytes(&s->hist) > df_history_bytes(&best->hist)))
+                best = s;
+        if (!best) break;
+        uint64_t before = best->hist_charged, d0 = best->hist.dropped;
+        df_history_set_max_bytes(&best->hist, df_history_bytes(&best->hist) - 1); /* one step */
+        srv->history_dropped += best->hist.dropped - d0;
+        history_recharge(best);
+        freed += before - best->hist_charged;
+    }
+    if (freed)
+        df_log(DF_LOG_INFO, "memory budget: dropped %llu bytes of old undo steps",
+               (unsigned long long)freed);
+    return freed;
+}
+
+int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
+                          df_error *err)
+{
+    df_membudget *mb = df_server_mem(srv);
+    if ((unsigned)kind < DF_MEM_KINDS && mb->used[kind] <= mb->kind_max[kind] &&
+        bytes <= mb->kind_max[kind] - mb->used[kind]) {
+        uint64_t used = df_mem_used(mb), room = used < mb->max ? mb->max - used : 0;
+        if (bytes > room) reclaim_history(srv, bytes - room);
+    }
+    return df_mem_charge(mb, kind, bytes, what, err);
+}
+
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err)
 {
@@ -22,8 +84,25 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
         df_meshload_free(mesh);
         return df_error_set(err, DF_ELIMIT, "too many sessions (max_sessions = %d)", max);
     }
-    df_session *s = calloc(1, sizeof *s);
+    if (name && name[0] && df_session_find_name(srv, name)) {
+        df_meshload_free(mesh);
+        return df_error_set(err, DF_EEXIST,
+                            "session name '%s' is already in use (close that session or pick "
+                            "another name)", name);
+    }
     size_t n = (size_t)mesh->nv * 3;
+    uint64_t est = df_session_estimate_bytes(mesh);
+    char what[64];
+    snprintf(what, sizeof what, "session of %d vertices", mesh->nv);
+    uint64_t state = n * sizeof(double); /* the history's first state */
+    if (df_session_mem_charge(srv, DF_MEM_SESSIONS, est + state, what, err) != DF_OK) {
+        df_meshload_free(mesh);
+        return err ? err->code : DF_ELIMIT;
+    }
+    df_membudget *mb = df_server_mem(srv);
+    df_mem_release(mb, DF_MEM_SESSIONS, state); /* charged as history: same total */
+    df_mem_adjust(mb, DF_MEM_HISTORY, 0, state);
+    df_session *s = calloc(1, sizeof *s);
     if (s) {
         s->rest = malloc(n * sizeof *s->rest);
         s->cur = malloc(n * sizeof *s->cur);
@@ -39,11 +118,16 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
             free(s->uf);
             free(s);
         }
+        df_mem_release(mb, DF_MEM_SESSIONS, est);
+        df_mem_release(mb, DF_MEM_HISTORY, state);
         df_meshload_free(mesh);
         return df_error_set(err, DF_ENOMEM, "out of memory creating a session (%d vertices)",
                             mesh->nv);
     }
     s->srv = srv;
+    s->mem_bytes = est;
+    s->hist_charged = state;
+    history_recharge(s);
     s->mesh = *mesh;
     memset(mesh, 0, sizeof *mesh);
     s->nv = s->mesh.nv;
@@ -51,6 +135,7 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     memcpy(s->cur, s->mesh.V, n * sizeof(double));
     for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
     atomic_init(&s->version, 0);
+    pthread_mutex_init(&s->pub_lock, NULL);
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
@@ -115,6 +200,10 @@ void df_session_destroy(df_session *s)
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
     df_history_free(&s->hist);
+    df_membudget *mb = df_server_mem(srv);
+    df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);
+    df_mem_release(mb, DF_MEM_SESSIONS, s->mem_bytes);
+    df_mem_release(mb, DF_MEM_SHM, s->shm_charged);
     df_meshload_free(&s->mesh);
     free(s->rest);
     free(s->cur);
@@ -126,6 +215,7 @@ void df_session_destroy(df_session *s)
     free(s->scratch_pos);
     free(s->scratch_disp);
     df_log(DF_LOG_INFO, "session %llu closed", (unsigned long long)s->id);
+    pthread_mutex_destroy(&s->pub_lock);
     free(s);
 }
 
@@ -190,8 +280,16 @@ int df_session_attach_shm(df_session *s, df_conn *c, df_error *err)
         return df_error_set(err, DF_ESTATE, "stream_shm: not subscribed to session %llu; "
                             "subscribe first", (unsigned long long)s->id);
     if (!s->shm) {
-        int rc = df_shm_create(s->id, s->srv->cfg.shm_ring_bytes, &s->shm, err);
+        uint64_t cap = df_shm_ring_size(s->nv, s->srv->cfg.shm_ring_bytes);
+        uint64_t bytes = cap + DF_SHM_HEADER_BYTES;
+        int rc = df_session_mem_charge(s->srv, DF_MEM_SHM, bytes, "stream_shm", err);
         if (rc) return rc;
+        rc = df_shm_create(s->id, cap, &s->shm, err);
+        if (rc) {
+            df_mem_release(df_server_mem(s->srv), DF_MEM_SHM, bytes);
+            return rc;
+        }
+        s->shm_charged = bytes;
     }
     if (!s->sub_shm[i]) s->nshm++;
     s->sub_shm[i] = 1;
@@ -201,7 +299,7 @@ int df_session_attach_shm(df_session *s, df_conn *c, df_error *err)
 /* Ends (commits) a departed client's stroke. */
 static void end_stroke(df_session *s, uint64_t conn_id)
 {
-    if (df_history_commit(&s->hist, s->cur, NULL) != DF_OK)
+    if (df_session_history_commit(s, NULL) != DF_OK)
         df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo",
                (unsigned long long)s->id);
     df_session_drop_stroke(s, conn_id);
@@ -212,10 +310,23 @@ static void drop_stroke_done(df_job *j)
     if (j->rc == DF_OK && df_session_stroke(j->s, j->conn_id)) end_stroke(j->s, j->conn_id);
 }
 
+/* A queued move of connection *arg. */
+static int pred_conn_move(const df_job *j, void *arg)
+{
+    return j->preemptible && j->conn_id == *(const uint64_t *)arg;
+}
+
 void df_session_forget_conn(df_server *srv, df_conn *c)
 {
     for (df_session *s = srv->sessions; s; s = s->next) {
         df_session_unsubscribe(s, c);
+        df_job *r = s->running;
+        if (r && r->preemptible && r->conn_id == c->id && !atomic_load(&r->cancel)) {
+            atomic_store(&r->cancel, 1); /* nobody waits for it any more */
+            srv->stats.moves_orphaned++;
+        }
+        uint64_t id = c->id;
+        df_job_drop_queued(s, pred_conn_move, &id, "requester disconnected");
         if (!df_session_stroke(s, c->id)) continue;
         if (!s->running) {
             end_stroke(s, c->id);
@@ -271,6 +382,29 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
     df_sbuf_unref(ref);
     if (subs != local) free(subs);
     if (shm != local_shm) free(shm);
+}
+
+int df_session_history_commit(df_session *s, df_error *err)
+{
+    uint64_t d0 = s->hist.dropped;
+    df_history_set_max_bytes(&s->hist, history_budget(s));
+    int rc = df_history_commit(&s->hist, s->cur, err);
+    s->srv->history_dropped += s->hist.dropped - d0;
+    history_recharge(s);
+    return rc;
+}
+
+int df_session_history_reset(df_session *s, df_error *err)
+{
+    df_history h;
+    int rc = df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, err);
+    if (rc != DF_OK) return rc;
+    h.dropped = s->hist.dropped; /* the session's count survives a reset */
+    df_history_free(&s->hist);
+    s->hist = h;
+    df_history_set_max_bytes(&s->hist, history_budget(s));
+    history_recharge(s);
+    return DF_OK;
 }
 
 df_stroke *df_session_stroke(df_session *s, uint64_t conn_id)

@@ -14,6 +14,7 @@
 #ifndef DF_SERVER_SESSION_H
 #define DF_SERVER_SESSION_H
 
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
 
@@ -25,6 +26,10 @@
 
 #define DF_SESSION_NAME_MAX 256
 #define DF_SESSION_HISTORY_MAX 64   /* committed states kept for undo/redo */
+/* Memory charged per vertex of a session (membudget.h): base, rest and current positions
+ * (3 x 24), float32 base and published displacements (2 x 12), the running job's scratch
+ * (stream.h: 12 + 4 + 12 + 24 + 12). The undo history and the ring are charged separately. */
+#define DF_SESSION_BYTES_PER_VERTEX 160
 
 /* An open brush stroke of one client (begin .. end/cancel). */
 typedef struct df_stroke {
@@ -86,13 +91,24 @@ typedef struct df_session {
     float *scratch_disp;         /* brush field, nv x 3 */
     double brush_last_ms;        /* worker time of the last brush begin/update/cancel */
     double move_last_ms;         /* worker time of the last handle move */
+    uint64_t mem_bytes;          /* charged to srv->mem: DF_MEM_SESSIONS (the estimate) */
+    uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
+    uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
+    pthread_mutex_t pub_lock;    /* while a move runs: its worker publishes (uf, version, posted
+                                  * frames) under it; loop-thread reads beside it (job.h) too */
     struct df_session *next;
 } df_session;
 
+/* Bytes charged to the memory budget for a session on `mesh` (df_session.mem_bytes): per vertex
+ * DF_SESSION_BYTES_PER_VERTEX, plus the elements and boundary faces. */
+uint64_t df_session_estimate_bytes(const df_mesh *mesh);
+
 /* Creates a session owning `mesh` (moved in: the caller's struct is zeroed) named `name`
- * ("" -> "session-<id>") and links it into srv. Errors: DF_ELIMIT (max_sessions), DF_ENOMEM.
- * On error the mesh is freed. */
+ * ("" -> "session-<id>") and links it into srv. Names are unique among live sessions. The
+ * estimate and the history's first state are charged to srv->mem first. Errors: DF_EEXIST (a
+ * live session already has `name`), DF_ELIMIT (max_sessions, or memory_max_mb: the message
+ * names it), DF_ENOMEM. On error the mesh is freed. */
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err);
 
@@ -116,8 +132,9 @@ int df_session_unsubscribe(df_session *s, df_conn *c);
  * or df_shm_create's error. */
 int df_session_attach_shm(df_session *s, df_conn *c, df_error *err);
 
-/* Called when a connection closes: unsubscribes it everywhere and drops its open strokes in
- * idle sessions (strokes of busy sessions are dropped by their next job). */
+/* Called when a connection closes: unsubscribes it everywhere, drops its open strokes in
+ * idle sessions (strokes of busy sessions are dropped by their next job), ends its running move
+ * (its last published iterate stays, as with supersession) and drops its queued moves. */
 void df_session_forget_conn(df_server *srv, df_conn *c);
 
 /* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for.
@@ -130,6 +147,22 @@ df_stroke *df_session_stroke(df_session *s, uint64_t conn_id);
 
 /* Unlinks and frees the stroke of `conn_id` (no-op when none). */
 void df_session_drop_stroke(df_session *s, uint64_t conn_id);
+
+/* Commits s->cur as a new undo step (loop thread) within the history budget: the smaller of
+ * history_max_mb and what the memory budget has left; the oldest steps are dropped to fit
+ * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
+int df_session_history_commit(df_session *s, df_error *err);
+
+/* Charges `bytes` of `kind` to the memory budget (df_mem_charge). When only the total
+ * (memory_max_mb) is short, the undo history of idle sessions (no running job) gives way first:
+ * their oldest undo steps are dropped, largest history first, until the charge fits or no such
+ * step is left. Errors: df_mem_charge's DF_ELIMIT (nothing charged). Loop thread. */
+int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
+                          df_error *err);
+
+/* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
+ * Errors: DF_ENOMEM (history unchanged). */
+int df_session_history_reset(df_session *s, df_error *err);
 
 /* Frees the handle set (and its solver, uncharging the cache). NULL-safe. */
 void df_handleset_free(df_server *srv, df_handleset *hs);

@@ -72,6 +72,15 @@ int df_shm_create(uint64_t session_id, uint64_t capacity, df_shm_ring **out, df_
     return DF_OK;
 }
 
+uint64_t df_shm_ring_size(int32_t nv, uint64_t cap)
+{
+    uint64_t version = 12 * (uint64_t)(nv > 0 ? nv : 0) + DF_SHM_VERSION_OVERHEAD;
+    uint64_t want = version * DF_SHM_RING_VERSIONS;
+    want = (want + DF_SHM_RING_ROUND - 1) / DF_SHM_RING_ROUND * DF_SHM_RING_ROUND;
+    if (want < DF_SHM_RING_MIN) want = DF_SHM_RING_MIN;
+    return want < cap ? want : cap;
+}
+
 int df_shm_sweep_stale(void)
 {
     DIR *d = opendir(DF_SHM_DIR);

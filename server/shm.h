@@ -19,6 +19,15 @@
 #define DF_SHM_DIR "/dev/shm"            /* where ring files live */
 #define DF_SHM_PREFIX "deformd-"         /* ring file names: deformd-<pid>-<session>-<random> */
 
+/* Ring sizing (df_shm_ring_size): room for this many dense versions of the session (a reader may
+ * fall this far behind before it loses frames), rounded up to DF_SHM_RING_ROUND bytes, at least
+ * DF_SHM_RING_MIN, at most shm_ring_bytes. A dense version of nv vertices is 12 nv bytes of rows
+ * plus at most DF_SHM_VERSION_OVERHEAD bytes of headers. */
+#define DF_SHM_RING_VERSIONS 128u
+#define DF_SHM_RING_ROUND (64u << 10)
+#define DF_SHM_RING_MIN (64u << 10)
+#define DF_SHM_VERSION_OVERHEAD 128u
+
 typedef struct df_shm_ring {
     char path[DF_MAX_PATH_LEN + 1]; /* absolute */
     df_shm_writer w;                /* w.base: mapping of the whole file, read-write */
@@ -32,6 +41,10 @@ typedef struct df_shm_ring {
  * and writes its header. Errors: DF_EINVAL (bad capacity), DF_EIO (create, size or map failed;
  * the message has the OS reason, e.g. /dev/shm full), DF_ENOMEM. */
 int df_shm_create(uint64_t session_id, uint64_t capacity, df_shm_ring **out, df_error *err);
+
+/* Data bytes of the ring of a session of `nv` vertices under the cap `cap` (shm_ring_bytes,
+ * >= DF_SHM_RING_MIN when nonzero): see DF_SHM_RING_VERSIONS. 0 when cap is 0. */
+uint64_t df_shm_ring_size(int32_t nv, uint64_t cap);
 
 /* Removes ring files of this user left by daemons that no longer run (a crash skips
  * df_shm_destroy). Returns how many were removed. Called once at start. */

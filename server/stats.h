@@ -9,6 +9,9 @@ typedef struct df_stats {
     uint64_t clients_total;       /* connections accepted */
     uint64_t clients_dropped;     /* dropped for backpressure or framing errors */
     uint64_t clients_refused;     /* refused at max_clients */
+    uint64_t clients_refused_fds; /* refused: out of file descriptors (guard.h) */
+    uint64_t clients_handshake_timeout; /* closed: no HELLO within handshake_timeout_s */
+    uint64_t clients_idle_timeout;/* closed: silent for idle_timeout_s (guard.h) */
     uint64_t frames_in, bytes_in;
     uint64_t frames_out, bytes_out;
     uint64_t writes_blocked;      /* writes a full socket left to uv_write (a slow reader) */
@@ -17,6 +20,9 @@ typedef struct df_stats {
     uint64_t jobs_submitted, jobs_completed, jobs_superseded;
     uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
     uint64_t jobs_inline_deferred;/* cheap enough, sent to the pool: iteration budget spent */
+    uint64_t jobs_beside_move;    /* reads answered (undo/redo refused) while a move ran (job.h) */
+    uint64_t moves_preempted;     /* moves ended early for a request queued behind them */
+    uint64_t moves_orphaned;      /* moves ended because their requester disconnected */
     uint64_t versions;            /* versions broadcast, all sessions */
     uint64_t shm_frames;          /* broadcast frames copied into a shared-memory ring */
     uint64_t shm_refs;            /* SHM_REF events queued in their place */

@@ -28,23 +28,33 @@ static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
     {"center", 1, "--center X,Y,Z     brush centre (required)"},
     {"move", 1, "--move DX,DY,DZ    grab: displacement of the centre"},
     {"twist", 1, "--twist WX,WY,WZ   twist: rotation vector at the centre (radians)"},
-    {"scale", 1, "--scale S          scale: centre dilation (grad u = S I; needs --nu < 0.5)"},
+    {"scale", 1, "--scale S          scale: centre dilation (grad u = S I; needs --nu < 0.5, "
+                 "as the default)"},
     {"matrix", 1, "--matrix M00,M01,...,M22   pinch (symmetric, traceless) / affine: centre "
                   "gradient, row-major"},
     {"radius", 1, "--radius R         regularization radius, mesh units (default 1)"},
-    {"nu", 1, "--nu NU            Poisson ratio in [-1, 0.5], or inf (default 0.5)"},
+    {"nu", 1, "--nu NU            Poisson ratio in [-1, 0.5], or inf (default 0.45, where every "
+              "--type works;\n                     0.5 = incompressible, where --type scale is "
+              "impossible)"},
     {"falloff", 1, "--falloff N        1 single, 2 bi-scale, 3 tri-scale, up to 8 (default 1)"},
-    {"ratio", 1, "--ratio Q          multi-scale radius ratio > 1 (default 1.1)"},
+    {"ratio", 1, "--ratio Q          multi-scale radius ratio > 1 (default 1.1; for --falloff 3 "
+                 "and up\n                     keep it at 1.05 or more, or the radii's weights "
+                 "cancel)"},
     {"dim", 1, "--dim 2|3          2: planar brush for z = 0 meshes (default 3)"},
     {"integrator", 1, "--integrator euler|rk4   time integrator (default euler)"},
     {"steps", 1, "--steps N          integration steps (default 1)"},
     {"mirror", 1, "--mirror PX,PY,PZ,NX,NY,NZ   also apply mirrored across this plane"},
-    {"pin", 1, "--pin FILE         points held fixed, one 'x y z' per line"},
+    {"pin", 1, "--pin FILE         points held fixed, one 'x y z' per line; pins need a 3D "
+               "brush (no --dim 2),\n                     no --mirror and no --moving"},
     {"pin-mode", 1, "--pin-mode displacement|gradient|both   what --pin holds (default "
                     "displacement: u = 0)"},
     {"strength", 1, "--strength S       load multiplier (default 1)"},
     {"moving", 0, "--moving           moving brush: the centre follows the load"},
 };
+
+/* deformctl's default Poisson ratio: below 0.5 so that every brush type works (the scale brush
+ * is impossible for an incompressible material); the wire default stays 0.5. */
+#define CTL_BRUSH_DEFAULT_NU 0.45
 
 static const char *const TYPES[] = {"grab", "twist", "scale", "pinch", "affine", NULL};
 static const char *const INTEGRATORS[] = {"euler", "rk4", NULL};
@@ -58,6 +68,7 @@ static const int LOAD_OPT[5] = {O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_MATRIX};
 static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, df_error *e)
 {
     df_msg_brush_defaults(b);
+    b->nu = CTL_BRUSH_DEFAULT_NU;
     memset(u, 0, sizeof *u);
     if (!a->val[O_TYPE] || !a->val[O_CENTER])
         return df_error_set(e, DF_EINVAL, "--type and --center are required");
@@ -166,10 +177,13 @@ static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         b.pin_flags = 0;
     }
     if (dc_brush_check(&b, &u, &e)) {
-        fprintf(stderr, "%s %s: rejected: %s: %s\n", ctx->prog, cmd->name,
-                df_proto_error_name(e.code), e.msg[0] ? e.msg : "(no message)");
         free(pins);
-        return CTL_EXIT_SERVER;
+        if (b.type == DF_BRUSH_SCALE && e.code == DF_ESINGULAR && b.nu == 0.5) {
+            char m[sizeof e.msg + 80];
+            snprintf(m, sizeof m, "%s; pass --nu below 0.5 (e.g. --nu 0.45, the default)", e.msg);
+            return ctl_error(ctx, cmd, "rejected", e.code, m, CTL_EXIT_SERVER);
+        }
+        return ctl_error(ctx, cmd, "rejected", e.code, e.msg, CTL_EXIT_SERVER);
     }
     df_client *c = ctl_connect(ctx, cmd);
     if (!c) {
@@ -193,13 +207,8 @@ static int run_brush(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     free(pins);
     if (rc) {
-        if (remote) {
-            fprintf(stderr, "%s %s: server: %s: %s\n", ctx->prog, cmd->name,
-                    df_proto_error_name(e.code), e.msg[0] ? e.msg : "(no message)");
-            rc = CTL_EXIT_SERVER;
-        } else {
-            rc = ctl_fail(ctx, cmd, c, &e);
-        }
+        rc = remote ? ctl_error(ctx, cmd, "server", e.code, e.msg, CTL_EXIT_SERVER)
+                    : ctl_fail(ctx, cmd, c, &e);
         df_client_close(c);
         return rc;
     }

@@ -30,6 +30,25 @@ static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
 
 static const char *const ENERGIES[] = {"arap", "acap", "neohookean", "cloth", "polyline", NULL};
 
+/* Each numeric option in its range; the message names the option and the value given. */
+static int check_ranges(const dc_cli_args *a, const df_msg_handles *h, df_error *e)
+{
+    if (h->w < 0)
+        return df_error_set(e, DF_EINVAL, "--w: %s must be >= 0", a->val[H_W]);
+    if (h->s <= 0)
+        return df_error_set(e, DF_EINVAL, "--s: %s must be > 0", a->val[H_S]);
+    if (h->rho <= 0)
+        return df_error_set(e, DF_EINVAL, "--rho: %s must be > 0 (and above w/s)", a->val[H_RHO]);
+    if (h->tol < 0)
+        return df_error_set(e, DF_EINVAL, "--tol: %s must be >= 0", a->val[H_TOL]);
+    if (a->val[H_YOUNGS] && h->youngs <= 0)
+        return df_error_set(e, DF_EINVAL, "--youngs: %s must be > 0", a->val[H_YOUNGS]);
+    if (a->val[H_POISSON] && !(h->poisson > -1 && h->poisson < 0.5))
+        return df_error_set(e, DF_EINVAL, "--poisson: %s must be in (-1, 0.5)",
+                            a->val[H_POISSON]);
+    return DF_OK;
+}
+
 static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
     df_error e;
@@ -56,8 +75,8 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
             return ctl_usage_error(ctx, cmd, e.msg);
         h.max_iters = (uint32_t)it;
     }
-    if (h.w < 0 || h.s <= 0 || h.rho <= 0 || h.tol < 0)
-        return ctl_usage_error(ctx, cmd, "need --w >= 0, --s > 0, --rho > 0, --tol >= 0");
+    if (check_ranges(a, &h, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
     int32_t *idx = NULL, n = 0;
     if (dc_load_index_file(a->val[H_HANDLES], &idx, &n, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
@@ -136,6 +155,9 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     size_t tl = strlen(tf);
     int is_node = tl >= 5 && strcasecmp(tf + tl - 5, ".node") == 0;
+    if (!is_node && a->val[M_HANDLES])
+        return ctl_usage_error(ctx, cmd, "--handles FILE only applies to a .node targets file "
+                               "(an 'x y z' targets file lists the handles in order)");
     /* Read every local file before connecting: a missing file is a usage error either way. */
     char *node_text = NULL;
     int32_t *hidx = NULL, nh = 0;
@@ -200,6 +222,13 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         df_client_close(c);
         return rc;
     }
+    if (r.status == DF_MOVE_FAILED) { /* the solver failed on the daemon: an error, exit 1 */
+        char msg[200];
+        snprintf(msg, sizeof msg, "the move failed after %u iterations (solver error; see the "
+                 "daemon's log), version %" PRIu64, r.iterations, r.version);
+        df_client_close(c);
+        return ctl_error(ctx, cmd, "server", DF_EINTERNAL, msg, CTL_EXIT_SERVER);
+    }
     if (ctx->json) {
         printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 ",\"status\":\"%s\",\"iterations\":%u,"
                "\"residual\":", r.session_id, r.version, status_name(r.status), r.iterations);
@@ -215,7 +244,7 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
                r.elapsed_ms);
     }
     df_client_close(c);
-    return r.status == DF_MOVE_FAILED ? CTL_EXIT_SERVER : CTL_EXIT_OK;
+    return CTL_EXIT_OK;
 }
 
 const ctl_cmd ctl_cmds_handles[] = {

@@ -53,8 +53,9 @@ static int run_get(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
                           m.faces, &surf, &e);
     if (rc) {
         df_client_mesh_free(&m);
-        fprintf(stderr, "%s %s: %s: %s\n", ctx->prog, cmd->name, df_error_name(e.code), e.msg);
-        return e.code == DF_EINVAL || e.code == DF_EUNSUPPORTED ? CTL_EXIT_USAGE : CTL_EXIT_SERVER;
+        /* A local failure after the command line was accepted (the file cannot be written, or
+         * its format cannot hold this session's mesh, e.g. a polyline as .off): exit 1. */
+        return ctl_error(ctx, cmd, "client", e.code, e.msg, CTL_EXIT_SERVER);
     }
     if (surf >= 0)
         fprintf(stderr, "%s %s: note: %s cannot hold tetrahedra; wrote the boundary surface of "

@@ -6,14 +6,41 @@
 
 #include "client/deformctl/ctl.h"
 
+int ctl_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *source, int code,
+              const char *msg, int exit_code)
+{
+    const char *prefix = strcmp(source, "server") == 0     ? "server: "
+                         : strcmp(source, "rejected") == 0 ? "rejected: "
+                                                           : "";
+    const char *name = df_proto_error_name(code);
+    const char *text = msg && msg[0] ? msg : "(no message)";
+    if (cmd)
+        fprintf(stderr, "%s %s: %s%s: %s\n", ctx->prog, cmd->name, prefix, name, text);
+    else
+        fprintf(stderr, "%s: %s%s: %s\n", ctx->prog, prefix, name, text);
+    if (ctx->json)
+        ctl_json_error(source, code, text, exit_code);
+    return exit_code;
+}
+
+void ctl_json_error(const char *source, int code, const char *msg, int exit_code)
+{
+    printf("{\"ok\":false,\"exit\":%d,\"source\":\"%s\",\"code\":%d,\"name\":", exit_code,
+           source, code);
+    ctl_json_str(stdout, df_proto_error_name(code));
+    printf(",\"message\":");
+    ctl_json_str(stdout, msg);
+    printf("}\n");
+    fflush(stdout);
+}
+
 int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const df_error *e)
 {
     int remote = c && df_client_last_error_was_remote(c);
-    fprintf(stderr, "%s %s: %s%s: %s\n", ctx->prog, cmd->name, remote ? "server: " : "",
-            df_proto_error_name(e->code), e->msg[0] ? e->msg : "(no message)");
     if (c && !remote && (e->code == DF_EINVAL || e->code == DF_ELIMIT))
-        return CTL_EXIT_USAGE; /* refused locally by the message encoder: bad input */
-    return CTL_EXIT_SERVER;
+        /* refused locally by the message encoder: bad input (e.g. a --name too long) */
+        return ctl_error(ctx, cmd, "usage", e->code, e->msg, CTL_EXIT_USAGE);
+    return ctl_error(ctx, cmd, remote ? "server" : "client", e->code, e->msg, CTL_EXIT_SERVER);
 }
 
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
@@ -23,13 +50,7 @@ df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
     df_client *c = NULL;
     int rc;
     if (ctx->tcp) {
-        char host[256];
-        int port = 0;
-        if (dc_cli_hostport(ctx->tcp, host, sizeof host, &port, &e)) {
-            ctl_usage_error(ctx, cmd, e.msg);
-            return NULL;
-        }
-        rc = df_client_connect_tcp(host, port, "deformctl", &c, &e);
+        rc = df_client_connect_tcp(ctx->host, ctx->port, "deformctl", &c, &e);
     } else {
         char path[256];
         const char *p = ctx->socket;
@@ -58,6 +79,8 @@ int ctl_session_id(df_client *c, const char *arg, uint64_t *id, df_error *err)
         *id = v;
         return DF_OK;
     }
+    if (arg[0] == '\0')
+        return df_error_set(err, DF_EINVAL, "SESSION is empty: give a session id or name");
     df_msg_session_info info;
     int rc = df_client_open_session(c, 0, arg, &info, err);
     if (rc)

@@ -9,11 +9,16 @@
 #include "client/dc_cli.h"
 #include "client/deformclient.h"
 
-/* Exit codes. */
+/* Exit codes (the README's 0/1/2, the same for every command). */
 #define CTL_EXIT_OK 0
-#define CTL_EXIT_SERVER 1   /* the daemon (or the local engine check of `brush`) refused the
-                               request as meaningless, or the connection failed */
-#define CTL_EXIT_USAGE 2    /* bad command line or unreadable/malformed input file */
+#define CTL_EXIT_SERVER 1   /* an error from the daemon, the daemon could not be reached (or the
+                               connection broke), the local engine check of `brush` refused the
+                               stroke, or a local failure after the command line was accepted
+                               (e.g. the --out file cannot be written or cannot hold the mesh) */
+#define CTL_EXIT_USAGE 2    /* usage: unknown command or option, missing or extra argument, an
+                               option value that does not parse or is out of its range (the
+                               global --tcp HOST:PORT and --socket PATH included), or an input
+                               file named on the command line that cannot be read or parsed */
 
 /* The global options, accepted before the command or among its options. */
 #define CTL_GLOBAL_OPTS                                                              \
@@ -28,6 +33,8 @@ typedef struct ctl_ctx {
     const char *tcp;      /* --tcp HOST:PORT or NULL */
     int json;
     const char *prog;     /* "deformctl" */
+    char host[256];       /* --tcp split by main before the command runs */
+    int port;
 } ctl_ctx;
 
 /* One command: name, one-line synopsis, the option table (globals first) and its handler. */
@@ -42,7 +49,7 @@ typedef struct ctl_cmd {
 } ctl_cmd;
 
 /* Command tables of each group (cmd_*.c). */
-extern const ctl_cmd ctl_cmds_session[];   /* ping load list stats watch */
+extern const ctl_cmd ctl_cmds_session[];   /* ping load list close stats watch */
 extern const ctl_cmd ctl_cmds_brush[];     /* brush */
 extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
 extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
@@ -50,20 +57,36 @@ extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
 /* Prints `cmd`'s usage to `f`. */
 void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd);
 
-/* Prints "deformctl CMD: MESSAGE" plus "try --help" on stderr and returns CTL_EXIT_USAGE. */
+/* Prints "deformctl CMD: MESSAGE" plus "try --help" on stderr and returns CTL_EXIT_USAGE.
+ * With --json also the error object of ctl_error (source "usage", EINVAL) on stdout. */
 int ctl_usage_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *msg);
 
-/* Reports a failed client call on stderr ("deformctl CMD: server: ENOTFOUND: no session 7")
+/* Reports an error and returns `exit_code`: "deformctl CMD: PREFIXNAME: MESSAGE" on stderr,
+ * where PREFIX is "server: " for source "server" and "rejected: " for source "rejected"; with
+ * --json also one line on stdout:
+ *   {"ok":false,"exit":E,"source":S,"code":C,"name":"N","message":"M"}
+ * S is "usage", "server" (the daemon refused), "rejected" (the local Kelvinlet check of brush)
+ * or "client" (connection and local I/O); C is the DF_E* / wire code, N its name. `cmd` may be
+ * NULL (errors before the command is known). */
+int ctl_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *source, int code,
+              const char *msg, int exit_code);
+
+/* Writes only the JSON error object of ctl_error to stdout (callers check ctx->json). */
+void ctl_json_error(const char *source, int code, const char *msg, int exit_code);
+
+/* Reports a failed client call via ctl_error ("deformctl CMD: server: ENOTFOUND: no session 7")
  * and maps it to an exit code: CTL_EXIT_SERVER for server and connection errors,
  * CTL_EXIT_USAGE when `c`'s last call was refused locally as invalid (DF_EINVAL/DF_ELIMIT from
  * a message encoder: e.g. --radius 0). `c` may be NULL (connection errors). */
 int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const df_error *e);
 
-/* Connects per the global options; on failure prints the error and returns NULL. */
+/* Connects per the global options (main has already checked and split them); on failure
+ * prints the error and returns NULL: the caller exits CTL_EXIT_SERVER. */
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd);
 
 /* Resolves SESSION (a decimal id, or else a session name looked up with open session) into
- * *id. Returns DF_OK or an error (printed by the caller via ctl_fail). */
+ * *id. Returns DF_OK or an error (printed by the caller via ctl_fail); an empty SESSION is
+ * DF_EINVAL without contacting the daemon (ctl_fail makes it a usage error). */
 int ctl_session_id(df_client *c, const char *arg, uint64_t *id, df_error *err);
 
 /* Writes `s` as a JSON string literal (quotes and escapes) to `f`. */

@@ -2,9 +2,11 @@
  *
  *   deformctl [--socket PATH | --tcp HOST:PORT] [--json] COMMAND [ARGS] [--help]
  *
- * Exit codes: 0 ok, 1 the request was refused as meaningless for the engine (by the daemon, or
- * by the local Kelvinlet check of `brush`) or the daemon could not be reached, 2 usage error.
- * Results go to stdout (one JSON object with --json); diagnostics to stderr. */
+ * Exit codes (ctl.h): 0 ok; 1 an error from the daemon, the daemon could not be reached, the
+ * local Kelvinlet check of `brush` refused the stroke, or a local failure (e.g. writing --out);
+ * 2 usage error (command line, global options included, or an unreadable input file).
+ * Results go to stdout (one JSON object with --json); diagnostics to stderr; with --json an
+ * error is also one JSON object on stdout (ctl_error). */
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,9 +31,14 @@ static void usage_top(FILE *f)
             "  --tcp HOST:PORT    connect over TCP instead of the Unix socket\n"
             "  --json             machine-readable JSON output on stdout\n"
             "  --help             this text; `deformctl COMMAND --help` for a command\n"
-            "\nExit status: 0 success, 1 error reported by the daemon (\"server: ...\"), a brush\n"
-            "the Kelvinlet engine rejects locally (\"rejected: ...\") or connection failure,\n"
-            "2 usage error (bad options or input files).\n");
+            "\nExit status: 0 success; 1 error reported by the daemon (\"server: ...\"), the\n"
+            "daemon could not be reached, a brush the Kelvinlet engine rejects locally\n"
+            "(\"rejected: ...\") or a local failure such as an --out file that cannot be\n"
+            "written; 2 usage error (unknown command or option, missing or bad value, bad\n"
+            "--tcp HOST:PORT or --socket PATH, unreadable input file).\n"
+            "With --json every error is also one JSON object on stdout:\n"
+            "  {\"ok\":false,\"exit\":1,\"source\":\"server\",\"code\":-7,\"name\":\"ENOTFOUND\",\n"
+            "   \"message\":\"...\"}   (source: usage, server, rejected or client)\n");
 }
 
 void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd)
@@ -46,6 +53,8 @@ void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd)
 
 int ctl_usage_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *msg)
 {
+    if (ctx->json)
+        ctl_json_error("usage", DF_EINVAL, msg, CTL_EXIT_USAGE);
     if (cmd)
         fprintf(stderr, "%s %s: %s\nTry '%s %s --help'.\n", ctx->prog, cmd->name, msg, ctx->prog,
                 cmd->name);
@@ -105,9 +114,35 @@ static int parse_globals(int argc, char **argv, ctl_ctx *ctx)
     return i;
 }
 
+/* Checks --socket and splits --tcp into ctx->host/port; a usage error when malformed. */
+static int check_globals(ctl_ctx *ctx, const ctl_cmd *cmd)
+{
+    df_error e;
+    df_error_clear(&e);
+    if (ctx->socket && ctx->tcp)
+        return ctl_usage_error(ctx, cmd, "--socket and --tcp are exclusive");
+    if (ctx->socket && dc_cli_socket_path(ctx->socket, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    if (ctx->tcp && dc_cli_hostport(ctx->tcp, ctx->host, (int)sizeof ctx->host, &ctx->port, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    return CTL_EXIT_OK;
+}
+
+/* 1 when --json appears before any "--": errors found while parsing are then JSON too. */
+static int wants_json(int argc, char **argv)
+{
+    for (int i = 1; i < argc && strcmp(argv[i], "--") != 0; i++)
+        if (strcmp(argv[i], "--json") == 0)
+            return 1;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
-    ctl_ctx ctx = {NULL, NULL, 0, "deformctl"};
+    ctl_ctx ctx;
+    memset(&ctx, 0, sizeof ctx);
+    ctx.prog = "deformctl";
+    ctx.json = wants_json(argc, argv);
     int i = parse_globals(argc, argv, &ctx);
     if (i == -1)
         return CTL_EXIT_OK;
@@ -136,8 +171,9 @@ int main(int argc, char **argv)
         ctx.tcp = a.val[1];
     if (a.val[2])
         ctx.json = 1;
-    if (ctx.socket && ctx.tcp)
-        return ctl_usage_error(&ctx, cmd, "--socket and --tcp are exclusive");
+    int rc = check_globals(&ctx, cmd);
+    if (rc)
+        return rc;
     if (a.npos < cmd->npos)
         return ctl_usage_error(&ctx, cmd, "missing argument (see the synopsis)");
     if (a.npos > cmd->npos) {

@@ -122,6 +122,17 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
  * 2D solve would drop it). Solver unchanged on error. */
 int df_admm_set_targets(df_admm *s, const double *targets, df_error *err);
 
+/* Replaces the solver's positions by V (nv x 3, e.g. the session's current shape after an undo or
+ * a brush edit), so that the next df_admm_run starts from V and not from the previous run's result.
+ * The warm start is kept only where it is still valid: for every vertex whose position differs
+ * (bitwise) from df_admm_positions, its ADMM state is restarted (V_i = given, Z_i = V_i - Vrest_i,
+ * U_i = 0), the dual W_e of every element touching such a vertex is zeroed, and the Anderson history
+ * and the cached objective are dropped; unchanged vertices keep V, Z, U. Neo-Hookean: the applied
+ * (damped) handle targets restart at the handles' new positions. Handle targets are otherwise
+ * unchanged. V equal to df_admm_positions changes nothing. *n_changed (may be NULL) receives the
+ * number of changed vertices. Errors: DF_EINVAL (NULL solver/V, NaN/Inf in V); solver unchanged. */
+int df_admm_set_positions(df_admm *s, const double *V, int32_t *n_changed, df_error *err);
+
 /* What df_admm_run reports to its progress callback. V is the current nv x 3 positions (valid only
  * during the call). */
 typedef struct df_admm_progress {

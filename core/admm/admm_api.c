@@ -1,5 +1,5 @@
 /* admm_api.c — solver lifetime and state access: create (validation, operators, factorization),
- * set_targets, positions, evaluate, reset_rest (sculpting), stats, free. */
+ * set_targets, set_positions, positions, evaluate, reset_rest (sculpting), stats, free. */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -8,25 +8,60 @@
 #include "core/admm/admm_internal.h"
 #include "core/admm/nh_prox.h"
 
+/* Energy and mesh kind by their wire / deformctl names ("--energy polyline"). */
+static const char *energy_name(df_admm_energy e)
+{
+    switch (e) {
+    case DF_ADMM_ARAP: return "arap";
+    case DF_ADMM_ACAP: return "acap";
+    case DF_ADMM_NEOHOOKEAN: return "neohookean";
+    case DF_ADMM_CLOTH: return "cloth";
+    case DF_ADMM_POLYLINE: return "polyline";
+    }
+    return "unknown";
+}
+
+static const char *kind_name(df_mesh_kind k)
+{
+    return k == DF_MESH_POLYLINE ? "a polyline" : k == DF_MESH_TRIANGLE ? "a triangle mesh"
+           : k == DF_MESH_TET ? "a tet mesh" : "of unknown kind";
+}
+
+/* The energy that fits a mesh kind, to suggest in the error. */
+static const char *energy_for(df_mesh_kind k)
+{
+    return k == DF_MESH_POLYLINE ? "polyline" : k == DF_MESH_TRIANGLE ? "arap, acap or cloth"
+           : "arap, acap or neohookean";
+}
+
 static int check_kind(const df_admm_params *p, const df_mesh *m, df_error *err)
 {
     df_mesh_kind k = m->kind;
+    const char *needs = NULL;
     switch (p->energy) {
     case DF_ADMM_ARAP:
     case DF_ADMM_ACAP:
         if (k == DF_MESH_TRIANGLE || k == DF_MESH_TET) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: ARAP/ACAP need a triangle or tet mesh (use DF_ADMM_POLYLINE for polylines)");
+        needs = "triangles or tets";
+        break;
     case DF_ADMM_NEOHOOKEAN:
         if (k == DF_MESH_TET) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: Neo-Hookean needs a tet mesh");
+        needs = "tets";
+        break;
     case DF_ADMM_CLOTH:
         if (k == DF_MESH_TRIANGLE) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: cloth needs a triangle mesh");
+        needs = "triangles";
+        break;
     case DF_ADMM_POLYLINE:
         if (k == DF_MESH_POLYLINE) return DF_OK;
-        return df_error_set(err, DF_EINVAL, "admm: polyline energy needs a segment mesh");
+        needs = "a polyline (segments)";
+        break;
+    default:
+        return df_error_set(err, DF_EINVAL, "admm: unknown energy %d", (int)p->energy);
     }
-    return df_error_set(err, DF_EINVAL, "admm: unknown energy %d", (int)p->energy);
+    return df_error_set(err, DF_EINVAL, "admm: energy %s needs %s; this mesh is %s: use energy "
+                        "%s (deformctl --energy %s)", energy_name(p->energy), needs, kind_name(k),
+                        energy_for(k), k == DF_MESH_POLYLINE ? "polyline" : "arap");
 }
 
 static int check_inputs(const df_mesh *m, const df_admm_params *p, const int32_t *handles, int32_t nh,
@@ -196,6 +231,47 @@ int df_admm_set_targets(df_admm *s, const double *targets, df_error *err)
     }
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     /* the objective does not depend on the targets: E_last (of the current positions) stays valid */
+    return DF_OK;
+}
+
+int df_admm_set_positions(df_admm *s, const double *V, int32_t *n_changed, df_error *err)
+{
+    if (!s || !V) return df_error_set(err, DF_EINVAL, "admm_set_positions: NULL argument");
+    size_t nv3 = (size_t)s->nv * 3;
+    for (size_t i = 0; i < nv3; i++)
+        if (!isfinite(V[i])) return df_error_set(err, DF_EINVAL, "admm_set_positions: vertex %d is not finite", (int)(i / 3));
+    int32_t changed = 0;
+    for (int32_t i = 0; i < s->nv; i++) {
+        size_t o = 3 * (size_t)i;
+        if (memcmp(V + o, s->Vout + o, 3 * sizeof(double)) == 0) continue;
+        changed++;
+        for (int k = 0; k < 3; k++) {
+            s->V[o + k] = V[o + k];
+            s->Z[o + k] = V[o + k] - s->Vrest[o + k];
+            s->U[o + k] = 0.0;
+        }
+    }
+    if (n_changed) *n_changed = changed;
+    if (changed == 0) return DF_OK;
+    if (s->W) /* element duals of elements touching a changed vertex */
+        for (int32_t e = 0; e < s->ne; e++) {
+            const int32_t *el = s->E + (size_t)e * s->esz;
+            for (int a = 0; a < s->esz; a++)
+                if (memcmp(V + 3 * (size_t)el[a], s->Vout + 3 * (size_t)el[a], 3 * sizeof(double))) {
+                    memset(s->W + 9 * (size_t)e, 0, 9 * sizeof(double));
+                    break;
+                }
+        }
+    memcpy(s->Vout, V, nv3 * sizeof(double));
+    if (s->damp) { /* damped handle steps restart from where the handles are now */
+        for (int32_t h = 0; h < s->nh; h++) memcpy(s->target + 3 * (size_t)h, V + 3 * (size_t)s->hidx[h], 3 * sizeof(double));
+        s->tgt_pending = memcmp(s->target_req, s->target, (size_t)s->nh * 3 * sizeof(double)) != 0;
+        s->damp_stall = 0;
+        admm_update_kfhp(s);
+    }
+    if (s->p.accelerate) admm_aa_reset(&s->aa);
+    s->E_last = NAN;
+    s->el_last = s->lo_last = NAN;
     return DF_OK;
 }
 

@@ -38,6 +38,7 @@ const char *df_error_name(int code)
     case DF_ESTATE: return "ESTATE";
     case DF_EUNSUPPORTED: return "EUNSUPPORTED";
     case DF_EINTERNAL: return "EINTERNAL";
+    case DF_EEXIST: return "EEXIST";
     default: return "EUNKNOWN";
     }
 }

@@ -21,7 +21,8 @@ enum {
     DF_ENOTFOUND = -7,  /* a named object (session, handle set, ...) does not exist */
     DF_ESTATE = -8,     /* the request is valid but not in the current state (e.g. no stroke open) */
     DF_EUNSUPPORTED = -9, /* a valid request this build or mesh kind does not support */
-    DF_EINTERNAL = -10  /* a library call failed unexpectedly (CHOLMOD, LAPACK) */
+    DF_EINTERNAL = -10, /* a library call failed unexpectedly (CHOLMOD, LAPACK) */
+    DF_EEXIST = -11     /* the name is already in use (e.g. a session name) */
 };
 
 #define DF_ERROR_MSG_MAX 256

@@ -106,6 +106,21 @@ static void mirror_matrix(const double *normal, double *M)
             M[3 * i + j] = (i == j ? 1.0 : 0.0) - 2.0 * n[i] * n[j];
 }
 
+/* The multi-scale normalization vanished: the order's radii are so close (ratio near 1) that
+ * their weights cancel. Names the ratio and the range that works (every order, both dims and
+ * every brush type prepare at ratios from 1.05 up to where the largest radius leaves
+ * [DF_KELVINLET_MIN_RADIUS, DF_KELVINLET_MAX_RADIUS]). */
+static int ratio_error(const df_kelvinlet_brush *b, df_error *err)
+{
+    static const char *const names[] = {"grab", "twist", "scale", "pinch", "affine"};
+    int t = (int)b->type - (int)DF_KELVINLET_GRAB;
+    const char *what = t >= 0 && t < 5 ? names[t] : "brush";
+    return df_error_set(err, DF_ESINGULAR, "kelvinlet %s: ratio %.10g is too close to 1 for falloff "
+                        "order %d: its %d radii nearly coincide and their weights cancel; use a "
+                        "ratio of 1.05 or more (default %g)", what, b->ratio, b->order, b->order,
+                        DF_KELVINLET_DEFAULT_RATIO);
+}
+
 /* Grab force (and its mirror image when b->mirror). */
 static int grab_force(const df_kelvinlet_brush *b, const df_kelvinlet_kernel *k,
                       df_kelvinlet_source *src, size_t *nsrc, df_error *err)
@@ -115,6 +130,8 @@ static int grab_force(const df_kelvinlet_brush *b, const df_kelvinlet_kernel *k,
     for (int i = 0; i < k->order; i++)
         scale += fabs(k->w[i]) * (d == 3 ? 1.5 / k->eps[i]
                                          : 2.0 * fabs(log(k->eps[i])) + 1.0);
+    if (!(fabs(kappa) > REL_SINGULAR * scale) && b->order >= 2)
+        return ratio_error(b, err);
     if (!(fabs(kappa) > REL_SINGULAR * scale))
         return df_error_set(err, DF_ESINGULAR, "kelvinlet grab: the tip normalization vanishes "
                             "for radius %g (dim %d, order %d, nu %g); pick another radius or "
@@ -223,8 +240,7 @@ static int affine_force(const df_kelvinlet_brush *b, const df_kelvinlet_kernel *
     for (int i = 0; i < k->order; i++)
         sscale += fabs(k->w[i]) / pow(k->eps[i], d);
     if (!(fabs(sigma) > REL_SINGULAR * sscale))
-        return df_error_set(err, DF_ESINGULAR, "kelvinlet affine: multi-scale gradient "
-                            "normalization vanishes (order %d, ratio %g)", b->order, b->ratio);
+        return ratio_error(b, err);
     double tr = 0.0, gmax = 0.0;
     for (int i = 0; i < d; i++)
         tr += G[4 * i];

@@ -33,6 +33,39 @@ static void count_runs(const uint64_t *keys, int64_t n, int32_t *ones, int32_t *
     }
 }
 
+static int cmp_elem4(const void *a, const void *b)
+{
+    return memcmp(a, b, 4 * sizeof(int32_t));
+}
+
+/* Elements whose sorted vertex set equals an earlier element's (e.g. the same face twice). */
+static int count_duplicates(const df_mesh *m, int k, int32_t *dup, df_error *err)
+{
+    if (m->ne < 2)
+        return DF_OK;
+    int32_t (*s)[4] = malloc((size_t)m->ne * sizeof *s);
+    if (!s)
+        return df_error_set(err, DF_ENOMEM, "out of memory analysing a mesh");
+    for (int32_t e = 0; e < m->ne; e++) {
+        int32_t *r = s[e];
+        r[0] = r[1] = r[2] = r[3] = -1;
+        for (int i = 0; i < k; i++) { /* insertion sort; equal sets give equal bytes */
+            int32_t v = m->E[(size_t)k * (size_t)e + (size_t)i];
+            int j = i;
+            while (j > 0 && r[j - 1] > v) {
+                r[j] = r[j - 1];
+                j--;
+            }
+            r[j] = v;
+        }
+    }
+    qsort(s, (size_t)m->ne, sizeof *s, cmp_elem4);
+    for (int32_t e = 1; e < m->ne; e++)
+        *dup += !memcmp(s[e], s[e - 1], sizeof *s);
+    free(s);
+    return DF_OK;
+}
+
 static int tri_topology(const int32_t *T, int64_t nt, int32_t *boundary, int32_t *nonmanifold,
                         df_error *err)
 {
@@ -129,6 +162,9 @@ int df_mesh_analyze(const df_mesh *m, df_mesh_report *rep, df_error *err)
     for (int32_t i = 0; i < m->nv; i++)
         r.unreferenced_vertices += !used[i];
     free(used);
+    rc = count_duplicates(m, k, &r.duplicate_elements, err);
+    if (rc)
+        return rc;
     if (m->kind == DF_MESH_TRIANGLE)
         rc = tri_topology(m->E, m->ne, &r.boundary_edges, &r.nonmanifold_edges, err);
     else if (m->kind == DF_MESH_TET)

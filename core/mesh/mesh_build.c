@@ -1,6 +1,7 @@
 /* mesh_build.c — growable storage for the mesh readers (see mesh_build.h). */
 #include "core/mesh/mesh_build.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -96,6 +97,14 @@ int df_mesh_build_vertex(df_mesh_build *b, long long loc, double x, double y, do
         return df_error_set(err, DF_EFORMAT, "%s: vertex %lld has a non-finite coordinate (NaN/Inf)",
                             w, (long long)b->nv);
     }
+    const double xyz[3] = {x, y, z};
+    for (int k = 0; k < 3; k++)
+        if (isinf((float)xyz[k])) { /* positions are stored and streamed as float32 */
+            df_mesh_build_where(b, loc, w, sizeof w);
+            return df_error_set(err, DF_EFORMAT,
+                                "%s: vertex %lld coordinate %c is outside the float32 range "
+                                "(|value| <= %g)", w, (long long)b->nv, "xyz"[k], (double)FLT_MAX);
+        }
     if (b->nv == b->cap_v) {
         int rc = df_mesh_build_reserve_vertices(b, 1, err);
         if (rc)

@@ -47,7 +47,8 @@ int df_mesh_build_check_count(const df_mesh_build *b, long long loc, const char 
 int df_mesh_build_reserve_vertices(df_mesh_build *b, int64_t nv, df_error *err);
 
 /* Appends one vertex (z = 0 when b->vertex_dims is 2). DF_ELIMIT past max_v, DF_EFORMAT when a
- * coordinate is not finite. */
+ * coordinate is not finite or is outside the float32 range (it would become +-inf when stored as
+ * float32). */
 int df_mesh_build_vertex(df_mesh_build *b, long long loc, double x, double y, double z,
                          df_error *err);
 

@@ -62,6 +62,8 @@ typedef struct df_mesh_read_opts {
                             * be 0 and it must not have tets (else DF_EFORMAT); 0: 2D only when
                             * the file declares it (OBJ `v x y`, MEDIT Dimension 2, TetGen .node
                             * dimension 2, PLY without z) */
+    int redact_content;    /* 1: error messages never quote bytes of the input (names, lines and
+                              counts only): for files a server reads on a client's behalf */
 } df_mesh_read_opts;
 
 /* The defaults used for a NULL opts: default limits, allow_inverted = 1 (read succeeds, the report
@@ -75,7 +77,10 @@ typedef struct df_mesh_report {
     int index_base;               /* TetGen: 0 or 1 (first node id); OBJ/MEDIT: 1; OFF/PLY: 0 */
     int32_t input_polygons;       /* faces as written in the file (before fan triangulation) */
     int32_t polygons_triangulated;/* of those, how many had > 3 vertices (quads, n-gons) */
-    int32_t ignored_elements;     /* e.g. OBJ `l` lines in a file that also has faces */
+    int32_t ignored_elements;     /* dropped lower-dimensional elements: OBJ `l` lines or PLY edges
+                                     in a file with faces, MEDIT Edges in a triangle/tet mesh,
+                                     skipped MEDIT sections (Hexahedra, ...) */
+    int32_t duplicate_elements;   /* elements with the same vertex set as an earlier one */
     int32_t degenerate_elements;  /* zero-measure or repeated-index elements */
     int32_t inverted_elements;    /* tets with negative volume; planar triangles whose orientation
                                      disagrees with the majority (all-clockwise is consistent) */
@@ -89,8 +94,15 @@ typedef struct df_mesh_report {
     double min_signed_volume;     /* smallest signed element measure (length/area/volume) */
 } df_mesh_report;
 
+/* The other half of a TetGen pair, keeping the case of the extension: "X.node" -> "X.ele",
+ * "X.NODE" -> "X.ELE" (an all-upper-case extension stays upper case), "X.ele" -> "X.node".
+ * Writes a NUL-terminated path into out (n bytes). Returns 0, or -1 when `path` does not end in
+ * .node/.ele (any case) or out is too small. */
+int df_mesh_tetgen_sibling(const char *path, char *out, size_t n);
+
 /* Reads a mesh from `path`; the format comes from the extension (.obj .off .ply .mesh .node
- * .ele; case-insensitive). For X.node (or X.ele) the pair X.node + X.ele is read; a .node without
+ * .ele; case-insensitive). Only regular files are read. For X.node (or X.ele) the pair is read,
+ * the sibling named by df_mesh_tetgen_sibling; a .node without
  * its .ele is an error (DF_EIO naming the missing file; use df_mesh_read_tetgen_nodes for positions
  * only). An unknown extension falls back to content sniffing. `o` may be NULL (defaults), `rep` may
  * be NULL. Errors: DF_EINVAL (NULL args), DF_EIO, DF_EFORMAT, DF_ELIMIT, DF_ENOMEM. On success
@@ -109,7 +121,8 @@ int df_mesh_read_memory(const void *buf, size_t len, df_mesh_format fmt, const c
 
 /* Reads a TetGen pair from memory: `node` (node_len bytes) and `ele` (ele_len bytes). Element
  * indices use the base of the first node id. `name_for_errors` is the common stem ("pig" gives
- * messages about "pig.node" / "pig.ele"; NULL -> "<memory>"). Errors as df_mesh_read_file. */
+ * messages about "pig.node" / "pig.ele"; NULL -> "<memory>") or the name of either half, whose
+ * case is kept ("T1.NODE" gives "T1.NODE" / "T1.ELE"). Errors as df_mesh_read_file. */
 int df_mesh_read_tetgen_memory(const void *node, size_t node_len, const void *ele, size_t ele_len,
                                const char *name_for_errors, const df_mesh_read_opts *o,
                                df_mesh *out, df_mesh_report *rep, df_error *err);

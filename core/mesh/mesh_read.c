@@ -6,7 +6,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "core/mesh/mesh_readers.h"
 #include "core/mesh/mesh_scan.h"
@@ -54,16 +57,24 @@ int df_mesh_read_memory(const void *buf, size_t len, df_mesh_format fmt, const c
     return df_error_set(err, DF_EINVAL, "%s: unknown mesh format %d", name, (int)fmt);
 }
 
-/* Loads a whole file (regular file, device or pipe; not a directory): *buf malloc'd, *len its size. */
+/* Loads a whole regular file: *buf malloc'd, *len its size. Devices, pipes and directories are
+ * refused (a FIFO or /dev/zero would block or never end). */
 static int load(const char *path, char **buf, size_t *len, df_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
         return df_error_set(err, DF_EIO, "%s: cannot open: %s", path, strerror(errno));
     struct stat st;
-    if (fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
-        fclose(f);
-        return df_error_set(err, DF_EIO, "%s: is a directory", path);
+    memset(&st, 0, sizeof st);
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        return df_error_set(err, DF_EIO, "%s: %s", path,
+                            S_ISDIR(st.st_mode) ? "is a directory" : "not a regular file");
+    }
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        close(fd);
+        return df_error_set(err, DF_ENOMEM, "%s: out of memory", path);
     }
     size_t cap = 1 << 16, n = 0;
     char *b = malloc(cap);
@@ -110,23 +121,41 @@ static int load(const char *path, char **buf, size_t *len, df_error *err)
     return DF_OK;
 }
 
-/* For "X.node" or "X.ele", writes "X" + ext into out. */
-static void sibling(const char *path, const char *ext, char *out, size_t n)
+int df_mesh_tetgen_sibling(const char *path, char *out, size_t n)
 {
-    const char *dot = strrchr(path, '.');
-    size_t stem = dot ? (size_t)(dot - path) : strlen(path);
-    snprintf(out, n, "%.*s%s", (int)stem, path, ext);
+    const char *dot = path ? strrchr(path, '.') : NULL;
+    if (!dot || strchr(dot, '/') || !out)
+        return -1;
+    const char *ext;
+    if (!strcasecmp(dot, ".node"))
+        ext = ".ele";
+    else if (!strcasecmp(dot, ".ele"))
+        ext = ".node";
+    else
+        return -1;
+    int upper = 1; /* an all-upper-case extension (X.NODE) keeps its case: X.ELE */
+    for (const char *c = dot + 1; *c; c++)
+        upper &= *c >= 'A' && *c <= 'Z';
+    size_t stem = (size_t)(dot - path);
+    if (stem + strlen(ext) + 1 > n)
+        return -1;
+    memcpy(out, path, stem);
+    for (size_t i = 0; ext[i]; i++)
+        out[stem + i] = upper ? (char)(ext[i] >= 'a' ? ext[i] - 32 : ext[i]) : ext[i];
+    out[stem + strlen(ext)] = '\0';
+    return 0;
 }
 
 static int read_tetgen_file(const char *path, const df_mesh_read_opts *o, df_mesh *out,
                             df_mesh_report *rep, df_error *err)
 {
-    char np[4096], ep[4096], stem[4096];
-    if (strlen(path) + 8 > sizeof np)
-        return df_error_set(err, DF_EINVAL, "path too long");
-    sibling(path, ".node", np, sizeof np);
-    sibling(path, ".ele", ep, sizeof ep);
-    sibling(path, "", stem, sizeof stem);
+    char other[4096], stem[4096];
+    if (strlen(path) + 8 > sizeof other || df_mesh_tetgen_sibling(path, other, sizeof other))
+        return df_error_set(err, DF_EINVAL, "%s: path too long", path);
+    int is_node = !strcasecmp(strrchr(path, '.'), ".node");
+    const char *np = is_node ? path : other, *ep = is_node ? other : path;
+    const char *base = strrchr(path, '/');
+    snprintf(stem, sizeof stem, "%s", base ? base + 1 : path); /* keeps the extension's case */
     char *nb = NULL, *eb = NULL;
     size_t nl = 0, el = 0;
     int rc = load(np, &nb, &nl, err);

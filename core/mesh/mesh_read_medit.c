@@ -113,8 +113,11 @@ static int read_sections(df_scan *s, df_mesh_build *b, df_error *err)
             while (k < nk && !df_scan_tok_eq(t, n, skip_sections[k].kw))
                 k++;
             if (k == nk)
-                return df_error_set(err, DF_EFORMAT, "%s:%d: unknown MEDIT keyword '%.*s'",
-                                    s->name, (int)s->line, (int)(n > 32 ? 32 : n), t);
+            {
+                char q[48];
+                return df_error_set(err, DF_EFORMAT, "%s:%d: unknown MEDIT keyword %s", s->name,
+                                    (int)s->line, df_scan_quote(s, t, n, q, sizeof q));
+            }
             rc = skip_section(s, b, skip_sections[k].kw, skip_sections[k].width, err);
         }
         if (rc)
@@ -127,6 +130,7 @@ int df_mesh_read_medit(const char *buf, size_t len, const char *name, const df_m
 {
     df_scan s;
     df_scan_init(&s, buf, len, name);
+    s.redact = o && o->redact_content;
     df_mesh_build b;
     df_mesh_build_init(&b, s.name, 0, o);
     int rc = read_sections(&s, &b, err);

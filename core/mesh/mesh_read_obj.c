@@ -15,9 +15,10 @@ static int corner(const df_mesh_build *b, const df_scan *s, const char *t, size_
     const char *slash = memchr(t, '/', n);
     size_t vn = slash ? (size_t)(slash - t) : n;
     int64_t raw;
+    char qb[48];
     if (df_scan_parse_int(t, vn, &raw) != 0 || raw == 0)
-        return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference '%.*s'", s->name,
-                            (int)s->line, (int)(n > 32 ? 32 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference %s", s->name,
+                            (int)s->line, df_scan_quote(s, t, n, qb, sizeof qb));
     size_t p = vn;
     for (int part = 0; p < n && part < 2; part++) { /* validate /vt and /vn parts */
         size_t q = p + 1;
@@ -25,13 +26,13 @@ static int corner(const df_mesh_build *b, const df_scan *s, const char *t, size_
             q++;
         int64_t dummy;
         if (q > p + 1 && df_scan_parse_int(t + p + 1, q - p - 1, &dummy) != 0)
-            return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference '%.*s'", s->name,
-                                (int)s->line, (int)(n > 32 ? 32 : n), t);
+            return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference %s", s->name,
+                                (int)s->line, df_scan_quote(s, t, n, qb, sizeof qb));
         p = q;
     }
     if (p < n)
-        return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference '%.*s'", s->name,
-                            (int)s->line, (int)(n > 32 ? 32 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: bad vertex reference %s", s->name,
+                            (int)s->line, df_scan_quote(s, t, n, qb, sizeof qb));
     if (raw < 0 && -raw > b->nv)
         return df_error_set(err, DF_EFORMAT, "%s:%d: vertex index %lld out of range (%lld vertices "
                             "so far)", s->name, (int)s->line, (long long)raw, (long long)b->nv);
@@ -78,6 +79,7 @@ int df_mesh_read_obj(const char *buf, size_t len, const char *name, const df_mes
 {
     df_scan s;
     df_scan_init(&s, buf, len, name);
+    s.redact = o && o->redact_content;
     df_mesh_build b;
     df_mesh_build_init(&b, s.name, 0, o);
     int32_t idx[DF_MESH_MAX_POLYGON];

@@ -20,9 +20,10 @@ static int read_counts(df_scan *s, df_mesh_build *b, int32_t *nv, int32_t *nf, d
 {
     const char *t;
     size_t n = df_scan_token(s, 1, &t);
+    char q[48];
     if (!off_header(t, n))
-        return df_error_set(err, DF_EFORMAT, "%s:%d: missing OFF header (found '%.*s')", s->name,
-                            (int)s->line, (int)(n > 16 ? 16 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: missing OFF header (found %s)", s->name,
+                            (int)s->line, df_scan_quote(s, t, n > 16 ? 16 : n, q, sizeof q));
     int32_t ne = 0;
     int rc = df_scan_int(s, 1, "vertex count", nv, err);
     if (!rc)
@@ -44,6 +45,7 @@ int df_mesh_read_off(const char *buf, size_t len, const char *name, const df_mes
 {
     df_scan s;
     df_scan_init(&s, buf, len, name);
+    s.redact = o && o->redact_content;
     df_mesh_build b;
     df_mesh_build_init(&b, s.name, 0, o);
     int32_t nv = 0, nf = 0;

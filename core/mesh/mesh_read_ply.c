@@ -126,8 +126,11 @@ static int parse_header(ply_ctx *c, df_error *err)
             else if (df_scan_tok_eq(t, n, "binary_little_endian"))
                 c->binary = 1;
             else
-                return df_error_set(err, DF_EFORMAT, "%s:%d: unsupported PLY format '%.*s'",
-                                    s->name, (int)s->line, (int)(n > 32 ? 32 : n), t);
+            {
+                char q[48];
+                return df_error_set(err, DF_EFORMAT, "%s:%d: unsupported PLY format %s", s->name,
+                                    (int)s->line, df_scan_quote(s, t, n, q, sizeof q));
+            }
             have_format = 1;
         } else if (df_scan_tok_eq(t, n, "element")) {
             if (c->ne >= PLY_MAX_ELEMENTS)
@@ -139,12 +142,15 @@ static int parse_header(ply_ctx *c, df_error *err)
                 return hdr_err(c, "element without a name", err);
             copy_name(e->name, t, n);
             int32_t cnt;
+            char q[48];
             int rc = df_scan_int(s, 0, "element count", &cnt, err);
             if (rc)
                 return rc;
             if (cnt < 0)
-                return df_error_set(err, DF_EFORMAT, "%s:%d: wrong counts: element '%s' count %d",
-                                    s->name, (int)s->line, e->name, (int)cnt);
+                return df_error_set(err, DF_EFORMAT, "%s:%d: wrong counts: element %s count %d",
+                                    s->name, (int)s->line,
+                                    df_scan_quote(s, e->name, strlen(e->name), q, sizeof q),
+                                    (int)cnt);
             e->count = cnt;
             c->ne++;
         } else if (df_scan_tok_eq(t, n, "property")) {
@@ -171,9 +177,10 @@ static int read_value(ply_ctx *c, int type, double *v, df_error *err)
         if (n == 0)
             return df_error_set(err, DF_EFORMAT, "%s:%d: truncated: PLY data ends early",
                                 c->s.name, (int)c->s.line);
+        char q[48];
         if (df_scan_parse_double(t, n, v) != 0)
-            return df_error_set(err, DF_EFORMAT, "%s:%d: '%.*s' is not a number", c->s.name,
-                                (int)c->s.line, (int)(n > 32 ? 32 : n), t);
+            return df_error_set(err, DF_EFORMAT, "%s:%d: %s is not a number", c->s.name,
+                                (int)c->s.line, df_scan_quote(&c->s, t, n, q, sizeof q));
         return DF_OK;
     }
     size_t sz = type_size(type);
@@ -310,7 +317,8 @@ static int read_element(ply_ctx *c, const ply_elem *e, df_error *err)
         key[1] = find_prop(e, "vertex2");
         role = key[0] >= 0 && key[1] >= 0 ? 3 : 0;
     }
-    int rc = df_mesh_build_check_count(&c->b, loc(c), e->name, e->count, INT32_MAX, left,
+    const char *what = c->s.redact ? "element" : e->name; /* element names are file content */
+    int rc = df_mesh_build_check_count(&c->b, loc(c), what, e->count, INT32_MAX, left,
                                        min_row, err);
     for (int64_t r = 0; !rc && e->np > 0 && r < e->count; r++)
         rc = read_row(c, e, role, key, err);
@@ -328,6 +336,7 @@ int df_mesh_read_ply(const char *buf, size_t len, const char *name, const df_mes
         return df_error_set(err, DF_ENOMEM, "out of memory reading PLY");
     *c = zero;
     df_scan_init(&c->s, buf, len, name);
+    c->s.redact = o && o->redact_content;
     int rc = parse_header(c, err);
     df_mesh_build_init(&c->b, c->s.name, c->binary, o);
     c->pos = c->s.pos;

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "core/mesh/mesh_build.h"
 #include "core/mesh/mesh_scan.h"
@@ -107,12 +108,20 @@ static int parse_elements(df_scan *s, df_mesh_build *b, int base, df_error *err)
     return rc ? rc : trailing(s, "elements", n, err);
 }
 
+/* Message names of the two halves: "X.node" / "X.ele" for a stem X; a name that already ends in
+ * .node or .ele (any case) keeps its case, the other half from df_mesh_tetgen_sibling. */
 static void stem_names(const char *stem, char *node, char *ele, size_t n)
 {
     const char *st = stem ? stem : "<memory>";
     size_t l = strlen(st);
-    if (l > 5 && (!strcmp(st + l - 5, ".node") || !strcmp(st + l - 4, ".ele")))
-        l -= st[l - 4] == '.' ? 4 : 5;
+    const char *dot = strrchr(st, '.');
+    char other[256];
+    if (l < 200 && dot && df_mesh_tetgen_sibling(st, other, sizeof other) == 0) {
+        int is_node = strcasecmp(dot, ".node") == 0;
+        snprintf(node, n, "%s", is_node ? st : other);
+        snprintf(ele, n, "%s", is_node ? other : st);
+        return;
+    }
     snprintf(node, n, "%.*s.node", (int)(l > 200 ? 200 : l), st);
     snprintf(ele, n, "%.*s.ele", (int)(l > 200 ? 200 : l), st);
 }
@@ -127,12 +136,14 @@ int df_mesh_read_tetgen_memory(const void *node, size_t node_len, const void *el
     stem_names(name_for_errors, nn, en, sizeof nn);
     df_scan s;
     df_scan_init(&s, node, node_len, nn);
+    s.redact = o && o->redact_content;
     df_mesh_build b;
     df_mesh_build_init(&b, nn, 0, o);
     int base = 0;
     int rc = parse_nodes(&s, &b, &base, err);
     if (!rc) {
         df_scan_init(&s, ele, ele_len, en);
+        s.redact = o && o->redact_content;
         b.name = en;
         rc = parse_elements(&s, &b, base, err);
     }

@@ -2,6 +2,7 @@
 #include "core/mesh/mesh_scan.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -18,6 +19,7 @@ void df_scan_init(df_scan *s, const void *buf, size_t len, const char *name)
     s->line = 1;
     s->name = name ? name : "<memory>";
     s->comment = '#';
+    s->redact = 0;
 }
 
 void df_scan_skip_blank(df_scan *s)
@@ -125,6 +127,15 @@ int df_scan_parse_double(const char *t, size_t n, double *v)
     return 0;
 }
 
+const char *df_scan_quote(const df_scan *s, const char *t, size_t n, char *buf, size_t bn)
+{
+    if (s->redact)
+        snprintf(buf, bn, "(value not shown)");
+    else
+        snprintf(buf, bn, "'%.*s'", (int)(n > 32 ? 32 : n), t);
+    return buf;
+}
+
 int df_scan_double(df_scan *s, int cross_lines, const char *what, double *v, df_error *err)
 {
     const char *t;
@@ -133,12 +144,13 @@ int df_scan_double(df_scan *s, int cross_lines, const char *what, double *v, df_
         return df_error_set(err, DF_EFORMAT, "%s:%d: truncated: expected %s, found %s", s->name,
                             (int)s->line, what, df_scan_eof(s) ? "end of file" : "end of line");
     double x;
+    char q[48];
     if (df_scan_parse_double(t, n, &x) != 0)
-        return df_error_set(err, DF_EFORMAT, "%s:%d: %s '%.*s' is not a number", s->name,
-                            (int)s->line, what, (int)(n > 32 ? 32 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: %s %s is not a number", s->name,
+                            (int)s->line, what, df_scan_quote(s, t, n, q, sizeof q));
     if (!isfinite(x))
-        return df_error_set(err, DF_EFORMAT, "%s:%d: %s '%.*s' is not finite (NaN/Inf)", s->name,
-                            (int)s->line, what, (int)(n > 32 ? 32 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: %s %s is not finite (NaN/Inf)", s->name,
+                            (int)s->line, what, df_scan_quote(s, t, n, q, sizeof q));
     *v = x;
     return DF_OK;
 }
@@ -152,12 +164,13 @@ int df_scan_int(df_scan *s, int cross_lines, const char *what, int32_t *v, df_er
                             (int)s->line, what, df_scan_eof(s) ? "end of file" : "end of line");
     int64_t x;
     int rc = df_scan_parse_int(t, n, &x);
+    char q[48];
     if (rc == -2)
-        return df_error_set(err, DF_EFORMAT, "%s:%d: %s '%.*s' out of 32-bit range", s->name,
-                            (int)s->line, what, (int)(n > 32 ? 32 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: %s %s out of 32-bit range", s->name,
+                            (int)s->line, what, df_scan_quote(s, t, n, q, sizeof q));
     if (rc != 0)
-        return df_error_set(err, DF_EFORMAT, "%s:%d: %s '%.*s' is not an integer", s->name,
-                            (int)s->line, what, (int)(n > 32 ? 32 : n), t);
+        return df_error_set(err, DF_EFORMAT, "%s:%d: %s %s is not an integer", s->name,
+                            (int)s->line, what, df_scan_quote(s, t, n, q, sizeof q));
     *v = (int32_t)x;
     return DF_OK;
 }

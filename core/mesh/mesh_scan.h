@@ -19,10 +19,16 @@ typedef struct df_scan {
     int32_t line;      /* 1-based line of `pos` */
     const char *name;  /* file name for messages */
     char comment;      /* comment character ('#') or 0 */
+    int redact;        /* 1: messages never quote input bytes (df_scan_quote) */
 } df_scan;
 
 /* Starts scanning `len` bytes at `buf`; line 1, comment char '#'. */
 void df_scan_init(df_scan *s, const void *buf, size_t len, const char *name);
+
+/* Formats the n-byte token t for an error message into buf (size bn >= 20): "'tok'" (cut at 32
+ * bytes), or "(value not shown)" when s->redact is set (files a server reads for a client must
+ * never have their content echoed). Returns buf. */
+const char *df_scan_quote(const df_scan *s, const char *t, size_t n, char *buf, size_t bn);
 
 /* Skips spaces, tabs, CR, VT, FF on the current line (not newlines, not comments). */
 void df_scan_skip_blank(df_scan *s);

@@ -14,7 +14,7 @@ from deformd_client import Brush, DeformdError
 from helpers import (grab_displacement, grid_obj, read_indices, read_node_positions,
                      read_obj_positions, read_off_positions, tet_grid_medit)
 
-COMMANDS = ["ping", "load", "list", "brush", "handles", "move", "get", "undo", "redo",
+COMMANDS = ["ping", "load", "list", "close", "brush", "handles", "move", "get", "undo", "redo",
             "reset-rest", "watch", "stats"]
 
 
@@ -124,7 +124,7 @@ CLI_BRUSHES = [
     (["--type", "scale", "--scale", "0.2", "--radius", "0.3", "--nu", "0.3"],
      Brush(type="scale", scale=0.2, radius=0.3, nu=0.3)),
     (["--type", "pinch", "--matrix", "0.2,0,0,0,-0.2,0,0,0,0", "--radius", "0.3"],
-     Brush(type="pinch", matrix=(0.2, 0, 0, 0, -0.2, 0, 0, 0, 0), radius=0.3, nu=0.5)),
+     Brush(type="pinch", matrix=(0.2, 0, 0, 0, -0.2, 0, 0, 0, 0), radius=0.3, nu=0.45)),  # CLI default
     (["--type", "affine", "--matrix", "0.1,0.2,0,0,0.1,0,0,0,0.3", "--radius", "0.3",
       "--nu", "0.3"],
      Brush(type="affine", matrix=(0.1, 0.2, 0, 0, 0.1, 0, 0, 0, 0.3), radius=0.3, nu=0.3)),
@@ -256,6 +256,29 @@ def test_move_node_targets_without_handles_uses_the_session_set(ctl, daemon, mes
     assert p.returncode == 2 and p.stderr
     with daemon.unix_client() as c:
         assert c.get_mesh(sid).version == j["version"]   # failed moves changed nothing
+        c.close_session(sid)
+
+
+def test_move_node_targets_supersedes_a_running_move(ctl, daemon, meshes):
+    """Issue 9 item 18: `move --targets X.node` without --handles fetches the handle set
+    (HANDLES_GET) while another client's never-ending move runs, and its move supersedes it."""
+    from deformd_client import messages as m
+    rest = os.path.join(meshes, "teaser_apple_rest.node")
+    hfile = os.path.join(meshes, "teaser_apple_handles.txt")
+    tfile = os.path.join(meshes, "teaser_apple_init1.node")
+    sid = int(ctl("load", rest).stdout)
+    ctl("handles", sid, "--energy", "neohookean", "--handles", hfile, "--rho", 1e3,
+        "--s", 0.01, "--w", 1, "--tol", 0, "--iters", 1000000)
+    handles = read_indices(hfile)
+    T = read_node_positions(tfile)
+    with daemon.unix_client() as c:
+        rid = c.send(m.HANDLES_MOVE, m.encode_handle_move(sid, [T[h] for h in handles]))
+        c.ping(b"move dispatched")
+        j = json.loads(ctl("--json", "move", sid, "--targets", tfile, "--max-iters", 3,
+                           timeout=60).stdout)
+        assert j["iterations"] <= 3 and j["status"] in ("converged", "budget"), j
+        first = m.decode_move_result(c.wait_reply(rid, 60)[0].payload)
+        assert first.status == m.MOVE_SUPERSEDED, first
         c.close_session(sid)
 
 

@@ -170,6 +170,34 @@ def test_error_session_info_and_stats_bodies():
         m.decode_session_info(info[:-1])
 
 
+def test_load_mesh_ext_and_load_reply_bodies():
+    plain = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc")
+    assert struct.unpack_from("<H", plain, 2)[0] == 0
+    ext = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc", m.LOAD_OPT_EXT,
+                             "spot.obj")
+    assert struct.unpack_from("<H", ext, 2)[0] == m.LOAD_OPT_EXT
+    assert ext == plain[:2] + b"\x01\x00" + plain[4:] + struct.pack("<H", 8) + b"spot.obj"
+    # one options field: bit 0 EXT, bit 1 2D (2D alone keeps the original layout)
+    assert (m.LOAD_OPT_EXT, m.LOAD_OPT_2D, m.LOAD_OPTS_ALL) == (1, 2, 3)
+    two_d = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc", m.LOAD_OPT_2D)
+    assert two_d == plain[:2] + b"\x02\x00" + plain[4:]
+    both = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc",
+                              m.LOAD_OPT_EXT | m.LOAD_OPT_2D, "spot.obj")
+    assert both == ext[:2] + b"\x03\x00" + ext[4:]
+    info = struct.pack("<QQBBHIIII", 3, 0, 2, 0, 0, 100, 196, 0, 0) + struct.pack("<H", 4) + b"spot"
+    bare = m.decode_load_reply(info)
+    assert bare.name == "spot" and bare.report is None
+    report = struct.pack("<BBH11I", 1, 1, 0, 98, 0, 2, 1, 0, 0, 3, 0, 4, 0, 5)
+    s = m.decode_load_reply(info + report)
+    assert (s.report.format, s.report.dropped_elements, s.report.duplicate_elements,
+            s.report.nonmanifold_edges, s.report.boundary_edges, s.report.unused_vertices) == \
+        (1, 2, 1, 3, 4, 5)
+    for bad in (info + report[:-1], info + report + b"\0",
+                info + report[:2] + b"\x01\x00" + report[4:]):
+        with pytest.raises(ProtocolError):
+            m.decode_load_reply(bad)
+
+
 def _mesh_chunk(section, offset, rows, data, nv=4, ne=2):
     head = struct.pack("<QQBBBBIIIII", 7, 3, 2, 0, section, 0, nv, ne, 0, offset, rows)
     return head + data.tobytes()

@@ -142,3 +142,50 @@ def test_closing_a_busy_session_whose_subscriber_already_left(daemon):
             c.wait_reply(move, 30)
             assert daemon.alive(), daemon.log()[-2000:]
         assert c.ping(b"ok") == b"ok"
+
+
+def test_a_move_starts_from_the_current_positions_after_undo_and_brush(daemon, meshes):
+    """Issue 9 item 17: on decimated-knight.off with handles 0 1 2, a converged move, an undo (back
+    to the load-time positions exactly) and a one-iteration move with the same targets give the
+    first iterate of a fresh solver, not (nearly) the converged shape; after a grab of 0.2 along z
+    away from the handles, a one-iteration move keeps the brush edit instead of wiping it out."""
+    import os
+    path = os.path.join(meshes, "decimated-knight.off")
+    with daemon.unix_client() as c:
+        sid = c.load_file(path).session_id
+        ref = c.load_file(path).session_id
+        X = c.get_mesh(sid).positions
+        nv = len(X) // 3
+        targets = [(X[3 * h], X[3 * h + 1], X[3 * h + 2] + 0.15) for h in (0, 1, 2)]
+        for s in (sid, ref):
+            c.set_handles(s, [0, 1, 2])
+
+        def dist(a, b):
+            return max(sum((a[3 * i + k] - b[3 * i + k]) ** 2 for k in range(3)) ** 0.5
+                       for i in range(nv))
+
+        c.move_handles(sid, targets, max_iters=2000)
+        conv = c.get_mesh(sid).positions
+        c.undo(sid)
+        assert c.get_mesh(sid).positions == X
+        c.move_handles(sid, targets, max_iters=1)
+        one = c.get_mesh(sid).positions
+        c.move_handles(ref, targets, max_iters=1)      # a fresh solver starts at load time
+        fresh = c.get_mesh(ref).positions
+        print("after undo, one iteration: %.3g from a fresh solver's, %.3g from the converged shape"
+              % (dist(one, fresh), dist(one, conv)))
+        assert dist(fresh, conv) > 0.01
+        assert dist(one, fresh) < 0.01 * dist(fresh, conv)
+        # a brush edit away from the handles survives a one-iteration move
+        c.undo(sid)
+        far = max(range(nv), key=lambda i: sum((X[3 * i + k] - X[k]) ** 2 for k in range(3)))
+        c.stroke(sid, Brush(type="grab", center=X[3 * far:3 * far + 3], move=(0, 0, 0.2),
+                            radius=0.1))
+        brushed = c.get_mesh(sid).positions
+        assert abs(brushed[3 * far + 2] - X[3 * far + 2] - 0.2) < 1e-4
+        c.move_handles(sid, targets, max_iters=1)
+        kept = c.get_mesh(sid).positions[3 * far + 2] - X[3 * far + 2]
+        print("grab of 0.2 at vertex %d: %.4f left after a one-iteration move" % (far, kept))
+        assert kept > 0.1
+        c.close_session(sid)
+        c.close_session(ref)

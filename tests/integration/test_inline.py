@@ -36,6 +36,7 @@ def _stroke_session(d, data, brush, updates=UPDATES):
             versions.append(ev.version)
             if ev.version == final.version:
                 break
+        c.close_session(sid)  # session names are unique: the next call reuses "inline"
     return replica.tobytes(), final.positions.tobytes(), versions, inline
 
 

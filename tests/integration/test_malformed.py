@@ -61,10 +61,14 @@ def test_fatal_header_errors_close_only_that_connection(daemon, what, header, co
     s = daemon.raw_unix()
     s.sendall(header)
     frames, closed = read_frames(s, 5.0)
-    if frames:  # an error frame may precede the close; if present it must name the problem
-        c, msg = error_of(frames[0])
-        assert c == code, "%s: code %d (%s)" % (what, c, msg)
-        closed = wait_closed(s)
+    # PROTOCOL.md 7: one ERROR event (type ERROR, flags ERROR only, request id 0), then close
+    assert frames, "%s: no error frame before the close" % what
+    c, msg = error_of(frames[0])
+    assert c == code, "%s: code %d (%s)" % (what, c, msg)
+    assert frames[0].type == m.ERROR and frames[0].flags == fr.FLAG_ERROR, \
+        "%s: type 0x%x flags 0x%x" % (what, frames[0].type, frames[0].flags)
+    assert frames[0].request_id == 0
+    closed = closed or wait_closed(s)
     assert closed, "%s: connection not closed" % what
     s.close()
     assert bystander.ping(b"x") == b"x"
@@ -86,17 +90,20 @@ def test_unknown_type_gets_badtype_and_connection_survives(daemon):
     s = daemon.raw_unix(hello=True)
     f, closed = one_reply(s, fr.encode_frame(0x7777, b"hello", 41), 41)
     assert error_of(f)[0] == E.EPROTO_BADTYPE
+    assert f.type == 0x7777, "answered with type 0x%x, not the request's" % f.type
     assert ping_on(s)
     # server-only types sent as requests are refused too
     f, _ = one_reply(s, fr.encode_frame(m.DISPLACEMENT, b"", 42), 42)
     assert error_of(f)[0] == E.EPROTO_BADTYPE
+    assert f.type == m.DISPLACEMENT
     s.close()
     assert_serving(daemon)
 
 
 @pytest.mark.parametrize("flags,code", [
-    (fr.FLAG_REPLY, None),          # a reply sent to the server
-    (fr.FLAG_EVENT, None),
+    (fr.FLAG_REPLY, E.EPROTO_BADFLAGS),  # a reply sent to the server
+    (fr.FLAG_EVENT, E.EPROTO_BADFLAGS),
+    (fr.FLAG_REPLY | fr.FLAG_ERROR, E.EPROTO_BADFLAGS),
     (fr.FLAG_MORE, E.EPROTO_BADFLAGS),  # only load_mesh may be chunked
     (0x0100, E.EPROTO_BADFLAGS),    # unknown bit
 ])
@@ -105,11 +112,37 @@ def test_bad_flags_are_answered(daemon, flags, code):
     s.sendall(fr.encode_frame(m.PING, b"abc", 7, flags))
     frames, closed = read_frames(s, 5.0)
     assert frames, "no reply to flags 0x%x (closed=%s)" % (flags, closed)
-    c, _ = error_of(frames[0])
-    if code is not None:
-        assert c == code
-    else:
-        assert c in (E.EPROTO_BADFLAGS, E.EPROTO_BADTYPE)
+    c, msg = error_of(frames[0])
+    assert c == code, "flags 0x%x: %s %s" % (flags, E.error_name(c), msg)
+    assert frames[0].type == m.PING and frames[0].request_id == 7
+    s.close()
+    assert_serving(daemon)
+
+
+def test_request_id_zero_is_refused_with_an_error_event(daemon):
+    """PROTOCOL.md 1.3: id 0 is reserved for events; a request with it is not executed and is
+    answered by an ERROR event (type ERROR, flags ERROR, id 0, EINVAL); the connection stays."""
+    s = daemon.raw_unix(hello=True)
+    s.sendall(fr.encode_frame(m.PING, b"zero", 0))
+    frames, closed = read_frames(s, 5.0)
+    assert frames and not closed
+    f = frames[0]
+    assert f.type == m.ERROR and f.flags == fr.FLAG_ERROR and f.request_id == 0
+    c, msg = error_of(f)
+    assert c == E.EINVAL and "request id 0" in msg
+    assert ping_on(s)
+    s.close()
+
+
+def test_hello_version_mismatch_is_answered_then_closed(daemon):
+    """PROTOCOL.md 4.2b: no common version -> EPROTO_BADVERSION reply, then the server closes."""
+    s = daemon.raw_unix()
+    s.sendall(fr.encode_frame(m.HELLO, m.encode_hello(5, 9, 0, "future"), 3))
+    frames, closed = read_frames(s, 5.0)
+    assert frames, "no reply to the HELLO"
+    assert frames[0].is_reply and frames[0].request_id == 3
+    assert error_of(frames[0])[0] == E.EPROTO_BADVERSION
+    assert closed or wait_closed(s), "connection left open after a version mismatch"
     s.close()
     assert_serving(daemon)
 

@@ -30,6 +30,12 @@ RING_HEADER = struct.Struct("<8sIIQQQQ")       # magic, header_bytes, reserved, 
 #                                                session, valid_from, head
 
 
+def ring_size(nv: int, cap: int = 64 << 20) -> int:
+    """deformd's ring for a session of nv vertices (server/shm.h df_shm_ring_size)."""
+    want = -(-128 * (12 * nv + 128) // (64 << 10)) * (64 << 10)
+    return min(max(want, 64 << 10), cap)
+
+
 def _grid_session(c: Client, name: str = "shm"):
     """Loads a GRID_N x GRID_N grid; returns (session id, base positions)."""
     data = grid_obj(GRID_N, GRID_N)
@@ -322,13 +328,14 @@ def test_shm_subscriber_replica_matches_and_the_socket_carries_refs(daemon):
 
 
 def test_shm_info_follows_the_config_and_the_file_lives_with_the_session(daemon, make_daemon):
-    """(b) capacity = shm_ring_bytes (default 64m), frames of 1024 .. capacity / 2 bytes through
+    """(b) capacity sized to the session (128 dense versions, rounded up to 64 KiB; PROTOCOL.md
+    6.1), at most shm_ring_bytes (default 64m), frames of 1024 .. capacity / 2 bytes through
     the ring, an absolute 0600 file of the daemon's user with the documented header, one ring
     per session; attaching twice is a no-op; CLOSE_SESSION removes the file."""
     with daemon.unix_client() as c:
         sid, _ = _grid_session(c)
         c.subscribe(sid)
-        assert c.stream_shm(sid).capacity == 64 << 20
+        assert c.stream_shm(sid).capacity == ring_size(GRID_N * GRID_N) < 64 << 20
         c.close_session(sid)
     d = make_daemon("shm_ring_bytes = 1m\n")
     with d.unix_client() as c:

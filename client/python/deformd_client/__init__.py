@@ -12,15 +12,16 @@ from .client import Client, MeshData, SessionClosed, ShmLost, ShmRing
 from .errors import ConnectionClosed, DeformdError, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
-from .messages import (AffineSet, Brush, HandleParams, HandleSet, MoveResult, SessionInfo,
-                       ShmInfo)
+from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, MoveResult,
+                       SessionInfo, ShmInfo)
 from .stream import Disp, Progress
 from .wire import ProtocolError
 
 __all__ = [
     "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "error_name",
     "Frame", "FrameDecoder", "FrameError", "encode_frame", "encode_header", "MeshState",
-    "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "MoveResult",
+    "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "LoadReport",
+    "MoveResult",
     "Progress", "ProtocolError", "SessionInfo", "ShmInfo", "ShmLost", "ShmRing",
 ]
 __version__ = "0.1.0"

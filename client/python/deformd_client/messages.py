@@ -67,6 +67,9 @@ FMT_AUTO, FMT_OBJ, FMT_OFF, FMT_PLY, FMT_MEDIT, FMT_TETGEN = range(6)
 FORMAT_BY_EXT = {".obj": FMT_OBJ, ".off": FMT_OFF, ".ply": FMT_PLY, ".mesh": FMT_MEDIT,
                  ".node": FMT_TETGEN}
 LOAD_INLINE, LOAD_PATH = 0, 1
+LOAD_OPT_EXT = 1               # load_mesh options: file_name follows; reply carries a LoadReport
+LOAD_OPT_2D = 2                # load_mesh options: a 2D session even if the file gives z (z all 0)
+LOAD_OPTS_ALL = LOAD_OPT_EXT | LOAD_OPT_2D
 
 BRUSH_TYPES = {"grab": 1, "twist": 2, "scale": 3, "pinch": 4, "affine": 5}
 INTEGRATORS = {"euler": 1, "rk4": 2}
@@ -129,13 +132,16 @@ def decode_error(p: bytes):
     return code, msg
 
 
-LOAD_2D = 0x0001   # load_mesh flags: a 2D session even if the file gives z (every z must be 0)
-
-
 def encode_load_mesh(source: int, fmt: int, name: str, path: str, total_size: int,
-                     part2_offset: int, offset: int, data: bytes, flags: int = 0) -> bytes:
-    return (struct.pack("<BBHQQQ", source, fmt, flags, total_size, part2_offset, offset)
+                     part2_offset: int, offset: int, data: bytes, options: int = 0,
+                     file_name: str = "") -> bytes:
+    """options LOAD_OPT_EXT appends file_name (the user's file, for messages and the default
+    session name) and asks for a load_reply with the reader's report."""
+    body = (struct.pack("<BBHQQQ", source, fmt, options, total_size, part2_offset, offset)
             + pack_str(name) + pack_str(path) + struct.pack("<I", len(data)) + bytes(data))
+    if options & LOAD_OPT_EXT:
+        body += pack_str(file_name)
+    return body
 
 
 def encode_session_ref(session_id: int) -> bytes:
@@ -169,6 +175,25 @@ class SessionInfo:
     undo_depth: int
     redo_depth: int
     name: str
+    report: Optional["LoadReport"] = None   # LOAD_MESH with LOAD_OPT_EXT only
+
+
+@dataclass
+class LoadReport:
+    """What the daemon's reader found in a loaded file (PROTOCOL.md 4.9b)."""
+    format: int
+    index_base: int
+    input_polygons: int
+    polygons_triangulated: int
+    dropped_elements: int
+    duplicate_elements: int
+    degenerate_elements: int
+    inverted_elements: int
+    nonmanifold_edges: int
+    nonmanifold_faces: int
+    boundary_edges: int
+    boundary_faces: int
+    unused_vertices: int
 
 
 def _read_session_info(r: Reader) -> SessionInfo:
@@ -179,6 +204,19 @@ def _read_session_info(r: Reader) -> SessionInfo:
 def decode_session_info(p: bytes) -> SessionInfo:
     r = Reader(p, "session_info")
     s = _read_session_info(r)
+    r.end()
+    return s
+
+
+def decode_load_reply(p: bytes) -> SessionInfo:
+    """LOAD_MESH reply: session_info, then (LOAD_OPT_EXT) the 48-byte report in .report."""
+    r = Reader(p, "load_reply")
+    s = _read_session_info(r)
+    if r.off < len(p):
+        fmt, base, reserved = r.take("BBH")
+        if reserved:
+            raise ProtocolError("load_reply: reserved field is not 0")
+        s.report = LoadReport(fmt, base, *r.take("11I"))
     r.end()
     return s
 

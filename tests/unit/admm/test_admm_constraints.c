@@ -127,6 +127,17 @@ static void test_bad_input(void **st)
     df_admm_params q = p;
     q.energy = DF_ADMM_CLOTH;
     expect_create_error(&m, &q, h, 2, DF_EINVAL, "triangle");
+    /* energy / mesh mismatches name both by their wire names and the energy to use */
+    expect_create_error(&m, &q, h, 2, DF_EINVAL, "energy cloth needs triangles; this mesh is a "
+                        "tet mesh: use energy arap, acap or neohookean");
+    double pv[12] = {0, 0, 0, 1, 0, 0, 2, 0.5, 0, 3, 0, 0};
+    int32_t pe[6] = {0, 1, 1, 2, 2, 3}, ph[2] = {0, 3};
+    df_mesh poly = {DF_MESH_POLYLINE, 0, 4, pv, 3, pe, 0, NULL};
+    q = p; q.energy = DF_ADMM_ARAP;
+    expect_create_error(&poly, &q, ph, 2, DF_EINVAL, "energy arap needs triangles or tets; this "
+                        "mesh is a polyline: use energy polyline (deformctl --energy polyline)");
+    q = p; q.energy = DF_ADMM_POLYLINE;
+    expect_create_error(&m, &q, h, 2, DF_EINVAL, "energy polyline needs a polyline");
     q = p; q.energy = (df_admm_energy)99;
     expect_create_error(&m, &q, h, 2, DF_EINVAL, "energy");
     q = p; q.s = 0;

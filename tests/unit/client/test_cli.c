@@ -152,6 +152,28 @@ static void test_choice_and_hostport(void **state)
     assert_int_equal(dc_cli_hostport("h:0", host, sizeof host, &port, &e), DF_EINVAL);
     assert_int_equal(dc_cli_hostport("h:65536", host, sizeof host, &port, &e), DF_EINVAL);
     assert_int_equal(dc_cli_hostport("[::1]80", host, sizeof host, &port, &e), DF_EINVAL);
+    /* the messages name --tcp and the value */
+    assert_int_equal(dc_cli_hostport("127.0.0.1", host, sizeof host, &port, &e), DF_EINVAL);
+    assert_string_equal(e.msg, "--tcp: '127.0.0.1' is not HOST:PORT");
+    assert_int_equal(dc_cli_hostport(":99999", host, sizeof host, &port, &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "':99999' has no host"));
+    assert_int_equal(dc_cli_hostport("h:abc", host, sizeof host, &port, &e), DF_EINVAL);
+    assert_string_equal(e.msg, "--tcp port: 'abc' is not an integer");
+}
+
+static void test_socket_path(void **state)
+{
+    (void)state;
+    df_error e;
+    char longp[200];
+    memset(longp, 'a', sizeof longp - 1);
+    longp[sizeof longp - 1] = '\0';
+    assert_int_equal(dc_cli_socket_path("/tmp/d.sock", &e), DF_OK);
+    assert_int_equal(dc_cli_socket_path("", &e), DF_EINVAL);
+    assert_string_equal(e.msg, "--socket: empty path");
+    assert_int_equal(dc_cli_socket_path(NULL, &e), DF_EINVAL);
+    assert_int_equal(dc_cli_socket_path(longp, &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "--socket: path of 199 bytes is too long"));
 }
 
 static void test_default_socket(void **state)
@@ -182,6 +204,7 @@ int main(void)
         cmocka_unit_test(test_vectors),
         cmocka_unit_test(test_choice_and_hostport),
         cmocka_unit_test(test_default_socket),
+        cmocka_unit_test(test_socket_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

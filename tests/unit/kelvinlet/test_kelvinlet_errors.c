@@ -101,6 +101,34 @@ static void test_range_errors(void **state)
     assert_memory_equal(w, z, sizeof z);
 }
 
+/* A ratio so close to 1 that the multi-scale weights cancel is blamed on the ratio (named with
+ * its digits, with the range that works), never on the radius, for every brush type. */
+static void test_ratio_near_one_names_the_ratio(void **state)
+{
+    (void)state;
+    for (int t = DF_KELVINLET_GRAB; t <= DF_KELVINLET_AFFINE; t++) {
+        df_kelvinlet_brush b = good();
+        b.type = (df_kelvinlet_type)t;
+        b.ratio = 1.0000001;
+        if (t == DF_KELVINLET_TWIST)
+            b.omega[1] = 0.3;
+        else if (t == DF_KELVINLET_SCALE)
+            b.s = 0.1;
+        else if (t != DF_KELVINLET_GRAB)
+            b.grad[0] = 0.1, b.grad[4] = -0.1;
+        df_kelvinlet_prepared out;
+        df_error e;
+        df_error_clear(&e);
+        assert_int_equal(df_kelvinlet_prepare(&b, &out, &e), DF_ESINGULAR);
+        assert_non_null(strstr(e.msg, "ratio 1.0000001 is too close to 1 for falloff order 3"));
+        assert_non_null(strstr(e.msg, "1.05 or more"));
+        assert_null(strstr(e.msg, "radius"));
+        b.ratio = 1.05;
+        assert_int_equal(df_kelvinlet_prepare(&b, &out, &e), DF_OK);
+        df_kelvinlet_prepared_free(&out);
+    }
+}
+
 static void test_bad_points_leave_outputs_untouched(void **state)
 {
     (void)state;
@@ -155,6 +183,7 @@ int main(void)
         cmocka_unit_test(test_non_finite_fields),
         cmocka_unit_test(test_range_errors),
         cmocka_unit_test(test_bad_points_leave_outputs_untouched),
+        cmocka_unit_test(test_ratio_near_one_names_the_ratio),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES = 32 };
+enum { N_SAMPLES = 35 };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -131,12 +131,15 @@ static inline void build_samples(sample *s)
     df_msg_ping ping = {3, tok};
     ADD("ping", DF_MSG_PING, 0, df_msg_ping_encode(&ping, out, &e));
     df_msg_load_mesh lm = {DF_LOAD_INLINE, DF_FMT_OFF, "tri", NULL, sizeof sample_blob - 1, 0,
-                           0, sizeof sample_blob - 1, sample_blob, 0};
+                           0, sizeof sample_blob - 1, sample_blob, 0, ""};
     ADD("load_mesh", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lm, out, &e));
     char path[] = "/work/shared/meshes/spot.obj";
-    df_msg_load_mesh lp = {DF_LOAD_PATH, DF_FMT_AUTO, "spot", path, 0, 0, 0, 0, NULL,
-                           DF_LOAD_2D};
+    df_msg_load_mesh lp = {DF_LOAD_PATH, DF_FMT_AUTO, "spot", path, 0, 0, 0, 0, NULL, 0, ""};
     ADD("load_path", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lp, out, &e));
+    df_msg_load_mesh lx = lm;
+    lx.options = DF_LOAD_OPT_EXT;
+    snprintf(lx.file_name, sizeof lx.file_name, "tri.off");
+    ADD("load_mesh_ext", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&lx, out, &e));
     df_msg_session_ref ref = {0x1122334455667788ull};
     ADD("session_ref", DF_MSG_UNDO, 0, df_msg_session_ref_encode(&ref, out, &e));
     df_msg_open_session os = {0, "bunny"};
@@ -145,6 +148,8 @@ static inline void build_samples(sample *s)
     ADD("subscribe", DF_MSG_SUBSCRIBE, 0, df_msg_subscribe_encode(&sub, out, &e));
     df_msg_session_info si = {5, 99, 3, 0, 2, 5433, 34055, 4, 1, "bunny"};
     ADD("session_info", DF_MSG_OPEN_SESSION, DF_FLAG_REPLY, df_msg_session_info_encode(&si, out, &e));
+    df_msg_load_reply lr = {si, 1, {5, 1, 0, 0, 12, 1, 0, 0, 2, 0, 0, 3, 4}};
+    ADD("load_reply", DF_MSG_LOAD_MESH, DF_FLAG_REPLY, df_msg_load_reply_encode(&lr, out, &e));
     df_msg_session_info items[2] = {si, {6, 0, 2, 1, 0, 694, 1267, 0, 0, "woody"}};
     df_msg_session_list sl = {2, items};
     ADD("session_list", DF_MSG_LIST_SESSIONS, DF_FLAG_REPLY,
@@ -197,6 +202,10 @@ static inline void build_samples(sample *s)
     ADD("shm_info", DF_MSG_STREAM_SHM, DF_FLAG_REPLY, df_msg_shm_info_encode(&shi, out, &e));
     df_msg_shm_ref shr = {9, 131072, 12356};
     ADD("shm_ref", DF_MSG_SHM_REF, DF_FLAG_EVENT, df_msg_shm_ref_encode(&shr, out, &e));
+    /* a path load asking for a 2D session (options bit 1, without EXT: no file_name) */
+    df_msg_load_mesh l2 = lp;
+    l2.options = DF_LOAD_OPT_2D;
+    ADD("load_path_2d", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&l2, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

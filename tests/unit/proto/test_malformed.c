@@ -151,7 +151,24 @@ static void test_load_mesh_bodies(void **state)
      * data_len at 35, data at 39 */
     u8("load_mesh", 0, 2, DF_EINVAL, "source");
     u8("load_mesh", 1, 6, DF_EINVAL, "format 6");
-    u16("load_mesh", 2, 6, DF_EINVAL, "flags");   /* only DF_LOAD_2D (1) is defined */
+    /* options: bit 0 EXT, bit 1 2D; any other bit is EPROTO_RESERVED */
+    u16("load_mesh", 2, 6, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_mesh", 2, 4, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_mesh", 2, 0x8000, DF_EPROTO_RESERVED, "unknown bits 0x8000");
+    u16("load_mesh", 2, DF_LOAD_OPT_2D, DF_OK, NULL);          /* 2D alone: same layout */
+    u16("load_mesh", 2, DF_LOAD_OPT_EXT, DF_EPROTO_TRUNCATED, "file_name"); /* EXT needs it */
+    u16("load_path_2d", 2, 0, DF_OK, NULL);
+    u16("load_path_2d", 2, 7, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_mesh_ext", 2, 0, DF_EPROTO_TRAILING, NULL);  /* file_name without the EXT option */
+    u16("load_mesh_ext", 2, 3, DF_OK, NULL);                   /* EXT | 2D */
+    u16("load_mesh_ext", 2, 2, DF_EPROTO_TRAILING, NULL);      /* 2D without EXT: trailing */
+    u16("load_mesh_ext", 2, 5, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    /* load_reply: session_info "bunny" is 43 bytes, then format 43, index_base 44, reserved 45 */
+    u8("load_reply", 43, 0, DF_EINVAL, "format");
+    u8("load_reply", 43, 6, DF_EINVAL, "format");
+    u8("load_reply", 44, 2, DF_EINVAL, "index_base");
+    u16("load_reply", 45, 1, DF_EPROTO_RESERVED, "reserved");
+    u8("load_reply", 16, 4, DF_EINVAL, "kind 4");
     u64("load_mesh", 4, 0, DF_ELIMIT, "total_size");
     u64("load_mesh", 4, DF_MAX_MESH_BYTES + 1, DF_ELIMIT, "total_size");
     u64("load_mesh", 4, 10, DF_EINVAL, "chunk");
@@ -172,9 +189,9 @@ static void test_load_mesh_bodies(void **state)
     df_buf b;
     df_buf_init(&b);
     df_error e;
-    df_msg_load_mesh lp = {DF_LOAD_PATH, 0, "", NULL, 0, 0, 0, 0, NULL, 0};
+    df_msg_load_mesh lp = {DF_LOAD_PATH, 0, "", NULL, 0, 0, 0, 0, NULL, 0, ""};
     assert_int_equal(df_msg_load_mesh_encode(&lp, &b, &e), DF_EINVAL);
-    df_msg_load_mesh li = {DF_LOAD_INLINE, 0, "", NULL, 10, 0, 0, 10, NULL, 0};
+    df_msg_load_mesh li = {DF_LOAD_INLINE, 0, "", NULL, 10, 0, 0, 10, NULL, 0, ""};
     assert_int_equal(df_msg_load_mesh_encode(&li, &b, &e), DF_EINVAL);
     assert_int_equal(b.len, 0);
     df_buf_free(&b);

@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "server/config.h"
+#include "server/membudget.h"
 #include "server/log.h"
 
 static void test_defaults(void **state)
@@ -33,6 +34,15 @@ static void test_defaults(void **state)
     assert_int_equal(c.spin_us, DF_CONFIG_DEFAULT_SPIN_US);
     assert_int_equal(c.inline_us, DF_CONFIG_DEFAULT_INLINE_US);
     assert_true(c.shm_ring_bytes == (uint64_t)64 << 20);
+    /* memory limits (issue 9, items 10-13): sized from the machine's RAM where it matters */
+    assert_true(c.shm_total_bytes == DF_CONFIG_DEFAULT_SHM_TOTAL);
+    assert_int_equal(c.max_upload_mb, 1024);
+    assert_int_equal(c.uploads_max_mb, DF_CONFIG_DEFAULT_UPLOADS_MB);
+    assert_in_range(c.history_max_mb, DF_CONFIG_HISTORY_MIN_DEFAULT_MB,
+                    DF_CONFIG_HISTORY_MAX_DEFAULT_MB);
+    assert_true(c.memory_max_mb >= DF_CONFIG_MEMORY_MIN_DEFAULT_MB);
+    assert_true((uint64_t)c.memory_max_mb << 20 <= df_mem_physical_bytes() ||
+                c.memory_max_mb == DF_CONFIG_MEMORY_MIN_DEFAULT_MB);
     /* An XDG dir too long for sun_path falls back to /run/deformd. */
     char longdir[200];
     memset(longdir, 'a', sizeof longdir - 1);
@@ -83,6 +93,14 @@ static void test_parse_file_text(void **state)
     assert_true(c.shm_ring_bytes == 0);
     assert_int_equal(df_config_set(&c, "shm_ring_bytes", "4g", &e), DF_OK);
     assert_true(c.shm_ring_bytes == (uint64_t)4 << 30);
+    const char mem[] = "max_upload_mb = 8\nuploads_max_mb = 16\nhistory_max_mb = 0\n"
+                       "memory_max_mb = 512\nshm_total_bytes = 3m\n";
+    assert_int_equal(df_config_parse(&c, mem, sizeof mem - 1, "mem.conf", &e), DF_OK);
+    assert_int_equal(c.max_upload_mb, 8);
+    assert_int_equal(c.uploads_max_mb, 16);
+    assert_int_equal(c.history_max_mb, 0);
+    assert_int_equal(c.memory_max_mb, 512);
+    assert_true(c.shm_total_bytes == (uint64_t)3 << 20);
     /* IPv6 brackets and disabling. */
     assert_int_equal(df_config_set(&c, "tcp", "[::1]:0", &e), DF_OK);
     assert_string_equal(c.tcp_host, "::1");
@@ -107,6 +125,14 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "spin_us = 1001\n",           "inline_us = 1001\n",       "inline_us = -1\n",
         "inline_us = fast\n",       "shm_ring_bytes = 65535\n", "shm_ring_bytes = 5g\n",
         "shm_ring_bytes = -1\n",     "shm_ring_bytes = big\n",
+        "max_upload_mb = 0\n",       "max_upload_mb = 1025\n",   "uploads_max_mb = 0\n",
+        "history_max_mb = -1\n",     "history_max_mb = 2000000\n", "memory_max_mb = 15\n",
+        "memory_max_mb = lots\n",    "shm_total_bytes = 1k\n",   "shm_total_bytes = 2t\n",
+        "tcp_insecure = maybe\n",    "tcp_insecure =\n",         "socket_mode = 0778\n",
+        "socket_mode = 1777\n",      "socket_mode = rw\n",       "socket_mode = -1\n",
+        "socket_group = a b\n",      "socket_group = /etc\n",
+        "handshake_timeout_s = -1\n", "handshake_timeout_s = 86401\n",
+        "idle_timeout_s = soon\n",   "idle_timeout_s = 1e3\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
@@ -135,6 +161,41 @@ static void test_parse_errors_leave_config_untouched(void **state)
     memset(line, 'a', big);
     assert_int_equal(df_config_parse(&c, line, big, "n", &e), DF_EFORMAT);
     free(line);
+}
+
+/* Issue 9 items 3, 4, 9: the keys of network exposure and connection admission. */
+static void test_network_and_admission_keys(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    assert_int_equal(c.tcp_insecure, 0);
+    assert_int_equal(c.socket_mode, 0660);
+    assert_string_equal(c.socket_group, "");
+    assert_int_equal(c.handshake_timeout_s, DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S);
+    assert_int_equal(c.idle_timeout_s, DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S);
+    const char *text = "tcp_insecure = yes\nsocket_mode = 600\nsocket_group = deformd\n"
+                       "handshake_timeout_s = 3\nidle_timeout_s = 0\n";
+    df_error e;
+    assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
+    assert_int_equal(c.tcp_insecure, 1);
+    assert_int_equal(c.socket_mode, 0600);
+    assert_string_equal(c.socket_group, "deformd");
+    assert_int_equal(c.handshake_timeout_s, 3);
+    assert_int_equal(c.idle_timeout_s, 0);
+    assert_int_equal(df_config_set(&c, "tcp_insecure", "No", &e), DF_OK);
+    assert_int_equal(c.tcp_insecure, 0);
+    assert_int_equal(df_config_set(&c, "socket_mode", "0777", &e), DF_OK);
+    assert_int_equal(c.socket_mode, 0777);
+    assert_int_equal(df_config_set(&c, "socket_group", "", &e), DF_OK);
+    assert_string_equal(c.socket_group, "");
+    /* --tcp-insecure on the command line */
+    df_cli_action act;
+    char *argv[] = {"deformd", "--tcp", "0.0.0.0:7878", "--tcp-insecure", NULL};
+    assert_int_equal(df_config_from_args(&c, 4, argv, NULL, &act, &e), DF_OK);
+    assert_int_equal(c.tcp_insecure, 1);
+    assert_string_equal(c.tcp_host, "0.0.0.0");
+    assert_non_null(strstr(df_config_usage(), "--tcp-insecure"));
 }
 
 static void test_load_file_and_cli(void **state)
@@ -234,6 +295,7 @@ int main(void)
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_parse_file_text),
         cmocka_unit_test(test_parse_errors_leave_config_untouched),
+        cmocka_unit_test(test_network_and_admission_keys),
         cmocka_unit_test(test_load_file_and_cli),
         cmocka_unit_test(test_allowed_paths),
         cmocka_unit_test(test_log_levels),

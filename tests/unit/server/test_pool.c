@@ -6,6 +6,7 @@
 #include <setjmp.h>
 #include <pthread.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -152,6 +153,117 @@ static void test_pool_slow_task_does_not_stall_short_one(void **state)
 }
 
 /* Back-to-back short tasks with spinning workers: some hand-offs need no wake-up. */
+/* Long lane: heavy tasks that block until a short task has completed. With 2 workers and
+ * 3 heavy tasks submitted first, at most one heavy task runs at a time and the short task,
+ * submitted last, still gets the other worker (without the lane both workers would block: the
+ * heavy tasks give up after a generous 20 s and record it). */
+#define LANE_HEAVY 3
+static atomic_int lane_released, lane_running, lane_max_running, lane_gave_up;
+
+static void lane_heavy_work(df_task *t)
+{
+    int n = atomic_fetch_add(&lane_running, 1) + 1;
+    int m = atomic_load(&lane_max_running);
+    while (n > m && !atomic_compare_exchange_weak(&lane_max_running, &m, n)) {
+    }
+    double give_up = now_ms() + 20000.0;
+    while (!atomic_load(&lane_released)) {
+        if (now_ms() > give_up) {
+            atomic_store(&lane_gave_up, 1);
+            break;
+        }
+        usleep(1000);
+    }
+    atomic_fetch_sub(&lane_running, 1);
+    item_work(t);
+}
+
+static void lane_short_after(df_task *t)
+{
+    atomic_store(&lane_released, 1);
+    item_after(t);
+}
+
+static void test_pool_long_lane_leaves_a_worker_for_short_tasks(void **state)
+{
+    (void)state;
+    static item v[LANE_HEAVY + 1];
+    items_init(v, LANE_HEAVY + 1);
+    for (int i = 0; i < LANE_HEAVY; i++) {
+        v[i].t.work = lane_heavy_work;
+        v[i].t.heavy = 1;
+    }
+    v[LANE_HEAVY].t.after = lane_short_after;
+    atomic_store(&lane_released, 0);
+    atomic_store(&lane_running, 0);
+    atomic_store(&lane_max_running, 0);
+    atomic_store(&lane_gave_up, 0);
+    ctx c;
+    df_pool_counters cnt;
+    run_items(&c, v, LANE_HEAVY + 1, 2, 0, 0, &cnt);
+    assert_int_equal(atomic_load(&lane_gave_up), 0);
+    assert_int_equal(c.order[0], LANE_HEAVY);     /* the short task finished first */
+    assert_int_equal(atomic_load(&lane_max_running), 1);
+    assert_int_equal(cnt.heavy_max, 1);
+    assert_true(cnt.heavy_waits >= LANE_HEAVY - 1);
+    for (int i = 0; i <= LANE_HEAVY; i++) assert_int_equal(v[i].ran, 1);
+}
+
+/* Yielding: heavy task A (lane of 1) waits until heavy task B queues behind it, then requeues
+ * itself; B runs and completes, then A runs again and completes: long tasks take turns, and a
+ * task's `after` runs once, when it really finished. */
+static df_pool *yield_pool;
+static atomic_int yield_a_runs, yield_gave_up;
+
+static void yield_a_work(df_task *t)
+{
+    if (atomic_fetch_add(&yield_a_runs, 1) == 0) {
+        double give_up = now_ms() + 20000.0;
+        while (df_pool_heavy_waiting(yield_pool) == 0) {
+            if (now_ms() > give_up) {
+                atomic_store(&yield_gave_up, 1);
+                break;
+            }
+            usleep(1000);
+        }
+        t->requeue = 1;
+        return;
+    }
+    item_work(t);
+}
+
+static void test_pool_heavy_task_yields_to_a_waiting_one(void **state)
+{
+    (void)state;
+    static item v[2];
+    items_init(v, 2);
+    v[0].t.work = yield_a_work;
+    v[0].t.heavy = v[1].t.heavy = 1;
+    atomic_store(&yield_a_runs, 0);
+    atomic_store(&yield_gave_up, 0);
+    uv_loop_t loop;
+    assert_int_equal(uv_loop_init(&loop), 0);
+    ctx c;
+    memset(&c, 0, sizeof c);
+    c.want = 2;
+    c.items = v;
+    g_ctx = &c;
+    df_error e;
+    assert_int_equal(df_pool_start(&loop, 2, 0, &c.p, &e), DF_OK);
+    yield_pool = c.p;
+    df_pool_submit(c.p, &v[0].t);
+    df_pool_submit(c.p, &v[1].t);
+    uv_run(&loop, UV_RUN_DEFAULT);
+    df_pool_free(c.p);
+    assert_int_equal(uv_loop_close(&loop), 0);
+    assert_int_equal(atomic_load(&yield_gave_up), 0);
+    assert_int_equal(atomic_load(&yield_a_runs), 2);
+    assert_int_equal(c.order[0], 1); /* B finished first, then A */
+    assert_int_equal(c.order[1], 0);
+    assert_int_equal(v[0].after_ran, 1);
+    assert_int_equal(v[1].after_ran, 1);
+}
+
 static void test_pool_spinning_worker_takes_back_to_back_tasks(void **state)
 {
     (void)state;
@@ -369,6 +481,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pool_runs_every_task_once_after_on_loop),
         cmocka_unit_test(test_pool_slow_task_does_not_stall_short_one),
+        cmocka_unit_test(test_pool_long_lane_leaves_a_worker_for_short_tasks),
+        cmocka_unit_test(test_pool_heavy_task_yields_to_a_waiting_one),
         cmocka_unit_test(test_pool_spinning_worker_takes_back_to_back_tasks),
         cmocka_unit_test(test_pool_rejects_bad_arguments),
         cmocka_unit_test(test_jobs_on_pool_keep_session_fifo),

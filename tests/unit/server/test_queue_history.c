@@ -7,6 +7,7 @@
 #include <setjmp.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -164,7 +165,7 @@ static void test_history_undo_redo(void **state)
     assert_true(p[0] == 3.0);
     /* the commit copied the data: changing the caller's array changes nothing */
     s3[0] = 99;
-    assert_true(h.states[h.cur][0] == 3.0);
+    assert_true(h.state[0] == 3.0);
     /* committing the current state again adds no step and keeps the redo tail */
     p = df_history_undo(&h, &e);
     assert_true(p[0] == 1.0);
@@ -173,7 +174,9 @@ static void test_history_undo_redo(void **state)
     assert_int_equal(df_history_can_redo(&h), 1);
     p = df_history_redo(&h, &e);
     assert_true(p[0] == 3.0);
-    assert_int_equal(df_history_bytes(&h), 3 * 3 * sizeof(double));
+    /* the current state plus two one-vertex steps (dense: 3 XORs, no index, is smaller) */
+    assert_int_equal(df_history_bytes(&h),
+                     3 * sizeof(double) + 2 * (3 * sizeof(uint64_t) + sizeof(df_history_step)));
     df_history_free(&h);
     assert_int_equal(df_history_can_undo(&h), 0);
 }
@@ -183,13 +186,14 @@ static void test_history_depth_cap_and_errors(void **state)
     (void)state;
     df_history h;
     df_error e;
-    double v[2] = {0, 0};
-    assert_int_equal(df_history_init(&h, v, 2, 3, &e), DF_OK);
+    double v[3] = {0, 0, 0};
+    assert_int_equal(df_history_init(&h, v, 3, 3, &e), DF_OK);
     for (int i = 1; i <= 10; i++) {
         v[0] = i;
         assert_int_equal(df_history_commit(&h, v, &e), DF_OK);
-        assert_true(h.count <= 3);
+        assert_true(h.count <= 2); /* steps between the 3 states */
     }
+    assert_int_equal(h.dropped, 8);
     /* keeps the newest 3 states: 8, 9, 10 -> two undos, then ESTATE */
     assert_int_equal(df_history_can_undo(&h), 2);
     assert_true(df_history_undo(&h, &e)[0] == 9.0);
@@ -197,9 +201,94 @@ static void test_history_depth_cap_and_errors(void **state)
     assert_null(df_history_undo(&h, &e));
     df_history_free(&h);
     assert_int_equal(df_history_init(&h, v, 0, 3, &e), DF_EINVAL);
-    assert_int_equal(df_history_init(&h, v, 2, 1, &e), DF_EINVAL);
-    assert_int_equal(df_history_init(&h, NULL, 2, 3, &e), DF_EINVAL);
+    assert_int_equal(df_history_init(&h, v, 2, 3, &e), DF_EINVAL); /* not whole vertices */
+    assert_int_equal(df_history_init(&h, v, 3, 1, &e), DF_EINVAL);
+    assert_int_equal(df_history_init(&h, NULL, 3, 3, &e), DF_EINVAL);
     assert_int_equal(df_history_commit(&h, v, &e), DF_EINVAL); /* not initialized */
+}
+
+/* State k of the budget tests: every vertex moves (dense steps), with awkward bit patterns
+ * (-0.0, subnormals, huge values) that only a bit-exact history restores. */
+#define HB_NV 1000
+static void hb_state(double *x, int k)
+{
+    for (int i = 0; i < 3 * HB_NV; i++)
+        x[i] = (i % 7 == 0) ? (k % 2 ? -0.0 : 0.0)
+               : (i % 11 == 0) ? 4.9e-324 * (k + 1)
+                               : (double)k * 1e300 / (i + 1) + i * 1e-3;
+}
+
+static void test_history_byte_budget_drops_oldest_steps(void **state)
+{
+    (void)state;
+    static double x[3 * HB_NV], want[3 * HB_NV];
+    const size_t state_bytes = 3 * HB_NV * sizeof(double);
+    const size_t dense_step = 3 * HB_NV * sizeof(uint64_t) + sizeof(df_history_step);
+    df_history h;
+    df_error e;
+    hb_state(x, 0);
+    assert_int_equal(df_history_init(&h, x, 3 * HB_NV, 64, &e), DF_OK);
+    /* room for the state and two dense steps, not three */
+    size_t budget = state_bytes + 2 * dense_step + dense_step / 2;
+    assert_int_equal(df_history_set_max_bytes(&h, budget), 0);
+    for (int k = 1; k <= 6; k++) {
+        hb_state(x, k);
+        assert_int_equal(df_history_commit(&h, x, &e), DF_OK);
+        assert_true(df_history_bytes(&h) <= budget);
+    }
+    assert_int_equal(df_history_can_undo(&h), 2);
+    assert_int_equal(h.dropped, 4);
+    assert_int_equal(df_history_bytes(&h), state_bytes + 2 * dense_step);
+    /* undo / redo restore states 5, 4 and back bit for bit; no further */
+    for (int k = 5; k >= 4; k--) {
+        const double *p = df_history_undo(&h, &e);
+        hb_state(want, k);
+        assert_non_null(p);
+        assert_memory_equal(p, want, state_bytes);
+    }
+    assert_null(df_history_undo(&h, &e));
+    assert_int_equal(e.code, DF_ESTATE);
+    hb_state(want, 5);
+    assert_int_equal(df_history_peek(&h, 1, x, &e), DF_OK); /* peek does not move */
+    assert_memory_equal(x, want, state_bytes);
+    assert_int_equal(df_history_can_undo(&h), 0);
+    assert_int_equal(df_history_peek(&h, -1, x, &e), DF_ESTATE);
+    assert_memory_equal(df_history_redo(&h, &e), want, state_bytes);
+    /* shrinking the budget drops more (only below the current state) */
+    assert_int_equal(df_history_set_max_bytes(&h, 0), 1);
+    assert_int_equal(df_history_can_undo(&h), 0);
+    assert_int_equal(df_history_can_redo(&h), 1);
+    assert_int_equal(h.dropped, 5);
+    /* a step larger than the whole budget is dropped at once: the state is always kept */
+    hb_state(x, 9);
+    assert_int_equal(df_history_commit(&h, x, &e), DF_OK);
+    assert_int_equal(df_history_can_undo(&h), 0);
+    assert_memory_equal(h.state, x, state_bytes);
+    assert_int_equal(df_history_bytes(&h), state_bytes);
+    df_history_free(&h);
+}
+
+static void test_history_sparse_steps_store_only_changed_vertices(void **state)
+{
+    (void)state;
+    static double x[3 * HB_NV], s0[3 * HB_NV], s1[3 * HB_NV];
+    df_history h;
+    df_error e;
+    hb_state(s0, 3);
+    memcpy(x, s0, sizeof x);
+    assert_int_equal(df_history_init(&h, x, 3 * HB_NV, 8, &e), DF_OK);
+    size_t b0 = df_history_bytes(&h);
+    assert_true(signbit(x[21]));
+    x[21] = 0.0;                            /* -0.0 -> 0.0: only the sign bit differs */
+    x[3 * 500] = nextafter(x[3 * 500], INFINITY); /* one ulp */
+    x[3 * 999 + 2] = 7.0;
+    memcpy(s1, x, sizeof x);
+    assert_int_equal(df_history_commit(&h, x, &e), DF_OK);
+    assert_int_equal(df_history_bytes(&h) - b0,
+                     3 * (sizeof(uint32_t) + 3 * sizeof(uint64_t)) + sizeof(df_history_step));
+    assert_memory_equal(df_history_undo(&h, &e), s0, sizeof s0);
+    assert_memory_equal(df_history_redo(&h, &e), s1, sizeof s1);
+    df_history_free(&h);
 }
 
 int main(void)
@@ -210,6 +299,8 @@ int main(void)
         cmocka_unit_test(test_outq_ring_growth_and_batches),
         cmocka_unit_test(test_history_undo_redo),
         cmocka_unit_test(test_history_depth_cap_and_errors),
+        cmocka_unit_test(test_history_byte_budget_drops_oldest_steps),
+        cmocka_unit_test(test_history_sparse_steps_store_only_changed_vertices),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
