@@ -121,7 +121,7 @@ int df_client_load_mesh_bytes_ex(df_client *c, const char *name, const char *fil
     memset(&m, 0, sizeof m);
     m.source = DF_LOAD_INLINE;
     m.format = format;
-    m.options = DF_LOAD_OPT_EXT;
+    m.options = (uint16_t)(DF_LOAD_OPT_EXT | c->load_flags);
     int rc = put_name(m.name, name, "name", err);
     if (!rc)
         rc = put_name(m.file_name, file_name, "file name", err);
@@ -233,6 +233,12 @@ int df_client_load_mesh_file_ex(df_client *c, const char *path, const char *name
     return rc;
 }
 
+void df_client_set_load_flags(df_client *c, uint16_t flags)
+{
+    if (c)
+        c->load_flags = flags;
+}
+
 int df_client_load_mesh_file(df_client *c, const char *path, const char *name,
                              df_msg_session_info *info, df_error *err)
 {
@@ -255,7 +261,7 @@ int df_client_load_mesh_path_ex(df_client *c, const char *path, const char *name
     memset(&m, 0, sizeof m);
     m.source = DF_LOAD_PATH;
     m.format = format;
-    m.options = DF_LOAD_OPT_EXT;
+    m.options = (uint16_t)(DF_LOAD_OPT_EXT | c->load_flags);
     m.path = (char *)path;
     int rc = put_name(m.name, name, "name", err);
     if (rc)

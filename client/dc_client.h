@@ -24,6 +24,7 @@ struct df_client {
     int nshm;
     uint8_t *shm_frame;          /* copy of the frame an SHM_REF points at */
     size_t shm_cap;
+    uint16_t load_flags;         /* DF_LOAD_OPT_* ORed into every load (df_client_set_load_flags) */
 };
 
 /* One mapped ring of a session this client streams through shared memory. */

@@ -116,6 +116,12 @@ int df_client_ping(df_client *c, const void *data, uint32_t len, double *rtt_us,
  * DF_EUNSUPPORTED. */
 int df_client_auth(df_client *c, uint16_t method, const void *token, uint32_t len, df_error *err);
 
+/* Sets extra load_mesh option bits (0 or DF_LOAD_OPT_2D: a 2D session even if the file gives z)
+ * ORed into the options of every later load on `c` (df_client_load_mesh_bytes / _file / _path
+ * and their _ex forms, which always set DF_LOAD_OPT_EXT themselves); 0 at connect. Unknown bits
+ * are refused by the server (DF_EPROTO_RESERVED). */
+void df_client_set_load_flags(df_client *c, uint16_t flags);
+
 /* Uploads `len` bytes of a mesh file in `format` (DF_FMT_*, DF_FMT_AUTO sniffs) as session
  * `name` (may be NULL/""), in chunks that fit the server's max frame payload. For DF_FMT_TETGEN
  * `bytes` holds the .node bytes then the .ele bytes, the .ele starting at `part2_offset`

@@ -119,11 +119,16 @@ typedef enum df_feature {            /* hello reply `features` bits */
  * then the ele bytes). DF_FMT_PLY_BINARY (write-only) is not valid on the wire. */
 #define DF_FMT_MAX 5
 
-/* load_mesh `options` (the u16 at offset 2, reserved = 0 before this option existed; servers
- * without it answer EPROTO_RESERVED). */
+/* load_mesh `options` (the u16 at offset 2, reserved = 0 before these bits existed; the same in
+ * every chunk of an upload). Unknown bits are refused with EPROTO_RESERVED (a server without a
+ * bit answers that way too, so a client can tell and load without it). */
 #define DF_LOAD_OPT_EXT 0x0001u  /* a str file_name follows the data, and the reply is a
                                   * load_reply: session_info + load_report */
-#define DF_LOAD_OPTS_ALL DF_LOAD_OPT_EXT
+#define DF_LOAD_OPT_2D 0x0002u   /* a 2D session even if the file gives z (every z must be 0,
+                                  * no tetrahedra); without it a mesh is 2D only when its file
+                                  * declares 2D (OBJ `v x y`, MEDIT Dimension 2, TetGen .node
+                                  * dimension 2, PLY without z) */
+#define DF_LOAD_OPTS_ALL (DF_LOAD_OPT_EXT | DF_LOAD_OPT_2D)
 
 typedef enum df_load_source {
     DF_LOAD_INLINE = 0,        /* file bytes are in the message(s) */
@@ -247,7 +252,8 @@ typedef struct df_msg_load_mesh {      /* one chunk of a mesh upload (or a path 
     uint64_t offset;                   /* byte offset of this chunk in the upload; PATH: 0 */
     uint32_t data_len;                 /* bytes in this chunk; offset + data_len <= total_size */
     const uint8_t *data;               /* points into the payload (decode) */
-    uint16_t options;                  /* DF_LOAD_OPT_* bits (0: the original layout and reply) */
+    uint16_t options;                  /* DF_LOAD_OPT_* bits (0: the original layout and reply),
+                                        * the same in every chunk (wire offset 2, after format) */
     char file_name[DF_MAX_NAME_LEN + 1]; /* DF_LOAD_OPT_EXT: the user's file name (base name, may be
                                         * "") for messages and the default session name; else "" */
 } df_msg_load_mesh;

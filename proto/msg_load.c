@@ -1,5 +1,6 @@
 /* msg_load.c — load mesh request and reply bodies (messages.h).
- * load_mesh: u8 source, u8 format, u16 options, u64 total_size, u64 part2_offset, u64 offset,
+ * load_mesh: u8 source, u8 format, u16 options (DF_LOAD_OPT_EXT | DF_LOAD_OPT_2D),
+ *            u64 total_size, u64 part2_offset, u64 offset,
  *            str name, str path (u16 length <= DF_MAX_PATH_LEN), u32 data_len, data bytes,
  *            [options & DF_LOAD_OPT_EXT: str file_name]
  * load_reply: session_info [+ load_report: u8 format, u8 index_base, u16 reserved,
@@ -17,8 +18,9 @@ static int load_check(const df_msg_load_mesh *m, df_error *err)
         return df_error_set(err, DF_EINVAL, "%s: format %u not in 0..%u", M, m->format,
                             DF_FMT_MAX);
     if (m->options & ~DF_LOAD_OPTS_ALL)
-        return df_error_set(err, DF_EPROTO_RESERVED, "%s: options: reserved bits 0x%x set", M,
-                            (unsigned)(m->options & ~DF_LOAD_OPTS_ALL));
+        return df_error_set(err, DF_EPROTO_RESERVED,
+                            "%s: options 0x%x has unknown bits 0x%x (known: 0x1 EXT, 0x2 2D)", M,
+                            (unsigned)m->options, (unsigned)(m->options & ~DF_LOAD_OPTS_ALL));
     int rc = df_check_str(m->name, DF_MAX_NAME_LEN, M, "name", err);
     if (!rc)
         rc = df_check_str(m->file_name, DF_MAX_NAME_LEN, M, "file_name", err);
@@ -98,8 +100,9 @@ int df_msg_load_mesh_decode(const uint8_t *p, size_t n, df_msg_load_mesh *m, df_
     t.options = df_rd_u16(&r, "options");
     t.file_name[0] = '\0';
     if (r.rc == DF_OK && (t.options & ~DF_LOAD_OPTS_ALL))
-        return df_error_set(err, DF_EPROTO_RESERVED, "load_mesh: options: reserved bits 0x%x set",
-                            (unsigned)(t.options & ~DF_LOAD_OPTS_ALL));
+        return df_error_set(err, DF_EPROTO_RESERVED,
+                            "load_mesh: options 0x%x has unknown bits 0x%x (known: 0x1 EXT, 0x2 2D)",
+                            (unsigned)t.options, (unsigned)(t.options & ~DF_LOAD_OPTS_ALL));
     t.total_size = df_rd_u64(&r, "total_size");
     t.part2_offset = df_rd_u64(&r, "part2_offset");
     t.offset = df_rd_u64(&r, "offset");

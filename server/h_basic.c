@@ -308,6 +308,10 @@ static void knob_done(df_job *j)
         df_job_failed(j);
         return;
     }
+    if ((j->rc = df_h_brush_knob_check(st, k->param, k->value, &j->err)) != DF_OK) {
+        df_job_failed(j);
+        return;
+    }
     {
         switch (k->param) {
         case DF_BP_RADIUS: st->brush.radius = k->value; break;

@@ -101,6 +101,12 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     if (rc != DF_OK) return rc;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
+    if (rc == DF_OK && s->mesh.planar) /* 2D session: z stays 0 (planar_check), verified */
+        for (int32_t i = 0; i < s->nv; i++)
+            if (disp[3 * (size_t)i + 2] != 0.0f)
+                return df_error_set(err, DF_EINVAL, "brush: the field would move vertex %d "
+                                    "off the plane of this 2D session (z %g)", i,
+                                    (double)disp[3 * (size_t)i + 2]);
     return rc;
 }
 
@@ -144,6 +150,85 @@ static int stroke_applied_nothing(const df_stroke *st, size_t n)
     for (size_t i = 0; i < n; i++)
         if (st->applied[i] != 0.0f) return 0;
     return 1;
+}
+
+/* The checks a stroke's fixed parameters must pass whatever its loads: strength within
+ * +-DF_BRUSH_MAX_STRENGTH, pins only on a 3D, unmirrored, stationary brush (what the pinned
+ * solver supports), and the Kelvinlet engine's own rules (nu, radii, ratio, order; a scale brush
+ * at nu 0.5 is singular). `what` names the request in messages. */
+static int stroke_params_check(const df_stroke *st, const char *what, df_error *err)
+{
+    const df_kelvinlet_brush *b = &st->brush;
+    if (!isfinite(st->strength) || fabs(st->strength) > DF_BRUSH_MAX_STRENGTH)
+        return df_error_set(err, DF_EINVAL, "%s: strength %g outside [-%g, %g]", what,
+                            st->strength, DF_BRUSH_MAX_STRENGTH, DF_BRUSH_MAX_STRENGTH);
+    if (st->n_pins && (b->dim != 3 || b->mirror || b->moving))
+        return df_error_set(err, DF_EUNSUPPORTED, "%s: pinned points need a 3D, unmirrored, "
+                            "stationary brush (dim %d, mirror %d, moving %d)", what, b->dim,
+                            b->mirror, b->moving);
+    df_kelvinlet_prepared prep;
+    df_error e;
+    int rc = df_kelvinlet_prepare(b, &prep, &e);
+    if (rc != DF_OK)
+        return df_error_set(err, rc, "%s: %s", what, e.msg);
+    df_kelvinlet_prepared_free(&prep);
+    return DF_OK;
+}
+
+int df_h_brush_knob_check(const df_stroke *st, uint8_t param, double value, df_error *err)
+{
+    df_stroke t = *st;  /* shallow: only the scalar parameters change */
+    const char *name = "?";
+    switch (param) {
+    case DF_BP_RADIUS: t.brush.radius = value; name = "radius"; break;
+    case DF_BP_NU: t.brush.nu = value; name = "nu"; break;
+    case DF_BP_STRENGTH: t.strength = value; name = "strength"; break;
+    case DF_BP_FALLOFF: t.brush.order = (int)value; name = "falloff"; break;
+    case DF_BP_RATIO: t.brush.ratio = value; name = "ratio"; break;
+    default:
+        return df_error_set(err, DF_EINVAL, "set_brush_param: param %u not in 1..%u", param,
+                            DF_BP_MAX);
+    }
+    df_error e;
+    int rc = stroke_params_check(&t, "set_brush_param", &e);
+    if (rc != DF_OK)
+        return df_error_set(err, rc, "set_brush_param: %s %g refused, stroke unchanged (%s)",
+                            name, value, e.msg + strlen("set_brush_param: "));
+    return DF_OK;
+}
+
+/* A 2D session (mesh declared 2D) keeps every z at 0: a load that would move z is refused
+ * rather than having its z part dropped. Loads: move z, twist about x or y, a gradient with a
+ * z row or column; with a 3D brush also a centre, mirror normal or pin off the z = 0 plane
+ * (those make the 3D field move z). `b` may be NULL (updates: the loads only). */
+static int planar_check(const df_session *s, const df_kelvinlet_brush *b, const df_stroke *st,
+                        const double *load, const char *what, df_error *err)
+{
+    if (!s->mesh.planar) return DF_OK;
+    static const char *const hint = "the session is 2D (load the mesh as 3D to move z)";
+    if (load[2] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: move z = %g would leave the plane: %s", what,
+                            load[2], hint);
+    if (load[3] != 0.0 || load[4] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: twist (%g, %g, _) about x/y would leave the "
+                            "plane: %s", what, load[3], load[4], hint);
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            if ((i == 2 || k == 2) && load[7 + 3 * i + k] != 0.0)
+                return df_error_set(err, DF_EINVAL, "%s: matrix[%d][%d] = %g would move z: %s",
+                                    what, i, k, load[7 + 3 * i + k], hint);
+    if (!b || b->dim != 3) return DF_OK;
+    if (b->centre[2] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: a 3D brush centred at z = %g would move z: %s "
+                            "(or use dim 2)", what, b->centre[2], hint);
+    if (b->mirror && b->mirror_normal[2] != 0.0)
+        return df_error_set(err, DF_EINVAL, "%s: mirror normal z = %g would move z: %s", what,
+                            b->mirror_normal[2], hint);
+    for (uint32_t k = 0; k < st->n_pins; k++)
+        if (st->pins[3 * (size_t)k + 2] != 0.0)
+            return df_error_set(err, DF_EINVAL, "%s: pinned point %u at z = %g would move z: %s",
+                                what, k, st->pins[3 * (size_t)k + 2], hint);
+    return DF_OK;
 }
 
 /* 1 when all 16 load components of a request (move, twist, scale, matrix) are zero. */
@@ -220,13 +305,12 @@ static void begin_work_inner(df_job *j)
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
     st->last_version = atomic_load(&s->version);
-    if (load_is_zero(r->load)) { /* validate the brush, publish nothing */
-        df_kelvinlet_prepared prep;
-        if (st->n_pins) j->rc = DF_OK; /* pins are validated by the first update */
-        else if ((j->rc = df_kelvinlet_prepare(&st->brush, &prep, &j->err)) == DF_OK)
-            df_kelvinlet_prepared_free(&prep);
+    /* validate the brush (a zero-load begin publishes nothing; the pin LU is built and
+     * checked by the first update) */
+    if ((j->rc = stroke_params_check(st, "brush_begin", &j->err)) != DF_OK) return;
+    if ((j->rc = planar_check(s, &st->brush, st, r->load, "brush_begin", &j->err)) != DF_OK)
         return;
-    }
+    if (load_is_zero(r->load)) return;
     j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
     if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
 }
@@ -270,7 +354,8 @@ static void update_work_inner(df_job *j)
         memset(disp, 0, n * sizeof *disp);
         j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
     } else {
-        j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
+        j->rc = planar_check(s, NULL, st, r->load, "brush_update", &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
         if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
     }
 }

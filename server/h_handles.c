@@ -30,7 +30,8 @@ typedef struct hs_req {
     uint8_t status;
     uint64_t progress_every;
     uint64_t t0;
-    int published;             /* move: the final iterate was published (posted) */
+    int publish_failed;        /* move: an iterate was refused (j->err says why): stop, fail */
+    int published;             /* move: an iterate of it was published (posted): one undo step */
     int resumed;               /* move: it yielded its worker and runs again (time slices) */
     int yield;                 /* move: on_progress asked to yield */
     int iters_done;            /* move: iterations of the earlier slices */
@@ -253,6 +254,7 @@ static int publish_iterate(df_job *j, const double *V, int iteration, double obj
     pthread_mutex_lock(&j->s->pub_lock);
     int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, &f, NULL, &j->err);
     if (rc == DF_OK) {
+        r->published = 1;
         memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
         uint64_t v = atomic_load(&j->s->version);
         for (size_t i = 0; i < f.n; i++) {
@@ -272,8 +274,13 @@ static int on_progress(void *user, const df_admm_progress *p)
     hs_req *r = j->body;
     if (atomic_load(&j->cancel)) return 1;
     int it = r->iters_done + p->iteration;
-    if (r->progress_every && it % (int)r->progress_every == 0)
-        publish_iterate(j, p->V, it, p->objective, p->residual, DF_MOVE_RUNNING, 0);
+    if (r->progress_every && it % (int)r->progress_every == 0) {
+        int prc = publish_iterate(j, p->V, it, p->objective, p->residual, DF_MOVE_RUNNING, 0);
+        if (prc != DF_OK) { /* e.g. an iterate not finite in float32: the move fails */
+            r->publish_failed = prc;
+            return 1;
+        }
+    }
     /* Time slices: another move waits for the long lane (pool.h) and this one had its turn. */
     if (j->srv->pool && df_pool_heavy_waiting(j->srv->pool) > 0 &&
         uv_hrtime() - r->slice_t0 >= DF_MOVE_SLICE_MS * 1000000ull) {
@@ -281,6 +288,24 @@ static int on_progress(void *user, const df_admm_progress *p)
         return 1;
     }
     return 0;
+}
+
+/* Refuses targets whose handle would leave float32 range: the position a client holds is the
+ * load-time float32 position plus a float32 displacement, and both must stay finite. */
+static int targets_check(const df_session *s, const df_handleset *hs, const double *t,
+                         df_error *err)
+{
+    for (int32_t k = 0; k < hs->nh; k++)
+        for (int c = 0; c < 3; c++) {
+            size_t i = 3 * (size_t)hs->handles[k] + (size_t)c;
+            float u = (float)(t[3 * (size_t)k + c] - s->mesh.V[i]);
+            if (!isfinite(u) || !isfinite(s->basef[i] + u))
+                return df_error_set(err, DF_EINVAL, "handles_move: target %d (vertex %d) "
+                                    "component %d = %g is not finite in float32 (|x| <= "
+                                    "3.4e38); nothing changed", k, hs->handles[k], c,
+                                    t[3 * (size_t)k + c]);
+        }
+    return DF_OK;
 }
 
 /* Checks the request and prepares the solver for the first slice of a move: the handle set's
@@ -296,16 +321,19 @@ static int move_setup(df_job *j)
     if ((int32_t)r->mv.n_targets != hs->nh)
         return df_error_set(&j->err, DF_EINVAL, "handles_move: %u targets for %d handles",
                             r->mv.n_targets, hs->nh);
+    int rc = targets_check(s, hs, r->mv.targets, &j->err);
+    if (rc != DF_OK) return rc;
     if (!hs->solver) {
-        int rc = build_solver(s, hs, &j->err);
+        rc = build_solver(s, hs, &j->err);
         if (rc != DF_OK) return rc;
         r->created = 1;
     } else {
         r->hit = 1;
     }
     /* Start from the session's current positions (PROTOCOL.md 6): an undo, a brush or another
-     * client's edit since the solver's last run invalidates its warm start there. */
-    int rc = df_admm_set_positions(hs->solver, s->cur, NULL, &j->err);
+     * client's edit since the solver's last run invalidates its warm start there. A target
+     * with z != 0 on a 2D session is refused here (df_admm_set_targets, EINVAL). */
+    rc = df_admm_set_positions(hs->solver, s->cur, NULL, &j->err);
     if (rc == DF_OK) rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err);
     r->progress_every = r->mv.progress_every;
     return rc;
@@ -334,6 +362,12 @@ static void move_work(df_job *j)
                         .progress = on_progress,
                         .user = j};
     int rc = df_admm_run(hs->solver, &b, &r->res, &j->err);
+    if (r->publish_failed) { /* j->err holds the refusal; the iterates before it stay */
+        r->status = DF_MOVE_FAILED;
+        s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+        j->rc = r->publish_failed;
+        return;
+    }
     r->iters_done += r->res.iterations;
     r->res.iterations = r->iters_done;
     if (rc == DF_OK && r->yield) {
@@ -357,7 +391,6 @@ static void move_work(df_job *j)
     s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
                               r->res.objective, r->res.residual, r->status, 1);
-    r->published = prc == DF_OK;
     j->rc = rc != DF_OK ? rc : prc;
 }
 

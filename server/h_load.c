@@ -37,7 +37,7 @@ typedef struct df_upload {
     df_server *srv;
     uint64_t req_id;
     uint8_t format;
-    uint16_t options;       /* DF_LOAD_OPT_* of the request */
+    uint16_t options;       /* DF_LOAD_OPT_* of the request (EXT, 2D) */
     char name[DF_MAX_NAME_LEN + 1];
     char file_name[DF_MAX_NAME_LEN + 1]; /* the user's file (uploads with EXT), for messages */
     uint64_t total, part2, received;
@@ -64,10 +64,11 @@ static void load_work(df_job *j)
     int32_t maxv = j->srv->cfg.max_mesh_vertices;
     if ((uint32_t)maxv > DF_MAX_MESH_VERTICES) maxv = (int32_t)DF_MAX_MESH_VERTICES;
     if (u->path)
-        j->rc = df_pathload_mesh(&j->srv->cfg, u->path, u->format, maxv, &u->mesh, &u->rep,
-                                 &j->err);
+        j->rc = df_pathload_mesh(&j->srv->cfg, u->path, u->format, maxv,
+                                 (u->options & DF_LOAD_OPT_2D) != 0, &u->mesh, &u->rep, &j->err);
     else
         j->rc = df_meshload_memory(u->data, (size_t)u->total, u->format, (size_t)u->part2, maxv,
+                                   (u->options & DF_LOAD_OPT_2D) != 0,
                                    u->file_name[0] ? u->file_name : "upload", &u->mesh, &u->rep,
                                    &j->err);
     if (j->rc == DF_OK && (uint32_t)u->mesh.ne > DF_MAX_MESH_ELEMENTS)
@@ -313,7 +314,7 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
         df_error_set(&err, DF_EPROTO_CHUNK,
                      "load_mesh: chunk at offset %llu does not continue the upload (expected "
                      "offset %llu of request %llu, with the first chunk's total_size, format, "
-                     "part2_offset and name)",
+                     "part2_offset, options, file_name and name)",
                      (unsigned long long)m.offset, (unsigned long long)(u ? u->received : 0),
                      (unsigned long long)(u ? u->req_id : h->request_id));
         df_msg_load_mesh_free(&m);

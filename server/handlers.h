@@ -50,6 +50,16 @@ df_session *df_h_session(df_conn *c, const df_frame_header *h, uint64_t session_
  * decode error or ENOTFOUND and returns NULL. */
 df_session *df_h_session_ref(df_conn *c, const df_frame_header *h, const uint8_t *p);
 
+/* Largest |strength| of a brush stroke (BRUSH_BEGIN, SET_BRUSH_PARAM). */
+#define DF_BRUSH_MAX_STRENGTH 1e6
+
+/* Whether knob `param` (df_brush_param_id) = value may be applied to the open stroke `st`: the
+ * stroke with that value must pass the Kelvinlet engine's rules (nu in [-1, 0.5] or +-inf,
+ * radii radius * ratio^k within [1e-6, 1e6], order 1..8, no singular normalization) and
+ * |strength| <= DF_BRUSH_MAX_STRENGTH. DF_OK, or the engine's code (DF_EINVAL, DF_ESINGULAR)
+ * with a message naming the parameter and value; `st` is never changed. */
+int df_h_brush_knob_check(const df_stroke *st, uint8_t param, double value, df_error *err);
+
 /* Frees a connection's unfinished upload (NULL-safe). */
 void df_upload_free(struct df_upload *u);
 

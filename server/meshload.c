@@ -4,11 +4,13 @@
 #include "core/mesh/mesh_io.h"
 
 int df_meshload_memory(const uint8_t *data, size_t len, int fmt, size_t part2,
-                       int32_t max_vertices, const char *name, df_mesh *out, df_mesh_report *rep,
+                       int32_t max_vertices, int want_2d, const char *name, df_mesh *out,
+                       df_mesh_report *rep,
                        df_error *err)
 {
     df_mesh_read_opts o = df_mesh_read_opts_default();
     o.max_vertices = max_vertices;
+    o.want_2d = want_2d;
     if (fmt < DF_FMT_AUTO || fmt > DF_FMT_TETGEN)
         return df_error_set(err, DF_EINVAL, "load: unknown mesh format %d", fmt);
     df_mesh_init(out);

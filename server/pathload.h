@@ -34,9 +34,12 @@ int df_pathload_read(const df_server_config *cfg, const char *path, size_t max_b
  * .ply .mesh .node .ele, any case; another extension is DF_EFORMAT "format not recognised",
  * listing the formats), 1..5 forces it (5 = TetGen needs a .node/.ele path). X.node / X.ele
  * reads both halves, the sibling found by df_mesh_tetgen_sibling (case kept: T1.NODE + T1.ELE),
- * each through df_pathload_read. At most `max_vertices` vertices. *out receives the mesh, *rep
- * (may be NULL) the reader's report. Errors: those of df_pathload_read and of the readers. */
+ * each through df_pathload_read. At most `max_vertices` vertices. `want_2d` 1: a 2D mesh even
+ * if the file gives z (every z must be 0, no tets: else DF_EFORMAT); 0: 2D only when the file
+ * declares it. *out receives the mesh, *rep (may be NULL) the reader's report. Errors: those of
+ * df_pathload_read and of the readers. */
 int df_pathload_mesh(const df_server_config *cfg, const char *path, int fmt,
-                     int32_t max_vertices, df_mesh *out, df_mesh_report *rep, df_error *err);
+                     int32_t max_vertices, int want_2d, df_mesh *out, df_mesh_report *rep,
+                     df_error *err);
 
 #endif

@@ -166,13 +166,18 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
         memcpy(&a, &u, 4);
         memcpy(&b, uf + i, 4);
         newu[i] = u;
-        bad |= !(fabsf(u) <= FLT_MAX); /* NaN or infinite */
+        /* NaN or infinite: the float32 displacement, or the float32 position a client gets
+         * (load-time float32 position fl32(X) = s->basef + displacement, as GET_MESH and
+         * replicas compute it) */
+        bad |= !(fabsf(u) <= FLT_MAX) | !(fabsf((float)X[i] + u) <= FLT_MAX);
         ne += a != b;
     }
     if (bad) {
         for (size_t i = 0; i < m; i++)
-            if (!isfinite(newu[i]))
-                return df_error_set(err, DF_EINVAL, "vertex %zu: position not finite", i / 3);
+            if (!isfinite(newu[i]) || !isfinite((float)X[i] + newu[i]))
+                return df_error_set(err, DF_EINVAL, "the result is refused: vertex %zu "
+                                    "component %zu would be %g, not finite in float32 "
+                                    "(|x| <= 3.4e38); nothing changed", i / 3, i % 3, pos[i]);
     }
     /* Pass 2: rows whose bits changed, their indices when the frame will be sparse. Skipped
      * when the ne changed components (>= ne / 3 rows) already make it dense and the caller does

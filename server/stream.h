@@ -37,8 +37,9 @@ int df_stream_scratch(df_session *s, df_error *err);
  * updates s->uf and s->version (NOT s->cur) and appends the event frames to `out`. With
  * `progress` non-NULL the frames are DF_MSG_PROGRESS events carrying its fields and request id
  * `req_id`; else DF_MSG_DISPLACEMENT events with id 0. *changed receives the rows that changed
- * (may be NULL). Errors: DF_EINVAL when a position or displacement is not finite (nothing
- * changes), DF_ENOMEM. Runs on the session's worker (or the loop thread in loop-only jobs). */
+ * (may be NULL). Errors: DF_EINVAL when a position or displacement is not finite in float32
+ * (the float32 displacement, or the load-time float32 position plus it; nothing changes),
+ * DF_ENOMEM. Runs on the session's worker (or the loop thread in loop-only jobs). */
 int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
                       const df_msg_progress *progress, uint64_t req_id, df_frames *out,
                       uint32_t *changed, df_error *err);

@@ -89,6 +89,7 @@ static int run_load(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         return CTL_EXIT_SERVER;
     df_error e;
     df_msg_load_reply r;
+    df_client_set_load_flags(c, a->val[4] ? DF_LOAD_OPT_2D : 0);
     int rc = df_client_load_mesh_file_ex(c, file, name, &r, &e);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);
@@ -375,6 +376,9 @@ static const dc_cli_opt LOAD_OPTS[] = {
     CTL_GLOBAL_OPTS,
     {"name", 1, "--name NAME        session name (default: the file name without extension: "
                 "spot, spot-2, ...)"},
+    {"2d", 0, "--2d               a 2D session even if the file gives z (every z must be 0); "
+              "else 2D only when the file is (OBJ `v x y`, MEDIT Dimension 2, 2D .node, PLY "
+              "without z)"},
 };
 static const dc_cli_opt STATS_OPTS[] = {
     CTL_GLOBAL_OPTS,
@@ -391,7 +395,7 @@ static const dc_cli_opt WATCH_OPTS[] = {
 const ctl_cmd ctl_cmds_session[] = {
     {"ping", "ping", "Check that the daemon answers; prints the round trip.", PLAIN_OPTS,
      N(PLAIN_OPTS), 0, run_ping},
-    {"load", "load FILE [--name NAME]",
+    {"load", "load FILE [--name NAME] [--2d]",
      "Upload a mesh (.obj .off .ply .mesh, or X.node with X.ele); prints the new session id "
      "(--json: also the load report); warnings about the mesh (dropped elements, duplicates, "
      "non-manifold edges, unused vertices) go to stderr.",

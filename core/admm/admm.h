@@ -118,7 +118,8 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
 
 /* Sets the handle targets: `targets` is nh x 3 row-major (same order as `handles` at create), in
  * mesh units. Never refactors. The next df_admm_run warm-starts from the current V, Z, U, W.
- * Errors: DF_EINVAL (NULL, NaN/Inf). Solver unchanged on error. */
+ * Errors: DF_EINVAL (NULL, NaN/Inf; a target with z != 0 on a 2D mesh (mesh->planar), whose
+ * 2D solve would drop it). Solver unchanged on error. */
 int df_admm_set_targets(df_admm *s, const double *targets, df_error *err);
 
 /* Replaces the solver's positions by V (nv x 3, e.g. the session's current shape after an undo or

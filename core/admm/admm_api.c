@@ -126,8 +126,8 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->nv = mesh->nv;
     s->ne = mesh->ne;
     s->esz = df_mesh_elem_size(mesh->kind);
-    s->planar = 1;
-    for (int32_t i = 0; i < mesh->nv; i++) if (mesh->V[3 * (size_t)i + 2] != 0.0) { s->planar = 0; break; }
+    /* 2D only when the mesh is declared 2D: a flat 3D mesh (every z = 0) deforms in 3D */
+    s->planar = mesh->planar != 0;
     s->nthreads = params->threads > 0 ? params->threads : omp_get_max_threads();
     s->family = (mesh->kind == DF_MESH_TET || params->energy == DF_ADMM_CLOTH) ? ADMM_FAM_ELEMENT : ADMM_FAM_VERTEX;
     s->q = mesh->kind == DF_MESH_TET ? 3 : 2;
@@ -214,6 +214,12 @@ int df_admm_set_targets(df_admm *s, const double *targets, df_error *err)
     if (!s || !targets) return df_error_set(err, DF_EINVAL, "admm_set_targets: NULL argument");
     for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++)
         if (!isfinite(targets[i])) return df_error_set(err, DF_EINVAL, "admm_set_targets: target of handle %d is not finite", (int)(i / 3));
+    if (s->planar) /* a 2D solve would drop z: a handle would silently miss its target */
+        for (int32_t k = 0; k < s->nh; k++)
+            if (targets[3 * (size_t)k + 2] != 0.0)
+                return df_error_set(err, DF_EINVAL, "admm_set_targets: the mesh is 2D, but the "
+                                    "target of handle %d has z = %g (load the mesh as 3D to move "
+                                    "it out of the z = 0 plane)", (int)k, targets[3 * (size_t)k + 2]);
     memcpy(s->target_req, targets, (size_t)s->nh * 3 * sizeof(double));
     if (s->damp) {
         /* applied by the next global steps, damped (admm_damp.c) */

@@ -166,6 +166,50 @@ static inline __attribute__((always_inline)) void tri_sums(const fsrc *S, const 
     }
 }
 
+/* 1/sqrt(x) in double: the float estimate plus two double Newton steps (vectorizes). */
+static inline __attribute__((always_inline)) double rsqd(double x)
+{
+    double y = (double)rsq((float)x);
+    y = y * (1.5 - 0.5 * x * y * y);
+    y = y * (1.5 - 0.5 * x * y * y);
+    return y;
+}
+
+/* Orders >= 4: the same difference sums as below, taken in double. Their weights grow like
+ * (ratio^2 - 1)^-(n-1) and cancel down to the O(1) result (at ratio 1.1, order 8: ~1e4-fold),
+ * which float sums turned into 2e-4 relative errors at the brush centre (issue 9 item 19);
+ * in double each output is rounded to float once, so the tip is exact to float rounding. */
+static inline __attribute__((always_inline)) void sums_wide(const fsrc *S, const int order,
+                                                            const int want5, float s, float *o1,
+                                                            float *o3, float *o5, float *ox3,
+                                                            float *ox5)
+{
+    double sd = s, x1 = S->dx[0], s1p = sd + x1;
+    double i1 = rsqd(s1p), i1s = i1 * i1, i13 = i1s * i1, rho1 = s1p * i1;
+    double s1 = 0.0, s3 = 0.0, s5 = 0.0, t3 = 0.0, t5 = 0.0;
+    for (int i = 1; i < order; i++) {
+        double sp = sd + S->dx[i];
+        double ii = rsqd(sp), iis = ii * ii, ii3 = iis * ii;
+        double d1 = -S->ddel[i] * i1 * ii / (rho1 + sp * ii);      /* ir_i - ir_1 */
+        double d3 = d1 * (iis + ii * i1 + i1s);                    /* ir_i^3 - ir_1^3 */
+        s1 += S->dw[i] * d1;
+        s3 += S->dw[i] * d3;
+        t3 += S->dwd[i] * d3;
+        if (want5) {
+            double d5 = d1 * (iis * iis + ii3 * i1 + iis * i1s + ii * i13 + i1s * i1s);
+            s5 += S->dw[i] * d5;
+            t5 += S->dwd[i] * d5;
+        }
+    }
+    *o1 = (float)s1;
+    *o3 = (float)s3;
+    *ox3 = (float)(x1 * s3 + t3);
+    if (want5) {
+        *o5 = (float)s5;
+        *ox5 = (float)(x1 * s5 + t5);
+    }
+}
+
 /* Multi-scale sums of one point, cancellation-aware. With ir_i = (s + eps_i^2)^-1/2:
  *   s1 = sum w_i ir_i, s3 = sum w_i ir_i^3, s5 = sum w_i ir_i^5,
  *   x3 = sum w_i eps_i^2 ir_i^3, x5 = sum w_i eps_i^2 ir_i^5.
@@ -173,7 +217,7 @@ static inline __attribute__((always_inline)) void tri_sums(const fsrc *S, const 
  * the weights sum to 0, so sum w_i f_i = sum_{i>=2} w_i (f_i - f_1) with the differences in
  * closed form (ir_i - ir_1 = -del_i ir_1 ir_i / (rho_1 + rho_i)); for order >= 3 also
  * sum w_i del_i = 0, used the same way for the eps^2-weighted sums. Orders >= 4 keep some
- * cancellation (about 1e-4 of the largest displacement at order 5, see the tests). */
+ * cancellation, so their sums run in double (sums_wide above). */
 static inline __attribute__((always_inline)) void scale_sums3(const fsrc *S, const int order,
                                                               const int want5, float s,
                                                               float *o1, float *o3, float *o5,
@@ -202,6 +246,10 @@ static inline __attribute__((always_inline)) void scale_sums3(const fsrc *S, con
             *o5 = i15;
             *ox5 = x1 * i15;
         }
+        return;
+    }
+    if (order >= 4) {
+        sums_wide(S, order, want5, s, o1, o3, o5, ox3, ox5);
         return;
     }
     float s1 = 0.0f, s3 = 0.0f, s5 = 0.0f, t3 = 0.0f, t5 = 0.0f;

@@ -61,21 +61,43 @@ static double weighted_half_log(const df_kelvinlet_kernel *k, double s)
 void dfk_grab_coeffs(const df_kelvinlet_kernel *k, double s, double *A, double *B)
 {
     double a = k->a, b = k->b, sa = 0.0, sb = 0.0;
-    if (k->dim == 3) {
-        for (int i = 0; i < k->order; i++) {
-            double e2 = k->eps[i] * k->eps[i];
-            double ir = 1.0 / sqrt(s + e2), ir3 = ir * ir * ir;
-            sa += k->w[i] * ((a - b) * ir + 0.5 * a * e2 * ir3);
-            sb += k->w[i] * b * ir3;
+    if (k->dim == 3 && k->order == 1) {
+        double e2 = k->eps[0] * k->eps[0];
+        double ir = 1.0 / sqrt(s + e2), ir3 = ir * ir * ir;
+        sa = (a - b) * ir + 0.5 * a * e2 * ir3;
+        sb = b * ir3;
+    } else if (k->dim == 3) {
+        /* sum_i w_i = 0 (and sum_i w_i del_i = 0 from order 3): sum over the differences
+         * ir_i^m - ir_1^m in closed form, as the float path does, so the large weights of
+         * close radii (ratio 1.1, order 8) cancel without losing digits to rounding. */
+        double x0 = k->eps[0] * k->eps[0], p0 = s + x0, i0 = 1.0 / sqrt(p0);
+        double i0s = i0 * i0, rho0 = p0 * i0, s1 = 0.0, s3 = 0.0, t3 = 0.0;
+        for (int i = 1; i < k->order; i++) {
+            double xi = k->eps[i] * k->eps[i], del = xi - x0, pi = s + xi;
+            double ii = 1.0 / sqrt(pi), iis = ii * ii;
+            double d1 = -del * i0 * ii / (rho0 + pi * ii);      /* ir_i - ir_1     */
+            double d3 = d1 * (iis + ii * i0 + i0s);              /* ir_i^3 - ir_1^3 */
+            s1 += k->w[i] * d1;
+            s3 += k->w[i] * d3;
+            t3 += k->w[i] * del * (k->order >= 3 ? d3 : iis * ii);
         }
+        sa = (a - b) * s1 + 0.5 * a * (x0 * s3 + t3);
+        sb = b * s3;
+    } else if (k->order == 1) {
+        double e2 = k->eps[0] * k->eps[0], q = 1.0 / (s + e2);
+        sa = 2.0 * (b - a) * weighted_half_log(k, s) + a * e2 * q;
+        sb = 2.0 * b * q;
     } else {
-        sa = 2.0 * (b - a) * weighted_half_log(k, s);
-        for (int i = 0; i < k->order; i++) {
-            double e2 = k->eps[i] * k->eps[i];
-            double ir2 = 1.0 / (s + e2);
-            sa += k->w[i] * a * e2 * ir2;
-            sb += k->w[i] * 2.0 * b * ir2;
+        /* The same difference form in 2D: q_i - q_1 = -del_i q_i q_1 with q = 1/(s + eps^2). */
+        double x0 = k->eps[0] * k->eps[0], q0 = 1.0 / (s + x0), a1 = 0.0, t1 = 0.0;
+        for (int i = 1; i < k->order; i++) {
+            double xi = k->eps[i] * k->eps[i], del = xi - x0, qi = 1.0 / (s + xi);
+            double d1 = -del * qi * q0;
+            a1 += k->w[i] * d1;
+            t1 += k->w[i] * del * (k->order >= 3 ? d1 : qi);
         }
+        sa = 2.0 * (b - a) * weighted_half_log(k, s) + a * (x0 * a1 + t1);
+        sb = 2.0 * b * a1;
     }
     *A = sa;
     *B = sb;
@@ -114,17 +136,12 @@ void dfk_affine_coeffs(const df_kelvinlet_kernel *k, double s, double *C, double
 
 double dfk_grab_tip_scale(const df_kelvinlet_kernel *k)
 {
-    double a = k->a, b = k->b, acc = 0.0;
-    if (k->dim == 3) {
-        for (int i = 0; i < k->order; i++)
-            acc += k->w[i] * (3.0 * a - 2.0 * b) / (2.0 * k->eps[i]);
-        return acc;
-    }
-    /* 2D: u(0) = sum_i w_i (2 (b - a) ln eps_i + a); sum_i w_i = 0 for n >= 2. */
-    acc = 2.0 * (b - a) * weighted_half_log(k, 0.0);
-    if (k->order == 1)
-        acc += a;
-    return acc;
+    /* A(0) of the very sums the field is evaluated with (3D: sum_i w_i (3a - 2b) / (2 eps_i);
+     * 2D: sum_i w_i (2 (b - a) ln eps_i + a)): u(centre) = kappa f then matches the tip to
+     * rounding however much the multi-scale weights cancel (issue 9 item 19). */
+    double A, B;
+    dfk_grab_coeffs(k, 0.0, &A, &B);
+    return A;
 }
 
 void dfk_affine_gradient_map(const df_kelvinlet_kernel *k, double *alpha, double *beta,

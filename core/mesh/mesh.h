@@ -2,7 +2,9 @@
  *
  * One mesh has one kind of element: polyline segments, triangles or tetrahedra. Positions are
  * double (the solvers' precision); the wire carries float32. 2D meshes (polylines or triangles in
- * the z = 0 plane) are stored with z = 0 and flagged `planar`.
+ * the z = 0 plane) are stored with z = 0 and flagged `planar`: only when the file declares 2D
+ * (two coordinates per vertex) or the reader was asked for 2D. A flat 3D mesh (every z = 0,
+ * e.g. a subdivided plane) is not planar and deforms in 3D.
  *
  * Ownership: a df_mesh owns its arrays (malloc'd); df_mesh_free releases them. */
 #ifndef DF_MESH_H
@@ -18,7 +20,7 @@ typedef enum df_mesh_kind {
 
 typedef struct df_mesh {
     df_mesh_kind kind;
-    int planar;          /* 1 when every z is exactly 0 (2D mesh), else 0 */
+    int planar;          /* 1: a 2D mesh (declared so; every z is exactly 0), else 0 */
     int32_t nv;          /* number of vertices */
     double *V;           /* nv x 3, row-major: V[3*i + k] */
     int32_t ne;          /* number of elements */

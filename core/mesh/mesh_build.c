@@ -16,6 +16,8 @@ void df_mesh_build_init(df_mesh_build *b, const char *name, int binary, const df
     b->max_v = (o && o->max_vertices > 0) ? o->max_vertices : d.max_vertices;
     b->max_e = (o && o->max_elements > 0) ? o->max_elements : d.max_elements;
     b->allow_inverted = o ? o->allow_inverted : d.allow_inverted;
+    b->want_2d = o ? o->want_2d : 0;
+    b->vertex_dims = 3;
 }
 
 void df_mesh_build_free(df_mesh_build *b)
@@ -111,9 +113,11 @@ int df_mesh_build_vertex(df_mesh_build *b, long long loc, double x, double y, do
     double *v = b->V + 3 * b->nv++;
     v[0] = x;
     v[1] = y;
-    v[2] = z;
-    if (z != 0.0)
-        b->dim_seen_z = 1;
+    v[2] = b->vertex_dims == 2 ? 0.0 : z;
+    if (b->vertex_dims == 2)
+        b->v2d++;
+    else
+        b->v3d++;
     return DF_OK;
 }
 
@@ -206,7 +210,20 @@ int df_mesh_build_finish(df_mesh_build *b, df_mesh_format fmt, int base, df_mesh
     }
     m.nv = (int32_t)b->nv;
     m.V = b->V;
-    m.planar = b->dim_seen_z ? 0 : 1;
+    /* 2D only when the file says so (every vertex with two coordinates) or the caller asks:
+     * a flat 3D mesh (every z = 0) deforms in 3D like any other. */
+    m.planar = m.kind != DF_MESH_TET && b->v2d > 0 && b->v3d == 0;
+    if (b->want_2d) {
+        if (m.kind == DF_MESH_TET)
+            return df_error_set(err, DF_EFORMAT, "%s: 2D requested, but the mesh has "
+                                "tetrahedra", b->name);
+        for (int64_t i = 0; i < b->nv; i++)
+            if (m.V[3 * i + 2] != 0.0)
+                return df_error_set(err, DF_EFORMAT, "%s: 2D requested, but vertex %lld "
+                                    "(0-based) has z = %g (a 2D mesh lies in the z = 0 plane)",
+                                    b->name, (long long)i, m.V[3 * i + 2]);
+        m.planar = 1;
+    }
     if (m.planar) /* store +0.0 (not -0.0) so every writer reproduces the same bits */
         for (int64_t i = 0; i < b->nv; i++)
             m.V[3 * i + 2] = 0.0;

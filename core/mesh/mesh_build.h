@@ -19,7 +19,11 @@ typedef struct df_mesh_build {
     int allow_inverted;
     double *V;
     int64_t nv, cap_v;
-    int dim_seen_z;             /* 1 once a vertex has z != 0 */
+    int vertex_dims;            /* coordinates the reader is giving per vertex: 2 (file
+                                 * declares 2D: OBJ `v x y`, MEDIT Dimension 2, 2D .node, PLY
+                                 * without z) or 3 (default); set by the reader */
+    int64_t v2d, v3d;           /* vertices given with 2 / 3 coordinates */
+    int want_2d;                /* the caller asks for a 2D mesh (df_mesh_read_opts.want_2d) */
     df_mesh_build_list seg, tri, tet;   /* widths 2, 3, 4 */
     int32_t polygons, triangulated, ignored;
 } df_mesh_build;
@@ -42,8 +46,9 @@ int df_mesh_build_check_count(const df_mesh_build *b, long long loc, const char 
 /* Reserves room for `nv` more vertices (already checked against the limit). */
 int df_mesh_build_reserve_vertices(df_mesh_build *b, int64_t nv, df_error *err);
 
-/* Appends one vertex. DF_ELIMIT past max_v, DF_EFORMAT when a coordinate is not finite or is
- * outside the float32 range (it would become +-inf when stored as float32). */
+/* Appends one vertex (z = 0 when b->vertex_dims is 2). DF_ELIMIT past max_v, DF_EFORMAT when a
+ * coordinate is not finite or is outside the float32 range (it would become +-inf when stored as
+ * float32). */
 int df_mesh_build_vertex(df_mesh_build *b, long long loc, double x, double y, double z,
                          df_error *err);
 
@@ -61,7 +66,9 @@ int df_mesh_build_polygon(df_mesh_build *b, long long loc, const int32_t *idx, i
                           df_error *err);
 
 /* Moves the data into `out`: tets win (triangles become the boundary F), else triangles, else
- * segments; no elements is DF_EFORMAT. Runs df_mesh_analyze, applies allow_inverted, fills `rep`
+ * segments; no elements is DF_EFORMAT. The mesh is 2D (`planar`) only when every vertex was
+ * given with 2 coordinates or want_2d asks for it (then every z must be 0: DF_EFORMAT naming the
+ * first vertex with z != 0; a tet mesh cannot be 2D); a flat 3D mesh stays 3D. Runs df_mesh_analyze, applies allow_inverted, fills `rep`
  * (may be NULL) with `fmt`, `base` and the polygon counts. On error `out` is untouched. */
 int df_mesh_build_finish(df_mesh_build *b, df_mesh_format fmt, int base, df_mesh *out,
                          df_mesh_report *rep, df_error *err);

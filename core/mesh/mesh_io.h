@@ -58,6 +58,10 @@ typedef struct df_mesh_read_opts {
     int32_t max_vertices;  /* refuse (DF_ELIMIT) more vertices; <= 0 means the default */
     int32_t max_elements;  /* refuse (DF_ELIMIT) more elements after triangulation; <= 0: default */
     int allow_inverted;    /* 0: inverted elements fail the read (DF_EFORMAT); 1: reported only */
+    int want_2d;           /* 1: the mesh is 2D (`planar`) even if the file gives z: every z must
+                            * be 0 and it must not have tets (else DF_EFORMAT); 0: 2D only when
+                            * the file declares it (OBJ `v x y`, MEDIT Dimension 2, TetGen .node
+                            * dimension 2, PLY without z) */
     int redact_content;    /* 1: error messages never quote bytes of the input (names, lines and
                               counts only): for files a server reads on a client's behalf */
 } df_mesh_read_opts;
@@ -136,7 +140,9 @@ int df_mesh_read_tetgen_nodes_memory(const void *buf, size_t len, const char *na
 /* Writes `m` to `path`, format from the extension: .obj (triangles, polylines), .off (triangles),
  * .ply (ASCII; triangles, polylines as `edge` elements), .mesh (all kinds; tet meshes also write
  * their F boundary triangles), .node (tets or triangles: writes X.node and X.ele, 1-based).
- * Coordinates are written with "%.17g" so write -> read round trips are bit-exact.
+ * Coordinates are written with "%.17g" so write -> read round trips are bit-exact. A 2D mesh
+ * (`planar`) is written in each format's 2D form (OBJ `v x y`, PLY without z, MEDIT Dimension 2,
+ * .node dimension 2) and reads back 2D; OFF has none (x y 0: reads back as a flat 3D mesh).
  * Errors: DF_EINVAL (bad mesh or unknown extension), DF_EUNSUPPORTED (kind not representable in the
  * format, e.g. tets in OBJ), DF_EIO, DF_ENOMEM. */
 int df_mesh_write_file(const char *path, const df_mesh *m, df_error *err);

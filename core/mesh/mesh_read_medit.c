@@ -30,6 +30,7 @@ static int read_vertices(df_scan *s, df_mesh_build *b, int dim, df_error *err)
     int rc = section_count(s, b, "vertices", b->max_v, dim + 1, &n, err);
     if (!rc)
         rc = df_mesh_build_reserve_vertices(b, n, err);
+    b->vertex_dims = dim;   /* Dimension 2: a 2D mesh */
     for (int32_t i = 0; !rc && i < n; i++) {
         double x[3] = {0, 0, 0};
         const char *t;

@@ -48,8 +48,10 @@ static int read_vertex(df_mesh_build *b, df_scan *s, df_error *err)
     int rc = df_scan_double(s, 0, "vertex x", &x, err);
     if (!rc)
         rc = df_scan_double(s, 0, "vertex y", &y, err);
-    if (!rc && !df_scan_at_eol(s))
+    int has_z = !rc && !df_scan_at_eol(s);
+    if (has_z)
         rc = df_scan_double(s, 0, "vertex z", &z, err);
+    b->vertex_dims = has_z ? 3 : 2;   /* `v x y`: a 2D file (when every vertex is so) */
     if (!rc)
         rc = df_mesh_build_vertex(b, line, x, y, z, err);
     return rc;

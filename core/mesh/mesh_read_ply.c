@@ -297,6 +297,7 @@ static int read_element(ply_ctx *c, const ply_elem *e, df_error *err)
             return df_error_set(err, DF_EFORMAT, "%s: PLY vertex element lacks scalar x/y",
                                 c->s.name);
         role = 1;
+        c->b.vertex_dims = key[2] >= 0 ? 3 : 2;   /* no z property: a 2D mesh */
         int rc = df_mesh_build_check_count(&c->b, loc(c), "vertices", e->count, c->b.max_v, left,
                                            min_row, err);
         if (!rc)

@@ -63,6 +63,7 @@ static int parse_nodes(df_scan *s, df_mesh_build *b, int *base, df_error *err)
                                    (size_t)(dim + 1) * 2, err);
     if (!rc)
         rc = df_mesh_build_reserve_vertices(b, n, err);
+    b->vertex_dims = dim;   /* a 2D .node: a 2D mesh */
     for (int32_t i = 0; !rc && i < n; i++) {
         double x[3] = {0, 0, 0};
         rc = row_id(s, i, base, "node id", err);

@@ -84,8 +84,8 @@ static int write_obj(const df_mesh *m, sbuf *b, df_error *err)
         return unsupported(m, "OBJ", err);
     sb_printf(b, "# deformd mesh: %d vertices, %d %s\n", (int)m->nv, (int)m->ne,
               m->kind == DF_MESH_TRIANGLE ? "triangles" : "segments");
-    for (int32_t i = 0; i < m->nv; i++)
-        put_xyz(b, "v ", m->V + 3 * (size_t)i, 3, "");
+    for (int32_t i = 0; i < m->nv; i++) /* a 2D mesh as `v x y`: read back as 2D */
+        put_xyz(b, "v ", m->V + 3 * (size_t)i, m->planar ? 2 : 3, "");
     for (int32_t e = 0; e < m->ne; e++) {
         const int32_t *c = m->E + (size_t)df_mesh_elem_size(m->kind) * (size_t)e;
         if (m->kind == DF_MESH_TRIANGLE)
@@ -113,9 +113,11 @@ static int write_ply(const df_mesh *m, int binary, sbuf *b, df_error *err)
     if (m->kind == DF_MESH_TET)
         return unsupported(m, "PLY", err);
     int tri = m->kind == DF_MESH_TRIANGLE;
+    int dim = m->planar ? 2 : 3;   /* a 2D mesh without z: read back as 2D */
     sb_printf(b, "ply\nformat %s 1.0\ncomment deformd\nelement vertex %d\n"
-                 "property double x\nproperty double y\nproperty double z\n",
-              binary ? "binary_little_endian" : "ascii", (int)m->nv);
+                 "property double x\nproperty double y\n%s",
+              binary ? "binary_little_endian" : "ascii", (int)m->nv,
+              dim == 3 ? "property double z\n" : "");
     if (tri)
         sb_printf(b, "element face %d\nproperty list uchar int vertex_indices\nend_header\n",
                   (int)m->ne);
@@ -124,7 +126,11 @@ static int write_ply(const df_mesh *m, int binary, sbuf *b, df_error *err)
                   (int)m->ne);
     int k = tri ? 3 : 2;
     if (binary) { /* x86-64 is little endian: raw copies are the file's byte order */
-        sb_bytes(b, m->V, (size_t)m->nv * 3 * sizeof(double));
+        if (dim == 3)
+            sb_bytes(b, m->V, (size_t)m->nv * 3 * sizeof(double));
+        else
+            for (int32_t i = 0; i < m->nv; i++)
+                sb_bytes(b, m->V + 3 * (size_t)i, 2 * sizeof(double));
         for (int32_t e = 0; e < m->ne; e++) {
             unsigned char three = 3;
             if (tri)
@@ -134,7 +140,7 @@ static int write_ply(const df_mesh *m, int binary, sbuf *b, df_error *err)
         return DF_OK;
     }
     for (int32_t i = 0; i < m->nv; i++)
-        put_xyz(b, "", m->V + 3 * (size_t)i, 3, "");
+        put_xyz(b, "", m->V + 3 * (size_t)i, dim, "");
     for (int32_t e = 0; e < m->ne; e++) {
         const int32_t *c = m->E + (size_t)k * (size_t)e;
         if (tri)

@@ -222,3 +222,55 @@ def test_sessions_are_named_after_their_file(jail, tmp_path):
         assert c.load_file(str(odd)).name == "we_ird name.v2"
         assert c.load_file(str(f), name="mine").name == "mine"
         assert c.load_mesh(TRI, fmt=".obj").name.startswith("session-")
+
+
+FLAT = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n"
+
+
+def test_load_options_ext_and_2d_together(jail):
+    """LOAD_MESH options is one field: bit 0 EXT (file_name, load report), bit 1 2D. Both work
+    together for uploads (every chunk repeats them) and for path loads; a chunk whose options
+    differ ends the upload; unknown bits are EPROTO_RESERVED."""
+    from deformd_client import frame as fr, messages as m
+    d, allowed, _ = jail
+    (allowed / "flat.obj").write_bytes(FLAT)
+    with d.unix_client() as c:
+        up = c.load_mesh(FLAT, fmt=".obj", file_name="flat.obj", two_d=True)
+        assert up.planar == 1 and up.name == "flat" and up.report is not None
+        assert up.report.format == m.FMT_OBJ
+        three = c.load_mesh(FLAT, fmt=".obj", file_name="flat.obj")
+        assert three.planar == 0 and three.name == "flat-2" and three.report is not None
+        p2 = c.load_mesh(path=str(allowed / "flat.obj"), two_d=True)
+        assert p2.planar == 1 and p2.name == "flat-3" and p2.report is not None
+        p3 = c.load_mesh(path=str(allowed / "flat.obj"), name="p3")
+        assert p3.planar == 0
+        # two chunks, both with EXT | 2D
+        opts = m.LOAD_OPT_EXT | m.LOAD_OPT_2D
+        rid = c.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "chunked", "",
+                                                     len(FLAT), 0, 0, FLAT[:20], opts, "f.obj"),
+                     fr.FLAG_MORE)
+        c.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "chunked", "",
+                                               len(FLAT), 0, 20, FLAT[20:], opts, "f.obj"),
+               0, rid)
+        ch = m.decode_load_reply(b"".join(f.payload for f in c.wait_reply(rid)))
+        assert ch.planar == 1 and ch.report is not None
+        # a second chunk without the 2D bit does not continue the upload
+        rid = c.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "bad", "",
+                                                     len(FLAT), 0, 0, FLAT[:20], opts, "f.obj"),
+                     fr.FLAG_MORE)
+        c.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "bad", "", len(FLAT),
+                                               0, 20, FLAT[20:], m.LOAD_OPT_EXT, "f.obj"), 0, rid)
+        with pytest.raises(DeformdError) as ei:
+            c.wait_reply(rid)
+        assert ei.value.code == E.EPROTO_CHUNK
+        with pytest.raises(DeformdError) as ei:
+            c._one(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "u", "", len(FLAT),
+                                                   0, 0, FLAT, 0x0004))
+        assert ei.value.code == E.EPROTO_RESERVED and "unknown bits 0x4" in ei.value.message
+    # deformctl: --2d and the load report together
+    p = ctl(d, "--json", "load", allowed / "flat.obj", "--2d", "--name", "ctl2d")
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout)
+    assert "report" in out
+    with d.unix_client() as c:
+        assert c.open_session(out["session"]).planar == 1

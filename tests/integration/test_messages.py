@@ -143,8 +143,8 @@ def test_load_shared_meshes_inline(daemon, meshes, name, nv, ne, kind):
             assert info.ne == ne
         if name == "suzanne.obj":
             assert info.ne == 968  # 500 faces, quads split into two triangles
-        if name == "woody.obj":
-            assert info.planar == 1
+        if name == "woody.obj":      # `v x y 0.000000` lines: a flat 3D mesh, not a 2D one
+            assert info.planar == 0
         mesh = c.get_mesh(info.session_id)
         assert len(mesh.positions) == 3 * nv and len(mesh.elements) == m.ELEM_SIZE[kind] * info.ne
         assert max(mesh.elements) < nv

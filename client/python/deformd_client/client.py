@@ -477,19 +477,22 @@ class Client:
     # ------------------------------------------------------------------ sessions
     def load_mesh(self, data: Optional[bytes] = None, path: Optional[str] = None,
                   fmt: Union[int, str] = m.FMT_AUTO, name: str = "",
-                  ele: Optional[bytes] = None, file_name: str = "") -> m.SessionInfo:
+                  ele: Optional[bytes] = None, file_name: str = "",
+                  two_d: bool = False) -> m.SessionInfo:
         """Creates a session from inline file bytes (`data`; for TetGen pass the .node bytes as
         data and the .ele bytes as ele) or from a server-side `path`. fmt: a FMT_* value or a
         file extension (".obj"). file_name (uploads): the user's file name, which the daemon's
         errors name and, without `name`, the session is named after ("spot", "spot-2", ...).
+        two_d: a 2D session even if the file gives z (every z must be 0); otherwise the session
+        is 2D only when the file declares it (OBJ `v x y`, ...).
         The returned SessionInfo carries the reader's LoadReport in .report (dropped,
         duplicate, degenerate and inverted elements, non-manifold edges, unused vertices)."""
         if isinstance(fmt, str):
             fmt = m.FORMAT_BY_EXT[fmt.lower()]
-        ext = m.LOAD_OPT_EXT
+        opts = m.LOAD_OPT_EXT | (m.LOAD_OPT_2D if two_d else 0)
         if path is not None:
             return m.decode_load_reply(self._one(m.LOAD_MESH, m.encode_load_mesh(
-                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"", ext)))
+                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"", opts)))
         if data is None:
             raise ValueError("load_mesh needs data or path")
         part2 = 0
@@ -505,7 +508,7 @@ class Client:
             chunk = data[off:off + m.LOAD_CHUNK_BYTES]
             last = off + len(chunk) >= total
             self.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, fmt, name, "", total, part2,
-                                                      off, chunk, ext, file_name),
+                                                      off, chunk, opts, file_name),
                       0 if last else fr.FLAG_MORE, rid)
             off += len(chunk)
             if last:
@@ -513,11 +516,11 @@ class Client:
         parts = self.wait_reply(rid)
         return m.decode_load_reply(b"".join(p.payload for p in parts))
 
-    def load_file(self, filename: str, name: str = "") -> m.SessionInfo:
+    def load_file(self, filename: str, name: str = "", two_d: bool = False) -> m.SessionInfo:
         """Reads a local mesh file and uploads it inline (X.node brings X.ele along, X.NODE
         brings X.ELE: the case of the extension is kept). The daemon's errors name the file and,
         without `name`, the session is named after it. Raises ValueError for an extension that
-        names no mesh format."""
+        names no mesh format. two_d as in load_mesh."""
         stem, ext = os.path.splitext(filename)
         base = os.path.basename(filename)
         if ext.lower() in (".node", ".ele"):
@@ -527,13 +530,15 @@ class Client:
             with open(node, "rb") as f:
                 data = f.read()
             with open(other, "rb") as f:
-                return self.load_mesh(data, ele=f.read(), name=name, file_name=base)
+                return self.load_mesh(data, ele=f.read(), name=name, file_name=base,
+                                      two_d=two_d)
         if ext.lower() not in m.FORMAT_BY_EXT:
             raise ValueError("%s: mesh format not recognised from the file name; formats: .obj, "
                              ".off, .ply, .mesh (MEDIT), .node + .ele (TetGen)" % filename)
         with open(filename, "rb") as f:
             data = f.read()
-        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT[ext.lower()], name=name, file_name=base)
+        return self.load_mesh(data, fmt=m.FORMAT_BY_EXT[ext.lower()], name=name, file_name=base,
+                              two_d=two_d)
 
     def list_sessions(self) -> List[m.SessionInfo]:
         return m.decode_session_list(self._one(m.LIST_SESSIONS))

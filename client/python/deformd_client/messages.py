@@ -68,6 +68,8 @@ FORMAT_BY_EXT = {".obj": FMT_OBJ, ".off": FMT_OFF, ".ply": FMT_PLY, ".mesh": FMT
                  ".node": FMT_TETGEN}
 LOAD_INLINE, LOAD_PATH = 0, 1
 LOAD_OPT_EXT = 1               # load_mesh options: file_name follows; reply carries a LoadReport
+LOAD_OPT_2D = 2                # load_mesh options: a 2D session even if the file gives z (z all 0)
+LOAD_OPTS_ALL = LOAD_OPT_EXT | LOAD_OPT_2D
 
 BRUSH_TYPES = {"grab": 1, "twist": 2, "scale": 3, "pinch": 4, "affine": 5}
 INTEGRATORS = {"euler": 1, "rk4": 2}

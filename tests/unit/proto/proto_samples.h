@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES = 34 };
+enum { N_SAMPLES = 35 };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -202,6 +202,10 @@ static inline void build_samples(sample *s)
     ADD("shm_info", DF_MSG_STREAM_SHM, DF_FLAG_REPLY, df_msg_shm_info_encode(&shi, out, &e));
     df_msg_shm_ref shr = {9, 131072, 12356};
     ADD("shm_ref", DF_MSG_SHM_REF, DF_FLAG_EVENT, df_msg_shm_ref_encode(&shr, out, &e));
+    /* a path load asking for a 2D session (options bit 1, without EXT: no file_name) */
+    df_msg_load_mesh l2 = lp;
+    l2.options = DF_LOAD_OPT_2D;
+    ADD("load_path_2d", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&l2, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

@@ -151,10 +151,18 @@ static void test_load_mesh_bodies(void **state)
      * data_len at 35, data at 39 */
     u8("load_mesh", 0, 2, DF_EINVAL, "source");
     u8("load_mesh", 1, 6, DF_EINVAL, "format 6");
-    u16("load_mesh", 2, 7, DF_EPROTO_RESERVED, "reserved");
-    u16("load_mesh", 2, 2, DF_EPROTO_RESERVED, "reserved");
+    /* options: bit 0 EXT, bit 1 2D; any other bit is EPROTO_RESERVED */
+    u16("load_mesh", 2, 6, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_mesh", 2, 4, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_mesh", 2, 0x8000, DF_EPROTO_RESERVED, "unknown bits 0x8000");
+    u16("load_mesh", 2, DF_LOAD_OPT_2D, DF_OK, NULL);          /* 2D alone: same layout */
+    u16("load_mesh", 2, DF_LOAD_OPT_EXT, DF_EPROTO_TRUNCATED, "file_name"); /* EXT needs it */
+    u16("load_path_2d", 2, 0, DF_OK, NULL);
+    u16("load_path_2d", 2, 7, DF_EPROTO_RESERVED, "unknown bits 0x4");
     u16("load_mesh_ext", 2, 0, DF_EPROTO_TRAILING, NULL);  /* file_name without the EXT option */
-    u16("load_mesh_ext", 2, 3, DF_EPROTO_RESERVED, "reserved");
+    u16("load_mesh_ext", 2, 3, DF_OK, NULL);                   /* EXT | 2D */
+    u16("load_mesh_ext", 2, 2, DF_EPROTO_TRAILING, NULL);      /* 2D without EXT: trailing */
+    u16("load_mesh_ext", 2, 5, DF_EPROTO_RESERVED, "unknown bits 0x4");
     /* load_reply: session_info "bunny" is 43 bytes, then format 43, index_base 44, reserved 45 */
     u8("load_reply", 43, 0, DF_EINVAL, "format");
     u8("load_reply", 43, 6, DF_EINVAL, "format");

@@ -237,11 +237,43 @@ static void test_stream_chunked_progress_and_snapshot(void **state)
     fake_free(&f);
 }
 
+/* Issue 9 item 14: a result whose float32 displacement is finite but whose float32 position
+ * (load-time float32 position + displacement, what GET_MESH and every replica compute) is not
+ * is refused, and nothing changes: such a version used to kill the session for everyone. */
+static void test_stream_refuses_float32_position_overflow(void **state)
+{
+    (void)state;
+    fake f;
+    fake_init(&f, 64, 7);
+    f.s.mesh.V[30] = 3.0e38;
+    f.s.basef[30] = 3.0e38f;
+    f.cur[30] = 3.0e38;
+    df_frames fr = {0};
+    df_error e;
+    f.cur[30] = 6.0e38;  /* displacement 3e38: finite in float32; position 6e38: not */
+    assert_true(isfinite((float)(f.cur[30] - f.s.mesh.V[30])));
+    assert_int_equal(df_stream_publish(&f.s, f.cur, DF_CHANGE_BRUSH, NULL, 0, &fr, NULL, &e),
+                     DF_EINVAL);
+    assert_non_null(strstr(e.msg, "vertex 10 component 0"));
+    assert_non_null(strstr(e.msg, "float32"));
+    assert_int_equal(fr.n, 0);
+    assert_true(atomic_load(&f.s.version) == 0);
+    for (size_t i = 0; i < 3 * 64; i++)
+        assert_true(f.s.uf[i] == 0.0f);
+    f.cur[30] = 3.3e38;  /* still in range: accepted */
+    assert_int_equal(df_stream_publish(&f.s, f.cur, DF_CHANGE_BRUSH, NULL, 0, &fr, NULL, &e),
+                     DF_OK);
+    assert_true(atomic_load(&f.s.version) == 1);
+    df_frames_clear(&fr);
+    fake_free(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stream_sparse_dense_byte_identical),
         cmocka_unit_test(test_stream_chunked_progress_and_snapshot),
+        cmocka_unit_test(test_stream_refuses_float32_position_overflow),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
