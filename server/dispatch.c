@@ -5,8 +5,9 @@
 #include "server/handlers.h"
 #include "server/log.h"
 #include "server/reply.h"
+#include "server/req.h"
 
-typedef void (*df_handler_fn)(df_conn *c, const df_frame_header *h, const uint8_t *p);
+typedef int (*df_handler_fn)(df_req *r, const uint8_t *p, df_error *err);
 
 static const struct {
     uint16_t type;
@@ -103,5 +104,9 @@ void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payl
     df_log(DF_LOG_DEBUG, "client %llu: %s #%llu (%u bytes)", (unsigned long long)c->id,
            df_msg_type_name(h->type), (unsigned long long)h->request_id,
            (unsigned)h->payload_len);
-    fn(c, h, payload);
+    df_req r = {.srv = c->srv, .c = c, .type = h->type, .id = h->request_id, .flags = h->flags,
+                .len = h->payload_len};
+    df_error err;
+    int rc = fn(&r, payload, &err);
+    if (rc != DF_OK) df_req_fail(&r, &err); /* synchronous errors; a queued job answers later */
 }

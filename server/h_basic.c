@@ -31,45 +31,28 @@ void df_session_info_fill(const df_session *s, df_msg_session_info *out)
     snprintf(out->name, sizeof out->name, "%s", s->name);
 }
 
-df_session *df_h_session(df_conn *c, const df_frame_header *h, uint64_t session_id)
-{
-    df_session *s = df_session_find(c->srv, session_id);
-    if (!s) {
-        df_error e;
-        df_error_set(&e, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(h->type),
-                     (unsigned long long)session_id);
-        df_reply_fail(c, h->type, h->request_id, &e);
-    }
-    return s;
-}
-
-df_session *df_h_session_ref(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_session_ref(const df_req *r, const uint8_t *p, uint64_t *session_id, df_error *err)
 {
     df_msg_session_ref m;
-    df_error err;
-    if (df_msg_session_ref_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return NULL;
-    }
-    return df_h_session(c, h, m.session_id);
+    int rc = df_msg_session_ref_decode(p, r->len, &m, err);
+    if (rc == DF_OK) *session_id = m.session_id;
+    return rc;
 }
 
-void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
 {
+    df_conn *c = rq->c;
     df_msg_hello m;
-    df_error err;
-    if (df_msg_hello_decode(p, h->payload_len, &m, &err) != DF_OK ||
-        df_text_check_name("hello: client_name", m.client_name, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
+    int rc = df_msg_hello_decode(p, rq->len, &m, err);
+    if (rc == DF_OK) rc = df_text_check_name("hello: client_name", m.client_name, err);
+    if (rc != DF_OK) return rc;
     if (m.max_version < DF_PROTO_VERSION_MIN || m.min_version > DF_PROTO_VERSION) {
-        df_error_set(&err, DF_EPROTO_BADVERSION,
+        df_error_set(err, DF_EPROTO_BADVERSION,
                      "hello: client speaks versions %u..%u, server %u..%u", m.min_version,
                      m.max_version, DF_PROTO_VERSION_MIN, DF_PROTO_VERSION);
-        df_reply_fail(c, h->type, h->request_id, &err);
+        df_req_fail(rq, err);
         df_conn_close_after_flush(c, "hello: no common protocol version"); /* PROTOCOL.md 4.2b */
-        return;
+        return DF_OK;
     }
     const df_server_config *cfg = &c->srv->cfg;
     df_msg_hello_reply r;
@@ -96,123 +79,107 @@ void df_h_hello(df_conn *c, const df_frame_header *h, const uint8_t *p)
     if (m.client_name[0])
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
     c->hello_done = 1;
-    df_reply_hello_reply(c, h->type, h->request_id, &r, 1);
+    df_req_reply_hello_reply(rq, &r);
+    return DF_OK;
 }
 
-void df_h_auth(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_auth(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_auth m;
-    df_error err;
-    if (df_msg_auth_decode(p, h->payload_len, &m, &err) == DF_OK)
-        df_error_set(&err, DF_EUNSUPPORTED, "auth: not required by this server (method %u)",
+    if (df_msg_auth_decode(p, r->len, &m, err) == DF_OK)
+        df_error_set(err, DF_EUNSUPPORTED, "auth: not required by this server (method %u)",
                      m.method);
-    df_reply_fail(c, h->type, h->request_id, &err);
+    return err->code;
 }
 
-void df_h_ping(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_ping(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_ping m;
-    df_error err;
-    if (df_msg_ping_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_reply_ping(c, h->type, h->request_id, &m, 1);
+    int rc = df_msg_ping_decode(p, r->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_req_reply_ping(r, &m);
+    return DF_OK;
 }
 
-void df_h_list_sessions(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_list_sessions(df_req *r, const uint8_t *p, df_error *err)
 {
-    df_error err;
-    if (df_msg_empty_decode(p, h->payload_len, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
+    df_conn *c = r->c;
+    int rc = df_msg_empty_decode(p, r->len, err);
+    if (rc != DF_OK) return rc;
     df_msg_session_list l = {0, NULL};
     int n = 0;
     for (df_session *s = c->srv->sessions; s; s = s->next) n += !s->closed;
     if (n > (int)DF_MAX_SESSIONS) n = (int)DF_MAX_SESSIONS;
     l.items = calloc((size_t)(n ? n : 1), sizeof *l.items);
-    if (!l.items) {
-        df_error_set(&err, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
+    if (!l.items) return df_error_set(err, DF_ENOMEM, "out of memory");
     /* Oldest first (the registry list is newest first). */
     int i = n;
     for (df_session *s = c->srv->sessions; s && i > 0; s = s->next)
         if (!s->closed) df_session_info_fill(s, &l.items[--i]);
     l.count = (uint32_t)n;
-    df_reply_session_list(c, h->type, h->request_id, &l, 1);
+    df_req_reply_session_list(r, &l);
     free(l.items);
+    return DF_OK;
 }
 
-void df_h_open_session(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_open_session m;
-    df_error err;
-    if (df_msg_open_session_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = m.session_id ? df_session_find(c->srv, m.session_id)
-                                 : df_session_find_name(c->srv, m.name);
+    int rc = df_msg_open_session_decode(p, r->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_session *s = m.session_id ? df_session_find(r->srv, m.session_id)
+                                 : df_session_find_name(r->srv, m.name);
     if (!s) {
         if (m.session_id)
-            df_error_set(&err, DF_ENOTFOUND, "open_session: no session %llu",
-                         (unsigned long long)m.session_id);
-        else
-            df_error_set(&err, DF_ENOTFOUND, "open_session: no session named '%s'", m.name);
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
+            return df_error_set(err, DF_ENOTFOUND, "open_session: no session %llu",
+                                (unsigned long long)m.session_id);
+        return df_error_set(err, DF_ENOTFOUND, "open_session: no session named '%s'", m.name);
     }
     df_msg_session_info info;
     df_session_info_fill(s, &info);
-    df_reply_session_info(c, h->type, h->request_id, &info, 1);
+    df_req_reply_session_info(r, &info);
+    return DF_OK;
 }
 
 static void close_done(df_job *j)
 {
     if (df_job_failed(j)) return;
-    df_msg_ack a = {.session_id = j->s->id, .version = atomic_load(&j->s->version)};
+    uint64_t v = atomic_load(&j->s->version);
     df_job_drop_queued(j->s, df_job_pred_all, NULL, "session closed");
     df_session_close(j->s);
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_req_ack(&j->req, j->s->id, v);
 }
 
-/* Submits a loop-only job (no work) on the session of a session_ref request; `beside`: its
- * DF_JOB_BESIDE_* mode (job.h). */
-static void ref_job(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn done,
-                    int beside)
+int df_h_ref_job(df_req *r, const uint8_t *p, const df_job_kind *kind, df_error *err)
 {
-    df_session *s = df_h_session_ref(c, h, p);
-    if (!s) return;
-    df_job *j = df_job_new(c->srv, s, c, h->type, h->request_id, NULL, done);
-    if (!j) {
-        df_error err;
-        df_error_set(&err, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    j->beside = beside;
+    uint64_t sid;
+    int rc = df_h_session_ref(r, p, &sid, err);
+    df_job *j = rc == DF_OK ? df_job_for_request(r, sid, kind, err) : NULL;
+    if (!j) return err->code;
     df_job_submit(j);
+    return DF_OK;
 }
 
-void df_h_close_session(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_close = {.done = close_done}; /* ends a running move first */
+
+int df_h_close_session(df_req *r, const uint8_t *p, df_error *err)
 {
-    ref_job(c, h, p, close_done, DF_JOB_BESIDE_NONE); /* ends a running move first */
+    return df_h_ref_job(r, p, &k_close, err);
 }
 
 static void unsubscribe_done(df_job *j)
 {
     if (df_job_failed(j)) return;
-    df_session_unsubscribe(j->s, j->c);
-    df_msg_ack a = {.session_id = j->s->id, .version = atomic_load(&j->s->version)};
-    df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_session_unsubscribe(j->s, j->req.c);
+    df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
 }
 
-void df_h_unsubscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_unsubscribe = {.done = unsubscribe_done,
+                                          .beside = DF_JOB_BESIDE_READ};
+
+int df_h_unsubscribe(df_req *r, const uint8_t *p, df_error *err)
 {
-    ref_job(c, h, p, unsubscribe_done, DF_JOB_BESIDE_READ);
+    return df_h_ref_job(r, p, &k_unsubscribe, err);
 }
 
 static void stream_shm_done(df_job *j)
@@ -220,31 +187,29 @@ static void stream_shm_done(df_job *j)
     if (df_job_failed(j)) return;
     df_session *s = j->s;
     df_error err;
-    if (j->c->closing) return;
-    if (df_session_attach_shm(s, j->c, &err) != DF_OK) {
-        df_reply_fail(j->c, j->type, j->req_id, &err);
+    if (j->req.c->closing) return;
+    if (df_session_attach_shm(s, j->req.c, &err) != DF_OK) {
+        df_req_fail(&j->req, &err);
         return;
     }
     df_msg_shm_info info = {.session_id = s->id, .capacity = s->shm->capacity,
                             .min_frame = s->shm->min_frame, .max_frame = s->shm->max_frame};
     snprintf(info.path, sizeof info.path, "%s", s->shm->path);
-    df_reply_shm_info(j->c, j->type, j->req_id, &info, 1);
+    df_req_reply_shm_info(&j->req, &info);
 }
+
+static const df_job_kind k_stream_shm = {.done = stream_shm_done,
+                                         .beside = DF_JOB_BESIDE_READ};
 
 /* STREAM_SHM (PROTOCOL.md 6.1): queued behind the session's earlier requests so that the reply
  * marks the exact place in the stream from which this subscriber gets SHM_REFs. */
-void df_h_stream_shm(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_stream_shm(df_req *r, const uint8_t *p, df_error *err)
 {
-    const char *why = c->is_tcp ? "needs a Unix-socket connection on the daemon's host"
-                      : c->srv->cfg.shm_ring_bytes == 0 ? "disabled (shm_ring_bytes = 0)"
+    const char *why = r->c->is_tcp ? "needs a Unix-socket connection on the daemon's host"
+                      : r->srv->cfg.shm_ring_bytes == 0 ? "disabled (shm_ring_bytes = 0)"
                                                         : NULL;
-    if (why) {
-        df_error err;
-        df_error_set(&err, DF_EUNSUPPORTED, "stream_shm: %s", why);
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    ref_job(c, h, p, stream_shm_done, DF_JOB_BESIDE_READ);
+    if (why) return df_error_set(err, DF_EUNSUPPORTED, "stream_shm: %s", why);
+    return df_h_ref_job(r, p, &k_stream_shm, err);
 }
 
 static void subscribe_done(df_job *j)
@@ -252,43 +217,36 @@ static void subscribe_done(df_job *j)
     if (df_job_failed(j)) return;
     df_session *s = j->s;
     df_error err;
-    if (j->c->closing) return;
-    if (df_session_subscribe(s, j->c, &err) != DF_OK) {
-        df_reply_fail(j->c, j->type, j->req_id, &err);
+    if (j->req.c->closing) return;
+    if (df_session_subscribe(s, j->req.c, &err) != DF_OK) {
+        df_req_fail(&j->req, &err);
         return;
     }
     df_msg_session_info info;
     df_session_info_fill(s, &info);
-    df_reply_session_info(j->c, j->type, j->req_id, &info, 1);
-    if ((uintptr_t)j->body & DF_SUBSCRIBE_SNAPSHOT) {
+    df_req_reply_session_info(&j->req, &info);
+    if (*(const uint8_t *)j->body & DF_SUBSCRIBE_SNAPSHOT) {
         df_frames f = {0};
-        if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req_id, &f, &err) == DF_OK)
-            for (size_t i = 0; i < f.n; i++) df_conn_send(j->c, f.v[i]);
+        if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)
+            for (size_t i = 0; i < f.n; i++) df_req_send_more(&j->req, f.v[i]);
         else
             df_log(DF_LOG_ERROR, "subscribe snapshot failed: %s", err.msg);
         df_frames_clear(&f);
     }
 }
 
-void df_h_subscribe(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_subscribe = {.body_size = sizeof(uint8_t), .done = subscribe_done,
+                                        .beside = DF_JOB_BESIDE_READ}; /* may join a move */
+
+int df_h_subscribe(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_subscribe m;
-    df_error err;
-    if (df_msg_subscribe_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
-    if (!s) return;
-    df_job *j = df_job_new(c->srv, s, c, h->type, h->request_id, NULL, subscribe_done);
-    if (!j) {
-        df_error_set(&err, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    j->body = (void *)(uintptr_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
-    j->beside = DF_JOB_BESIDE_READ; /* watchers may join a running move */
+    int rc = df_msg_subscribe_decode(p, r->len, &m, err);
+    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_subscribe, err) : NULL;
+    if (!j) return err->code;
+    *(uint8_t *)j->body = (uint8_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
     df_job_submit(j);
+    return DF_OK;
 }
 
 typedef struct knob {
@@ -312,43 +270,28 @@ static void knob_done(df_job *j)
         df_job_failed(j);
         return;
     }
-    {
-        switch (k->param) {
-        case DF_BP_RADIUS: st->brush.radius = k->value; break;
-        case DF_BP_NU: st->brush.nu = k->value; break;
-        case DF_BP_STRENGTH: st->strength = k->value; break;
-        case DF_BP_FALLOFF: st->brush.order = (int)k->value; break;
-        case DF_BP_RATIO: st->brush.ratio = k->value; break;
-        default: break;
-        }
+    switch (k->param) {
+    case DF_BP_RADIUS: st->brush.radius = k->value; break;
+    case DF_BP_NU: st->brush.nu = k->value; break;
+    case DF_BP_STRENGTH: st->strength = k->value; break;
+    case DF_BP_FALLOFF: st->brush.order = (int)k->value; break;
+    case DF_BP_RATIO: st->brush.ratio = k->value; break;
+    default: break;
     }
-    df_msg_ack a = {.session_id = j->s->id, .version = atomic_load(&j->s->version)};
-    df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
 }
 
-static void free_body(df_job *j) { free(j->body); }
+static const df_job_kind k_knob = {.body_size = sizeof(knob), .done = knob_done};
 
-void df_h_set_brush_param(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_set_brush_param(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_brush_param m;
-    df_error err;
-    if (df_msg_brush_param_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
-    if (!s) return;
-    knob *k = malloc(sizeof *k);
-    df_job *j = k ? df_job_new(c->srv, s, c, h->type, h->request_id, NULL, knob_done) : NULL;
-    if (!j) {
-        free(k);
-        df_error_set(&err, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
+    int rc = df_msg_brush_param_decode(p, r->len, &m, err);
+    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_knob, err) : NULL;
+    if (!j) return err->code;
+    knob *k = j->body;
     k->param = m.param;
     k->value = m.value;
-    j->body = k;
-    j->cleanup = free_body;
     df_job_submit(j);
+    return DF_OK;
 }

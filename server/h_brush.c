@@ -48,6 +48,7 @@ typedef struct brush_req {
 static void req_free(df_job *j)
 {
     brush_req *r = j->body;
+    if (!r) return;
     df_msg_brush_free(&r->begin);
     if (r->created) {
         free(r->created->pins);
@@ -57,7 +58,6 @@ static void req_free(df_job *j)
         free(r->created);
     }
     df_frames_clear(&r->frames);
-    free(r);
 }
 
 static const df_kelvinlet_type k_types[] = {DF_KELVINLET_GRAB, DF_KELVINLET_GRAB,
@@ -324,7 +324,7 @@ static void update_work(df_job *j)
     uint64_t dt = uv_hrtime() - t0;
     j->s->brush_last_ms = (double)dt / 1e6;
     df_stroke *st = df_session_stroke(j->s, j->conn_id);
-    if (st && j->type == DF_MSG_BRUSH_UPDATE) st->work_ns = j->rc == DF_OK ? dt : 0;
+    if (st && j->req.type == DF_MSG_BRUSH_UPDATE) st->work_ns = j->rc == DF_OK ? dt : 0;
 }
 
 /* Predicted cost of a brush update at the head of its FIFO: the same stroke's last field
@@ -343,13 +343,13 @@ static void update_work_inner(df_job *j)
     df_stroke *st = df_session_stroke(s, j->conn_id);
     if (!st) {
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: no open stroke on session %llu",
-                             df_msg_type_name(j->type), (unsigned long long)s->id);
+                             df_msg_type_name(j->req.type), (unsigned long long)s->id);
         return;
     }
     size_t n = 3 * (size_t)s->nv;
     if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
     float *disp = s->scratch_disp;
-    if (j->type == DF_MSG_BRUSH_CANCEL) {
+    if (j->req.type == DF_MSG_BRUSH_CANCEL) {
         if (stroke_applied_nothing(st, n)) return; /* nothing to undo: no version */
         memset(disp, 0, n * sizeof *disp);
         j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
@@ -380,59 +380,55 @@ static void brush_done(df_job *j)
         s->strokes = r->created;
         r->created = NULL;
     }
-    if (j->type == DF_MSG_BRUSH_CANCEL) df_session_drop_stroke(s, j->conn_id);
+    if (j->req.type == DF_MSG_BRUSH_CANCEL) df_session_drop_stroke(s, j->conn_id);
     df_job_ack(j);
     df_cache_enforce(srv);
 }
 
-/* A job for request h on session s with a fresh brush_req (NULL: error replied). */
-static df_job *new_job(df_conn *c, const df_frame_header *h, df_session *s, df_job_fn work,
-                       df_job_fn done)
+static const df_job_kind k_begin = {.body_size = sizeof(brush_req), .work = begin_work,
+                                    .done = brush_done, .cleanup = req_free};
+static const df_job_kind k_update = {.body_size = sizeof(brush_req), .work = update_work,
+                                     .done = brush_done, .cleanup = req_free,
+                                     .inline_cost = update_cost};
+static const df_job_kind k_cancel = {.body_size = sizeof(brush_req), .work = update_work,
+                                     .done = brush_done, .cleanup = req_free};
+
+/* The cumulative load of a begin or update message (move, twist, scale, matrix) into r->load. */
+static void load_from(brush_req *r, const double *move, const double *twist, double scale,
+                      const double *matrix)
 {
-    return df_job_for_request(c, h, s, sizeof(brush_req), work, done, req_free);
+    memcpy(r->load, move, 3 * sizeof(double));
+    memcpy(r->load + 3, twist, 3 * sizeof(double));
+    r->load[6] = scale;
+    memcpy(r->load + 7, matrix, 9 * sizeof(double));
 }
 
-void df_h_brush_begin(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_brush_begin(df_req *rq, const uint8_t *p, df_error *err)
 {
     df_msg_brush m;
-    df_error err;
-    if (df_msg_brush_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
-    df_job *j = s ? new_job(c, h, s, begin_work, brush_done) : NULL;
+    int rc = df_msg_brush_decode(p, rq->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_job *j = df_job_for_request(rq, m.session_id, &k_begin, err);
     if (!j) {
         df_msg_brush_free(&m);
-        return;
+        return err->code;
     }
     brush_req *r = j->body;
-    memcpy(r->load, m.move, 3 * sizeof(double));
-    memcpy(r->load + 3, m.twist, 3 * sizeof(double));
-    r->load[6] = m.scale;
-    memcpy(r->load + 7, m.matrix, 9 * sizeof(double));
+    load_from(r, m.move, m.twist, m.scale, m.matrix);
     r->begin = m;
     df_job_submit(j);
+    return DF_OK;
 }
 
-void df_h_brush_update(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_brush_update(df_req *rq, const uint8_t *p, df_error *err)
 {
     df_msg_brush_update m;
-    df_error err;
-    if (df_msg_brush_update_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
-    df_job *j = s ? new_job(c, h, s, update_work, brush_done) : NULL;
-    if (!j) return;
-    if (h->type == DF_MSG_BRUSH_UPDATE) j->inline_cost = update_cost;
-    brush_req *r = j->body;
-    memcpy(r->load, m.move, 3 * sizeof(double));
-    memcpy(r->load + 3, m.twist, 3 * sizeof(double));
-    r->load[6] = m.scale;
-    memcpy(r->load + 7, m.matrix, 9 * sizeof(double));
+    int rc = df_msg_brush_update_decode(p, rq->len, &m, err);
+    df_job *j = rc == DF_OK ? df_job_for_request(rq, m.session_id, &k_update, err) : NULL;
+    if (!j) return err->code;
+    load_from(j->body, m.move, m.twist, m.scale, m.matrix);
     df_job_submit(j);
+    return DF_OK;
 }
 
 static void end_done(df_job *j)
@@ -454,20 +450,14 @@ static void end_done(df_job *j)
     df_job_ack(j);
 }
 
-static void ref_request(df_conn *c, const df_frame_header *h, const uint8_t *p, df_job_fn work,
-                        df_job_fn done)
+static const df_job_kind k_end = {.done = end_done};
+
+int df_h_brush_end(df_req *r, const uint8_t *p, df_error *err)
 {
-    df_session *s = df_h_session_ref(c, h, p);
-    df_job *j = s ? new_job(c, h, s, work, done) : NULL;
-    if (j) df_job_submit(j);
+    return df_h_ref_job(r, p, &k_end, err);
 }
 
-void df_h_brush_end(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_brush_cancel(df_req *r, const uint8_t *p, df_error *err)
 {
-    ref_request(c, h, p, NULL, end_done);
-}
-
-void df_h_brush_cancel(df_conn *c, const df_frame_header *h, const uint8_t *p)
-{
-    ref_request(c, h, p, update_work, brush_done);
+    return df_h_ref_job(r, p, &k_cancel, err);
 }

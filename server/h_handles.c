@@ -42,11 +42,11 @@ typedef struct hs_req {
 static void req_free(df_job *j)
 {
     hs_req *r = j->body;
+    if (!r) return;
     df_msg_handles_free(&r->m);
     df_msg_handle_move_free(&r->mv);
     if (r->hs) df_handleset_free(j->srv, r->hs);
     df_frames_clear(&r->frames);
-    free(r);
 }
 
 /* Builds the solver of `hs` against the session's rest shape. */
@@ -130,29 +130,22 @@ static void set_done(df_job *j)
     df_cache_enforce(j->srv);
 }
 
-/* A job for request h on session s with a fresh hs_req (NULL: error replied). */
-static df_job *new_job(df_conn *c, const df_frame_header *h, df_session *s, df_job_fn work,
-                       df_job_fn done)
-{
-    return df_job_for_request(c, h, s, sizeof(hs_req), work, done, req_free);
-}
+static const df_job_kind k_set = {.body_size = sizeof(hs_req), .work = set_work,
+                                  .done = set_done, .cleanup = req_free};
 
-void df_h_handles_set(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_handles_set(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_handles m;
-    df_error err;
-    if (df_msg_handles_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
-    df_job *j = s ? new_job(c, h, s, set_work, set_done) : NULL;
+    int rc = df_msg_handles_decode(p, r->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_job *j = df_job_for_request(r, m.session_id, &k_set, err);
     if (!j) {
         df_msg_handles_free(&m);
-        return;
+        return err->code;
     }
     ((hs_req *)j->body)->m = m;
     df_job_submit(j);
+    return DF_OK;
 }
 
 /* Handles_get: the session's current set as a handles body (loop thread, in FIFO order so it sees
@@ -161,12 +154,12 @@ static void get_done(df_job *j)
 {
     df_session *s = j->s;
     const df_handleset *hs = s->hs;
-    if (df_job_failed(j) || !j->c) return;
+    if (df_job_failed(j)) return;
     if (!hs) {
         df_error e;
         df_error_set(&e, DF_ENOTFOUND, "handles_get: session %llu has no handle set",
                      (unsigned long long)s->id);
-        df_reply_fail(j->c, j->type, j->req_id, &e);
+        df_req_fail(&j->req, &e);
         return;
     }
     df_msg_affine_set aff[DF_MAX_AFFINE_SETS];
@@ -205,7 +198,7 @@ static void get_done(df_job *j)
     df_buf b;
     size_t start;
     df_buf_init(&b);
-    int rc = df_frame_begin(&b, j->type, DF_FLAG_REPLY, j->req_id, &start, &err);
+    int rc = df_frame_begin(&b, j->req.type, DF_FLAG_REPLY, j->req.id, &start, &err);
     if (rc == DF_OK) rc = df_msg_handles_encode(&m, &b, &err);
     if (rc == DF_OK) rc = df_frame_end(&b, start, &err);
     df_sbuf *f = rc == DF_OK ? df_sbuf_from_buf(&b) : NULL;
@@ -214,22 +207,19 @@ static void get_done(df_job *j)
         if (rc == DF_OK) df_error_set(&err, DF_ENOMEM, "out of memory building a frame");
         df_log(DF_LOG_ERROR, "encoding a handles_get reply failed: %s", err.msg);
         df_error_set(&err, DF_EINTERNAL, "handles_get: server could not encode the set");
-        df_reply_fail(j->c, j->type, j->req_id, &err);
+        df_req_fail(&j->req, &err);
         return;
     }
-    if (j->c->pending > 0) j->c->pending--;
-    j->srv->stats.requests_ok++;
-    df_conn_send(j->c, f);
+    df_req_send(&j->req, f);
     df_sbuf_unref(f);
 }
 
-void df_h_handles_get(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_get = {.done = get_done, /* the set cannot change during a move */
+                                  .beside = DF_JOB_BESIDE_READ};
+
+int df_h_handles_get(df_req *r, const uint8_t *p, df_error *err)
 {
-    df_session *s = df_h_session_ref(c, h, p);
-    df_job *j = s ? new_job(c, h, s, NULL, get_done) : NULL;
-    if (!j) return;
-    j->beside = DF_JOB_BESIDE_READ; /* the set cannot change while a move runs */
-    df_job_submit(j);
+    return df_h_ref_job(r, p, &k_get, err);
 }
 
 static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }
@@ -252,7 +242,8 @@ static int publish_iterate(df_job *j, const double *V, int iteration, double obj
     pr.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     df_frames f = {0};
     pthread_mutex_lock(&j->s->pub_lock);
-    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req_id, &f, NULL, &j->err);
+    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req.id, &f, NULL,
+                               &j->err);
     if (rc == DF_OK) {
         r->published = 1;
         memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
@@ -413,7 +404,7 @@ static void move_done(df_job *j)
     res.version = atomic_load(&s->version);
     if (r->superseded) {
         res.status = DF_MOVE_SUPERSEDED;
-        if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
+        df_req_reply_move_result(&j->req, &res);
         return;
     }
     if (r->published && df_session_history_commit(s, NULL) != DF_OK)
@@ -425,43 +416,43 @@ static void move_done(df_job *j)
     res.objective = finite_or(r->res.objective, DBL_MAX);
     res.residual = finite_or(r->res.residual, DBL_MAX);
     res.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
-    if (j->c) df_reply_move_result(j->c, j->type, j->req_id, &res, 1);
+    df_req_reply_move_result(&j->req, &res);
     df_cache_enforce(srv);
 }
 
 static int pred_move(const df_job *j, void *arg)
 {
     (void)arg;
-    if (j->type != DF_MSG_HANDLES_MOVE) return 0;
+    if (j->req.type != DF_MSG_HANDLES_MOVE) return 0;
     ((hs_req *)j->body)->superseded = 1;
     return 1;
 }
 
-void df_h_handles_move(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_move = {.body_size = sizeof(hs_req), .work = move_work,
+                                   .done = move_done, .cleanup = req_free, .heavy = 1,
+                                   .preemptible = 1};
+
+int df_h_handles_move(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_handle_move m;
-    df_error err;
-    if (df_msg_handle_move_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_session *s = df_h_session(c, h, m.session_id);
-    df_job *j = s ? new_job(c, h, s, move_work, move_done) : NULL;
+    int rc = df_msg_handle_move_decode(p, r->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_job *j = df_job_for_request(r, m.session_id, &k_move, err);
     if (!j) {
         df_msg_handle_move_free(&m);
-        return;
+        return err->code;
     }
-    j->heavy = 1;
-    j->preemptible = 1;
+    df_session *s = j->s;
     ((hs_req *)j->body)->mv = m;
     /* A newer move supersedes the running one and any queued ones. */
-    if (s->running && s->running->type == DF_MSG_HANDLES_MOVE) {
+    if (s->running && s->running->req.type == DF_MSG_HANDLES_MOVE) {
         atomic_store(&s->running->cancel, 1);
-        c->srv->stats.jobs_superseded++;
+        r->srv->stats.jobs_superseded++;
     }
-    c->srv->stats.jobs_superseded +=
+    r->srv->stats.jobs_superseded +=
         (uint64_t)df_job_drop_queued(s, pred_move, NULL, "superseded by a newer move");
     df_job_submit(j);
+    return DF_OK;
 }
 
 static void reset_work(df_job *j)
@@ -483,9 +474,10 @@ static void reset_done(df_job *j)
     df_job_ack(j);
 }
 
-void df_h_reset_rest(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_reset = {.body_size = sizeof(hs_req), .work = reset_work,
+                                    .done = reset_done, .cleanup = req_free};
+
+int df_h_reset_rest(df_req *r, const uint8_t *p, df_error *err)
 {
-    df_session *s = df_h_session_ref(c, h, p);
-    df_job *j = s ? new_job(c, h, s, reset_work, reset_done) : NULL;
-    if (j) df_job_submit(j);
+    return df_h_ref_job(r, p, &k_reset, err);
 }

@@ -168,57 +168,56 @@ static void load_done(df_job *j)
         q->boundary_faces = (uint32_t)p->boundary_faces;
         q->unused_vertices = (uint32_t)p->unreferenced_vertices;
     }
-    if (j->c) df_reply_load_reply(j->c, j->type, j->req_id, &r, 1);
+    df_req_reply_load_reply(&j->req, &r);
 }
 
 static void upload_cleanup(df_job *j) { df_upload_free(j->body); }
 
-static void submit_load(df_conn *c, df_upload *u)
+/* Queues the load of the complete upload `u` (owned by the job from here) for request `r`. */
+static int submit_load(df_req *r, df_upload *u, df_error *err)
 {
-    df_job *j = df_job_new(c->srv, NULL, c, DF_MSG_LOAD_MESH, u->req_id, load_work, load_done);
+    df_job *j = df_job_new(r->srv, NULL, r->c, DF_MSG_LOAD_MESH, u->req_id, load_work, load_done);
     if (!j) {
-        df_error e;
-        df_error_set(&e, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, DF_MSG_LOAD_MESH, u->req_id, &e);
         df_upload_free(u);
-        return;
+        return df_error_set(err, DF_ENOMEM, "out of memory");
     }
+    r->answered = 1; /* the job answers it (j->req) */
     j->body = u;
     j->cleanup = upload_cleanup;
     df_job_submit(j);
+    return DF_OK;
 }
 
-static void fail(df_conn *c, const df_frame_header *h, df_error *e)
+/* Drops the connection's upload; returns e->code (the dispatcher answers the request). */
+static int fail(df_conn *c, df_error *e)
 {
     df_upload_free(c->upload);
     c->upload = NULL;
-    df_reply_fail(c, h->type, h->request_id, e);
+    return e->code;
 }
 
-static void load_path(df_conn *c, const df_frame_header *h, const df_msg_load_mesh *m)
+static int load_path(df_req *r, const df_msg_load_mesh *m, df_error *err)
 {
-    df_error err;
+    df_conn *c = r->c;
     if (c->srv->cfg.n_allow == 0) {
-        df_error_set(&err, DF_EUNSUPPORTED,
+        df_error_set(err, DF_EUNSUPPORTED,
                      "load_mesh: server-side paths are disabled (no allow_paths in the config)");
-        fail(c, h, &err);
-        return;
+        return fail(c, err);
     }
     df_upload *u = calloc(1, sizeof *u);
     char *path = strdup(m->path);
     if (!u || !path) {
         free(u);
         free(path);
-        df_error_set(&err, DF_ENOMEM, "out of memory");
-        fail(c, h, &err);
-        return;
+        df_error_set(err, DF_ENOMEM, "out of memory");
+        return fail(c, err);
     }
-    u->req_id = h->request_id;
+    u->req_id = r->id;
     u->format = m->format;
     u->options = m->options;
     u->path = path; /* resolved and checked on the worker (pathload.h) */
     snprintf(u->name, sizeof u->name, "%s", m->name);
-    submit_load(c, u);
+    return submit_load(r, u, err);
 }
 
 /* Checks the announced total_size of a new upload against max_upload_mb and uploads_max_mb. */
@@ -260,46 +259,41 @@ static int upload_reserve(df_upload *u, uint64_t need, df_error *err)
     return DF_OK;
 }
 
-void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_load_mesh(df_req *r, const uint8_t *p, df_error *err)
 {
+    df_conn *c = r->c;
     df_msg_load_mesh m;
-    df_error err;
-    if (df_msg_load_mesh_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        fail(c, h, &err);
-        return;
+    if (df_msg_load_mesh_decode(p, r->len, &m, err) != DF_OK) {
+        return fail(c, err);
     }
-    if (df_text_check_name("load_mesh: name", m.name, &err) != DF_OK) {
+    if (df_text_check_name("load_mesh: name", m.name, err) != DF_OK) {
         df_msg_load_mesh_free(&m);
-        fail(c, h, &err);
-        return;
+        return fail(c, err);
     }
     if (m.source == DF_LOAD_PATH) {
-        if (c->upload || (h->flags & DF_FLAG_MORE)) {
+        if (c->upload || (r->flags & DF_FLAG_MORE)) {
             df_msg_load_mesh_free(&m);
-            df_error_set(&err, DF_EPROTO_CHUNK, "load_mesh: a path load cannot be chunked");
-            fail(c, h, &err);
-            return;
+            df_error_set(err, DF_EPROTO_CHUNK, "load_mesh: a path load cannot be chunked");
+            return fail(c, err);
         }
-        load_path(c, h, &m);
+        int rc = load_path(r, &m, err);
         df_msg_load_mesh_free(&m);
-        return;
+        return rc;
     }
     df_upload *u = c->upload;
     if (m.offset == 0 && !u) {
-        if (upload_size_ok(&c->srv->cfg, m.total_size, &err) != DF_OK) {
+        if (upload_size_ok(&c->srv->cfg, m.total_size, err) != DF_OK) {
             df_msg_load_mesh_free(&m);
-            fail(c, h, &err);
-            return;
+            return fail(c, err);
         }
         u = calloc(1, sizeof *u);
         if (!u) {
             df_msg_load_mesh_free(&m);
-            df_error_set(&err, DF_ENOMEM, "load_mesh: out of memory");
-            fail(c, h, &err);
-            return;
+            df_error_set(err, DF_ENOMEM, "load_mesh: out of memory");
+            return fail(c, err);
         }
         u->srv = c->srv;
-        u->req_id = h->request_id;
+        u->req_id = r->id;
         u->format = m.format;
         u->total = m.total_size;
         u->part2 = m.part2_offset;
@@ -307,45 +301,42 @@ void df_h_load_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
         snprintf(u->name, sizeof u->name, "%s", m.name);
         snprintf(u->file_name, sizeof u->file_name, "%s", m.file_name);
         c->upload = u;
-    } else if (!u || u->req_id != h->request_id || m.offset != u->received ||
+    } else if (!u || u->req_id != r->id || m.offset != u->received ||
                m.total_size != u->total || m.format != u->format ||
                m.part2_offset != u->part2 || m.options != u->options ||
                strcmp(m.file_name, u->file_name) != 0 || strcmp(m.name, u->name) != 0) {
-        df_error_set(&err, DF_EPROTO_CHUNK,
+        df_error_set(err, DF_EPROTO_CHUNK,
                      "load_mesh: chunk at offset %llu does not continue the upload (expected "
                      "offset %llu of request %llu, with the first chunk's total_size, format, "
                      "part2_offset, options, file_name and name)",
                      (unsigned long long)m.offset, (unsigned long long)(u ? u->received : 0),
-                     (unsigned long long)(u ? u->req_id : h->request_id));
+                     (unsigned long long)(u ? u->req_id : r->id));
         df_msg_load_mesh_free(&m);
-        fail(c, h, &err);
-        return;
+        return fail(c, err);
     }
-    if (upload_reserve(u, u->received + m.data_len, &err) != DF_OK) {
+    if (upload_reserve(u, u->received + m.data_len, err) != DF_OK) {
         df_msg_load_mesh_free(&m);
-        fail(c, h, &err);
-        return;
+        return fail(c, err);
     }
     memcpy(u->data + u->received, m.data, m.data_len);
     u->received += m.data_len;
     df_msg_load_mesh_free(&m);
-    if (h->flags & DF_FLAG_MORE) {
+    if (r->flags & DF_FLAG_MORE) {
         if (u->received >= u->total) {
-            df_error_set(&err, DF_EPROTO_CHUNK, "load_mesh: MORE flag on a chunk that completes "
+            df_error_set(err, DF_EPROTO_CHUNK, "load_mesh: MORE flag on a chunk that completes "
                                                 "the upload");
-            fail(c, h, &err);
-            return;
+            return fail(c, err);
         }
         c->pending--; /* answered with the last chunk */
-        return;
+        r->answered = 1;
+        return DF_OK;
     }
     if (u->received != u->total) {
-        df_error_set(&err, DF_EPROTO_CHUNK,
+        df_error_set(err, DF_EPROTO_CHUNK,
                      "load_mesh: upload ended at %llu of %llu bytes",
                      (unsigned long long)u->received, (unsigned long long)u->total);
-        fail(c, h, &err);
-        return;
+        return fail(c, err);
     }
     c->upload = NULL;
-    submit_load(c, u);
+    return submit_load(r, u, err);
 }

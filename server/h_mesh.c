@@ -20,26 +20,15 @@ typedef struct mesh_req {
 static void req_free(df_job *j)
 {
     mesh_req *r = j->body;
-    df_frames_clear(&r->frames);
-    free(r);
+    if (r) df_frames_clear(&r->frames);
 }
 
-/* A job for request h on session `session_id` with a fresh mesh_req (NULL: error replied). */
-static df_job *new_job(df_conn *c, const df_frame_header *h, uint64_t session_id,
-                       df_job_fn work, df_job_fn done)
-{
-    df_session *s = df_h_session(c, h, session_id);
-    return s ? df_job_for_request(c, h, s, sizeof(mesh_req), work, done, req_free) : NULL;
-}
-
-/* Sends the job's frames to the requester only: a multi-frame reply. */
+/* Sends the job's frames to the requester only: a multi-frame reply (the last is final). */
 static void reply_frames(df_job *j)
 {
     mesh_req *r = j->body;
-    if (!j->c) return;
-    if (j->c->pending > 0) j->c->pending--;
-    j->srv->stats.requests_ok++;
-    for (size_t i = 0; i < r->frames.n; i++) df_conn_send(j->c, r->frames.v[i]);
+    for (size_t i = 0; i + 1 < r->frames.n; i++) df_req_send_more(&j->req, r->frames.v[i]);
+    if (r->frames.n) df_req_send(&j->req, r->frames.v[r->frames.n - 1]);
 }
 
 /* ---- undo / redo ---- */
@@ -48,7 +37,7 @@ static void history_work(df_job *j)
 {
     mesh_req *r = j->body;
     df_session *s = j->s;
-    int undo = j->type == DF_MSG_UNDO;
+    int undo = j->req.type == DF_MSG_UNDO;
     if (s->strokes) {
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: a brush stroke is open on session %llu",
                              undo ? "undo" : "redo", (unsigned long long)s->id);
@@ -78,31 +67,24 @@ static void history_done(df_job *j)
     mesh_req *r = j->body;
     df_session *s = j->s;
     if (df_job_failed(j)) return;
-    if (j->type == DF_MSG_UNDO) df_history_undo(&s->hist, NULL);
+    if (j->req.type == DF_MSG_UNDO) df_history_undo(&s->hist, NULL);
     else df_history_redo(&s->hist, NULL);
     df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
     df_job_ack(j);
 }
 
-static void history_request(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_history = {.body_size = sizeof(mesh_req), .work = history_work,
+                                      .done = history_done, .cleanup = req_free,
+                                      .beside = DF_JOB_BESIDE_REFUSE}; /* ESTATE beside a move */
+
+int df_h_undo(df_req *r, const uint8_t *p, df_error *err)
 {
-    df_session *s = df_h_session_ref(c, h, p);
-    df_job *j = s ? df_job_for_request(c, h, s, sizeof(mesh_req), history_work, history_done,
-                                       req_free)
-                  : NULL;
-    if (!j) return;
-    j->beside = DF_JOB_BESIDE_REFUSE; /* ESTATE while a move runs (PROTOCOL.md 6) */
-    df_job_submit(j);
+    return df_h_ref_job(r, p, &k_history, err);
 }
 
-void df_h_undo(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_redo(df_req *r, const uint8_t *p, df_error *err)
 {
-    history_request(c, h, p);
-}
-
-void df_h_redo(df_conn *c, const df_frame_header *h, const uint8_t *p)
-{
-    history_request(c, h, p);
+    return df_h_ref_job(r, p, &k_history, err);
 }
 
 /* ---- get mesh ---- */
@@ -133,8 +115,9 @@ static int add_section(df_job *j, uint8_t section, uint32_t rows, int width, con
         if (xyz) m.xyz = (float *)(xyz + (size_t)off * 3);
         if (idx) m.idx = (int32_t *)(idx + (size_t)off * width);
         int last = last_section && off + cnt >= rows;
-        df_sbuf *f = df_out_mesh_chunk(j->type, (uint16_t)(DF_FLAG_REPLY | (last ? 0 : DF_FLAG_MORE)),
-                                       j->req_id, &m, &j->err);
+        df_sbuf *f = df_out_mesh_chunk(j->req.type,
+                                       (uint16_t)(DF_FLAG_REPLY | (last ? 0 : DF_FLAG_MORE)),
+                                       j->req.id, &m, &j->err);
         if (!f) return j->err.code;
         if (df_frames_push(&r->frames, f) != DF_OK)
             return df_error_set(&j->err, DF_ENOMEM, "out of memory");
@@ -179,19 +162,20 @@ static void frames_done(df_job *j)
     reply_frames(j);
 }
 
-void df_h_get_mesh(df_conn *c, const df_frame_header *h, const uint8_t *p)
+/* get-mesh and snapshot answer the last published version while a move runs */
+static const df_job_kind k_get_mesh = {.body_size = sizeof(mesh_req), .work = get_mesh_work,
+                                       .done = frames_done, .cleanup = req_free,
+                                       .beside = DF_JOB_BESIDE_READ};
+
+int df_h_get_mesh(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_get_mesh m;
-    df_error err;
-    if (df_msg_get_mesh_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_job *j = new_job(c, h, m.session_id, get_mesh_work, frames_done);
-    if (!j) return;
-    j->beside = DF_JOB_BESIDE_READ; /* the last published version while a move runs */
+    int rc = df_msg_get_mesh_decode(p, r->len, &m, err);
+    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_get_mesh, err) : NULL;
+    if (!j) return err->code;
     ((mesh_req *)j->body)->flags = m.flags;
     df_job_submit(j);
+    return DF_OK;
 }
 
 /* ---- snapshot ---- */
@@ -207,20 +191,20 @@ static void snapshot_work(df_job *j)
                              (unsigned long long)r->version, (unsigned long long)v);
         return;
     }
-    j->rc = df_stream_snapshot(s, DF_MSG_SNAPSHOT, j->req_id, &r->frames, &j->err);
+    j->rc = df_stream_snapshot(s, DF_MSG_SNAPSHOT, j->req.id, &r->frames, &j->err);
 }
 
-void df_h_snapshot(df_conn *c, const df_frame_header *h, const uint8_t *p)
+static const df_job_kind k_snapshot = {.body_size = sizeof(mesh_req), .work = snapshot_work,
+                                       .done = frames_done, .cleanup = req_free,
+                                       .beside = DF_JOB_BESIDE_READ};
+
+int df_h_snapshot(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_snapshot_req m;
-    df_error err;
-    if (df_msg_snapshot_req_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_job *j = new_job(c, h, m.session_id, snapshot_work, frames_done);
-    if (!j) return;
-    j->beside = DF_JOB_BESIDE_READ;
+    int rc = df_msg_snapshot_req_decode(p, r->len, &m, err);
+    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_snapshot, err) : NULL;
+    if (!j) return err->code;
     ((mesh_req *)j->body)->version = m.version;
     df_job_submit(j);
+    return DF_OK;
 }

@@ -19,17 +19,16 @@ static void put(df_msg_stats *st, const char *key, double v)
     st->count++;
 }
 
-void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
+int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_stats_req m;
-    df_error err;
-    if (df_msg_stats_req_decode(p, h->payload_len, &m, &err) != DF_OK) {
-        df_reply_fail(c, h->type, h->request_id, &err);
-        return;
-    }
-    df_server *srv = c->srv;
+    int rc = df_msg_stats_req_decode(p, r->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_server *srv = r->srv;
     df_session *s = NULL;
-    if (m.session_id && !(s = df_h_session(c, h, m.session_id))) return;
+    if (m.session_id && !(s = df_session_find(srv, m.session_id)))
+        return df_error_set(err, DF_ENOTFOUND, "stats: no session %llu",
+                            (unsigned long long)m.session_id);
     df_msg_stat items[DF_STATS_MAX];
     df_msg_stats st = {0, items};
     const df_stats *x = &srv->stats;
@@ -53,6 +52,7 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "shm_refs", (double)x->shm_refs);
         put(&st, "requests_ok", (double)x->requests_ok);
         put(&st, "requests_failed", (double)x->requests_failed);
+        put(&st, "requests_double_answer", (double)x->requests_double_answer);
         put(&st, "jobs_submitted", (double)x->jobs_submitted);
         put(&st, "jobs_completed", (double)x->jobs_completed);
         put(&st, "jobs_running", srv->jobs_running);
@@ -122,5 +122,6 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "brush.last_ms", s->brush_last_ms);
         put(&st, "move.last_ms", s->move_last_ms);
     }
-    df_reply_stats(c, h->type, h->request_id, &st, 1);
+    df_req_reply_stats(r, &st);
+    return DF_OK;
 }

@@ -1,19 +1,20 @@
 /* handlers.h — one handler per request type (dispatch.c routes to them; loop thread).
  *
- * Each handler decodes its payload with the proto decoder and answers the request exactly once
- * (reply or error, which decrements c->pending), either right away or when its session job is
- * applied. `h` is the frame header, `p` the payload (h->payload_len bytes, valid during the
- * call). */
+ * Each handler decodes its payload `p` (r->len bytes, valid during the call) with the proto
+ * decoder and either answers request `r` itself (df_req_*), or queues a session job that
+ * answers it when applied (df_job_for_request: the job takes the request over), and returns
+ * DF_OK; or it returns an error code with `err` filled, answered by the dispatcher. */
 #ifndef DF_SERVER_HANDLERS_H
 #define DF_SERVER_HANDLERS_H
 
 #include <stdint.h>
 
 #include "proto/messages.h"
+#include "server/req.h"
 #include "server/server.h"
 #include "server/session.h"
 
-#define DF_HANDLER(name) void df_h_##name(df_conn *c, const df_frame_header *h, const uint8_t *p)
+#define DF_HANDLER(name) int df_h_##name(df_req *r, const uint8_t *p, df_error *err)
 DF_HANDLER(hello);
 DF_HANDLER(auth);
 DF_HANDLER(ping);
@@ -43,12 +44,14 @@ DF_HANDLER(snapshot);
 /* Fills a session_info body from `s` (loop thread). */
 void df_session_info_fill(const df_session *s, df_msg_session_info *out);
 
-/* Looks up a live session for request (h, c); on failure answers ENOTFOUND and returns NULL. */
-df_session *df_h_session(df_conn *c, const df_frame_header *h, uint64_t session_id);
+/* Decodes a session_ref request body `p` (r->len bytes) into *session_id. Errors: the
+ * decoder's. */
+int df_h_session_ref(const df_req *r, const uint8_t *p, uint64_t *session_id, df_error *err);
 
-/* Decodes a session_ref request body `p` and looks its session up; on failure answers the
- * decode error or ENOTFOUND and returns NULL. */
-df_session *df_h_session_ref(df_conn *c, const df_frame_header *h, const uint8_t *p);
+/* Decodes a session_ref request and submits a job of `kind` for it on that session
+ * (df_job_for_request). DF_OK, or the decode / lookup / allocation error (nothing queued). */
+struct df_job_kind;
+int df_h_ref_job(df_req *r, const uint8_t *p, const struct df_job_kind *kind, df_error *err);
 
 /* Largest |strength| of a brush stroke (BRUSH_BEGIN, SET_BRUSH_PARAM). */
 #define DF_BRUSH_MAX_STRENGTH 1e6

@@ -17,40 +17,63 @@ df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uin
     if (!j) return NULL;
     j->srv = srv;
     j->s = s;
-    j->c = c;
+    j->req.srv = srv;
+    j->req.c = c;
     if (c) {
         df_conn_ref(c);
         j->conn_id = c->id;
     }
-    j->type = type;
-    j->req_id = req_id;
+    j->req.type = type;
+    j->req.id = req_id;
     j->work = work;
     j->done = done;
     atomic_init(&j->cancel, 0);
     return j;
 }
 
-df_job *df_job_for_request(df_conn *c, const df_frame_header *h, df_session *s, size_t body_size,
-                           df_job_fn work, df_job_fn done, df_job_fn cleanup)
+/* Frees the body of a job made by df_job_for_request (after the kind's cleanup). */
+static void kind_cleanup(df_job *j)
 {
-    void *body = calloc(1, body_size);
-    df_job *j = body ? df_job_new(c->srv, s, c, h->type, h->request_id, work, done) : NULL;
-    if (!j) {
-        free(body);
-        df_error e;
-        df_error_set(&e, DF_ENOMEM, "out of memory");
-        df_reply_fail(c, h->type, h->request_id, &e);
+    const df_job_kind *k = j->kind;
+    if (k->cleanup) k->cleanup(j);
+    free(j->body);
+}
+
+df_job *df_job_for_request(df_req *r, uint64_t session_id, const df_job_kind *kind,
+                           df_error *err)
+{
+    df_session *s = df_session_find(r->srv, session_id);
+    if (!s) {
+        df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
+                     (unsigned long long)session_id);
         return NULL;
     }
+    void *body = kind->body_size ? calloc(1, kind->body_size) : NULL;
+    df_job *j = body || !kind->body_size
+                    ? df_job_new(r->srv, s, r->c, r->type, r->id, kind->work, kind->done)
+                    : NULL;
+    if (!j) {
+        free(body);
+        df_error_set(err, DF_ENOMEM, "out of memory");
+        return NULL;
+    }
+    j->req.flags = r->flags;
+    j->req.len = r->len;
+    r->answered = 1; /* the job answers it now (j->req) */
+    j->kind = kind;
     j->body = body;
-    j->cleanup = cleanup;
+    j->cleanup = kind_cleanup;
+    j->inline_cost = kind->inline_cost;
+    j->beside = kind->beside;
+    j->heavy = kind->heavy;
+    j->preemptible = kind->preemptible;
     return j;
 }
 
 static void job_free(df_job *j)
 {
     if (j->cleanup) j->cleanup(j);
-    if (j->c) df_conn_unref(j->c);
+    if (j->req.c) df_conn_unref(j->req.c);
     free(j);
 }
 
@@ -62,8 +85,7 @@ void df_job_broadcast(df_job *j, const df_frames *f)
 
 void df_job_ack(df_job *j)
 {
-    df_msg_ack a = {.session_id = j->s->id, .version = atomic_load(&j->s->version)};
-    if (j->c) df_reply_ack(j->c, j->type, j->req_id, &a, 1);
+    df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
 }
 
 static void pump(df_session *s);
@@ -91,7 +113,7 @@ static void run_beside(df_job *j)
     df_server_drain_mail(srv); /* subscribers have every version the move published so far */
     if (j->beside == DF_JOB_BESIDE_REFUSE)
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: a handle move is running on session %llu",
-                             df_msg_type_name(j->type), (unsigned long long)s->id);
+                             df_msg_type_name(j->req.type), (unsigned long long)s->id);
     else if (j->work)
         j->work(j);
     j->done(j);
@@ -223,7 +245,7 @@ void df_job_submit(df_job *j)
         run_beside(j);
         return;
     }
-    if (j->c) preempt(s); /* a requester must not wait for a move: it ends at its next iteration */
+    if (j->req.c) preempt(s); /* a requester must not wait for a move: it ends at its next iteration */
     if (s->jtail) s->jtail->next = j;
     else s->jhead = j;
     s->jtail = j;
@@ -265,6 +287,6 @@ int df_job_pred_all(const df_job *j, void *arg)
 int df_job_failed(df_job *j)
 {
     if (j->rc == DF_OK) return 0;
-    if (j->c) df_reply_fail(j->c, j->type, j->req_id, &j->err);
+    df_req_fail(&j->req, &j->err);
     return 1;
 }

@@ -40,6 +40,7 @@
 #include "core/common/df_error.h"
 #include "proto/frame.h"
 #include "server/pool.h"
+#include "server/req.h"
 #include "server/sbuf.h"
 #include "server/server.h"
 #include "server/session.h"
@@ -59,15 +60,14 @@ typedef uint64_t (*df_job_cost_fn)(const df_job *j);
 struct df_job {
     df_server *srv;
     df_session *s;            /* NULL for session-less jobs */
-    df_conn *c;               /* requester (a reference is held), or NULL */
+    df_req req;               /* the request (req.c: a reference is held), or req.c NULL */
     uint64_t conn_id;
-    uint16_t type;            /* request message type */
-    uint64_t req_id;
     df_job_fn work;           /* worker thread, may be NULL */
     df_job_fn done;           /* loop thread, required */
     df_job_fn cleanup;        /* frees `body`, may be NULL */
     df_job_cost_fn inline_cost; /* may be NULL: never inline (see "Inline jobs" above) */
     void *body;               /* request data owned by the job */
+    const struct df_job_kind *kind; /* df_job_for_request's kind, or NULL */
     int rc;                   /* result of work (DF_OK or DF_E*) */
     df_error err;
     atomic_int cancel;        /* set by the loop thread to supersede a running move */
@@ -86,11 +86,23 @@ struct df_job {
 df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
                    df_job_fn work, df_job_fn done);
 
-/* Creates a job for request `h` from connection `c` on session `s` (as df_job_new) with a zeroed
- * private body of `body_size` bytes in j->body, released by `cleanup` (which must free the body
- * too). On allocation failure it replies ENOMEM to `c` itself and returns NULL. */
-df_job *df_job_for_request(df_conn *c, const df_frame_header *h, df_session *s, size_t body_size,
-                           df_job_fn work, df_job_fn done, df_job_fn cleanup);
+/* What a kind of session job is: its private body, its functions and how it queues. */
+typedef struct df_job_kind {
+    size_t body_size;         /* zeroed body in j->body (0: none) */
+    df_job_fn work;           /* NULL: done only, on the loop thread */
+    df_job_fn done;           /* required */
+    df_job_fn cleanup;        /* frees what the body owns (not the body itself); may be NULL */
+    df_job_cost_fn inline_cost;
+    int beside;               /* DF_JOB_BESIDE_* */
+    int heavy, preemptible;   /* handle moves */
+} df_job_kind;
+
+/* The common start of a session request: looks session `session_id` up and makes a job of
+ * `kind` for request `r` on it (copying r into j->req; the job's body is freed with it). NULL
+ * with err set: DF_ENOTFOUND (no such live session), DF_ENOMEM; nothing is answered (the
+ * handler returns the error and the dispatcher answers it). */
+df_job *df_job_for_request(df_req *r, uint64_t session_id, const df_job_kind *kind,
+                           df_error *err);
 
 /* Queues the job (FIFO of j->s, or the pool when s is NULL). The job is freed after `done`. */
 void df_job_submit(df_job *j);

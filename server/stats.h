@@ -17,6 +17,7 @@ typedef struct df_stats {
     uint64_t writes_blocked;      /* writes a full socket left to uv_write (a slow reader) */
     uint64_t fanout_resumed;      /* subscriber-write passes continued after a slice (conn.h) */
     uint64_t requests_ok, requests_failed;
+    uint64_t requests_double_answer; /* answers to an already answered request (req.h; a bug) */
     uint64_t jobs_submitted, jobs_completed, jobs_superseded;
     uint64_t jobs_inline;         /* jobs whose work ran on the loop thread (job.h) */
     uint64_t jobs_inline_deferred;/* cheap enough, sent to the pool: iteration budget spent */
