@@ -9,41 +9,47 @@
 
 typedef int (*df_handler_fn)(df_req *r, const uint8_t *p, df_error *err);
 
+/* Per request type: a loop-thread handler, or the job kind of a session request. */
 static const struct {
     uint16_t type;
     df_handler_fn fn;
+    const df_job_kind *kind;
 } k_routes[] = {
-    {DF_MSG_HELLO, df_h_hello},
-    {DF_MSG_AUTH, df_h_auth},
-    {DF_MSG_PING, df_h_ping},
-    {DF_MSG_LOAD_MESH, df_h_load_mesh},
-    {DF_MSG_LIST_SESSIONS, df_h_list_sessions},
-    {DF_MSG_OPEN_SESSION, df_h_open_session},
-    {DF_MSG_CLOSE_SESSION, df_h_close_session},
-    {DF_MSG_SUBSCRIBE, df_h_subscribe},
-    {DF_MSG_UNSUBSCRIBE, df_h_unsubscribe},
-    {DF_MSG_STREAM_SHM, df_h_stream_shm},
-    {DF_MSG_BRUSH_BEGIN, df_h_brush_begin},
-    {DF_MSG_BRUSH_UPDATE, df_h_brush_update},
-    {DF_MSG_BRUSH_END, df_h_brush_end},
-    {DF_MSG_BRUSH_CANCEL, df_h_brush_cancel},
-    {DF_MSG_SET_BRUSH_PARAM, df_h_set_brush_param},
-    {DF_MSG_HANDLES_SET, df_h_handles_set},
-    {DF_MSG_HANDLES_MOVE, df_h_handles_move},
-    {DF_MSG_HANDLES_GET, df_h_handles_get},
-    {DF_MSG_RESET_REST, df_h_reset_rest},
-    {DF_MSG_UNDO, df_h_undo},
-    {DF_MSG_REDO, df_h_redo},
-    {DF_MSG_GET_MESH, df_h_get_mesh},
-    {DF_MSG_SNAPSHOT, df_h_snapshot},
-    {DF_MSG_STATS, df_h_stats},
+    {DF_MSG_HELLO, df_h_hello, NULL},
+    {DF_MSG_AUTH, df_h_auth, NULL},
+    {DF_MSG_PING, df_h_ping, NULL},
+    {DF_MSG_LOAD_MESH, df_h_load_mesh, NULL},
+    {DF_MSG_LIST_SESSIONS, df_h_list_sessions, NULL},
+    {DF_MSG_OPEN_SESSION, df_h_open_session, NULL},
+    {DF_MSG_STATS, df_h_stats, NULL},
+    {DF_MSG_CLOSE_SESSION, NULL, &df_k_close_session},
+    {DF_MSG_SUBSCRIBE, NULL, &df_k_subscribe},
+    {DF_MSG_UNSUBSCRIBE, NULL, &df_k_unsubscribe},
+    {DF_MSG_STREAM_SHM, NULL, &df_k_stream_shm},
+    {DF_MSG_BRUSH_BEGIN, NULL, &df_k_brush_begin},
+    {DF_MSG_BRUSH_UPDATE, NULL, &df_k_brush_update},
+    {DF_MSG_BRUSH_END, NULL, &df_k_brush_end},
+    {DF_MSG_BRUSH_CANCEL, NULL, &df_k_brush_cancel},
+    {DF_MSG_SET_BRUSH_PARAM, NULL, &df_k_set_brush_param},
+    {DF_MSG_HANDLES_SET, NULL, &df_k_handles_set},
+    {DF_MSG_HANDLES_MOVE, NULL, &df_k_handles_move},
+    {DF_MSG_HANDLES_GET, NULL, &df_k_handles_get},
+    {DF_MSG_RESET_REST, NULL, &df_k_reset_rest},
+    {DF_MSG_UNDO, NULL, &df_k_history},
+    {DF_MSG_REDO, NULL, &df_k_history},
+    {DF_MSG_GET_MESH, NULL, &df_k_get_mesh},
+    {DF_MSG_SNAPSHOT, NULL, &df_k_snapshot},
 };
 
 void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payload)
 {
     df_handler_fn fn = NULL;
+    const df_job_kind *kind = NULL;
     for (size_t i = 0; i < sizeof k_routes / sizeof k_routes[0]; i++)
-        if (k_routes[i].type == h->type) fn = k_routes[i].fn;
+        if (k_routes[i].type == h->type) {
+            fn = k_routes[i].fn;
+            kind = k_routes[i].kind;
+        }
     if (h->request_id == 0) { /* PROTOCOL.md 1.3: id 0 is reserved for events */
         c->srv->stats.requests_failed++;
         df_reply_error(c, DF_MSG_ERROR, 0, DF_EINVAL,
@@ -60,7 +66,7 @@ void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payl
                        (unsigned)h->flags);
         return;
     }
-    if (!fn) {
+    if (!fn && !kind) {
         c->srv->stats.requests_failed++;
         df_reply_error(c, h->type, h->request_id, DF_EPROTO_BADTYPE,
                        "%s 0x%04x is not a request",
@@ -107,6 +113,6 @@ void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payl
     df_req r = {.srv = c->srv, .c = c, .type = h->type, .id = h->request_id, .flags = h->flags,
                 .len = h->payload_len};
     df_error err;
-    int rc = fn(&r, payload, &err);
+    int rc = fn ? fn(&r, payload, &err) : df_job_request(&r, payload, kind, &err);
     if (rc != DF_OK) df_req_fail(&r, &err); /* synchronous errors; a queued job answers later */
 }

@@ -150,22 +150,7 @@ static void close_done(df_job *j)
     df_req_ack(&j->req, j->s->id, v);
 }
 
-int df_h_ref_job(df_req *r, const uint8_t *p, const df_job_kind *kind, df_error *err)
-{
-    uint64_t sid;
-    int rc = df_h_session_ref(r, p, &sid, err);
-    df_job *j = rc == DF_OK ? df_job_for_request(r, sid, kind, err) : NULL;
-    if (!j) return err->code;
-    df_job_submit(j);
-    return DF_OK;
-}
-
-static const df_job_kind k_close = {.done = close_done}; /* ends a running move first */
-
-int df_h_close_session(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_close, err);
-}
+const df_job_kind df_k_close_session = {.decode = df_job_decode_ref, .done = close_done};
 
 static void unsubscribe_done(df_job *j)
 {
@@ -174,54 +159,52 @@ static void unsubscribe_done(df_job *j)
     df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
 }
 
-static const df_job_kind k_unsubscribe = {.done = unsubscribe_done,
-                                          .beside = DF_JOB_BESIDE_READ};
+const df_job_kind df_k_unsubscribe = {.decode = df_job_decode_ref, .done = unsubscribe_done,
+                                      .beside = DF_JOB_BESIDE_READ};
 
-int df_h_unsubscribe(df_req *r, const uint8_t *p, df_error *err)
+/* Adds the requester to the session with `join` (subscribe, attach_shm); 1 when it may be
+ * answered with success, 0 when it was answered with an error or its connection is closing. */
+static int join(df_job *j, int (*join_fn)(df_session *s, df_conn *c, df_error *err))
 {
-    return df_h_ref_job(r, p, &k_unsubscribe, err);
+    df_error err;
+    if (df_job_failed(j) || j->req.c->closing) return 0;
+    if (join_fn(j->s, j->req.c, &err) != DF_OK) {
+        df_req_fail(&j->req, &err);
+        return 0;
+    }
+    return 1;
 }
 
 static void stream_shm_done(df_job *j)
 {
-    if (df_job_failed(j)) return;
+    if (!join(j, df_session_attach_shm)) return;
     df_session *s = j->s;
-    df_error err;
-    if (j->req.c->closing) return;
-    if (df_session_attach_shm(s, j->req.c, &err) != DF_OK) {
-        df_req_fail(&j->req, &err);
-        return;
-    }
     df_msg_shm_info info = {.session_id = s->id, .capacity = s->shm->capacity,
                             .min_frame = s->shm->min_frame, .max_frame = s->shm->max_frame};
     snprintf(info.path, sizeof info.path, "%s", s->shm->path);
     df_req_reply_shm_info(&j->req, &info);
 }
 
-static const df_job_kind k_stream_shm = {.done = stream_shm_done,
-                                         .beside = DF_JOB_BESIDE_READ};
-
 /* STREAM_SHM (PROTOCOL.md 6.1): queued behind the session's earlier requests so that the reply
  * marks the exact place in the stream from which this subscriber gets SHM_REFs. */
-int df_h_stream_shm(df_req *r, const uint8_t *p, df_error *err)
+static int stream_shm_decode(const df_req *r, const uint8_t *p, void *body, uint64_t *sid,
+                             df_error *err)
 {
     const char *why = r->c->is_tcp ? "needs a Unix-socket connection on the daemon's host"
                       : r->srv->cfg.shm_ring_bytes == 0 ? "disabled (shm_ring_bytes = 0)"
                                                         : NULL;
     if (why) return df_error_set(err, DF_EUNSUPPORTED, "stream_shm: %s", why);
-    return df_h_ref_job(r, p, &k_stream_shm, err);
+    return df_job_decode_ref(r, p, body, sid, err);
 }
+
+const df_job_kind df_k_stream_shm = {.decode = stream_shm_decode, .done = stream_shm_done,
+                                     .beside = DF_JOB_BESIDE_READ};
 
 static void subscribe_done(df_job *j)
 {
-    if (df_job_failed(j)) return;
+    if (!join(j, df_session_subscribe)) return;
     df_session *s = j->s;
     df_error err;
-    if (j->req.c->closing) return;
-    if (df_session_subscribe(s, j->req.c, &err) != DF_OK) {
-        df_req_fail(&j->req, &err);
-        return;
-    }
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(&j->req, &info);
@@ -235,19 +218,20 @@ static void subscribe_done(df_job *j)
     }
 }
 
-static const df_job_kind k_subscribe = {.body_size = sizeof(uint8_t), .done = subscribe_done,
-                                        .beside = DF_JOB_BESIDE_READ}; /* may join a move */
-
-int df_h_subscribe(df_req *r, const uint8_t *p, df_error *err)
+static int subscribe_decode(const df_req *r, const uint8_t *p, void *body, uint64_t *sid,
+                            df_error *err)
 {
     df_msg_subscribe m;
     int rc = df_msg_subscribe_decode(p, r->len, &m, err);
-    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_subscribe, err) : NULL;
-    if (!j) return err->code;
-    *(uint8_t *)j->body = (uint8_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
-    df_job_submit(j);
-    return DF_OK;
+    if (rc != DF_OK) return rc;
+    *sid = m.session_id;
+    *(uint8_t *)body = (uint8_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
+    return rc;
 }
+
+const df_job_kind df_k_subscribe = {.body_size = sizeof(uint8_t), .decode = subscribe_decode,
+                                    .done = subscribe_done,
+                                    .beside = DF_JOB_BESIDE_READ}; /* may join a move */
 
 typedef struct knob {
     uint8_t param;
@@ -281,17 +265,18 @@ static void knob_done(df_job *j)
     df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
 }
 
-static const df_job_kind k_knob = {.body_size = sizeof(knob), .done = knob_done};
-
-int df_h_set_brush_param(df_req *r, const uint8_t *p, df_error *err)
+static int knob_decode(const df_req *r, const uint8_t *p, void *body, uint64_t *sid,
+                       df_error *err)
 {
     df_msg_brush_param m;
     int rc = df_msg_brush_param_decode(p, r->len, &m, err);
-    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_knob, err) : NULL;
-    if (!j) return err->code;
-    knob *k = j->body;
+    if (rc != DF_OK) return rc;
+    knob *k = body;
+    *sid = m.session_id;
     k->param = m.param;
     k->value = m.value;
-    df_job_submit(j);
-    return DF_OK;
+    return rc;
 }
+
+const df_job_kind df_k_set_brush_param = {.body_size = sizeof(knob), .decode = knob_decode,
+                                          .done = knob_done};

@@ -45,10 +45,10 @@ typedef struct brush_req {
     df_frames frames;
 } brush_req;
 
-static void req_free(df_job *j)
+static void req_free(df_server *srv, void *body)
 {
-    brush_req *r = j->body;
-    if (!r) return;
+    (void)srv;
+    brush_req *r = body;
     df_msg_brush_free(&r->begin);
     if (r->created) {
         free(r->created->pins);
@@ -385,14 +385,6 @@ static void brush_done(df_job *j)
     df_cache_enforce(srv);
 }
 
-static const df_job_kind k_begin = {.body_size = sizeof(brush_req), .work = begin_work,
-                                    .done = brush_done, .cleanup = req_free};
-static const df_job_kind k_update = {.body_size = sizeof(brush_req), .work = update_work,
-                                     .done = brush_done, .cleanup = req_free,
-                                     .inline_cost = update_cost};
-static const df_job_kind k_cancel = {.body_size = sizeof(brush_req), .work = update_work,
-                                     .done = brush_done, .cleanup = req_free};
-
 /* The cumulative load of a begin or update message (move, twist, scale, matrix) into r->load. */
 static void load_from(brush_req *r, const double *move, const double *twist, double scale,
                       const double *matrix)
@@ -403,33 +395,37 @@ static void load_from(brush_req *r, const double *move, const double *twist, dou
     memcpy(r->load + 7, matrix, 9 * sizeof(double));
 }
 
-int df_h_brush_begin(df_req *rq, const uint8_t *p, df_error *err)
+static int begin_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
+                        df_error *err)
 {
-    df_msg_brush m;
-    int rc = df_msg_brush_decode(p, rq->len, &m, err);
+    brush_req *r = body;
+    int rc = df_msg_brush_decode(p, rq->len, &r->begin, err); /* owned by the body from here */
     if (rc != DF_OK) return rc;
-    df_job *j = df_job_for_request(rq, m.session_id, &k_begin, err);
-    if (!j) {
-        df_msg_brush_free(&m);
-        return err->code;
-    }
-    brush_req *r = j->body;
-    load_from(r, m.move, m.twist, m.scale, m.matrix);
-    r->begin = m;
-    df_job_submit(j);
+    *sid = r->begin.session_id;
+    load_from(r, r->begin.move, r->begin.twist, r->begin.scale, r->begin.matrix);
     return DF_OK;
 }
 
-int df_h_brush_update(df_req *rq, const uint8_t *p, df_error *err)
+static int update_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
+                         df_error *err)
 {
     df_msg_brush_update m;
     int rc = df_msg_brush_update_decode(p, rq->len, &m, err);
-    df_job *j = rc == DF_OK ? df_job_for_request(rq, m.session_id, &k_update, err) : NULL;
-    if (!j) return err->code;
-    load_from(j->body, m.move, m.twist, m.scale, m.matrix);
-    df_job_submit(j);
+    if (rc != DF_OK) return rc;
+    *sid = m.session_id;
+    load_from(body, m.move, m.twist, m.scale, m.matrix);
     return DF_OK;
 }
+
+const df_job_kind df_k_brush_begin = {.body_size = sizeof(brush_req), .decode = begin_decode,
+                                      .release = req_free, .work = begin_work,
+                                      .done = brush_done};
+const df_job_kind df_k_brush_update = {.body_size = sizeof(brush_req), .decode = update_decode,
+                                       .release = req_free, .work = update_work,
+                                       .done = brush_done, .inline_cost = update_cost};
+const df_job_kind df_k_brush_cancel = {.body_size = sizeof(brush_req),
+                                       .decode = df_job_decode_ref, .release = req_free,
+                                       .work = update_work, .done = brush_done};
 
 static void end_done(df_job *j)
 {
@@ -450,14 +446,4 @@ static void end_done(df_job *j)
     df_job_ack(j);
 }
 
-static const df_job_kind k_end = {.done = end_done};
-
-int df_h_brush_end(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_end, err);
-}
-
-int df_h_brush_cancel(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_cancel, err);
-}
+const df_job_kind df_k_brush_end = {.decode = df_job_decode_ref, .done = end_done};

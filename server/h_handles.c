@@ -39,13 +39,12 @@ typedef struct hs_req {
     df_frames frames;          /* reset-rest: its frame(s) */
 } hs_req;
 
-static void req_free(df_job *j)
+static void req_free(df_server *srv, void *body)
 {
-    hs_req *r = j->body;
-    if (!r) return;
+    hs_req *r = body;
     df_msg_handles_free(&r->m);
     df_msg_handle_move_free(&r->mv);
-    if (r->hs) df_handleset_free(j->srv, r->hs);
+    if (r->hs) df_handleset_free(srv, r->hs);
     df_frames_clear(&r->frames);
 }
 
@@ -130,23 +129,17 @@ static void set_done(df_job *j)
     df_cache_enforce(j->srv);
 }
 
-static const df_job_kind k_set = {.body_size = sizeof(hs_req), .work = set_work,
-                                  .done = set_done, .cleanup = req_free};
-
-int df_h_handles_set(df_req *r, const uint8_t *p, df_error *err)
+static int set_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
+                      df_error *err)
 {
-    df_msg_handles m;
-    int rc = df_msg_handles_decode(p, r->len, &m, err);
-    if (rc != DF_OK) return rc;
-    df_job *j = df_job_for_request(r, m.session_id, &k_set, err);
-    if (!j) {
-        df_msg_handles_free(&m);
-        return err->code;
-    }
-    ((hs_req *)j->body)->m = m;
-    df_job_submit(j);
-    return DF_OK;
+    hs_req *r = body;
+    int rc = df_msg_handles_decode(p, rq->len, &r->m, err); /* owned by the body */
+    *sid = r->m.session_id;
+    return rc;
 }
+
+const df_job_kind df_k_handles_set = {.body_size = sizeof(hs_req), .decode = set_decode,
+                                      .release = req_free, .work = set_work, .done = set_done};
 
 /* Handles_get: the session's current set as a handles body (loop thread, in FIFO order so it sees
  * every earlier handles_set). The affine index arrays point into `hs` (valid during the call). */
@@ -214,13 +207,8 @@ static void get_done(df_job *j)
     df_sbuf_unref(f);
 }
 
-static const df_job_kind k_get = {.done = get_done, /* the set cannot change during a move */
-                                  .beside = DF_JOB_BESIDE_READ};
-
-int df_h_handles_get(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_get, err);
-}
+const df_job_kind df_k_handles_get = {.decode = df_job_decode_ref, .done = get_done,
+                                      .beside = DF_JOB_BESIDE_READ}; /* fixed during a move */
 
 static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }
 
@@ -428,32 +416,31 @@ static int pred_move(const df_job *j, void *arg)
     return 1;
 }
 
-static const df_job_kind k_move = {.body_size = sizeof(hs_req), .work = move_work,
-                                   .done = move_done, .cleanup = req_free, .heavy = 1,
-                                   .preemptible = 1};
-
-int df_h_handles_move(df_req *r, const uint8_t *p, df_error *err)
+static int move_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
+                       df_error *err)
 {
-    df_msg_handle_move m;
-    int rc = df_msg_handle_move_decode(p, r->len, &m, err);
-    if (rc != DF_OK) return rc;
-    df_job *j = df_job_for_request(r, m.session_id, &k_move, err);
-    if (!j) {
-        df_msg_handle_move_free(&m);
-        return err->code;
-    }
+    hs_req *r = body;
+    int rc = df_msg_handle_move_decode(p, rq->len, &r->mv, err); /* owned by the body */
+    *sid = r->mv.session_id;
+    return rc;
+}
+
+/* A newer move supersedes the running one and any queued ones. */
+static void move_queued(df_job *j)
+{
     df_session *s = j->s;
-    ((hs_req *)j->body)->mv = m;
-    /* A newer move supersedes the running one and any queued ones. */
     if (s->running && s->running->req.type == DF_MSG_HANDLES_MOVE) {
         atomic_store(&s->running->cancel, 1);
-        r->srv->stats.jobs_superseded++;
+        j->srv->stats.jobs_superseded++;
     }
-    r->srv->stats.jobs_superseded +=
+    j->srv->stats.jobs_superseded +=
         (uint64_t)df_job_drop_queued(s, pred_move, NULL, "superseded by a newer move");
-    df_job_submit(j);
-    return DF_OK;
 }
+
+const df_job_kind df_k_handles_move = {.body_size = sizeof(hs_req), .decode = move_decode,
+                                       .release = req_free, .queued = move_queued,
+                                       .work = move_work, .done = move_done, .heavy = 1,
+                                       .preemptible = 1};
 
 static void reset_work(df_job *j)
 {
@@ -474,10 +461,6 @@ static void reset_done(df_job *j)
     df_job_ack(j);
 }
 
-static const df_job_kind k_reset = {.body_size = sizeof(hs_req), .work = reset_work,
-                                    .done = reset_done, .cleanup = req_free};
-
-int df_h_reset_rest(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_reset, err);
-}
+const df_job_kind df_k_reset_rest = {.body_size = sizeof(hs_req), .decode = df_job_decode_ref,
+                                     .release = req_free, .work = reset_work,
+                                     .done = reset_done};

@@ -17,10 +17,10 @@ typedef struct mesh_req {
     df_frames frames;
 } mesh_req;
 
-static void req_free(df_job *j)
+static void req_free(df_server *srv, void *body)
 {
-    mesh_req *r = j->body;
-    if (r) df_frames_clear(&r->frames);
+    (void)srv;
+    df_frames_clear(&((mesh_req *)body)->frames);
 }
 
 /* Sends the job's frames to the requester only: a multi-frame reply (the last is final). */
@@ -73,19 +73,10 @@ static void history_done(df_job *j)
     df_job_ack(j);
 }
 
-static const df_job_kind k_history = {.body_size = sizeof(mesh_req), .work = history_work,
-                                      .done = history_done, .cleanup = req_free,
-                                      .beside = DF_JOB_BESIDE_REFUSE}; /* ESTATE beside a move */
-
-int df_h_undo(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_history, err);
-}
-
-int df_h_redo(df_req *r, const uint8_t *p, df_error *err)
-{
-    return df_h_ref_job(r, p, &k_history, err);
-}
+const df_job_kind df_k_history = {.body_size = sizeof(mesh_req), .decode = df_job_decode_ref,
+                                  .release = req_free, .work = history_work,
+                                  .done = history_done,
+                                  .beside = DF_JOB_BESIDE_REFUSE}; /* ESTATE beside a move */
 
 /* ---- get mesh ---- */
 
@@ -162,21 +153,26 @@ static void frames_done(df_job *j)
     reply_frames(j);
 }
 
-/* get-mesh and snapshot answer the last published version while a move runs */
-static const df_job_kind k_get_mesh = {.body_size = sizeof(mesh_req), .work = get_mesh_work,
-                                       .done = frames_done, .cleanup = req_free,
-                                       .beside = DF_JOB_BESIDE_READ};
-
-int df_h_get_mesh(df_req *r, const uint8_t *p, df_error *err)
+/* Decodes a get-mesh or a snapshot request into its mesh_req. */
+static int read_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
+                       df_error *err)
 {
-    df_msg_get_mesh m;
-    int rc = df_msg_get_mesh_decode(p, r->len, &m, err);
-    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_get_mesh, err) : NULL;
-    if (!j) return err->code;
-    ((mesh_req *)j->body)->flags = m.flags;
-    df_job_submit(j);
+    mesh_req *r = body;
+    df_msg_get_mesh g;
+    df_msg_snapshot_req q;
+    int rc = rq->type == DF_MSG_GET_MESH ? df_msg_get_mesh_decode(p, rq->len, &g, err)
+                                         : df_msg_snapshot_req_decode(p, rq->len, &q, err);
+    if (rc != DF_OK) return rc;
+    *sid = rq->type == DF_MSG_GET_MESH ? g.session_id : q.session_id;
+    if (rq->type == DF_MSG_GET_MESH) r->flags = g.flags;
+    else r->version = q.version;
     return DF_OK;
 }
+
+/* get-mesh and snapshot answer the last published version while a move runs */
+const df_job_kind df_k_get_mesh = {.body_size = sizeof(mesh_req), .decode = read_decode,
+                                   .release = req_free, .work = get_mesh_work,
+                                   .done = frames_done, .beside = DF_JOB_BESIDE_READ};
 
 /* ---- snapshot ---- */
 
@@ -194,17 +190,6 @@ static void snapshot_work(df_job *j)
     j->rc = df_stream_snapshot(s, DF_MSG_SNAPSHOT, j->req.id, &r->frames, &j->err);
 }
 
-static const df_job_kind k_snapshot = {.body_size = sizeof(mesh_req), .work = snapshot_work,
-                                       .done = frames_done, .cleanup = req_free,
-                                       .beside = DF_JOB_BESIDE_READ};
-
-int df_h_snapshot(df_req *r, const uint8_t *p, df_error *err)
-{
-    df_msg_snapshot_req m;
-    int rc = df_msg_snapshot_req_decode(p, r->len, &m, err);
-    df_job *j = rc == DF_OK ? df_job_for_request(r, m.session_id, &k_snapshot, err) : NULL;
-    if (!j) return err->code;
-    ((mesh_req *)j->body)->version = m.version;
-    df_job_submit(j);
-    return DF_OK;
-}
+const df_job_kind df_k_snapshot = {.body_size = sizeof(mesh_req), .decode = read_decode,
+                                   .release = req_free, .work = snapshot_work,
+                                   .done = frames_done, .beside = DF_JOB_BESIDE_READ};

@@ -31,31 +31,39 @@ df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uin
     return j;
 }
 
-/* Frees the body of a job made by df_job_for_request (after the kind's cleanup). */
+/* Frees the body of a job made by df_job_request (what it owns first). */
 static void kind_cleanup(df_job *j)
 {
-    const df_job_kind *k = j->kind;
-    if (k->cleanup) k->cleanup(j);
+    if (j->kind->release && j->body) j->kind->release(j->srv, j->body);
     free(j->body);
 }
 
-df_job *df_job_for_request(df_req *r, uint64_t session_id, const df_job_kind *kind,
-                           df_error *err)
+int df_job_decode_ref(const df_req *r, const uint8_t *p, void *body, uint64_t *session_id,
+                      df_error *err)
 {
-    df_session *s = df_session_find(r->srv, session_id);
-    if (!s) {
-        df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
-                     (unsigned long long)session_id);
-        return NULL;
-    }
+    (void)body;
+    df_msg_session_ref m;
+    int rc = df_msg_session_ref_decode(p, r->len, &m, err);
+    if (rc == DF_OK) *session_id = m.session_id;
+    return rc;
+}
+
+int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_error *err)
+{
     void *body = kind->body_size ? calloc(1, kind->body_size) : NULL;
-    df_job *j = body || !kind->body_size
-                    ? df_job_new(r->srv, s, r->c, r->type, r->id, kind->work, kind->done)
-                    : NULL;
+    if (kind->body_size && !body) return df_error_set(err, DF_ENOMEM, "out of memory");
+    uint64_t sid = 0;
+    int rc = kind->decode(r, p, body, &sid, err);
+    df_session *s = NULL;
+    if (rc == DF_OK && !(s = df_session_find(r->srv, sid)))
+        rc = df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
+                          (unsigned long long)sid);
+    df_job *j = rc == DF_OK ? df_job_new(r->srv, s, r->c, r->type, r->id, kind->work, kind->done)
+                            : NULL;
     if (!j) {
+        if (kind->release && body) kind->release(r->srv, body);
         free(body);
-        df_error_set(err, DF_ENOMEM, "out of memory");
-        return NULL;
+        return rc != DF_OK ? rc : df_error_set(err, DF_ENOMEM, "out of memory");
     }
     j->req.flags = r->flags;
     j->req.len = r->len;
@@ -67,7 +75,9 @@ df_job *df_job_for_request(df_req *r, uint64_t session_id, const df_job_kind *ki
     j->beside = kind->beside;
     j->heavy = kind->heavy;
     j->preemptible = kind->preemptible;
-    return j;
+    if (kind->queued) kind->queued(j);
+    df_job_submit(j);
+    return DF_OK;
 }
 
 static void job_free(df_job *j)

@@ -86,23 +86,35 @@ struct df_job {
 df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
                    df_job_fn work, df_job_fn done);
 
-/* What a kind of session job is: its private body, its functions and how it queues. */
+/* What a kind of session request is (dispatch.c routes a request type to its kind): how its
+ * payload is decoded, the job's private body, its functions and how it queues. */
 typedef struct df_job_kind {
     size_t body_size;         /* zeroed body in j->body (0: none) */
+    /* Decodes payload `p` (r->len bytes) into `body` and names the session (*session_id);
+     * DF_OK or the decode/check error. Loop thread. Required. */
+    int (*decode)(const df_req *r, const uint8_t *p, void *body, uint64_t *session_id,
+                  df_error *err);
+    /* Frees what a body owns (not the body itself); also after a failed decode. May be NULL. */
+    void (*release)(df_server *srv, void *body);
+    /* Called with the new job before it is queued (a move supersedes older ones). May be NULL. */
+    void (*queued)(df_job *j);
     df_job_fn work;           /* NULL: done only, on the loop thread */
     df_job_fn done;           /* required */
-    df_job_fn cleanup;        /* frees what the body owns (not the body itself); may be NULL */
     df_job_cost_fn inline_cost;
     int beside;               /* DF_JOB_BESIDE_* */
     int heavy, preemptible;   /* handle moves */
 } df_job_kind;
 
-/* The common start of a session request: looks session `session_id` up and makes a job of
- * `kind` for request `r` on it (copying r into j->req; the job's body is freed with it). NULL
- * with err set: DF_ENOTFOUND (no such live session), DF_ENOMEM; nothing is answered (the
- * handler returns the error and the dispatcher answers it). */
-df_job *df_job_for_request(df_req *r, uint64_t session_id, const df_job_kind *kind,
-                           df_error *err);
+/* The one path of every session request: decodes request `r` with kind->decode, looks its
+ * session up and queues a job of `kind` for it, which takes the request over (r is marked
+ * answered; j->req answers it, holding a connection reference). DF_OK, or the decode error,
+ * DF_ENOTFOUND (no such live session) or DF_ENOMEM with err set and nothing queued or answered
+ * (the dispatcher answers). Loop thread. */
+int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_error *err);
+
+/* Decoder of the requests whose body is a session_ref (no job body). */
+int df_job_decode_ref(const df_req *r, const uint8_t *p, void *body, uint64_t *session_id,
+                      df_error *err);
 
 /* Queues the job (FIFO of j->s, or the pool when s is NULL). The job is freed after `done`. */
 void df_job_submit(df_job *j);

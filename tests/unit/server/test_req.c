@@ -1,6 +1,6 @@
 /* Unit tests for server/req.c: a request is answered exactly once. A second answer is counted in
  * stats.requests_double_answer and sends nothing (release behaviour, df_req_strict = 0), or
- * aborts (df_req_strict = 1, the default of debug builds); df_job_for_request takes the request
+ * aborts (df_req_strict = 1, the default of debug builds); df_job_request takes the request
  * over (the original is marked answered, the job's copy answers it) and fails with ENOTFOUND
  * for a missing session without answering anything. */
 #include <stdarg.h>
@@ -69,16 +69,34 @@ static void test_double_answer_aborts_when_strict(void **state)
 
 static void noop_done(df_job *j) { (void)j; }
 
+static int g_released;
+static void count_release(df_server *srv, void *body)
+{
+    (void)srv;
+    (void)body;
+    g_released++;
+}
+
+/* A decoder naming session 42 (there is none). */
+static int decode_42(const df_req *r, const uint8_t *p, void *body, uint64_t *sid, df_error *err)
+{
+    (void)r, (void)p, (void)body, (void)err;
+    *sid = 42;
+    return DF_OK;
+}
+
 static void test_job_takes_the_request_over(void **state)
 {
     (void)state;
     df_server srv;
     server_init(&srv);
-    static const df_job_kind kind = {.body_size = 16, .done = noop_done};
+    static const df_job_kind kind = {.body_size = 16, .decode = decode_42,
+                                     .release = count_release, .done = noop_done};
     df_req r = {.srv = &srv, .type = DF_MSG_BRUSH_END, .id = 9, .len = 8};
     df_error e;
-    assert_null(df_job_for_request(&r, 42, &kind, &e)); /* no session 42 */
+    assert_int_equal(df_job_request(&r, NULL, &kind, &e), DF_ENOTFOUND); /* no session 42 */
     assert_int_equal(e.code, DF_ENOTFOUND);
+    assert_int_equal(g_released, 1);  /* the decoded body was released */
     assert_int_equal(r.answered, 0); /* the dispatcher answers it */
 }
 
