@@ -5,11 +5,11 @@
 #   server/**/*.c        -> build/lib/libdf_server.a + server/main.c -> build/bin/deformd
 #   client/**/*.c        -> build/lib/libdeformclient.a   (minus client/deformctl/, client/python/)
 #   client/deformctl/**/*.c -> build/bin/deformctl
-#   tests/unit/<area>/**/test_*.c -> build/tests/unit/<area>/.../test_*  (cmocka, one binary per file)
+#   tests/unit/<area>/**/test_*.c -> build/tests/unit/<area>/.../test_*  (cmocka, one per file)
 #   tests/bench/bench_*.c      -> build/bench/bench_*
 #   tests/fuzz/fuzz_*.c        -> build/fuzz/fuzz_*  (clang libFuzzer, `make fuzz`)
 # Layers (tests/check_layers.sh, run by `make test`, holds the allowed #include matrix):
-#   core <- proto <- client <- deformctl;  core, proto <- server.  Each binary links only its layers:
+#   core <- proto <- client <- deformctl;  core, proto <- server. Each binary links its layers only:
 #   deformd: server proto core + libuv; deformctl: client proto mesh common kelvinlet (local brush
 #   check); libdeformclient needs proto mesh common only (client/deformclient.pc.in).
 # Release flags: -O2 -march=x86-64-v2 (SSE4.2/POPCNT: every x86-64 server of the last decade) plus
@@ -138,7 +138,8 @@ endef
 $(foreach a,$(UNIT_AREAS),$(eval $(call unit_area,$(a))))
 $(BUILD)/bench/%: tests/bench/%.c $(ALL_LIBS)
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(LDFLAGS) $(call group,$(ALL_LIBS)) $(MATH_LIBS) $(SERVER_SYS)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(LDFLAGS) $(call group,$(ALL_LIBS)) $(MATH_LIBS) \
+	  $(SERVER_SYS)
 
 # The README's test command: deps, build, every suite, one closing "N passed, N failed" line.
 test: deps
@@ -183,8 +184,8 @@ tsan:
 tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN))
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
-# sources (compiled once into $(BUILD)/fuzz/obj; -MMD -MP: header changes rebuild them, the .d
-# files are included at the end like the others). `make fuzz` mutates for FUZZ_SECONDS each, writing new
+# sources (compiled once into $(BUILD)/fuzz/obj; -MMD -MP: header changes rebuild them; their .d
+# files are included at the end). `make fuzz` mutates for FUZZ_SECONDS each, writing new
 # inputs to $(BUILD)/fuzz/corpus/X and only reading the checked-in seeds in tests/fuzz/corpus/X.
 FUZZ_SECONDS ?= 60
 FUZZ_CC     := clang
@@ -229,7 +230,8 @@ install: all
 	for h in $(CLIENT_HEADERS); do install -D -m 644 $$h $(DESTDIR)$(PREFIX)/include/deformd/$$h; done
 	install -m 644 client/deformclient.h $(DESTDIR)$(PREFIX)/include/deformd/deformclient.h
 	sed 's|@PREFIX@|$(PREFIX)|' client/deformclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/deformclient.pc
-	sed -e 's|/usr/local/bin/|$(PREFIX)/bin/|' -e 's|file:///usr/share/doc/deformd/|file://$(DOCDIR)/|' \
+	sed -e 's|/usr/local/bin/|$(PREFIX)/bin/|' \
+	  -e 's|file:///usr/share/doc/deformd/|file://$(DOCDIR)/|' \
 	  systemd/deformd.service > $(DESTDIR)$(PREFIX)/lib/systemd/system/deformd.service
 	install -m 644 systemd/deformd.socket $(DESTDIR)$(PREFIX)/lib/systemd/system/
 	install -m 644 systemd/deformd.conf.example README.md proto/PROTOCOL.md $(DESTDIR)$(DOCDIR)/
