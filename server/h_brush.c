@@ -21,7 +21,6 @@
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
  * change. */
 #include <math.h>
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,7 +32,8 @@
 #include "server/stream.h"
 
 /* Below this many vertices a brush field is evaluated by the worker thread alone: waking an
- * OpenMP team costs more than it saves. */
+ * OpenMP team costs more than it saves. Above it, on the `threads` setting (config.h) at most:
+ * passed in the prepared field, never through omp_set_num_threads. */
 #define DF_BRUSH_PARALLEL_MIN_VERTICES 32768
 
 typedef struct brush_req {
@@ -77,12 +77,12 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     b.s = k * load[6];
     for (int i = 0; i < 9; i++) b.grad[i] = k * load[7 + i];
     df_kelvinlet_prepared prep;
-    int rc;
-    omp_set_num_threads(s->nv < DF_BRUSH_PARALLEL_MIN_VERTICES ? 1 : omp_get_num_procs());
+    int rc, threads = s->nv < DF_BRUSH_PARALLEL_MIN_VERTICES ? 1 : s->srv->cfg.threads;
     if (st->n_pins) {
         df_kelvinlet_pins pins = {.n = st->n_pins, .points = st->pins,
                                   .flags = st->pin_flags, .radius = b.radius,
-                                  .ratio = b.ratio, .nu = b.nu, .order = b.order};
+                                  .ratio = b.ratio, .nu = b.nu, .order = b.order,
+                                  .threads = threads};
         if (!s->kc) {
             rc = df_kelvinlet_constraints_create(&pins, &s->kc, err);
             r->kc_hit = 0;
@@ -99,6 +99,7 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
         rc = df_kelvinlet_prepare(&b, &prep, err);
     }
     if (rc != DF_OK) return rc;
+    prep.threads = threads;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
     if (rc == DF_OK && s->mesh.planar) /* 2D session: z stays 0 (planar_check), verified */

@@ -1,15 +1,19 @@
 #!/usr/bin/env bash
 # Runs every test suite and prints one closing line "N passed, N failed[, N skipped]".
+#   layers: tests/check_layers.sh over the checkout (one test: no #include crosses a layer) and
+#         tests/check_layers_selftest.sh (one test: the checker rejects fake violations).
 #   unit: each build/tests/unit/<area>/test_* cmocka binary (its "[  PASSED  ] N test(s)." lines
 #         are summed; a binary that dies without a FAILED line counts as one failure).
 #   integration: /usr/bin/python3 -m pytest tests/integration (when it holds test_*.py files).
 #   fuzz: each build/fuzz/fuzz_* libFuzzer binary mutates for FUZZ_TEST_SECONDS from its checked-in
 #         seeds (tests/fuzz/corpus/<name>); one test each, failed on any crash, leak or UB report.
-# Environment: BUILD (build dir), MESHES (../shared/meshes), PYTHON, SUITES ("unit integration fuzz").
+# Environment: BUILD (build dir), MESHES (../shared/meshes), PYTHON,
+#   SUITES ("layers unit integration fuzz"), PYTEST_ARGS (extra pytest arguments, e.g. make tsan's
+#   --deselect of a cost-dependent test).
 set -u
 BUILD=${BUILD:-build}
 PYTHON=${PYTHON:-/usr/bin/python3}
-SUITES=${SUITES:-unit integration fuzz}
+SUITES=${SUITES:-layers unit integration fuzz}
 FUZZ_TEST_SECONDS=${FUZZ_TEST_SECONDS:-15}
 export MESHES=${MESHES:-$(cd "$(dirname "$0")/.." && pwd)/../shared/meshes}
 passed=0; failed=0; skipped=0
@@ -18,6 +22,14 @@ log=$(mktemp); trap 'rm -f "$log"' EXIT
 count() { # $1 = regex with one capture group of the count; reads $log
   sed -n -E "s/$1/\\1/p" "$log" | awk '{s+=$1} END {print s+0}'
 }
+
+if [[ " $SUITES " == *" layers "* ]]; then
+  here=$(cd "$(dirname "$0")" && pwd)
+  for t in check_layers.sh check_layers_selftest.sh; do
+    echo "== tests/$t"
+    if bash "$here/$t"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "!! tests/$t failed"; fi
+  done
+fi
 
 if [[ " $SUITES " == *" unit "* ]]; then
   for t in $(find "$BUILD/tests/unit" -type f -name 'test_*' -perm -u+x 2>/dev/null | sort); do
@@ -34,7 +46,9 @@ fi
 
 if [[ " $SUITES " == *" integration "* ]] && ls tests/integration/test_*.py >/dev/null 2>&1; then
   echo "== pytest tests/integration"
-  BUILD=$BUILD "$PYTHON" -m pytest tests/integration -q -rs -p no:cacheprovider >"$log" 2>&1; rc=$?
+  # shellcheck disable=SC2086  # PYTEST_ARGS is a word list
+  BUILD=$BUILD "$PYTHON" -m pytest tests/integration -q -rs -p no:cacheprovider ${PYTEST_ARGS:-} \
+    >"$log" 2>&1; rc=$?
   cat "$log"
   last=$(grep -E '[0-9]+ (passed|failed|error)' "$log" | tail -n 1)
   pick() { echo "$last" | grep -oE "[0-9]+ $1" | head -n 1 | awk '{print $1+0}'; }

@@ -1,5 +1,5 @@
 /* dc_brush.c — local Kelvinlet validation of a stroke before it is sent (see dc_brush.h). */
-#include "client/dc_brush.h"
+#include "client/deformctl/dc_brush.h"
 
 #include <string.h>
 

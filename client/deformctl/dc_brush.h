@@ -1,9 +1,11 @@
-/* dc_brush.h — local pre-flight check of a brush stroke: runs the Kelvinlet engine's own
- * validation (core/kelvinlet) on the stroke that deformctl is about to send, so that strokes the
- * daemon would reject (pinch gradient not symmetric/traceless, nu outside [-1, 0.5], scale at
- * nu = 0.5, radius out of range, coincident pins...) fail with a clear message before connecting. */
-#ifndef DF_CLIENT_DC_BRUSH_H
-#define DF_CLIENT_DC_BRUSH_H
+/* dc_brush.h — deformctl's local pre-flight check of a brush stroke (part of deformctl, not of
+ * libdeformclient, which needs no Kelvinlet solver): runs the Kelvinlet engine's own validation
+ * (core/kelvinlet) on the stroke that deformctl is about to send, so that strokes the daemon
+ * would reject (pinch gradient not symmetric/traceless, nu outside [-1, 0.5], scale at
+ * nu = 0.5, radius out of range, coincident pins...) fail with a clear message before
+ * connecting. */
+#ifndef DF_CTL_DC_BRUSH_H
+#define DF_CTL_DC_BRUSH_H
 
 #include "core/common/df_error.h"
 #include "core/kelvinlet/kelvinlet.h"
