@@ -39,10 +39,7 @@
 typedef struct brush_req {
     df_msg_brush begin;          /* begin: the message (owns `pinned`) */
     double load[16];             /* move[3] twist[3] scale matrix[9] */
-    df_stroke *created;          /* begin: the new stroke, linked in done */
-    int kc_used, kc_hit;         /* pinned-point solver used / reused without refactoring */
-    uint32_t kc_pins;            /* its number of pins */
-    df_frames frames;
+    df_stroke *created;          /* begin: the new stroke (moved to the change on success) */
 } brush_req;
 
 static void req_free(df_server *srv, void *body)
@@ -57,16 +54,17 @@ static void req_free(df_server *srv, void *body)
         free(r->created->applied);
         free(r->created);
     }
-    df_frames_clear(&r->frames);
 }
 
 static const df_kelvinlet_type k_types[] = {DF_KELVINLET_GRAB, DF_KELVINLET_GRAB,
                                             DF_KELVINLET_TWIST, DF_KELVINLET_SCALE,
                                             DF_KELVINLET_PINCH, DF_KELVINLET_AFFINE};
 
-/* Computes the displacement of the stroke's brush under `load` at st->startf into disp. */
-static int stroke_field(df_session *s, df_stroke *st, const double *load, float *disp,
-                        brush_req *r, df_error *err)
+/* Computes the displacement of the stroke's brush under `load` at st->startf into disp. A pin
+ * LU built here goes to the change (ch->kc); an existing one (s->kc, the running job's cache
+ * object: only evicted while its session is idle) is refactorized in place when pins changed. */
+static int stroke_field(const df_session *s, const df_stroke *st, const double *load,
+                        float *disp, df_change *ch, df_error *err)
 {
     df_kelvinlet_brush b = st->brush;
     double k = st->strength;
@@ -83,18 +81,20 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
                                   .flags = st->pin_flags, .radius = b.radius,
                                   .ratio = b.ratio, .nu = b.nu, .order = b.order,
                                   .threads = threads};
-        if (!s->kc) {
-            rc = df_kelvinlet_constraints_create(&pins, &s->kc, err);
-            r->kc_hit = 0;
+        df_kelvinlet_constraints *kc = s->kc;
+        if (!kc) {
+            rc = df_kelvinlet_constraints_create(&pins, &ch->kc, err);
+            kc = ch->kc;
+            ch->kc_hit = 0;
         } else {
-            unsigned long before = df_kelvinlet_constraints_factorizations(s->kc);
-            rc = df_kelvinlet_constraints_update(s->kc, &pins, err);
-            r->kc_hit = df_kelvinlet_constraints_factorizations(s->kc) == before;
+            unsigned long before = df_kelvinlet_constraints_factorizations(kc);
+            rc = df_kelvinlet_constraints_update(kc, &pins, err);
+            ch->kc_hit = df_kelvinlet_constraints_factorizations(kc) == before;
         }
         if (rc != DF_OK) return rc;
-        r->kc_used = 1;
-        r->kc_pins = st->n_pins;
-        rc = df_kelvinlet_constraints_solve(s->kc, &b, &prep, err);
+        ch->kc_used = 1;
+        ch->kc_pins = st->n_pins;
+        rc = df_kelvinlet_constraints_solve(kc, &b, &prep, err);
     } else {
         rc = df_kelvinlet_prepare(&b, &prep, err);
     }
@@ -111,36 +111,42 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     return rc;
 }
 
-/* Publishes base + m as the next version, m = fl32(x0 + disp) - x0 the float32 motion of each
- * stroke-start point x0 = st->startf (0 where disp is below x0's resolution; disp =
- * s->scratch_disp, replaced by m). On success the stroke contributes m. Buffers are swapped,
- * not copied. */
-static int stroke_publish(df_session *s, df_stroke *st, uint8_t kind, brush_req *r,
-                          df_error *err)
+/* Encodes base + m as the next version into change `ch`, m = fl32(x0 + disp) - x0 the float32
+ * motion of each stroke-start point x0 = st->startf (0 where disp is below x0's resolution;
+ * disp = s->scratch_disp, replaced by m). The commit makes the stroke contribute m. The job's
+ * borrowed scratch buffers are swapped in by the commit, not copied. */
+static int stroke_publish(const df_session *s, const df_stroke *st, uint8_t kind,
+                          df_change *ch, df_error *err)
 {
     size_t n = 3 * (size_t)s->nv;
     float *disp = s->scratch_disp;
-    if (atomic_load(&s->version) != st->last_version) /* someone else changed the mesh */
-        for (size_t i = 0; i < n; i++) st->base[i] = s->cur[i] - (double)st->applied[i];
+    const double *base = st->base;
+    double *rebased = NULL;
+    if (atomic_load(&s->version) != st->last_version) { /* someone else changed the mesh */
+        rebased = malloc(n * sizeof *rebased);
+        if (!rebased) return df_error_set(err, DF_ENOMEM, "out of memory");
+        for (size_t i = 0; i < n; i++) rebased[i] = s->cur[i] - (double)st->applied[i];
+        base = rebased;
+    }
     double *pos = s->scratch_pos;
     const float *x0 = st->startf;
-    const double *base = st->base;
 #pragma omp simd /* one fused pass; distinct arrays (gcc -O2 would not vectorize it) */
     for (size_t i = 0; i < n; i++) {
         float m = (x0[i] + disp[i]) - x0[i];
         disp[i] = m;
         pos[i] = base[i] + (double)m;
     }
-    int rc = df_stream_publish(s, pos, kind, NULL, 0, &r->frames, NULL, err);
-    if (rc == DF_OK) {
-        s->scratch_pos = s->cur;
-        s->cur = pos;
-        float *a = st->applied;
-        st->applied = s->scratch_disp;
-        s->scratch_disp = a;
-        st->last_version = atomic_load(&s->version);
+    int rc = df_stream_encode(s, pos, kind, NULL, 0, s->scratch_u, &ch->frames, NULL, err);
+    if (rc != DF_OK) {
+        free(rebased);
+        return rc;
     }
-    return rc;
+    ch->pos = pos;
+    ch->uf = s->scratch_u;
+    ch->version = atomic_load(&s->version) + 1;
+    ch->applied = disp;
+    ch->base = rebased;
+    return DF_OK;
 }
 
 /* True when stroke `st` contributes no displacement (n floats of st->applied are all zero):
@@ -242,21 +248,27 @@ static int load_is_zero(const double *load)
 
 static void begin_work_inner(df_job *j);
 
+/* Work of BRUSH_BEGIN (pure: reads the session, fills j->change; the scratch buffers were lent
+ * by job.c). */
 static void begin_work(df_job *j)
 {
     uint64_t t0 = uv_hrtime();
     begin_work_inner(j);
     uint64_t dt = uv_hrtime() - t0;
-    j->s->brush_last_ms = (double)dt / 1e6;
+    j->change.brush_ms = (double)dt / 1e6;
     brush_req *r = j->body; /* a zero-load begin evaluates no field: nothing measured */
     if (r->created && !load_is_zero(r->load) && j->rc == DF_OK) r->created->work_ns = dt;
+    if (j->rc == DF_OK) { /* the new stroke goes to the session with the commit */
+        j->change.link = r->created;
+        r->created = NULL;
+    }
 }
 
 static void begin_work_inner(df_job *j)
 {
     brush_req *r = j->body;
-    df_session *s = j->s;
-    if (df_session_stroke(s, j->conn_id)) {
+    const df_session *s = j->s;
+    if (df_session_stroke(j->s, j->conn_id)) {
         j->rc = df_error_set(&j->err, DF_ESTATE,
                              "brush_begin: this client already has an open stroke on session "
                              "%llu (end or cancel it first)", (unsigned long long)s->id);
@@ -264,10 +276,6 @@ static void begin_work_inner(df_job *j)
     }
     size_t n = 3 * (size_t)s->nv;
     df_stroke *st = calloc(1, sizeof *st);
-    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) {
-        free(st);
-        return;
-    }
     float *disp = s->scratch_disp;
     if (st) {
         st->base = malloc(n * sizeof *st->base);
@@ -312,20 +320,26 @@ static void begin_work_inner(df_job *j)
     if ((j->rc = planar_check(s, &st->brush, st, r->load, "brush_begin", &j->err)) != DF_OK)
         return;
     if (load_is_zero(r->load)) return;
-    j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
-    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
+    j->rc = stroke_field(s, st, r->load, disp, &j->change, &j->err);
+    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, &j->change, &j->err);
 }
 
 static void update_work_inner(df_job *j);
 
+/* Work of BRUSH_UPDATE and BRUSH_CANCEL (pure, as begin_work). */
 static void update_work(df_job *j)
 {
     uint64_t t0 = uv_hrtime();
     update_work_inner(j);
     uint64_t dt = uv_hrtime() - t0;
-    j->s->brush_last_ms = (double)dt / 1e6;
-    df_stroke *st = df_session_stroke(j->s, j->conn_id);
-    if (st && j->req.type == DF_MSG_BRUSH_UPDATE) st->work_ns = j->rc == DF_OK ? dt : 0;
+    df_change *ch = &j->change;
+    ch->brush_ms = (double)dt / 1e6;
+    ch->stroke = df_session_stroke(j->s, j->conn_id);
+    if (ch->stroke && j->req.type == DF_MSG_BRUSH_UPDATE) {
+        ch->set_work_ns = 1;
+        ch->work_ns = j->rc == DF_OK ? dt : 0;
+    }
+    if (j->req.type == DF_MSG_BRUSH_CANCEL) ch->drop_stroke = 1;
 }
 
 /* Predicted cost of a brush update at the head of its FIFO: the same stroke's last field
@@ -340,50 +354,25 @@ static uint64_t update_cost(const df_job *j)
 static void update_work_inner(df_job *j)
 {
     brush_req *r = j->body;
-    df_session *s = j->s;
-    df_stroke *st = df_session_stroke(s, j->conn_id);
+    const df_session *s = j->s;
+    const df_stroke *st = df_session_stroke(j->s, j->conn_id);
     if (!st) {
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: no open stroke on session %llu",
                              df_msg_type_name(j->req.type), (unsigned long long)s->id);
         return;
     }
     size_t n = 3 * (size_t)s->nv;
-    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
     float *disp = s->scratch_disp;
+    df_change *ch = &j->change;
     if (j->req.type == DF_MSG_BRUSH_CANCEL) {
         if (stroke_applied_nothing(st, n)) return; /* nothing to undo: no version */
         memset(disp, 0, n * sizeof *disp);
-        j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, r, &j->err);
+        j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, ch, &j->err);
     } else {
         j->rc = planar_check(s, NULL, st, r->load, "brush_update", &j->err);
-        if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, r, &j->err);
-        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r, &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, ch, &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, ch, &j->err);
     }
-}
-
-static void brush_done(df_job *j)
-{
-    brush_req *r = j->body;
-    df_session *s = j->s;
-    df_server *srv = j->srv;
-    if (r->kc_used) {
-        if (r->kc_hit) srv->stats.kelvin_lu_hits++;
-        else srv->stats.kelvin_lu_misses++;
-        if (s->kc) {
-            srv->cache_bytes -= s->kc_bytes <= srv->cache_bytes ? s->kc_bytes : srv->cache_bytes;
-            df_cache_install_kelvinlet(srv, s, df_cache_estimate_kelvinlet(r->kc_pins));
-        }
-    }
-    if (df_job_failed(j)) return;
-    df_job_broadcast(j, &r->frames);
-    if (r->created) { /* link the new stroke */
-        r->created->next = s->strokes;
-        s->strokes = r->created;
-        r->created = NULL;
-    }
-    if (j->req.type == DF_MSG_BRUSH_CANCEL) df_session_drop_stroke(s, j->conn_id);
-    df_job_ack(j);
-    df_cache_enforce(srv);
 }
 
 /* The cumulative load of a begin or update message (move, twist, scale, matrix) into r->load. */
@@ -420,31 +409,23 @@ static int update_decode(const df_req *rq, const uint8_t *p, void *body, uint64_
 
 const df_job_kind df_k_brush_begin = {.body_size = sizeof(brush_req), .decode = begin_decode,
                                       .release = req_free, .work = begin_work,
-                                      .done = brush_done};
+                                      .done = df_job_commit};
 const df_job_kind df_k_brush_update = {.body_size = sizeof(brush_req), .decode = update_decode,
                                        .release = req_free, .work = update_work,
-                                       .done = brush_done, .inline_cost = update_cost};
+                                       .done = df_job_commit, .inline_cost = update_cost};
 const df_job_kind df_k_brush_cancel = {.body_size = sizeof(brush_req),
                                        .decode = df_job_decode_ref, .release = req_free,
-                                       .work = update_work, .done = brush_done};
+                                       .work = update_work, .done = df_job_commit};
 
+/* BRUSH_END: the stroke becomes one undo step and is dropped (loop thread, in FIFO order). */
 static void end_done(df_job *j)
 {
-    if (df_job_failed(j)) return;
-    df_session *s = j->s;
-    if (!df_session_stroke(s, j->conn_id)) {
+    if (j->rc == DF_OK && !df_session_stroke(j->s, j->conn_id))
         j->rc = df_error_set(&j->err, DF_ESTATE, "brush_end: no open stroke on session %llu",
-                             (unsigned long long)s->id);
-        df_job_failed(j);
-        return;
-    }
-    if (df_session_history_commit(s, &j->err) != DF_OK) {
-        j->rc = j->err.code;
-        df_job_failed(j);
-        return;
-    }
-    df_session_drop_stroke(s, j->conn_id);
-    df_job_ack(j);
+                             (unsigned long long)j->s->id);
+    j->change.hist = DF_HIST_COMMIT;
+    j->change.drop_stroke = 1;
+    df_job_commit(j);
 }
 
 const df_job_kind df_k_brush_end = {.decode = df_job_decode_ref, .done = end_done};

@@ -36,7 +36,6 @@ typedef struct hs_req {
     int yield;                 /* move: on_progress asked to yield */
     int iters_done;            /* move: iterations of the earlier slices */
     uint64_t slice_t0;         /* move: start of the current slice (uv_hrtime) */
-    df_frames frames;          /* reset-rest: its frame(s) */
 } hs_req;
 
 static void req_free(df_server *srv, void *body)
@@ -45,7 +44,6 @@ static void req_free(df_server *srv, void *body)
     df_msg_handles_free(&r->m);
     df_msg_handle_move_free(&r->mv);
     if (r->hs) df_handleset_free(srv, r->hs);
-    df_frames_clear(&r->frames);
 }
 
 /* Builds the solver of `hs` against the session's rest shape. */
@@ -113,20 +111,10 @@ static void set_work(df_job *j)
         hs->n_affine++;
     }
     j->rc = build_solver(s, hs, &j->err);
-}
-
-static void set_done(df_job *j)
-{
-    hs_req *r = j->body;
-    df_session *s = j->s;
-    if (df_job_failed(j)) return;
-    df_handleset_free(j->srv, s->hs);
-    s->hs = r->hs;
+    if (j->rc != DF_OK) return;
+    j->change.hs = hs; /* installed, its solver cached, by the commit */
+    j->change.solver_created = 1;
     r->hs = NULL;
-    j->srv->stats.admm_misses++;
-    df_cache_install_solver(j->srv, s->hs, df_cache_estimate_admm(s->nv, s->mesh.ne));
-    df_job_ack(j);
-    df_cache_enforce(j->srv);
 }
 
 static int set_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
@@ -139,7 +127,8 @@ static int set_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *
 }
 
 const df_job_kind df_k_handles_set = {.body_size = sizeof(hs_req), .decode = set_decode,
-                                      .release = req_free, .work = set_work, .done = set_done};
+                                      .release = req_free, .work = set_work,
+                                      .done = df_job_commit};
 
 /* Handles_get: the session's current set as a handles body (loop thread, in FIFO order so it sees
  * every earlier handles_set). The affine index arrays point into `hs` (valid during the call). */
@@ -343,7 +332,7 @@ static void move_work(df_job *j)
     int rc = df_admm_run(hs->solver, &b, &r->res, &j->err);
     if (r->publish_failed) { /* j->err holds the refusal; the iterates before it stay */
         r->status = DF_MOVE_FAILED;
-        s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+        j->change.move_ms = (double)(uv_hrtime() - r->t0) / 1e6;
         j->rc = r->publish_failed;
         return;
     }
@@ -353,7 +342,7 @@ static void move_work(df_job *j)
         if (!(r->res.residual < hs->params.tol) && r->iters_done < max_iters) {
             r->resumed = 1; /* back to the tail of the long lane; continues from here */
             j->task.requeue = 1;
-            s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+            j->change.move_ms = (double)(uv_hrtime() - r->t0) / 1e6;
             return;
         }
         if (r->res.residual < hs->params.tol) { /* it converged at the yielding iteration */
@@ -367,24 +356,29 @@ static void move_work(df_job *j)
     else if (r->res.converged) r->status = DF_MOVE_CONVERGED;
     else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
     else r->status = DF_MOVE_BUDGET;
-    s->move_last_ms = (double)(uv_hrtime() - r->t0) / 1e6;
+    j->change.move_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
                               r->res.objective, r->res.residual, r->status, 1);
     j->rc = rc != DF_OK ? rc : prc;
 }
 
+/* A move's commit: the solver's cache accounting and, when it published iterates (each already
+ * a version: see publish_iterate), one undo step; then the move result (or its error). */
 static void move_done(df_job *j)
 {
     hs_req *r = j->body;
     df_session *s = j->s;
-    df_server *srv = j->srv;
-    if (r->created) {
-        srv->stats.admm_misses++;
-        df_cache_install_solver(srv, s->hs, df_cache_estimate_admm(s->nv, s->mesh.ne));
-    } else if (r->hit) {
-        srv->stats.admm_hits++;
-        df_cache_touch_solver(srv, s->hs);
-    }
+    df_change *ch = &j->change;
+    df_error herr;
+    ch->solver_created = r->created;
+    ch->solver_hit = r->hit;
+    ch->hist = r->published && !r->superseded ? DF_HIST_COMMIT : DF_HIST_NONE;
+    ch->answered_by_job = 1;
+    ch->err = &herr;
+    ch->rc = DF_OK; /* its published iterates stay, even when the move then failed */
+    if (df_session_commit(s, ch) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
+               (unsigned long long)s->id);
     /* the final frames were posted by the worker and broadcast before this `done` (job.c) */
     df_msg_move_result res;
     memset(&res, 0, sizeof res);
@@ -395,9 +389,6 @@ static void move_done(df_job *j)
         df_req_reply_move_result(&j->req, &res);
         return;
     }
-    if (r->published && df_session_history_commit(s, NULL) != DF_OK)
-        df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
-               (unsigned long long)s->id);
     if (df_job_failed(j)) return;
     res.status = r->status;
     res.iterations = (uint32_t)r->res.iterations;
@@ -405,7 +396,6 @@ static void move_done(df_job *j)
     res.residual = finite_or(r->res.residual, DBL_MAX);
     res.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     df_req_reply_move_result(&j->req, &res);
-    df_cache_enforce(srv);
 }
 
 static int pred_move(const df_job *j, void *arg)
@@ -442,25 +432,23 @@ const df_job_kind df_k_handles_move = {.body_size = sizeof(hs_req), .decode = mo
                                        .work = move_work, .done = move_done, .heavy = 1,
                                        .preemptible = 1};
 
+/* Work of RESET_REST (pure): the current positions as a new version (kind RESET_REST); the
+ * commit makes them the rest shape, clears undo/redo and drops the solver (rebuilt against the
+ * new rest by the next move). */
 static void reset_work(df_job *j)
 {
-    hs_req *r = j->body;
-    df_session *s = j->s;
-    j->rc = df_stream_publish(s, s->cur, DF_CHANGE_RESET_REST, NULL, 0, &r->frames, NULL, &j->err);
-    if (j->rc == DF_OK) memcpy(s->rest, s->cur, 3 * (size_t)s->nv * sizeof(double));
-}
-
-static void reset_done(df_job *j)
-{
-    hs_req *r = j->body;
-    df_session *s = j->s;
-    if (df_job_failed(j)) return;
-    df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
-    if (s->hs) df_cache_drop_solver(j->srv, s->hs); /* rebuilt against the new rest */
-    df_session_history_reset(s, NULL); /* reset-rest clears undo/redo */
-    df_job_ack(j);
+    const df_session *s = j->s;
+    df_change *ch = &j->change;
+    j->rc = df_stream_encode(s, s->cur, DF_CHANGE_RESET_REST, NULL, 0, s->scratch_u,
+                             &ch->frames, NULL, &j->err);
+    if (j->rc != DF_OK) return;
+    ch->uf = s->scratch_u;
+    ch->version = atomic_load(&s->version) + 1;
+    ch->rest_from_cur = 1;
+    ch->hist = DF_HIST_RESET;
+    ch->solver_drop = 1;
 }
 
 const df_job_kind df_k_reset_rest = {.body_size = sizeof(hs_req), .decode = df_job_decode_ref,
                                      .release = req_free, .work = reset_work,
-                                     .done = reset_done};
+                                     .done = df_job_commit};

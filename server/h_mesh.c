@@ -33,10 +33,10 @@ static void reply_frames(df_job *j)
 
 /* ---- undo / redo ---- */
 
+/* Work of UNDO / REDO (pure: fills j->change). */
 static void history_work(df_job *j)
 {
-    mesh_req *r = j->body;
-    df_session *s = j->s;
+    const df_session *s = j->s;
     int undo = j->req.type == DF_MSG_UNDO;
     if (s->strokes) {
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: a brush stroke is open on session %llu",
@@ -49,33 +49,23 @@ static void history_work(df_job *j)
                              (unsigned long long)s->id);
         return;
     }
-    /* The target state is rebuilt from the history's steps into the scratch positions, which
-     * then become s->cur (the history itself moves in history_done, on the loop thread). */
-    if ((j->rc = df_stream_scratch(s, &j->err)) != DF_OK) return;
+    /* The target state is rebuilt from the history's steps into the scratch positions the job
+     * borrowed; the commit swaps them in and moves the history (commit.h). */
     double *state = s->scratch_pos;
     if ((j->rc = df_history_peek(&s->hist, undo ? -1 : 1, state, &j->err)) != DF_OK) return;
-    j->rc = df_stream_publish(s, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL, 0,
-                              &r->frames, NULL, &j->err);
-    if (j->rc == DF_OK) {
-        s->scratch_pos = s->cur;
-        s->cur = state;
-    }
-}
-
-static void history_done(df_job *j)
-{
-    mesh_req *r = j->body;
-    df_session *s = j->s;
-    if (df_job_failed(j)) return;
-    if (j->req.type == DF_MSG_UNDO) df_history_undo(&s->hist, NULL);
-    else df_history_redo(&s->hist, NULL);
-    df_job_broadcast(j, &r->frames); /* a successful publish made at least one frame */
-    df_job_ack(j);
+    df_change *ch = &j->change;
+    j->rc = df_stream_encode(s, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL, 0,
+                             s->scratch_u, &ch->frames, NULL, &j->err);
+    if (j->rc != DF_OK) return;
+    ch->pos = state;
+    ch->uf = s->scratch_u;
+    ch->version = atomic_load(&s->version) + 1;
+    ch->hist = undo ? DF_HIST_UNDO : DF_HIST_REDO;
 }
 
 const df_job_kind df_k_history = {.body_size = sizeof(mesh_req), .decode = df_job_decode_ref,
                                   .release = req_free, .work = history_work,
-                                  .done = history_done,
+                                  .done = df_job_commit,
                                   .beside = DF_JOB_BESIDE_REFUSE}; /* ESTATE beside a move */
 
 /* ---- get mesh ---- */

@@ -28,6 +28,7 @@ df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uin
     j->work = work;
     j->done = done;
     atomic_init(&j->cancel, 0);
+    df_change_init(&j->change, &j->req, &j->err);
     return j;
 }
 
@@ -83,19 +84,15 @@ int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_erro
 static void job_free(df_job *j)
 {
     if (j->cleanup) j->cleanup(j);
+    df_change_clear(j->srv, &j->change);
     if (j->req.c) df_conn_unref(j->req.c);
     free(j);
 }
 
-void df_job_broadcast(df_job *j, const df_frames *f)
+void df_job_commit(df_job *j)
 {
-    for (size_t i = 0; i < f->n; i++) df_session_broadcast(j->s, f->v[i]);
-    if (f->n) j->srv->stats.versions++;
-}
-
-void df_job_ack(df_job *j)
-{
-    df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
+    j->change.rc = j->rc;
+    df_session_commit(j->s, &j->change);
 }
 
 static void pump(df_session *s);
@@ -207,6 +204,10 @@ static void pump(df_session *s)
         j->next = NULL;
         s->running = j;
         if (j->preemptible && s->jhead) preempt(s); /* requests already wait behind it */
+        if (j->work && (j->rc = df_stream_scratch(s, &j->err)) != DF_OK) { /* lent to the work */
+            finish(j);
+            continue;
+        }
         if (j->work && runs_inline(j)) { /* cheaper than two thread hand-offs */
             uint64_t t0 = uv_hrtime();
             j->work(j);

@@ -1,8 +1,10 @@
 /* job.h — requests as jobs: per-session FIFO, compute on the libuv thread pool.
  *
- * A job has an optional `work` (runs on a worker thread, touches only the job's own data and its
- * session's compute state) and a `done` (runs on the loop thread afterwards: publishes frames,
- * replies). Jobs of one session run strictly one after another in submission order; jobs of
+ * A job has an optional `work` (runs on a worker thread: reads its session, which no other
+ * job touches meanwhile, and fills the job's own data and change record j->change; it writes no
+ * session field, see commit.h) and a `done` (runs on the loop thread afterwards: commits the
+ * change with df_job_commit, or answers a read). Jobs of one session run strictly one after
+ * another in submission order; jobs of
  * different sessions run in parallel: on the server's compute pool (srv->pool, see pool.h: low
  * hand-off latency for interactive strokes), or on the libuv pool (uv_queue_work) when the
  * server has no pool. A job without `work` runs `done` directly on the loop thread when it
@@ -39,6 +41,7 @@
 
 #include "core/common/df_error.h"
 #include "proto/frame.h"
+#include "server/commit.h"
 #include "server/pool.h"
 #include "server/req.h"
 #include "server/sbuf.h"
@@ -78,6 +81,7 @@ struct df_job {
     uv_work_t w;              /* session-less jobs, and every job of a server without a pool */
     df_task task;             /* session jobs on srv->pool */
     uint64_t version;         /* version after the job (for the ack) */
+    df_change change;         /* what the work computed, committed by df_job_commit (commit.h) */
     struct df_job *next;
 };
 
@@ -123,13 +127,9 @@ void df_job_submit(df_job *j);
  * closed and idle (loop thread). */
 void df_job_pump(df_session *s);
 
-/* Broadcasts the frames of one new version (`f`, in order; the list keeps its references) to the
- * subscribers of j's session and counts the version when there is any frame (loop thread). */
-void df_job_broadcast(df_job *j, const df_frames *f);
-
-/* Answers the requester (if it is still there) with an ack carrying the session's current
- * version (loop thread). */
-void df_job_ack(df_job *j);
+/* The `done` of jobs whose work fills j->change: commits it (df_session_commit with the job's
+ * rc and error), which answers the request. */
+void df_job_commit(df_job *j);
 
 /* Removes queued (not started) jobs of session `s` for which pred(j, arg) is 1, running their
  * `done` with rc = DF_ESTATE and the given message first. Returns how many. */
@@ -137,7 +137,7 @@ int df_job_drop_queued(df_session *s, int (*pred)(const df_job *j, void *arg), v
                        const char *why);
 
 /* When j->rc is an error: answers the requester (if any) with j->err and returns 1; else 0.
- * Every `done` starts with `if (df_job_failed(j)) return;` unless it needs to clean up. */
+ * A `done` that does not commit starts with `if (df_job_failed(j)) return;`. */
 int df_job_failed(df_job *j);
 
 /* 1 when the session's running job is a move that a request arriving now could be answered

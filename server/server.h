@@ -18,6 +18,7 @@
 
 struct df_session;
 struct df_job;
+struct df_change;
 
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
 #define DF_CONN_MAX_SUBS 64            /* sessions one connection may subscribe to */
@@ -92,6 +93,10 @@ typedef struct df_server {
     uint64_t refuse_log_ms, refuse_suppressed; /* refusal log rate limit (guard.h) */
     uint64_t sweep_epoch;
     df_stats stats;
+    /* Step 4 of every session commit (commit.h): where a journal or replication log appends
+     * its record. NULL: none. Loop thread. */
+    void (*commit_hook)(void *arg, const struct df_session *s, const struct df_change *c);
+    void *commit_hook_arg;
 } df_server;
 
 /* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,

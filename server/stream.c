@@ -144,15 +144,13 @@ static inline uint32_t row_changed(const float *u, const float *v)
     return (a != b) | (c != d);
 }
 
-int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
-                      const df_msg_progress *progress, uint64_t req_id, df_frames *out,
-                      uint32_t *changed, df_error *err)
+int df_stream_encode(const df_session *s, const double *pos, uint8_t kind,
+                     const df_msg_progress *progress, uint64_t req_id, float *newu,
+                     df_frames *out, uint32_t *changed, df_error *err)
 {
-    if (df_stream_scratch(s, err) != DF_OK) return err ? err->code : DF_ENOMEM;
     size_t nv = (size_t)s->nv;
     const double *X = s->mesh.V;
     const float *uf = s->uf;
-    float *newu = s->scratch_u;
     int32_t *idx = s->scratch_idx;
     /* Pass 1: new displacements, their finiteness, changed components. `omp simd` because
      * gcc's -O2 cost model will not add the alias checks needed to vectorize it on its own. */
@@ -211,11 +209,21 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
     }
     int rc = emit_chunks(&d, progress, DF_MSG_DISPLACEMENT, DF_FLAG_EVENT,
                          progress ? req_id : 0, out, err);
+    if (rc == DF_OK && changed) *changed = k;
+    return rc;
+}
+
+int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
+                      const df_msg_progress *progress, uint64_t req_id, df_frames *out,
+                      uint32_t *changed, df_error *err)
+{
+    if (df_stream_scratch(s, err) != DF_OK) return err ? err->code : DF_ENOMEM;
+    int rc = df_stream_encode(s, pos, kind, progress, req_id, s->scratch_u, out, changed, err);
     if (rc == DF_OK) {
-        s->scratch_u = s->uf; /* swap: newu becomes the published state */
+        float *newu = s->scratch_u; /* swap: newu becomes the published state */
+        s->scratch_u = s->uf;
         s->uf = newu;
-        atomic_store(&s->version, version);
-        if (changed) *changed = k;
+        atomic_store(&s->version, atomic_load(&s->version) + 1);
     }
     return rc;
 }
