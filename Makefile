@@ -132,8 +132,10 @@ fuzz: fuzz-build
 	  echo "== $$n for $(FUZZ_SECONDS) s"; \
 	  $$b -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$c tests/fuzz/corpus/$$c || exit 1; done
 
-run: all
-	bash tests/demo_run.sh
+# Like test: installs the Debian packages first, so it works as the first command on a fresh machine.
+run: deps
+	$(MAKE) all
+	BUILD=$(BUILD) MESHES=$(MESHES) bash tests/demo_run.sh
 
 # Installs the daemon, deformctl, the systemd units, libdeformclient (static, with the libraries it
 # needs), its header tree under include/deformd/ and a pkg-config file:
