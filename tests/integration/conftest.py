@@ -4,7 +4,8 @@
 to the repo root) in the foreground on a temporary Unix socket and a free loopback TCP port, waits
 until it answers a ping on both, and on teardown stops it with SIGTERM and checks it exits with
 status 0. `make_daemon` starts extra daemons with their own config (e.g. a small output queue).
-Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent.
+Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent
+(skip_or_fail: under CI=true every skip is a failure). A missing deformd always fails.
 """
 import os
 import signal
@@ -174,9 +175,17 @@ def make_daemon():
         t.cleanup()
 
 
+def skip_or_fail(reason: str) -> None:
+    """The suite's one skip helper: skips the running test with `reason`, or, under CI (environment
+    CI=true), fails it, so that a missing prerequisite fails a CI run instead of thinning it out."""
+    if os.environ.get("CI") == "true":
+        pytest.fail("%s (CI=true: a skip is a failure)" % reason, pytrace=False)
+    pytest.skip(reason)
+
+
 @pytest.fixture(scope="session")
 def meshes() -> str:
-    """The shared mesh folder; skips the test (with the reason) when it is absent."""
+    """The shared mesh folder; skips the test (with the reason) when it is absent (fails under CI)."""
     if not os.path.isdir(MESHES):
-        pytest.skip("shared meshes not found at %s (set MESHES)" % MESHES)
+        skip_or_fail("shared meshes not found at %s (set MESHES)" % MESHES)
     return MESHES

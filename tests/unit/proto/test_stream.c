@@ -15,6 +15,7 @@
 
 #include "core/mesh/mesh_io.h"
 #include "proto/messages.h"
+#include "tests/unit/unit_skip.h"
 
 /* Encode budget of one 1M-vertex dense frame: 60 frames/s leaves 16 ms per frame; sanitizer
  * builds (make asan) are ~10x slower and get a proportionally larger budget. */
@@ -238,10 +239,8 @@ static void test_get_mesh_reassembly_of_real_mesh(void **state)
     char path[1024];
     snprintf(path, sizeof path, "%s/bunny.mesh", meshes_dir());
     FILE *f = fopen(path, "rb");
-    if (!f) {
-        printf("skip: %s not found (set MESHES to the shared meshes folder)\n", path);
-        skip();
-    }
+    if (!f)
+        unit_skip("%s not found (set MESHES to the shared meshes folder)", path);
     fclose(f);
     df_mesh mesh;
     df_mesh_init(&mesh);
