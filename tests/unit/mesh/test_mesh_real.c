@@ -12,20 +12,11 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <cmocka.h>
 
 #include "core/mesh/mesh_io.h"
 #include "core/mesh/operators.h"
 #include "tests/unit/unit_skip.h"
-
-/* Parse-time budget for the 2.4 MB bunny OBJ and the 1.1 MB pig .ele (+ .node), seconds; the
- * sanitizer build (make asan) runs ~25x slower and gets a looser bound. */
-#if defined(__SANITIZE_ADDRESS__)
-#define PARSE_BUDGET_S 5.0
-#else
-#define PARSE_BUDGET_S 1.0
-#endif
 
 static const char *meshes_dir(void)
 {
@@ -271,38 +262,6 @@ static void test_operators_on_real_meshes(void **state)
     df_mesh_free(&m);
 }
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static void test_parse_speed(void **state)
-{
-    (void)state;
-    have_meshes();
-    static const char *files[] = {"stanford-bunny.obj", "pig_rest.ele"};
-    for (int f = 0; f < 2; f++) {
-        char p[1024];
-        path_of(p, sizeof p, files[f]);
-        double best = 1e9;
-        for (int rep = 0; rep < 3; rep++) {
-            df_mesh m;
-            df_mesh_init(&m);
-            double t0 = now();
-            assert_int_equal(df_mesh_read_file(p, NULL, &m, NULL, NULL), DF_OK);
-            double dt = now() - t0;
-            if (dt < best)
-                best = dt;
-            df_mesh_free(&m);
-        }
-        printf("  parse %-20s best of 3: %.1f ms (budget %.0f ms)\n", files[f], best * 1e3,
-               PARSE_BUDGET_S * 1e3);
-        assert_true(best < PARSE_BUDGET_S);
-    }
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -310,7 +269,6 @@ int main(void)
         cmocka_unit_test(test_roundtrips_exact),
         cmocka_unit_test(test_init_nodes_differ_only_at_handles),
         cmocka_unit_test(test_operators_on_real_meshes),
-        cmocka_unit_test(test_parse_speed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
