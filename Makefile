@@ -101,8 +101,12 @@ test: deps
 unit: all
 	BUILD=$(BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES=unit bash tests/run_tests.sh
 
+# C benches (build/bench/bench_*), then the Python ones (tests/bench/bench_*.py, against the built
+# daemon); each prints its figures with their targets (timing lives here, never in make test).
 bench: all
 	@for b in $(BENCH_BIN); do echo "== $$b"; MESHES=$(MESHES) $$b || exit 1; done
+	@for p in $(wildcard tests/bench/bench_*.py); do echo "== $$p"; \
+	  BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p || exit 1; done
 
 asan:
 	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
