@@ -12,7 +12,8 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
 def dry_run(target: str, build: str) -> str:
-    r = subprocess.run(["make", "-n", "-C", ROOT, target, "BUILD=" + build],
+    env = {k: v for k, v in os.environ.items() if k not in ("MAKEFLAGS", "MFLAGS", "MAKELEVEL")}
+    r = subprocess.run(["make", "-n", "-C", ROOT, target, "BUILD=" + build], env=env,
                        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                        timeout=120)
     out = r.stdout.decode("utf-8", "replace")
