@@ -108,9 +108,10 @@ bench: all
 	@for p in $(wildcard tests/bench/bench_*.py); do echo "== $$p"; \
 	  BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p || exit 1; done
 
+# The fuzzers are ASan+UBSan builds already (make test runs them): here the unit and integration suites.
 asan:
 	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
-	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
+	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" bash tests/run_tests.sh
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
 # sources (compiled once into $(BUILD)/fuzz/obj). `make fuzz` mutates for FUZZ_SECONDS each, writing new
