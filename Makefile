@@ -149,12 +149,17 @@ test: deps
 unit: all
 	BUILD=$(BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES=unit bash tests/run_tests.sh
 
+# C benches (build/bench/bench_*), then the Python ones (tests/bench/bench_*.py, against the built
+# daemon); each prints its figures with their targets (timing lives here, never in make test).
 bench: all
 	@for b in $(BENCH_BIN); do echo "== $$b"; MESHES=$(MESHES) $$b || exit 1; done
+	@for p in $(wildcard tests/bench/bench_*.py); do echo "== $$p"; \
+	  BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p || exit 1; done
 
+# The fuzzers are ASan+UBSan builds already (make test runs them): here the unit and integration suites.
 asan:
 	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
-	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
+	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" bash tests/run_tests.sh
 
 # ThreadSanitizer: the daemon, deformctl, the client library and the server unit tests in
 # build-tsan, then those tests and the integration suite; any report fails the run (halt_on_error,
@@ -208,8 +213,10 @@ fuzz: fuzz-build
 	  echo "== $$n for $(FUZZ_SECONDS) s"; \
 	  $$b -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$c tests/fuzz/corpus/$$c || exit 1; done
 
-run: all
-	bash tests/demo_run.sh
+# Like test: installs the Debian packages first, so it works as the first command on a fresh machine.
+run: deps
+	$(MAKE) all
+	BUILD=$(BUILD) MESHES=$(MESHES) bash tests/demo_run.sh
 
 # Installs the daemon, deformctl, the systemd units, libdeformclient (static, with the libraries it
 # needs: client, proto, mesh, common), only the public header deformclient.h and the project headers

@@ -6,7 +6,8 @@ until it answers a ping on both, and on teardown stops it with SIGTERM and check
 status 0 and that its log holds no ThreadSanitizer report (`make tsan` builds an instrumented
 deformd; TSAN_OPTIONS=halt_on_error=1 also ends it at the first report, failing the suite).
 `make_daemon` starts extra daemons with their own config (e.g. a small output queue).
-Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent.
+Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent
+(skip_or_fail: under CI=true every skip is a failure). A missing deformd always fails.
 """
 import os
 import signal
@@ -186,9 +187,17 @@ def make_daemon():
         t.cleanup()
 
 
+def skip_or_fail(reason: str) -> None:
+    """The suite's one skip helper: skips the running test with `reason`, or, under CI (environment
+    CI=true), fails it, so that a missing prerequisite fails a CI run instead of thinning it out."""
+    if os.environ.get("CI") == "true":
+        pytest.fail("%s (CI=true: a skip is a failure)" % reason, pytrace=False)
+    pytest.skip(reason)
+
+
 @pytest.fixture(scope="session")
 def meshes() -> str:
-    """The shared mesh folder; skips the test (with the reason) when it is absent."""
+    """The shared mesh folder; skips the test (with the reason) when it is absent (fails under CI)."""
     if not os.path.isdir(MESHES):
-        pytest.skip("shared meshes not found at %s (set MESHES)" % MESHES)
+        skip_or_fail("shared meshes not found at %s (set MESHES)" % MESHES)
     return MESHES
