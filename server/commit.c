@@ -31,6 +31,12 @@ static void stroke_free(df_stroke *st)
 void df_change_clear(df_server *srv, df_change *c)
 {
     df_frames_clear(&c->frames);
+    if (c->own_buffers) { /* not committed */
+        free(c->pos);
+        free(c->uf);
+    }
+    c->pos = NULL;
+    c->uf = NULL;
     stroke_free(c->link);
     c->link = NULL;
     free(c->base);
@@ -47,13 +53,15 @@ static void apply_state(df_session *s, df_change *c)
     if (c->pos) {
         double *old = s->cur;
         s->cur = c->pos;
-        s->scratch_pos = old;
+        if (c->own_buffers) free(old);
+        else s->scratch_pos = old;
         c->pos = NULL;
     }
     if (c->version) {
         float *old = s->uf;
         s->uf = c->uf;
-        s->scratch_u = old;
+        if (c->own_buffers) free(old);
+        else s->scratch_u = old;
         c->uf = NULL;
         atomic_store(&s->version, c->version);
     }

@@ -35,6 +35,8 @@ typedef struct df_change {
     df_req *req;                 /* answered in step 6 (NULL: the job answers itself) */
     int answered_by_job;         /* 1: step 6 is skipped (moves reply with a move result) */
     /* 1. state */
+    int own_buffers;             /* pos / uf were allocated for this change: the buffers they
+                                  * replace are freed (else they become the session's scratch) */
     double *pos;                 /* new current positions (s->nv x 3), or NULL: unchanged */
     float *uf;                   /* new published displacements, or NULL (with version 0) */
     uint64_t version;            /* the version those frames publish; 0: no new version */

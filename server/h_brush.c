@@ -136,7 +136,8 @@ static int stroke_publish(const df_session *s, const df_stroke *st, uint8_t kind
         disp[i] = m;
         pos[i] = base[i] + (double)m;
     }
-    int rc = df_stream_encode(s, pos, kind, NULL, 0, s->scratch_u, &ch->frames, NULL, err);
+    int rc = df_stream_encode(s, NULL, 0, pos, kind, NULL, 0, s->scratch_u, &ch->frames, NULL,
+                              err);
     if (rc != DF_OK) {
         free(rebased);
         return rc;

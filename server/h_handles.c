@@ -33,6 +33,8 @@ typedef struct hs_req {
     int publish_failed;        /* move: an iterate was refused (j->err says why): stop, fail */
     int published;             /* move: an iterate of it was published (posted): one undo step */
     int resumed;               /* move: it yielded its worker and runs again (time slices) */
+    const float *uf_prev;      /* move: displacements of its last iterate (or the session's) */
+    uint64_t version;          /* move: version of its last iterate (or the session's) */
     int yield;                 /* move: on_progress asked to yield */
     int iters_done;            /* move: iterations of the earlier slices */
     uint64_t slice_t0;         /* move: start of the current slice (uv_hrtime) */
@@ -201,13 +203,30 @@ const df_job_kind df_k_handles_get = {.decode = df_job_decode_ref, .done = get_d
 
 static double finite_or(double v, double dflt) { return isfinite(v) ? v : dflt; }
 
-/* Publishes the iterate V as the next version and posts its progress frames to the loop
- * (worker), all under s->pub_lock: requests answered beside the move (job.h) then see a version
- * exactly when its frames are on their way to the subscribers. */
+/* A move's iterate on its way to the loop: a change record committed as it arrives. */
+typedef struct move_iter {
+    df_task t;                 /* posted through the pool's completion channel */
+    df_session *s;
+    df_change ch;
+} move_iter;
+
+static void iter_commit(df_task *t)
+{
+    move_iter *m = (move_iter *)t; /* t is the first member */
+    df_session_commit(m->s, &m->ch); /* no request: the move answers once it ends */
+    df_change_clear(m->s->srv, &m->ch);
+    free(m);
+}
+
+/* Encodes the iterate V as the move's next version (pure: from the move's previous iterate, in
+ * buffers of its own) and posts it to the loop, which commits it (commit.h) before the move's
+ * completion: requests answered beside the move (job.h) see exactly the versions subscribers
+ * have been sent. Worker thread. */
 static int publish_iterate(df_job *j, const double *V, int iteration, double objective,
                            double residual, uint8_t status, int final)
 {
     hs_req *r = j->body;
+    const df_session *s = j->s;
     df_msg_progress pr;
     memset(&pr, 0, sizeof pr);
     pr.status = status;
@@ -217,23 +236,37 @@ static int publish_iterate(df_job *j, const double *V, int iteration, double obj
     pr.residual = finite_or(residual, DBL_MAX);
     if (pr.residual < 0) pr.residual = 0;
     pr.elapsed_ms = (double)(uv_hrtime() - r->t0) / 1e6;
-    df_frames f = {0};
-    pthread_mutex_lock(&j->s->pub_lock);
-    int rc = df_stream_publish(j->s, V, DF_CHANGE_HANDLE_MOVE, &pr, j->req.id, &f, NULL,
-                               &j->err);
-    if (rc == DF_OK) {
-        r->published = 1;
-        memcpy(j->s->cur, V, 3 * (size_t)j->s->nv * sizeof(double));
-        uint64_t v = atomic_load(&j->s->version);
-        for (size_t i = 0; i < f.n; i++) {
-            df_server_post(j->srv, j, f.v[i], i + 1 == f.n ? v : 0);
-            f.v[i] = NULL;
-        }
-        f.n = 0;
+    size_t n = 3 * (size_t)s->nv;
+    move_iter *m = calloc(1, sizeof *m);
+    float *uf = malloc(n * sizeof *uf);
+    double *pos = malloc(n * sizeof *pos);
+    if (!m || !uf || !pos) {
+        free(m);
+        free(uf);
+        free(pos);
+        return df_error_set(&j->err, DF_ENOMEM, "out of memory for a move iterate");
     }
-    pthread_mutex_unlock(&j->s->pub_lock);
-    df_frames_clear(&f);
-    return rc;
+    df_change_init(&m->ch, NULL, NULL);
+    int rc = df_stream_encode(s, r->uf_prev, r->version + 1, V, DF_CHANGE_HANDLE_MOVE, &pr,
+                              j->req.id, uf, &m->ch.frames, NULL, &j->err);
+    if (rc != DF_OK) {
+        df_change_clear(j->srv, &m->ch);
+        free(m);
+        free(uf);
+        free(pos);
+        return rc;
+    }
+    memcpy(pos, V, n * sizeof *pos);
+    m->ch.pos = pos;
+    m->ch.uf = uf;
+    m->ch.own_buffers = 1;
+    m->ch.version = ++r->version;
+    m->s = j->s;
+    m->t.after = iter_commit;
+    r->uf_prev = uf;
+    r->published = 1;
+    df_pool_post(j->srv->pool, &m->t);
+    return DF_OK;
 }
 
 static int on_progress(void *user, const df_admm_progress *p)
@@ -304,6 +337,8 @@ static int move_setup(df_job *j)
     rc = df_admm_set_positions(hs->solver, s->cur, NULL, &j->err);
     if (rc == DF_OK) rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err);
     r->progress_every = r->mv.progress_every;
+    r->uf_prev = s->uf; /* its iterates are encoded one from the other (publish_iterate) */
+    r->version = atomic_load(&s->version);
     return rc;
 }
 
@@ -439,8 +474,8 @@ static void reset_work(df_job *j)
 {
     const df_session *s = j->s;
     df_change *ch = &j->change;
-    j->rc = df_stream_encode(s, s->cur, DF_CHANGE_RESET_REST, NULL, 0, s->scratch_u,
-                             &ch->frames, NULL, &j->err);
+    j->rc = df_stream_encode(s, NULL, 0, s->cur, DF_CHANGE_RESET_REST, NULL, 0,
+                             s->scratch_u, &ch->frames, NULL, &j->err);
     if (j->rc != DF_OK) return;
     ch->uf = s->scratch_u;
     ch->version = atomic_load(&s->version) + 1;

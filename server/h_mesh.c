@@ -54,8 +54,8 @@ static void history_work(df_job *j)
     double *state = s->scratch_pos;
     if ((j->rc = df_history_peek(&s->hist, undo ? -1 : 1, state, &j->err)) != DF_OK) return;
     df_change *ch = &j->change;
-    j->rc = df_stream_encode(s, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL, 0,
-                             s->scratch_u, &ch->frames, NULL, &j->err);
+    j->rc = df_stream_encode(s, NULL, 0, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL,
+                             0, s->scratch_u, &ch->frames, NULL, &j->err);
     if (j->rc != DF_OK) return;
     ch->pos = state;
     ch->uf = s->scratch_u;

@@ -116,15 +116,14 @@ static void run_beside(df_job *j)
 {
     df_session *s = j->s;
     df_server *srv = j->srv;
-    pthread_mutex_lock(&s->pub_lock);
-    df_server_drain_mail(srv); /* subscribers have every version the move published so far */
+    /* The move's iterates are committed on this thread as they arrive (commit.h): the session
+     * holds exactly the last version its subscribers have been sent. */
     if (j->beside == DF_JOB_BESIDE_REFUSE)
         j->rc = df_error_set(&j->err, DF_ESTATE, "%s: a handle move is running on session %llu",
                              df_msg_type_name(j->req.type), (unsigned long long)s->id);
     else if (j->work)
         j->work(j);
     j->done(j);
-    pthread_mutex_unlock(&s->pub_lock);
     job_free(j);
     srv->stats.jobs_completed++;
     srv->stats.jobs_beside_move++;
@@ -144,39 +143,38 @@ static void finish(df_job *j)
     }
 }
 
-static void work_cb(uv_work_t *w)
-{
-    df_job *j = w->data;
-    j->work(j);
-}
-
-/* The job's work has run (or was cancelled: status UV_ECANCELED); loop thread. */
-static void completed(df_job *j, int status)
-{
-    df_server *srv = j->srv;
-    df_session *s = j->s;
-    srv->jobs_running--;
-    /* Progress frames the worker posted must go out before the job's final frames. */
-    df_server_drain_mail(srv);
-    if (status == UV_ECANCELED) {
-        j->canceled = 1;
-        j->rc = df_error_set(&j->err, DF_ESTATE, "server shutting down");
-    }
-    finish(j);
-    if (s) pump(s);
-}
-
-static void after_cb(uv_work_t *w, int status) { completed(w->data, status); }
-
 static void task_work(df_task *t)
 {
     df_job *j = (df_job *)((char *)t - offsetof(df_job, task));
     j->work(j);
 }
 
+/* The job's work has run: its completion came through the pool's channel, after everything it
+ * posted (loop thread). */
 static void task_after(df_task *t)
 {
-    completed((df_job *)((char *)t - offsetof(df_job, task)), 0);
+    df_job *j = (df_job *)((char *)t - offsetof(df_job, task));
+    df_session *s = j->s;
+    j->srv->jobs_running--;
+    finish(j);
+    if (s) pump(s);
+}
+
+/* Hands j's work to the compute pool (every job's work that does not run inline). 0, or -1
+ * with j->rc set when the server has no pool (then `done` must still run). */
+static int start_on_pool(df_job *j)
+{
+    if (!j->srv->pool) {
+        j->rc = df_error_set(&j->err, DF_EINTERNAL, "%s: the server has no compute pool",
+                             df_msg_type_name(j->req.type));
+        return -1;
+    }
+    j->srv->jobs_running++;
+    j->task.work = task_work;
+    j->task.after = task_after;
+    j->task.heavy = j->heavy;
+    df_pool_submit(j->srv->pool, &j->task);
+    return 0;
 }
 
 /* 1 when the head job `j` may run its work on the loop thread (see job.h, "Inline jobs"). */
@@ -216,22 +214,7 @@ static void pump(df_session *s)
             finish(j);
             continue;
         }
-        if (j->work && j->srv->pool) { /* the server's low-latency pool */
-            j->srv->jobs_running++;
-            j->task.work = task_work;
-            j->task.after = task_after;
-            j->task.heavy = j->heavy;
-            df_pool_submit(j->srv->pool, &j->task);
-            return;
-        }
-        if (j->work) { /* bare servers (unit tests): the libuv pool */
-            j->w.data = j;
-            j->srv->jobs_running++;
-            int rc = uv_queue_work(j->srv->loop, &j->w, work_cb, after_cb);
-            if (rc == 0) return;
-            j->srv->jobs_running--;
-            j->rc = df_error_set(&j->err, DF_EINTERNAL, "uv_queue_work: %s", uv_strerror(rc));
-        }
+        if (j->work && start_on_pool(j) == 0) return;
         finish(j);
     }
     if (s->closed && !s->running && !s->jhead) df_session_destroy(s);
@@ -243,16 +226,9 @@ void df_job_submit(df_job *j)
 {
     j->srv->stats.jobs_submitted++;
     df_session *s = j->s;
-    if (!s) {
-        j->w.data = j;
-        j->srv->jobs_running++;
-        int rc = j->work ? uv_queue_work(j->srv->loop, &j->w, work_cb, after_cb) : -1;
-        if (rc != 0) {
-            j->srv->jobs_running--;
-            if (j->work)
-                j->rc = df_error_set(&j->err, DF_EINTERNAL, "uv_queue_work: %s", uv_strerror(rc));
-            finish(j);
-        }
+    if (!s) { /* a mesh load: long work, so the long lane (a worker stays free for strokes) */
+        j->heavy = 1;
+        if (!j->work || start_on_pool(j) != 0) finish(j);
         return;
     }
     if (j->beside != DF_JOB_BESIDE_NONE && df_job_move_running(s)) {

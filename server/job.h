@@ -1,15 +1,14 @@
-/* job.h — requests as jobs: per-session FIFO, compute on the libuv thread pool.
+/* job.h — requests as jobs: per-session FIFO, compute on the server's pool.
  *
  * A job has an optional `work` (runs on a worker thread: reads its session, which no other
  * job touches meanwhile, and fills the job's own data and change record j->change; it writes no
  * session field, see commit.h) and a `done` (runs on the loop thread afterwards: commits the
  * change with df_job_commit, or answers a read). Jobs of one session run strictly one after
  * another in submission order; jobs of
- * different sessions run in parallel: on the server's compute pool (srv->pool, see pool.h: low
- * hand-off latency for interactive strokes), or on the libuv pool (uv_queue_work) when the
- * server has no pool. A job without `work` runs `done` directly on the loop thread when it
- * reaches the head of its FIFO. Jobs without a session (mesh loads) go straight to the libuv
- * pool.
+ * different sessions run in parallel on the server's compute pool (srv->pool, see pool.h: low
+ * hand-off latency for interactive strokes; its completion channel is the one way back). A job
+ * without `work` runs `done` directly on the loop thread when it reaches the head of its FIFO.
+ * Jobs without a session (mesh loads) go straight to the pool's long lane.
  *
  * Inline jobs. Handing a job to a worker and its completion back costs two thread wake-ups:
  * on the 2-core test machine ~20-25 us of latency and ~30 us of CPU, three times the work of a
@@ -29,8 +28,8 @@
  * it. Requests that need not wait are answered beside it when they arrive and nothing else is
  * queued (`beside`): DF_JOB_BESIDE_READ jobs (get-mesh, snapshot, handles-get, subscribe,
  * unsubscribe, stream-shm) run their work and done on the loop thread at once against the last
- * published version (under s->pub_lock, after broadcasting what the move posted, so they see
- * exactly the versions subscribers have been sent); DF_JOB_BESIDE_REFUSE jobs (undo, redo) fail
+ * committed version (the move's iterates are committed on the loop thread as they arrive, so
+ * they see exactly the versions subscribers have been sent); DF_JOB_BESIDE_REFUSE jobs (undo, redo) fail
  * with ESTATE at once. A move whose requester disconnects ends too (df_session_forget_conn). */
 #ifndef DF_SERVER_JOB_H
 #define DF_SERVER_JOB_H
@@ -74,12 +73,10 @@ struct df_job {
     int rc;                   /* result of work (DF_OK or DF_E*) */
     df_error err;
     atomic_int cancel;        /* set by the loop thread to supersede a running move */
-    int canceled;             /* the pool refused/cancelled the job (shutdown) */
     int heavy;                /* long work (handle moves): the pool's long lane */
     int preemptible;          /* a move: cancelled when a request must queue behind it */
     int beside;               /* DF_JOB_BESIDE_*: behaviour while a move runs (see above) */
-    uv_work_t w;              /* session-less jobs, and every job of a server without a pool */
-    df_task task;             /* session jobs on srv->pool */
+    df_task task;             /* its work on srv->pool */
     uint64_t version;         /* version after the job (for the ack) */
     df_change change;         /* what the work computed, committed by df_job_commit (commit.h) */
     struct df_job *next;

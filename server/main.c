@@ -5,19 +5,19 @@
  * One libuv loop thread owns every connection, session, subscriber list, job FIFO, the undo
  * history bookkeeping and all stats; all socket I/O happens there (non-blocking, partial reads
  * reassembled into frames, writes queued per client with a byte bound). Compute (mesh parsing,
- * Kelvinlet fields, ADMM factorizations and iterations, stream encoding) runs off the loop: session
- * jobs on the server's compute pool (pool.h: `threads` workers, eventfd completions, LIFO wake-ups,
- * optional bounded spin `spin_us`), mesh loads on the libuv pool (uv_queue_work). The one
+ * Kelvinlet fields, ADMM factorizations and iterations, stream encoding) runs off the loop on
+ * the server's compute pool (pool.h: `threads` workers, eventfd completions, LIFO wake-ups,
+ * optional bounded spin `spin_us`; mesh loads in its long lane like handle moves). The one
  * exception: a brush update whose stroke's previous update measured <= `inline_us` (default
  * 50 us, cheaper than the two hand-offs; job.h) runs on the loop thread. Replies go out
  * with one uv_try_write when the socket takes them (uv_write for the rest), TCP with NODELAY.
- * Each session has a FIFO of jobs and only its head job
- * runs, so a worker touches only its job's private inputs plus the compute state of its session
- * (positions, published displacements, version, strokes, cached solvers), which the FIFO
- * guarantees no other thread uses meanwhile. Different sessions run in parallel. Results return
- * to the loop in the job's `done` callback (publish frames, reply); progress iterates of a
- * running handle move are posted through a mutex-protected mailbox + uv_async and broadcast by
- * the loop; the mailbox is drained before a job's `done`, so versions stay in order. A newer move
+ * Each session has a FIFO of jobs and only its head job runs; its work reads the session
+ * (which the FIFO guarantees no other job changes meanwhile) and fills a change record, and
+ * df_session_commit applies that record on the loop thread in one fixed order (commit.h:
+ * state, history, caches, hook, broadcast, answer). Different sessions run in parallel.
+ * Progress iterates of a running handle move are change records too, posted through the pool's
+ * one completion channel (df_pool_post) and committed as they arrive, always before the move's
+ * own completion, so versions stay in order. A newer move
  * supersedes a running one through an atomic flag read in the ADMM progress callback. Encoded
  * frames are built once and shared by reference count across subscribers' queues.
  * Shutdown (SIGINT/SIGTERM): stop listening and reading, cancel running moves, wait for running

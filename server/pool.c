@@ -201,8 +201,12 @@ static void drain(df_pool *p)
     pthread_mutex_unlock(&p->dlock);
     while (t) {
         df_task *next = t->next;
-        p->inflight--;
-        p->tasks++;
+        if (!t->post) { /* a completion (posts are progress messages of a running task) */
+            p->inflight--;
+            p->tasks++;
+            if (p->inflight == 0 && p->handle_open && !p->closing)
+                uv_unref((uv_handle_t *)&p->poll); /* idle: the pool keeps no loop alive */
+        }
         t->after(t);
         t = next;
     }
@@ -220,9 +224,16 @@ static void on_poll(uv_poll_t *h, int status, int events)
     drain(p);
 }
 
+void df_pool_post(df_pool *p, df_task *msg)
+{
+    msg->post = 1;
+    complete(p, msg);
+}
+
 void df_pool_submit(df_pool *p, df_task *t)
 {
-    p->inflight++;
+    if (p->inflight++ == 0 && p->handle_open && !p->closing) uv_ref((uv_handle_t *)&p->poll);
+    t->post = 0;
     t->next = NULL;
     t->work_ns = 0;
     pthread_mutex_lock(&p->lock);
@@ -321,6 +332,7 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
         p->poll.data = p;
         p->handle_open = 1;
         rc = uv_poll_start(&p->poll, UV_READABLE, on_poll);
+        if (rc == 0) uv_unref((uv_handle_t *)&p->poll); /* referenced while tasks are in flight */
     }
     if (rc != 0) {
         const char *what = p->efd < 0 ? strerror(-rc) : uv_strerror(rc);

@@ -1,7 +1,12 @@
-/* pool.h — the compute pool: a few worker threads that run session jobs off the loop thread.
+/* pool.h — the compute pool: a few worker threads that run every job's work off the loop
+ * thread (session jobs and mesh loads), and the one channel back from them.
  *
  * Same contract as uv_queue_work (work on a worker, `after` on the loop thread in completion
  * order, the loop never waits for work), with a cheaper hand-off for interactive requests:
+ *   - one completion channel: a running task may also post progress messages
+ *     (df_pool_post), delivered on the loop thread in the same order as completions, so a
+ *     task's progress always arrives before its completion (handle moves' iterates);
+ *   - the pool's handle keeps the loop alive only while tasks are in flight;
  *   - completions are signalled through one eventfd watched by a uv_poll handle, written only
  *     when the loop has not been told yet (uv_async makes the woken loop spin until the sender
  *     has left uv_async_send, which on a loaded machine means waiting for it to be rescheduled);
@@ -43,6 +48,7 @@ struct df_task {
     uint64_t work_ns;  /* measured work time in ns, set before `after` runs */
     int heavy;         /* 1: long-lane task (see above); set by the caller before submit */
     int requeue;       /* set by a heavy task's work to yield (see above); the pool clears it */
+    int post;          /* pool-internal: a progress message (df_pool_post), not a task */
     df_task *next;     /* pool-internal */
 };
 
@@ -57,6 +63,11 @@ int df_pool_start(uv_loop_t *loop, int threads, uint64_t spin_ns, df_pool **out,
 
 /* Queues `t` (loop thread; t->work and t->after set). Never waits for running work. */
 void df_pool_submit(df_pool *p, df_task *t);
+
+/* Posts progress message `msg` from a running task's work (worker thread): msg->after runs on
+ * the loop thread, after everything posted or completed before it and before the posting
+ * task's own `after`. msg->work is not used; the poster owns msg until its `after` ran. */
+void df_pool_post(df_pool *p, df_task *msg);
 
 /* Tasks that wait because heavy tasks occupy workers (any thread): heavy tasks queued beyond
  * the long lane's room, plus the queued short tasks when the pool has a single thread (its

@@ -1,4 +1,4 @@
-/* server.c — start/stop of the daemon, signals, the worker -> loop mailbox (see server.h). */
+/* server.c — start/stop of the daemon, signals (see server.h). */
 #include "server/server.h"
 
 #include <stdio.h>
@@ -17,44 +17,6 @@
 #include "server/shm.h"
 
 #define DF_SERVER_SWEEP_MS 1000 /* period of the flush-close deadline sweep */
-
-void df_server_drain_mail(df_server *srv)
-{
-    pthread_mutex_lock(&srv->mailbox_lock);
-    df_mail *m = srv->mail_head;
-    srv->mail_head = srv->mail_tail = NULL;
-    pthread_mutex_unlock(&srv->mailbox_lock);
-    while (m) {
-        df_mail *next = m->next;
-        if (m->job && m->job->s) df_session_broadcast(m->job->s, m->frame);
-        if (m->version) srv->stats.versions++;
-        df_sbuf_unref(m->frame);
-        free(m);
-        m = next;
-    }
-}
-
-void df_server_post(df_server *srv, struct df_job *job, df_sbuf *frame, uint64_t version)
-{
-    df_mail *m = malloc(sizeof *m);
-    if (!m) {
-        df_sbuf_unref(frame);
-        df_log(DF_LOG_ERROR, "out of memory posting a progress frame");
-        return;
-    }
-    m->job = job;
-    m->frame = frame;
-    m->version = version;
-    m->next = NULL;
-    pthread_mutex_lock(&srv->mailbox_lock);
-    if (srv->mail_tail) srv->mail_tail->next = m;
-    else srv->mail_head = m;
-    srv->mail_tail = m;
-    pthread_mutex_unlock(&srv->mailbox_lock);
-    uv_async_send(&srv->mailbox);
-}
-
-static void on_mail(uv_async_t *a) { df_server_drain_mail(a->data); }
 
 static void on_check(uv_check_t *h)
 {
@@ -83,9 +45,6 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     srv->cfg = *cfg;
     srv->stats.start_ns = uv_hrtime();
     srv->reserve_fd = -1;
-    pthread_mutex_init(&srv->mailbox_lock, NULL);
-    uv_async_init(loop, &srv->mailbox, on_mail);
-    srv->mailbox.data = srv;
     uv_check_init(loop, &srv->kick_check);
     srv->kick_check.data = srv;
     uv_check_start(&srv->kick_check, on_check);
@@ -102,11 +61,14 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     srv->sig_int.data = srv->sig_term.data = srv;
     uv_signal_start(&srv->sig_int, on_signal, SIGINT);
     uv_signal_start(&srv->sig_term, on_signal, SIGTERM);
-    int rc = df_listener_open(srv, err);
-    if (rc == DF_OK && (rc = df_guard_init(srv, err)) != DF_OK) df_listener_close(srv);
+    /* every job's work runs on the pool: no daemon without it */
+    int rc = df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, err);
+    if (rc == DF_OK && (rc = df_listener_open(srv, err)) == DF_OK &&
+        (rc = df_guard_init(srv, err)) != DF_OK)
+        df_listener_close(srv);
     if (rc != DF_OK) {
         srv->stopping = 1;
-        uv_close((uv_handle_t *)&srv->mailbox, NULL);
+        df_pool_close(srv->pool); /* NULL-safe; freed with the server */
         uv_close((uv_handle_t *)&srv->kick_check, NULL);
         uv_close((uv_handle_t *)&srv->cork_timer, NULL);
         uv_close((uv_handle_t *)&srv->fanout_idle, NULL);
@@ -117,12 +79,6 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     }
     int stale = df_shm_sweep_stale();
     if (stale) df_log(DF_LOG_INFO, "removed %d shared-memory ring(s) of daemons that died", stale);
-    df_error perr;
-    if (df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, &perr) !=
-        DF_OK) {
-        srv->pool = NULL; /* jobs use the libuv pool instead: slower hand-off, same semantics */
-        df_log(DF_LOG_WARN, "%s; using the libuv thread pool", perr.msg);
-    }
     return DF_OK;
 }
 
@@ -146,7 +102,6 @@ static void on_stop_timer(uv_timer_t *h)
     if (srv->jobs_running > 0) return;
     uv_timer_stop(h);
     uv_close((uv_handle_t *)h, (uv_close_cb)free);
-    df_server_drain_mail(srv);
     /* Sessions: every FIFO is drained (queued jobs were answered or dropped). */
     while (srv->sessions) {
         df_session *s = srv->sessions;
@@ -156,7 +111,6 @@ static void on_stop_timer(uv_timer_t *h)
     for (df_conn *c = srv->conns; c; c = c->next) df_conn_close(c, "server shutting down", 0);
     df_conn_flush_all(srv, 1);
     df_pool_close(srv->pool); /* idle: jobs_running is 0 */
-    uv_close((uv_handle_t *)&srv->mailbox, NULL);
     uv_close((uv_handle_t *)&srv->kick_check, NULL);
     uv_timer_stop(&srv->cork_timer);
     uv_close((uv_handle_t *)&srv->cork_timer, NULL);
@@ -190,15 +144,6 @@ void df_server_stop(df_server *srv)
 void df_server_free(df_server *srv)
 {
     while (srv->sessions) df_session_destroy(srv->sessions);
-    df_mail *m = srv->mail_head;
-    while (m) {
-        df_mail *n = m->next;
-        df_sbuf_unref(m->frame);
-        free(m);
-        m = n;
-    }
-    srv->mail_head = srv->mail_tail = NULL;
-    pthread_mutex_destroy(&srv->mailbox_lock);
     df_pool_free(srv->pool);
     srv->pool = NULL;
     df_guard_free(srv);

@@ -65,9 +65,6 @@ typedef struct df_server {
     int unix_owned;          /* 1 when we created the socket file (unlink on exit) */
     int tcp_port_bound;      /* actual TCP port (after binding port 0) */
     uv_signal_t sig_int, sig_term;
-    uv_async_t mailbox;      /* workers -> loop: progress frames */
-    pthread_mutex_t mailbox_lock;
-    struct df_mail *mail_head, *mail_tail;
     uv_check_t kick_check;   /* starts the writes queued during this loop iteration */
     uv_timer_t cork_timer;   /* starts corked subscriber writes (DF_CONN_CORK_MS) */
     uv_idle_t fanout_idle;   /* continues corked writes that overran their slice (conn.h) */
@@ -79,7 +76,7 @@ typedef struct df_server {
     struct df_session *sessions; /* singly linked, newest first */
     int n_sessions;
     uint64_t next_session_id;
-    struct df_pool *pool;    /* compute pool for session jobs (NULL: libuv pool) */
+    struct df_pool *pool;    /* compute pool: every job's work, its one channel back (pool.h) */
     int jobs_running;        /* jobs submitted to the thread pool and not completed */
     uint64_t inline_spent_ns;/* job work run on the loop thread this iteration (job.h) */
     int stopping;
@@ -109,17 +106,10 @@ static inline df_membudget *df_server_mem(df_server *srv)
     return &srv->mem;
 }
 
-/* A message from a worker to the loop thread: a frame to broadcast to a session's subscribers. */
-typedef struct df_mail {
-    struct df_job *job;      /* the running job (kept alive until its completion) */
-    struct df_sbuf *frame;
-    uint64_t version;        /* version the frame carries (0 = not a version) */
-    struct df_mail *next;
-} df_mail;
-
 /* Initializes `srv` on `loop` with `cfg` (copied): opens the listeners (socket-activated fds
- * first, then cfg->socket_path and cfg->tcp_*), installs SIGINT/SIGTERM handlers and the worker
- * mailbox. Errors: DF_EIO (bind/listen failed, message names the address), DF_EINVAL. On error
+ * first, then cfg->socket_path and cfg->tcp_*), installs SIGINT/SIGTERM handlers and starts the
+ * compute pool (pool.h). Errors: DF_EIO (bind/listen failed, message names the address; or the
+ * pool could not start), DF_EINVAL. On error
  * everything opened so far is closed again (run the loop once to finish closing handles). */
 int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg, df_error *err);
 
@@ -132,13 +122,5 @@ void df_server_free(df_server *srv);
 
 /* Writes "unix:PATH" / "tcp:HOST:PORT" descriptions of the listeners into buf. */
 void df_server_describe(const df_server *srv, char *buf, size_t cap);
-
-/* Posts a frame from a worker thread to the loop (thread-safe); the loop broadcasts it to the
- * job's session subscribers. Takes ownership of one reference of `frame`. */
-void df_server_post(df_server *srv, struct df_job *job, struct df_sbuf *frame, uint64_t version);
-
-/* Broadcasts every frame posted with df_server_post so far, in posting order (loop thread;
- * called by the mailbox's uv_async and before any job's `done`). */
-void df_server_drain_mail(df_server *srv);
 
 #endif

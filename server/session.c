@@ -135,7 +135,6 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     memcpy(s->cur, s->mesh.V, n * sizeof(double));
     for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
     atomic_init(&s->version, 0);
-    pthread_mutex_init(&s->pub_lock, NULL);
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
@@ -215,7 +214,6 @@ void df_session_destroy(df_session *s)
     free(s->scratch_pos);
     free(s->scratch_disp);
     df_log(DF_LOG_INFO, "session %llu closed", (unsigned long long)s->id);
-    pthread_mutex_destroy(&s->pub_lock);
     free(s);
 }
 

@@ -8,9 +8,14 @@
  * cached factorizations.
  *
  * Ordering: every request that reads or changes a session is a df_job on the session's FIFO
- * (job.h). Only the head job runs; while its `work` runs on a worker thread it owns the compute
- * state (cur, uf, rest, version, strokes, handle set, caches) and the loop thread does not touch
- * it; `done` then runs on the loop thread. Subscribers, name and the FIFO are loop-thread only. */
+ * (job.h). Only the head job runs; its `work` (a worker thread, or inline) reads the session and
+ * writes no session field: it fills the job's change record, which df_session_commit applies
+ * on the loop thread (commit.h), the only writer of positions, displacements, version, strokes,
+ * handle set, history and caches. Two things a running work uses in place: the scratch
+ * buffers job.c lends it (s->scratch_*, allocated on the loop thread before the work starts)
+ * and the cached factorization it runs (s->kc refactorized when pins change, hs->solver
+ * iterating), which only an idle session's eviction may free. Subscribers, name and the FIFO
+ * are loop-thread only. */
 #ifndef DF_SERVER_SESSION_H
 #define DF_SERVER_SESSION_H
 
@@ -107,8 +112,6 @@ typedef struct df_session {
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
-    pthread_mutex_t pub_lock;    /* while a move runs: its worker publishes (uf, version, posted
-                                  * frames) under it; loop-thread reads beside it (job.h) too */
     struct df_session *next;
 } df_session;
 

@@ -144,13 +144,14 @@ static inline uint32_t row_changed(const float *u, const float *v)
     return (a != b) | (c != d);
 }
 
-int df_stream_encode(const df_session *s, const double *pos, uint8_t kind,
-                     const df_msg_progress *progress, uint64_t req_id, float *newu,
-                     df_frames *out, uint32_t *changed, df_error *err)
+int df_stream_encode(const df_session *s, const float *prev, uint64_t version,
+                     const double *pos, uint8_t kind, const df_msg_progress *progress,
+                     uint64_t req_id, float *newu, df_frames *out, uint32_t *changed,
+                     df_error *err)
 {
     size_t nv = (size_t)s->nv;
     const double *X = s->mesh.V;
-    const float *uf = s->uf;
+    const float *uf = prev ? prev : s->uf;
     int32_t *idx = s->scratch_idx;
     /* Pass 1: new displacements, their finiteness, changed components. `omp simd` because
      * gcc's -O2 cost model will not add the alias checks needed to vectorize it on its own. */
@@ -188,7 +189,7 @@ int df_stream_encode(const df_session *s, const double *pos, uint8_t kind,
             k += row_changed(newu + 3 * i, uf + 3 * i);
         }
     }
-    uint64_t version = atomic_load(&s->version) + 1;
+    if (!version) version = atomic_load(&s->version) + 1;
     df_msg_disp d;
     memset(&d, 0, sizeof d);
     d.session_id = s->id;
@@ -218,7 +219,8 @@ int df_stream_publish(df_session *s, const double *pos, uint8_t kind,
                       uint32_t *changed, df_error *err)
 {
     if (df_stream_scratch(s, err) != DF_OK) return err ? err->code : DF_ENOMEM;
-    int rc = df_stream_encode(s, pos, kind, progress, req_id, s->scratch_u, out, changed, err);
+    int rc = df_stream_encode(s, NULL, 0, pos, kind, progress, req_id, s->scratch_u, out,
+                              changed, err);
     if (rc == DF_OK) {
         float *newu = s->scratch_u; /* swap: newu becomes the published state */
         s->scratch_u = s->uf;

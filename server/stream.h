@@ -33,14 +33,16 @@ void df_frames_clear(df_frames *f);
  * Errors: DF_ENOMEM. */
 int df_stream_scratch(df_session *s, df_error *err);
 
-/* Encodes `pos` (s->nv x 3 doubles) as version s->version + 1 of kind `kind` without changing
- * the session (pure; the compute of a job, commit.h): the new published displacements into
- * `newu` (nv x 3, a buffer the job owns or borrowed) and the version's frames appended to `out`
- * (as df_stream_publish). Uses the scratch index and row buffers of the running job
+/* Encodes `pos` (s->nv x 3 doubles) as version `version` (0: s->version + 1) of kind `kind`,
+ * the change from the published displacements `prev` (NULL: s->uf), without changing the
+ * session (pure; the compute of a job, commit.h): the new published displacements into `newu`
+ * (nv x 3, a buffer the job owns or borrowed) and the version's frames appended to `out` (as
+ * df_stream_publish). Uses the scratch index and row buffers of the running job
  * (df_stream_scratch first). Errors: as df_stream_publish (nothing appended). */
-int df_stream_encode(const df_session *s, const double *pos, uint8_t kind,
-                     const df_msg_progress *progress, uint64_t req_id, float *newu,
-                     df_frames *out, uint32_t *changed, df_error *err);
+int df_stream_encode(const df_session *s, const float *prev, uint64_t version,
+                     const double *pos, uint8_t kind, const df_msg_progress *progress,
+                     uint64_t req_id, float *newu, df_frames *out, uint32_t *changed,
+                     df_error *err);
 
 /* Publishes `pos` (s->nv x 3 doubles) as version s->version + 1 of kind `kind` (df_change_kind):
  * updates s->uf and s->version (NOT s->cur) and appends the event frames to `out`. With

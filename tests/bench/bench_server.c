@@ -79,10 +79,14 @@ static void bench_jobs(void)
     memset(&srv, 0, sizeof srv);
     df_config_defaults(&srv.cfg, NULL);
     srv.loop = &loop;
-    pthread_mutex_init(&srv.mailbox_lock, NULL);
     df_mesh ma = tiny_mesh(), mb = tiny_mesh();
     df_session *a, *b;
     df_error e;
+    if (df_pool_start(&loop, srv.cfg.threads, 0, &srv.pool, &e) != DF_OK) { /* job.h */
+        fprintf(stderr, "pool: %s\n", e.msg);
+        g_errors++;
+        return;
+    }
     if (df_session_create(&srv, &ma, "a", &a, &e) != DF_OK ||
         df_session_create(&srv, &mb, "b", &b, &e) != DF_OK) {
         fprintf(stderr, "session: %s\n", e.msg);
@@ -97,6 +101,9 @@ static void bench_jobs(void)
     report("two sessions' 150 ms jobs, total", total, "ms", "< 290", total < 290.0);
     df_session_destroy(a);
     df_session_destroy(b);
+    df_pool_close(srv.pool);
+    uv_run(&loop, UV_RUN_DEFAULT);
+    df_pool_free(srv.pool);
     uv_loop_close(&loop);
 }
 

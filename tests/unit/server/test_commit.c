@@ -36,7 +36,6 @@ static void server_init(df_server *srv)
 {
     memset(srv, 0, sizeof *srv);
     df_config_defaults(&srv->cfg, NULL);
-    pthread_mutex_init(&srv->mailbox_lock, NULL);
 }
 
 /* What the hook saw (step 4). */
@@ -83,8 +82,8 @@ static void test_commit_order(void **state)
     g_req = &r;
     df_change c;
     df_change_init(&c, &r, &e);
-    assert_int_equal(df_stream_encode(s, pos, DF_CHANGE_BRUSH, NULL, 0, s->scratch_u, &c.frames,
-                                      NULL, &e),
+    assert_int_equal(df_stream_encode(s, NULL, 0, pos, DF_CHANGE_BRUSH, NULL, 0, s->scratch_u,
+                                      &c.frames, NULL, &e),
                      DF_OK);
     assert_int_equal(atomic_load(&s->version), v0); /* pure: nothing published yet */
     assert_true(c.frames.n >= 1);

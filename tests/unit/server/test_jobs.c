@@ -17,6 +17,7 @@
 #include <cmocka.h>
 
 #include "server/job.h"
+#include "server/pool.h"
 #include "server/session.h"
 
 static pthread_mutex_t g_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -87,7 +88,17 @@ static void server_init(df_server *srv, uv_loop_t *loop)
     memset(srv, 0, sizeof *srv);
     df_config_defaults(&srv->cfg, NULL);
     srv->loop = loop;
-    pthread_mutex_init(&srv->mailbox_lock, NULL);
+    df_error e; /* every job's work runs on the server's pool (job.h) */
+    assert_int_equal(df_pool_start(loop, srv->cfg.threads, 0, &srv->pool, &e), DF_OK);
+}
+
+/* Stops the pool started by server_init and closes its handle. */
+static void server_fini(df_server *srv)
+{
+    df_pool_close(srv->pool);
+    uv_run(srv->loop, UV_RUN_DEFAULT);
+    df_pool_free(srv->pool);
+    srv->pool = NULL;
 }
 
 static df_job *job(df_server *srv, df_session *s, int i, int worker)
@@ -125,6 +136,7 @@ static void test_fifo_order_within_a_session(void **state)
     assert_true(srv.stats.jobs_completed == 6);
     df_session_destroy(s);
     assert_int_equal(srv.n_sessions, 0);
+    server_fini(&srv);
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 
@@ -154,6 +166,7 @@ static void test_sessions_run_in_parallel(void **state)
     assert_true(g_saw_other[6] && g_saw_other[7]);
     df_session_destroy(a);
     df_session_destroy(b);
+    server_fini(&srv);
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 
@@ -203,6 +216,7 @@ static void test_inline_jobs_capped_per_iteration(void **state)
     assert_true(deferred >= 1 && in + deferred <= INLINE_JOBS);
     assert_true(srv.stats.jobs_completed == INLINE_JOBS);
     df_session_destroy(s);
+    server_fini(&srv);
     assert_int_equal(uv_loop_close(&loop), 0);
 
     /* inline_us = 0: never inline, never deferred */
@@ -223,6 +237,7 @@ static void test_inline_jobs_capped_per_iteration(void **state)
     assert_int_equal(g_n, 3);
     assert_true(srv.stats.jobs_inline == 0 && srv.stats.jobs_inline_deferred == 0);
     df_session_destroy(s);
+    server_fini(&srv);
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 
@@ -265,6 +280,7 @@ static void test_drop_queued_and_close(void **state)
     assert_memory_equal(g_log, want, sizeof want);
     assert_int_equal(g_done_rc[0], DF_OK);
     assert_int_equal(g_done_rc[2], DF_OK);
+    server_fini(&srv);
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 

@@ -347,7 +347,6 @@ static void test_jobs_on_pool_keep_session_fifo(void **state)
     memset(&srv, 0, sizeof srv);
     df_config_defaults(&srv.cfg, NULL);
     srv.loop = &loop;
-    pthread_mutex_init(&srv.mailbox_lock, NULL);
     df_error e;
     assert_int_equal(df_pool_start(&loop, 4, 0, &srv.pool, &e), DF_OK);
     df_mesh m;
@@ -385,7 +384,6 @@ static void test_jobs_on_pool_keep_session_fifo(void **state)
     df_session_destroy(s);
     df_pool_free(srv.pool);
     srv.pool = NULL;
-    pthread_mutex_destroy(&srv.mailbox_lock);
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 

@@ -21,7 +21,6 @@ static void server_init(df_server *srv)
 {
     memset(srv, 0, sizeof *srv);
     df_config_defaults(&srv->cfg, NULL);
-    pthread_mutex_init(&srv->mailbox_lock, NULL);
 }
 
 static void test_answered_once_counts_the_second(void **state)
