@@ -7,7 +7,6 @@
 
 #include "server/cache.h"
 #include "server/conn.h"
-#include "server/job.h"
 #include "server/log.h"
 
 void df_change_init(df_change *c, df_req *req, df_error *err)
@@ -16,16 +15,6 @@ void df_change_init(df_change *c, df_req *req, df_error *err)
     c->req = req;
     c->err = err;
     c->brush_ms = c->move_ms = -1;
-}
-
-static void stroke_free(df_stroke *st)
-{
-    if (!st) return;
-    free(st->pins);
-    free(st->base);
-    free(st->startf);
-    free(st->applied);
-    free(st);
 }
 
 void df_change_clear(df_server *srv, df_change *c)
@@ -37,7 +26,7 @@ void df_change_clear(df_server *srv, df_change *c)
     }
     c->pos = NULL;
     c->uf = NULL;
-    stroke_free(c->link);
+    df_stroke_free(c->link);
     c->link = NULL;
     free(c->base);
     c->base = NULL;

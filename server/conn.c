@@ -7,12 +7,9 @@
 #include "proto/buf.h"
 #include "proto/frame_codec.h"
 #include "proto/messages.h"
-#include "server/dispatch.h"
 #include "server/guard.h"
-#include "server/handlers.h"
 #include "server/log.h"
 #include "server/reply.h"
-#include "server/session.h"
 
 static void kick_write(df_conn *c);
 static void on_fanout_idle(uv_idle_t *h);
@@ -22,7 +19,7 @@ void df_conn_ref(df_conn *c) { c->refs++; }
 void df_conn_unref(df_conn *c)
 {
     if (--c->refs == 0) {
-        df_upload_free(c->upload);
+        if (c->srv->on_conn_free) c->srv->on_conn_free(c); /* its unfinished upload */
         df_outq_clear(&c->outq);
         free(c->rbuf);
         free(c);
@@ -49,7 +46,7 @@ void df_conn_close(df_conn *c, const char *why, int warn)
     /* refused connections are logged by guard.c's rate limit, not one line each */
     df_log(c->refused ? DF_LOG_DEBUG : warn ? DF_LOG_WARN : DF_LOG_INFO, "client %llu closed: %s",
            (unsigned long long)c->id, why ? why : "closed");
-    df_session_forget_conn(c->srv, c);
+    if (c->srv->on_conn_close) c->srv->on_conn_close(c); /* sessions and jobs forget it */
     uv_read_stop(&c->h.stream);
     uv_close((uv_handle_t *)&c->h.stream, on_closed);
 }
@@ -309,7 +306,7 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
             continue;
         }
         c->srv->stats.frames_in++;
-        df_dispatch_frame(c, &h, c->rbuf + off + DF_FRAME_HEADER_SIZE);
+        if (c->srv->on_frame) c->srv->on_frame(c, &h, c->rbuf + off + DF_FRAME_HEADER_SIZE);
         off += total;
     }
     if (!c->closing && off > 0) {

@@ -13,7 +13,6 @@
 #include "server/conn.h"
 #include "server/log.h"
 #include "server/reply.h"
-#include "server/session.h"
 
 int df_guard_init(df_server *srv, df_error *err)
 {
@@ -167,10 +166,7 @@ void df_guard_sweep(df_server *srv)
     uint64_t hs = (uint64_t)srv->cfg.handshake_timeout_s * 1000;
     uint64_t idle = (uint64_t)srv->cfg.idle_timeout_s * 1000;
     if (!hs && !idle) return;
-    /* Mark the subscribers of this sweep (no per-connection bookkeeping in the sessions). */
-    uint64_t epoch = ++srv->sweep_epoch;
-    for (df_session *s = srv->sessions; s; s = s->next)
-        for (int i = 0; i < s->nsubs; i++) s->subs[i]->sub_epoch = epoch;
+    uint64_t epoch = srv->sweep_epoch; /* subscribers carry it (marked by the caller) */
     for (df_conn *c = srv->conns; c; c = c->next) {
         if (c->closing || c->flush_close) continue;
         if (!c->hello_done) {

@@ -41,7 +41,8 @@ int df_guard_admit(df_conn *c);
 void df_guard_accept_failed(df_server *srv, uv_stream_t *listener, int status, const char *kind);
 
 /* Periodic (server sweep timer): applies the handshake and idle timeouts and logs the number of
- * refusals the rate limit held back. */
+ * refusals the rate limit held back. The caller first bumps srv->sweep_epoch and marks every
+ * subscribed connection with it (c->sub_epoch): subscribers are exempt from the idle timeout. */
 void df_guard_sweep(df_server *srv);
 
 #endif

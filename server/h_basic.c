@@ -147,6 +147,7 @@ static void close_done(df_job *j)
     uint64_t v = atomic_load(&j->s->version);
     df_job_drop_queued(j->s, df_job_pred_all, NULL, "session closed");
     df_session_close(j->s);
+    df_job_pump(j->s); /* frees it once its FIFO is empty */
     df_req_ack(&j->req, j->s->id, v);
 }
 

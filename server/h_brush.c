@@ -47,13 +47,7 @@ static void req_free(df_server *srv, void *body)
     (void)srv;
     brush_req *r = body;
     df_msg_brush_free(&r->begin);
-    if (r->created) {
-        free(r->created->pins);
-        free(r->created->base);
-        free(r->created->startf);
-        free(r->created->applied);
-        free(r->created);
-    }
+    df_stroke_free(r->created);
 }
 
 static const df_kelvinlet_type k_types[] = {DF_KELVINLET_GRAB, DF_KELVINLET_GRAB,

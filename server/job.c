@@ -280,3 +280,48 @@ int df_job_failed(df_job *j)
     df_req_fail(&j->req, &j->err);
     return 1;
 }
+
+/* Ends (commits) a departed client's stroke. */
+static void end_stroke(df_session *s, uint64_t conn_id)
+{
+    if (df_session_history_commit(s, NULL) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo",
+               (unsigned long long)s->id);
+    df_session_drop_stroke(s, conn_id);
+}
+
+static void drop_stroke_done(df_job *j)
+{
+    if (j->rc == DF_OK && df_session_stroke(j->s, j->conn_id)) end_stroke(j->s, j->conn_id);
+}
+
+/* A queued move of connection *arg. */
+static int pred_conn_move(const df_job *j, void *arg)
+{
+    return j->preemptible && j->conn_id == *(const uint64_t *)arg;
+}
+
+void df_job_forget_conn(df_server *srv, df_conn *c)
+{
+    for (df_session *s = srv->sessions; s; s = s->next) {
+        df_session_unsubscribe(s, c);
+        df_job *r = s->running;
+        if (r && r->preemptible && r->conn_id == c->id && !atomic_load(&r->cancel)) {
+            atomic_store(&r->cancel, 1); /* nobody waits for it any more */
+            srv->stats.moves_orphaned++;
+        }
+        uint64_t id = c->id;
+        df_job_drop_queued(s, pred_conn_move, &id, "requester disconnected");
+        if (!df_session_stroke(s, c->id)) continue;
+        if (!s->running) {
+            end_stroke(s, c->id);
+            continue;
+        }
+        /* A worker may be reading the stroke: drop it in FIFO order instead. */
+        df_job *j = df_job_new(srv, s, NULL, 0, 0, NULL, drop_stroke_done);
+        if (j) {
+            j->conn_id = c->id;
+            df_job_submit(j);
+        }
+    }
+}

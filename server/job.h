@@ -30,7 +30,7 @@
  * unsubscribe, stream-shm) run their work and done on the loop thread at once against the last
  * committed version (the move's iterates are committed on the loop thread as they arrive, so
  * they see exactly the versions subscribers have been sent); DF_JOB_BESIDE_REFUSE jobs (undo, redo) fail
- * with ESTATE at once. A move whose requester disconnects ends too (df_session_forget_conn). */
+ * with ESTATE at once. A move whose requester disconnects ends too (df_job_forget_conn). */
 #ifndef DF_SERVER_JOB_H
 #define DF_SERVER_JOB_H
 
@@ -140,6 +140,11 @@ int df_job_failed(df_job *j);
 /* 1 when the session's running job is a move that a request arriving now could be answered
  * beside (nothing queued behind it): see "Moves" above (loop thread). */
 int df_job_move_running(const df_session *s);
+
+/* Called when a connection closes: unsubscribes it everywhere, drops its open strokes in
+ * idle sessions (strokes of busy sessions are dropped by their next job), ends its running move
+ * (its last published iterate stays, as with supersession) and drops its queued moves. */
+void df_job_forget_conn(df_server *srv, df_conn *c);
 
 /* Predicate matching every job (for df_job_drop_queued at shutdown). */
 int df_job_pred_all(const df_job *j, void *arg);

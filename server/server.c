@@ -7,7 +7,9 @@
 
 #include "server/cache.h"
 #include "server/conn.h"
+#include "server/dispatch.h"
 #include "server/guard.h"
+#include "server/handlers.h"
 #include "server/job.h"
 #include "server/listener.h"
 #include "server/log.h"
@@ -27,8 +29,22 @@ static void on_check(uv_check_t *h)
 
 static void on_sweep(uv_timer_t *t)
 {
-    df_conn_sweep(t->data);
-    df_guard_sweep(t->data);
+    df_server *srv = t->data;
+    df_conn_sweep(srv);
+    /* Mark the subscribers of this sweep (no per-connection bookkeeping in the sessions). */
+    uint64_t epoch = ++srv->sweep_epoch;
+    for (df_session *s = srv->sessions; s; s = s->next)
+        for (int i = 0; i < s->nsubs; i++) s->subs[i]->sub_epoch = epoch;
+    df_guard_sweep(srv);
+}
+
+/* The network layer's upward calls (server.h). */
+static void conn_closing(df_conn *c) { df_job_forget_conn(c->srv, c); }
+
+static void conn_free(df_conn *c)
+{
+    df_upload_free(c->upload);
+    c->upload = NULL;
 }
 
 static void on_signal(uv_signal_t *h, int signum)
@@ -45,6 +61,9 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     srv->cfg = *cfg;
     srv->stats.start_ns = uv_hrtime();
     srv->reserve_fd = -1;
+    srv->on_frame = df_dispatch_frame;
+    srv->on_conn_close = conn_closing;
+    srv->on_conn_free = conn_free;
     uv_check_init(loop, &srv->kick_check);
     srv->kick_check.data = srv;
     uv_check_start(&srv->kick_check, on_check);

@@ -90,6 +90,12 @@ typedef struct df_server {
     uint64_t refuse_log_ms, refuse_suppressed; /* refusal log rate limit (guard.h) */
     uint64_t sweep_epoch;
     df_stats stats;
+    /* Upward calls of the network layer (net never includes what is above it), set by
+     * df_server_start: a complete request frame (dispatch), a connection that closes (its
+     * sessions and jobs forget it), its last reference gone (its unfinished upload). NULL: none. */
+    void (*on_frame)(struct df_conn *c, const df_frame_header *h, const uint8_t *payload);
+    void (*on_conn_close)(struct df_conn *c);
+    void (*on_conn_free)(struct df_conn *c);
     /* Step 4 of every session commit (commit.h): where a journal or replication log appends
      * its record. NULL: none. Loop thread. */
     void (*commit_hook)(void *arg, const struct df_session *s, const struct df_change *c);

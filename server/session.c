@@ -7,7 +7,6 @@
 
 #include "server/cache.h"
 #include "server/conn.h"
-#include "server/job.h"
 #include "server/log.h"
 #include "server/meshload.h"
 #include "server/reply.h"
@@ -159,8 +158,9 @@ df_session *df_session_find_name(df_server *srv, const char *name)
     return NULL;
 }
 
-static void free_stroke(df_stroke *st)
+void df_stroke_free(df_stroke *st)
 {
+    if (!st) return;
     free(st->pins);
     free(st->base);
     free(st->startf);
@@ -194,7 +194,7 @@ void df_session_destroy(df_session *s)
     while (s->strokes) {
         df_stroke *st = s->strokes;
         s->strokes = st->next;
-        free_stroke(st);
+        df_stroke_free(st);
     }
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
@@ -230,7 +230,6 @@ void df_session_close(df_session *s)
     }
     for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
     s->nsubs = s->nshm = 0;
-    df_job_pump(s); /* destroys it when idle */
 }
 
 int df_session_subscribe(df_session *s, df_conn *c, df_error *err)
@@ -292,51 +291,6 @@ int df_session_attach_shm(df_session *s, df_conn *c, df_error *err)
     if (!s->sub_shm[i]) s->nshm++;
     s->sub_shm[i] = 1;
     return DF_OK;
-}
-
-/* Ends (commits) a departed client's stroke. */
-static void end_stroke(df_session *s, uint64_t conn_id)
-{
-    if (df_session_history_commit(s, NULL) != DF_OK)
-        df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo",
-               (unsigned long long)s->id);
-    df_session_drop_stroke(s, conn_id);
-}
-
-static void drop_stroke_done(df_job *j)
-{
-    if (j->rc == DF_OK && df_session_stroke(j->s, j->conn_id)) end_stroke(j->s, j->conn_id);
-}
-
-/* A queued move of connection *arg. */
-static int pred_conn_move(const df_job *j, void *arg)
-{
-    return j->preemptible && j->conn_id == *(const uint64_t *)arg;
-}
-
-void df_session_forget_conn(df_server *srv, df_conn *c)
-{
-    for (df_session *s = srv->sessions; s; s = s->next) {
-        df_session_unsubscribe(s, c);
-        df_job *r = s->running;
-        if (r && r->preemptible && r->conn_id == c->id && !atomic_load(&r->cancel)) {
-            atomic_store(&r->cancel, 1); /* nobody waits for it any more */
-            srv->stats.moves_orphaned++;
-        }
-        uint64_t id = c->id;
-        df_job_drop_queued(s, pred_conn_move, &id, "requester disconnected");
-        if (!df_session_stroke(s, c->id)) continue;
-        if (!s->running) {
-            end_stroke(s, c->id);
-            continue;
-        }
-        /* A worker may be reading the stroke: drop it in FIFO order instead. */
-        df_job *j = df_job_new(srv, s, NULL, 0, 0, NULL, drop_stroke_done);
-        if (j) {
-            j->conn_id = c->id;
-            df_job_submit(j);
-        }
-    }
 }
 
 /* The SHM_REF frame standing for `frame` once it is copied into the session's ring; NULL when the
@@ -418,7 +372,7 @@ void df_session_drop_stroke(df_session *s, uint64_t conn_id)
         if ((*pp)->conn_id == conn_id) {
             df_stroke *st = *pp;
             *pp = st->next;
-            free_stroke(st);
+            df_stroke_free(st);
             return;
         }
 }

@@ -131,8 +131,8 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
 df_session *df_session_find(df_server *srv, uint64_t id);
 df_session *df_session_find_name(df_server *srv, const char *name);
 
-/* Marks the session closed, tells subscribers (SESSION_CLOSED event), drops them, and frees it
- * once its FIFO is empty (immediately when idle). */
+/* Marks the session closed, tells subscribers (SESSION_CLOSED event) and drops them; the job
+ * FIFO frees it once it is empty (df_job_pump). */
 void df_session_close(df_session *s);
 
 /* Frees a session that has no running job (unlinks it from srv). */
@@ -147,11 +147,6 @@ int df_session_unsubscribe(df_session *s, df_conn *c);
  * or df_shm_create's error. */
 int df_session_attach_shm(df_session *s, df_conn *c, df_error *err);
 
-/* Called when a connection closes: unsubscribes it everywhere, drops its open strokes in
- * idle sessions (strokes of busy sessions are dropped by their next job), ends its running move
- * (its last published iterate stays, as with supersession) and drops its queued moves. */
-void df_session_forget_conn(df_server *srv, df_conn *c);
-
 /* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for.
  * Subscribers on the shared-memory stream get an SHM_REF to the frame's copy in the ring
  * instead, when the frame's size qualifies (df_shm_takes). */
@@ -159,6 +154,9 @@ void df_session_broadcast(df_session *s, df_sbuf *frame);
 
 /* Open stroke of connection `conn_id`, or NULL. */
 df_stroke *df_session_stroke(df_session *s, uint64_t conn_id);
+
+/* Frees a stroke that is not linked into a session (NULL-safe). */
+void df_stroke_free(df_stroke *st);
 
 /* Unlinks and frees the stroke of `conn_id` (no-op when none). */
 void df_session_drop_stroke(df_session *s, uint64_t conn_id);
