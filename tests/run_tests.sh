@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test suite and prints one closing line "N passed, N failed[, N skipped]".
 #   layers: tests/check_layers.sh over the checkout (one test: no #include crosses a layer) and
-#         tests/check_layers_selftest.sh (one test: the checker rejects fake violations).
+#         tests/check_layers_selftest.sh (one test: the checker rejects fake violations), and
+#         tests/check_server_cycles.sh (one test: no include cycle between server/ subfolders).
 #   unit: each build/tests/unit/<area>/test_* cmocka binary (its "[  PASSED  ] N test(s)." lines
 #         are summed; a binary that dies without a FAILED line counts as one failure).
 #   integration: /usr/bin/python3 -m pytest tests/integration (when it holds test_*.py files).
@@ -30,7 +31,7 @@ count() { # $1 = regex with one capture group of the count; reads $log
 
 if [[ " $SUITES " == *" layers "* ]]; then
   here=$(cd "$(dirname "$0")" && pwd)
-  for t in check_layers.sh check_layers_selftest.sh; do
+  for t in check_layers.sh check_layers_selftest.sh check_server_cycles.sh; do
     echo "== tests/$t"
     if bash "$here/$t"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "!! tests/$t failed"; fi
   done
