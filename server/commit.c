@@ -34,6 +34,8 @@ void df_change_clear(df_server *srv, df_change *c)
     c->hs = NULL;
     df_kelvinlet_constraints_free(c->kc);
     c->kc = NULL;
+    df_admm_free(c->solver);
+    c->solver = NULL;
 }
 
 /* Step 1: the new state, swapped in (the old buffers become the session's scratch). */
@@ -116,6 +118,11 @@ static void apply_caches(df_session *s, df_change *c)
             srv->cache_bytes -= s->kc_bytes <= srv->cache_bytes ? s->kc_bytes : srv->cache_bytes;
             df_cache_install_kelvinlet(srv, s, df_cache_estimate_kelvinlet(c->kc_pins));
         }
+    }
+    if (c->solver) { /* rebuilt by the compute (an evicted one): the set's from now on */
+        if (s->hs && !s->hs->solver) s->hs->solver = c->solver;
+        else df_admm_free(c->solver);
+        c->solver = NULL;
     }
     if (c->solver_created && s->hs) {
         srv->stats.admm_misses++;

@@ -57,6 +57,7 @@ typedef struct df_change {
     int kc_used, kc_hit;         /* Kelvinlet pin LU used / reused without refactoring */
     uint32_t kc_pins;
     df_kelvinlet_constraints *kc;/* a pin LU the compute built (installed as s->kc) */
+    df_admm *solver;             /* an ADMM solver the compute rebuilt for s->hs (installed) */
     int solver_created, solver_hit; /* the handle set's ADMM solver rebuilt / reused */
     int solver_drop;             /* drop the cached solver (rest shape changed) */
 } df_change;

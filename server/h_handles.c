@@ -34,6 +34,7 @@ typedef struct hs_req {
     int published;             /* move: an iterate of it was published (posted): one undo step */
     int resumed;               /* move: it yielded its worker and runs again (time slices) */
     const float *uf_prev;      /* move: displacements of its last iterate (or the session's) */
+    df_admm *solver;           /* move: the solver it runs (the set's, or one it rebuilt) */
     uint64_t version;          /* move: version of its last iterate (or the session's) */
     int yield;                 /* move: on_progress asked to yield */
     int iters_done;            /* move: iterations of the earlier slices */
@@ -48,13 +49,14 @@ static void req_free(df_server *srv, void *body)
     if (r->hs) df_handleset_free(srv, r->hs);
 }
 
-/* Builds the solver of `hs` against the session's rest shape. */
-static int build_solver(df_session *s, df_handleset *hs, df_error *err)
+/* Builds a solver for handle set `hs` against the session's rest shape into *out. */
+static int build_solver(const df_session *s, const df_handleset *hs, df_admm **out,
+                        df_error *err)
 {
     df_mesh m = s->mesh;
     m.V = s->rest;
-    return df_admm_create(&m, &hs->params, hs->handles, hs->nh, hs->affine, hs->n_affine,
-                          &hs->solver, err);
+    return df_admm_create(&m, &hs->params, hs->handles, hs->nh, hs->affine, hs->n_affine, out,
+                          err);
 }
 
 static void set_work(df_job *j)
@@ -112,7 +114,7 @@ static void set_work(df_job *j)
         memcpy(hs->affine[k].b, a->b, sizeof a->b);
         hs->n_affine++;
     }
-    j->rc = build_solver(s, hs, &j->err);
+    j->rc = build_solver(s, hs, &hs->solver, &j->err); /* hs is the job's own until committed */
     if (j->rc != DF_OK) return;
     j->change.hs = hs; /* installed, its solver cached, by the commit */
     j->change.solver_created = 1;
@@ -314,8 +316,8 @@ static int targets_check(const df_session *s, const df_handleset *hs, const doub
 static int move_setup(df_job *j)
 {
     hs_req *r = j->body;
-    df_session *s = j->s;
-    df_handleset *hs = s->hs;
+    const df_session *s = j->s;
+    const df_handleset *hs = s->hs;
     if (!hs)
         return df_error_set(&j->err, DF_ESTATE, "handles_move: session %llu has no handle set "
                             "(send handles_set first)", (unsigned long long)s->id);
@@ -324,29 +326,31 @@ static int move_setup(df_job *j)
                             r->mv.n_targets, hs->nh);
     int rc = targets_check(s, hs, r->mv.targets, &j->err);
     if (rc != DF_OK) return rc;
-    if (!hs->solver) {
-        rc = build_solver(s, hs, &j->err);
+    if (!hs->solver) { /* evicted: rebuilt into the change, cached by the commit */
+        rc = build_solver(s, hs, &j->change.solver, &j->err);
         if (rc != DF_OK) return rc;
         r->created = 1;
     } else {
         r->hit = 1;
     }
+    r->solver = hs->solver ? hs->solver : j->change.solver;
     /* Start from the session's current positions (PROTOCOL.md 6): an undo, a brush or another
      * client's edit since the solver's last run invalidates its warm start there. A target
      * with z != 0 on a 2D session is refused here (df_admm_set_targets, EINVAL). */
-    rc = df_admm_set_positions(hs->solver, s->cur, NULL, &j->err);
-    if (rc == DF_OK) rc = df_admm_set_targets(hs->solver, r->mv.targets, &j->err);
+    rc = df_admm_set_positions(r->solver, s->cur, NULL, &j->err);
+    if (rc == DF_OK) rc = df_admm_set_targets(r->solver, r->mv.targets, &j->err);
     r->progress_every = r->mv.progress_every;
     r->uf_prev = s->uf; /* its iterates are encoded one from the other (publish_iterate) */
     r->version = atomic_load(&s->version);
     return rc;
 }
 
+/* Work of HANDLES_MOVE (one time slice): reads the session, runs the solver (the handle set's
+ * cached one, used in place: the running job's), posts its iterates (publish_iterate). */
 static void move_work(df_job *j)
 {
     hs_req *r = j->body;
-    df_session *s = j->s;
-    df_handleset *hs = s->hs;
+    const df_handleset *hs = j->s->hs;
     if (!r->resumed) {
         r->t0 = uv_hrtime();
         if ((j->rc = move_setup(j)) != DF_OK) return;
@@ -364,7 +368,7 @@ static void move_work(df_job *j)
                         .progress_every = 1, /* every iteration: prompt supersede checks */
                         .progress = on_progress,
                         .user = j};
-    int rc = df_admm_run(hs->solver, &b, &r->res, &j->err);
+    int rc = df_admm_run(r->solver, &b, &r->res, &j->err);
     if (r->publish_failed) { /* j->err holds the refusal; the iterates before it stay */
         r->status = DF_MOVE_FAILED;
         j->change.move_ms = (double)(uv_hrtime() - r->t0) / 1e6;
@@ -392,7 +396,7 @@ static void move_work(df_job *j)
     else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
     else r->status = DF_MOVE_BUDGET;
     j->change.move_ms = (double)(uv_hrtime() - r->t0) / 1e6;
-    int prc = publish_iterate(j, df_admm_positions(hs->solver), r->res.iterations,
+    int prc = publish_iterate(j, df_admm_positions(r->solver), r->res.iterations,
                               r->res.objective, r->res.residual, r->status, 1);
     j->rc = rc != DF_OK ? rc : prc;
 }
