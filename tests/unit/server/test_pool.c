@@ -1,4 +1,5 @@
-/* Unit tests for the server's latency work: server/pool.c (the compute pool), the pool-backed job
+/* Unit tests for the server's latency work: server/pool.c (the compute pool and its one completion
+ * channel: progress posts before the completion), the pool-backed job
  * FIFO of server/job.c, the single-allocation displacement frames of server/stream.c (byte-equal
  * to the proto encoder's) and the spin_us setting of server/config.c. Nothing here asserts a
  * duration: how fast a short task passes a slow one and how often spinning workers catch
@@ -317,6 +318,69 @@ static void test_pool_rejects_bad_arguments(void **state)
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 
+/* ---- one completion channel: progress posts arrive before their task's completion -------- */
+
+typedef struct post_msg {
+    df_task t;
+    int n;
+} post_msg;
+
+static struct {
+    df_pool *p;
+    int order[8], n;
+} g_post;
+
+static void post_after(df_task *t)
+{
+    post_msg *m = (post_msg *)t;
+    g_post.order[g_post.n++] = m->n;
+    free(m);
+}
+
+static void posting_work(df_task *t)
+{
+    (void)t;
+    for (int i = 1; i <= 3; i++) {
+        post_msg *m = calloc(1, sizeof *m);
+        assert_non_null(m);
+        m->n = i;
+        m->t.after = post_after;
+        df_pool_post(g_post.p, &m->t);
+        usleep(2000); /* the loop may deliver some before the next post */
+    }
+}
+
+static void posting_after(df_task *t)
+{
+    (void)t;
+    g_post.order[g_post.n++] = 100; /* the completion */
+    assert_int_equal(df_pool_inflight(g_post.p), 0);
+}
+
+static void test_pool_posts_arrive_before_completion(void **state)
+{
+    (void)state;
+    uv_loop_t loop;
+    assert_int_equal(uv_loop_init(&loop), 0);
+    df_error e;
+    assert_int_equal(df_pool_start(&loop, 2, 0, &g_post.p, &e), DF_OK);
+    g_post.n = 0;
+    df_task t = {.work = posting_work, .after = posting_after};
+    df_pool_submit(g_post.p, &t);
+    assert_int_equal(df_pool_inflight(g_post.p), 1); /* posts are not tasks */
+    uv_run(&loop, UV_RUN_DEFAULT); /* returns: the idle pool keeps no loop alive */
+    int want[] = {1, 2, 3, 100};
+    assert_int_equal(g_post.n, 4);
+    assert_memory_equal(g_post.order, want, sizeof want);
+    df_pool_counters pc;
+    df_pool_counters_get(g_post.p, &pc);
+    assert_true(pc.tasks == 1);
+    df_pool_close(g_post.p);
+    uv_run(&loop, UV_RUN_DEFAULT);
+    df_pool_free(g_post.p);
+    assert_int_equal(uv_loop_close(&loop), 0);
+}
+
 /* ---- job FIFO on the pool ------------------------------------------------------------------ */
 
 static int g_log[16], g_n, g_jobs_done;
@@ -507,6 +571,7 @@ int main(void)
         cmocka_unit_test(test_pool_heavy_task_yields_to_a_waiting_one),
         cmocka_unit_test(test_pool_spinning_worker_takes_back_to_back_tasks),
         cmocka_unit_test(test_pool_rejects_bad_arguments),
+        cmocka_unit_test(test_pool_posts_arrive_before_completion),
         cmocka_unit_test(test_jobs_on_pool_keep_session_fifo),
         cmocka_unit_test(test_stream_frames_equal_proto_encoder),
         cmocka_unit_test(test_config_spin_us),
