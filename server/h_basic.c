@@ -212,7 +212,7 @@ static void subscribe_done(df_job *j)
     if (*(const uint8_t *)j->body & DF_SUBSCRIBE_SNAPSHOT) {
         df_frames f = {0};
         if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)
-            for (size_t i = 0; i < f.n; i++) df_req_send_more(&j->req, f.v[i]);
+            for (size_t i = 0; i < f.n; i++) df_req_reply_more(&j->req, f.v[i]);
         else
             df_log(DF_LOG_ERROR, "subscribe snapshot failed: %s", err.msg);
         df_frames_clear(&f);

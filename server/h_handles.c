@@ -196,7 +196,7 @@ static void get_done(df_job *j)
         df_req_fail(&j->req, &err);
         return;
     }
-    df_req_send(&j->req, f);
+    df_req_reply(&j->req, f);
     df_sbuf_unref(f);
 }
 

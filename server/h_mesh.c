@@ -27,8 +27,8 @@ static void req_free(df_server *srv, void *body)
 static void reply_frames(df_job *j)
 {
     mesh_req *r = j->body;
-    for (size_t i = 0; i + 1 < r->frames.n; i++) df_req_send_more(&j->req, r->frames.v[i]);
-    if (r->frames.n) df_req_send(&j->req, r->frames.v[r->frames.n - 1]);
+    for (size_t i = 0; i + 1 < r->frames.n; i++) df_req_reply_more(&j->req, r->frames.v[i]);
+    if (r->frames.n) df_req_reply(&j->req, r->frames.v[r->frames.n - 1]);
 }
 
 /* ---- undo / redo ---- */

@@ -33,7 +33,7 @@ int df_req_fail(df_req *r, const df_error *e)
     return e->code;
 }
 
-void df_req_send(df_req *r, df_sbuf *f)
+void df_req_reply(df_req *r, df_sbuf *f)
 {
     if (!df_req_claim(r) || !r->c) return;
     if (r->c->pending > 0) r->c->pending--;
@@ -41,7 +41,7 @@ void df_req_send(df_req *r, df_sbuf *f)
     df_conn_send(r->c, f);
 }
 
-void df_req_send_more(df_req *r, df_sbuf *f)
+void df_req_reply_more(df_req *r, df_sbuf *f)
 {
     if (r->c) df_conn_send(r->c, f);
 }

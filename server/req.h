@@ -4,9 +4,9 @@
  * dispatch.c makes one df_req per request frame and hands it to the request's handler; a
  * handler that queues a session job copies it into the job (df_job.req, which holds a
  * reference on the connection). Every request is answered exactly once, through df_req_fail or
- * a final df_req_reply_* / df_req_send: a second answer is a bug. It is counted in the stats
- * (`requests_double_answer`) and, while df_req_strict is set (the default unless NDEBUG is
- * defined), aborts the daemon so that tests catch it. Loop thread only. */
+ * a final df_req_reply / df_req_reply_<msg> / df_req_ack: a second answer is a bug. It is
+ * counted in the stats (`requests_double_answer`) and, while df_req_strict is set (the default
+ * unless NDEBUG is defined), aborts the daemon so that tests catch it. Loop thread only. */
 #ifndef DF_SERVER_REQ_H
 #define DF_SERVER_REQ_H
 
@@ -40,11 +40,11 @@ int df_req_fail(df_req *r, const df_error *e);
 
 /* Sends the final reply frame `f` (built by the caller; the caller keeps its reference) and
  * counts the request ok. */
-void df_req_send(df_req *r, df_sbuf *f);
+void df_req_reply(df_req *r, df_sbuf *f);
 
 /* Sends a non-final frame of the answer (chunks, the snapshot after a subscribe's reply): no
  * accounting, no check. */
-void df_req_send_more(df_req *r, df_sbuf *f);
+void df_req_reply_more(df_req *r, df_sbuf *f);
 
 /* Acks `r` with (session, version). */
 void df_req_ack(df_req *r, uint64_t session_id, uint64_t version);
