@@ -70,6 +70,10 @@ static void apply_state(df_session *s, df_change *c)
         c->base = NULL;
     }
     if (st && c->version) st->last_version = c->version;
+    if (st && c->set_params) {
+        st->brush = c->brush;
+        st->strength = c->strength;
+    }
     if (c->link) {
         c->link->next = s->strokes;
         s->strokes = c->link;

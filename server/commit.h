@@ -46,6 +46,9 @@ typedef struct df_change {
     double *base;                /* its rebased base (swapped in, old freed), or NULL */
     uint64_t work_ns;            /* its measured update (when set_work_ns) */
     int set_work_ns;
+    int set_params;              /* the stroke's knobs become brush / strength (SET_BRUSH_PARAM) */
+    df_kelvinlet_brush brush;
+    double strength;
     df_stroke *link;             /* a new stroke to link (owned until the commit) */
     int drop_stroke;             /* drop the requester's stroke (cancel, end) */
     int rest_from_cur;           /* reset-rest: rest shape = the new current positions */

@@ -239,31 +239,31 @@ typedef struct knob {
     double value;
 } knob;
 
-/* Applies a knob value to the client's open stroke on the session (FIFO order). */
+/* Sets a knob of the client's open stroke on the session (FIFO order): checked here, applied
+ * by the commit (from the stroke's next update on). */
 static void knob_done(df_job *j)
 {
-    if (df_job_failed(j)) return;
     knob *k = j->body;
-    df_stroke *st = df_session_stroke(j->s, j->conn_id);
-    if (!st) {
+    df_stroke *st = j->rc == DF_OK ? df_session_stroke(j->s, j->conn_id) : NULL;
+    if (j->rc == DF_OK && !st)
         j->rc = df_error_set(&j->err, DF_ESTATE, "set_brush_param: no open stroke on session %llu",
                              (unsigned long long)j->s->id);
-        df_job_failed(j);
-        return;
+    if (st && (j->rc = df_h_brush_knob_check(st, k->param, k->value, &j->err)) == DF_OK) {
+        df_stroke t = *st; /* shallow: only the scalar parameters change */
+        switch (k->param) {
+        case DF_BP_RADIUS: t.brush.radius = k->value; break;
+        case DF_BP_NU: t.brush.nu = k->value; break;
+        case DF_BP_STRENGTH: t.strength = k->value; break;
+        case DF_BP_FALLOFF: t.brush.order = (int)k->value; break;
+        case DF_BP_RATIO: t.brush.ratio = k->value; break;
+        default: break;
+        }
+        j->change.stroke = st;
+        j->change.set_params = 1;
+        j->change.brush = t.brush;
+        j->change.strength = t.strength;
     }
-    if ((j->rc = df_h_brush_knob_check(st, k->param, k->value, &j->err)) != DF_OK) {
-        df_job_failed(j);
-        return;
-    }
-    switch (k->param) {
-    case DF_BP_RADIUS: st->brush.radius = k->value; break;
-    case DF_BP_NU: st->brush.nu = k->value; break;
-    case DF_BP_STRENGTH: st->strength = k->value; break;
-    case DF_BP_FALLOFF: st->brush.order = (int)k->value; break;
-    case DF_BP_RATIO: st->brush.ratio = k->value; break;
-    default: break;
-    }
-    df_req_ack(&j->req, j->s->id, atomic_load(&j->s->version));
+    df_job_commit(j);
 }
 
 static int knob_decode(const df_req *r, const uint8_t *p, void *body, uint64_t *sid,
