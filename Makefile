@@ -56,7 +56,7 @@ deps:
 	else echo "deps: all $(words $(DEB_PKGS)) Debian packages present"; fi
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
-            python3 python3-pytest clang libclang-rt-14-dev
+            python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
