@@ -141,7 +141,8 @@ run: all
 PREFIX  ?= /usr/local
 DESTDIR ?=
 CLIENT_HEADERS := core/common/df_error.h core/mesh/mesh.h core/mesh/mesh_io.h \
-                  proto/frame.h proto/buf.h proto/frame_codec.h proto/wire_error.h proto/messages.h
+                  proto/frame.h proto/buf.h proto/frame_codec.h proto/wire_error.h proto/messages.h \
+                  proto/wire_schema.h
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig \
 	  $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(PREFIX)/share/doc/deformd
