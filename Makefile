@@ -1,53 +1,93 @@
-# deformd build. Everything is found by glob so that new files need no Makefile edit:
-#   core/<area>/*.c      -> build/lib/libdf_<area>.a      (math only)
-#   proto/*.c            -> build/lib/libdf_proto.a       (wire format only)
-#   server/*.c           -> build/bin/deformd
-#   client/*.c           -> build/lib/libdeformclient.a, client/deformctl/*.c -> build/bin/deformctl
-#   tests/unit/<area>/test_*.c -> build/tests/unit/<area>/test_*   (cmocka, one binary per file)
+# deformd build. Everything is found by glob (find: subfolders included) so that new files and
+# folders need no Makefile edit:
+#   core/<area>/**/*.c   -> build/lib/libdf_<area>.a      (math only)
+#   proto/**/*.c         -> build/lib/libdf_proto.a       (wire format only)
+#   server/**/*.c        -> build/lib/libdf_server.a + server/main.c -> build/bin/deformd
+#   client/**/*.c        -> build/lib/libdeformclient.a   (minus client/deformctl/, client/python/)
+#   client/deformctl/**/*.c -> build/bin/deformctl
+#   tests/unit/<area>/**/test_*.c -> build/tests/unit/<area>/.../test_*  (cmocka, one per file)
 #   tests/bench/bench_*.c      -> build/bench/bench_*
 #   tests/fuzz/fuzz_*.c        -> build/fuzz/fuzz_*  (clang libFuzzer, `make fuzz`)
+# Layers (tests/check_layers.sh, run by `make test`, holds the allowed #include matrix):
+#   core <- proto <- client <- deformctl;  core, proto <- server. Each binary links its layers only:
+#   deformd: server proto core + libuv; deformctl: client proto mesh common kelvinlet (local brush
+#   check); libdeformclient needs proto mesh common only (client/deformclient.pc.in).
 # Release flags: -O2 -march=x86-64-v2 (SSE4.2/POPCNT: every x86-64 server of the last decade) plus
-# -ffp-contract=off so float results are reproducible across builds; OpenMP for kernels.
+# -ffp-contract=off so float results are reproducible across builds; OpenMP for kernels (OMP).
+# Sanitizer builds: `make asan` (build-asan), `make tsan` (build-tsan: kernels serial, no
+# target_clones; see the tsan target).
 
 SHELL   := /bin/bash
 CC      ?= gcc
 BUILD   ?= build
 OPT     ?= -O2 -march=x86-64-v2 -ffp-contract=off
 SAN     ?=
+OMP     ?= -fopenmp
+DEFS    ?=
 PYTHON  := /usr/bin/python3
 MESHES  ?= $(abspath $(CURDIR)/../shared/meshes)
 
 WARN    := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes
-CPPFLAGS := -I. -I/usr/include/suitesparse -D_GNU_SOURCE
-CFLAGS  := -std=c11 $(OPT) $(SAN) $(WARN) -fopenmp -g -MMD -MP
+CPPFLAGS := -I. -I/usr/include/suitesparse -D_GNU_SOURCE $(DEFS)
+CFLAGS  := -std=c11 $(OPT) $(SAN) $(WARN) $(OMP) -g -MMD -MP
+LDFLAGS := $(OMP) $(SAN)
+# System libraries per layer (hidapi, libusb, SQLite: only with the code that uses them, none yet).
+KELV_SYS    := -llapacke -llapack -lopenblas -lm
 MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
-SERVER_LIBS := -luv -lhidapi-hidraw -lusb-1.0 -lsqlite3 -lpthread
-LDFLAGS := -fopenmp $(SAN)
+SERVER_SYS  := -luv -lpthread
 
+srcs = $(if $(wildcard $(1)),$(shell find $(1) -name '*.c' $(2) | sort))
+lib  = $(BUILD)/lib/libdf_$(1).a
+objs = $(patsubst %.c,$(BUILD)/obj/%.o,$(1))
 AREAS      := $(notdir $(patsubst %/,%,$(wildcard core/*/)))
-CORE_LIBS  := $(foreach a,$(AREAS),$(BUILD)/lib/libdf_$(a).a)
-PROTO_SRC  := $(wildcard proto/*.c)
-PROTO_LIB  := $(if $(PROTO_SRC),$(BUILD)/lib/libdf_proto.a)
-CLIENT_SRC := $(wildcard client/*.c)
+CORE_LIBS  := $(foreach a,$(AREAS),$(call lib,$(a)))
+PROTO_SRC  := $(call srcs,proto)
+PROTO_LIB  := $(if $(PROTO_SRC),$(call lib,proto))
+CLIENT_SRC := $(call srcs,client,-not -path 'client/deformctl/*' -not -path 'client/python/*')
 CLIENT_LIB := $(if $(CLIENT_SRC),$(BUILD)/lib/libdeformclient.a)
-SERVER_SRC := $(filter-out server/main.c,$(wildcard server/*.c))
-SERVER_LIB := $(if $(SERVER_SRC),$(BUILD)/lib/libdf_server.a)
-CTL_SRC    := $(wildcard client/deformctl/*.c)
-ALL_LIBS   := $(SERVER_LIB) $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
-LINK_LIBS  := -Wl,--start-group $(ALL_LIBS) -Wl,--end-group $(MATH_LIBS)
+SERVER_SRC := $(call srcs,server,-not -path server/main.c)
+SERVER_LIB := $(if $(SERVER_SRC),$(call lib,server))
+CTL_SRC    := $(call srcs,client/deformctl)
+CTL_LIB    := $(if $(CTL_SRC),$(BUILD)/lib/libdf_ctl.a)
+ALL_LIBS   := $(SERVER_LIB) $(CTL_LIB) $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
+group      = -Wl,--start-group $(1) -Wl,--end-group
+# What each binary links (archives, then system libraries).
+BASE_LIBS   := $(call lib,mesh) $(call lib,common)
+CLIENT_LINK := $(CLIENT_LIB) $(PROTO_LIB) $(BASE_LIBS)
+CTL_LINK    := $(CTL_LIB) $(CLIENT_LINK) $(call lib,kelvinlet)
+SERVER_LINK := $(SERVER_LIB) $(PROTO_LIB) $(CORE_LIBS)
 
-UNIT_SRC   := $(wildcard tests/unit/*/test_*.c)
+UNIT_SRC   := $(call srcs,tests/unit,-mindepth 2 -name 'test_*.c')
 UNIT_BIN   := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
+UNIT_AREAS := $(sort $(foreach t,$(UNIT_SRC),$(word 3,$(subst /, ,$(t)))))
 UNIT_HELP  := $(wildcard tests/unit/*.c)
+# C unit tests link their area's layers: a core area its library plus mesh and common, proto its
+# layer, client the client layer plus core (test_parity checks it against the solvers), deformctl
+# what deformctl links (its objects but main are the archive libdf_ctl.a), server what deformd
+# links.
+$(foreach a,$(AREAS),$(eval UNIT_LINK_$(a) := $(call lib,$(a)) $(BASE_LIBS)))
+$(foreach a,$(AREAS),$(eval UNIT_SYS_$(a) := $(MATH_LIBS)))
+UNIT_SYS_common     := -lm
+UNIT_SYS_mesh       := -lm
+UNIT_SYS_kelvinlet  := $(KELV_SYS)
+UNIT_LINK_proto     := $(PROTO_LIB) $(BASE_LIBS)
+UNIT_SYS_proto      := -lm
+UNIT_LINK_client    := $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
+UNIT_SYS_client     := $(MATH_LIBS)
+UNIT_LINK_deformctl := $(CTL_LINK)
+UNIT_SYS_deformctl  := $(KELV_SYS)
+UNIT_LINK_server    := $(SERVER_LINK)
+UNIT_SYS_server     := $(MATH_LIBS) $(SERVER_SYS)
 BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
 
-.PHONY: all deps test unit bench asan fuzz fuzz-build run install clean
+.PHONY: all deps test unit bench asan tsan tsan-build fuzz fuzz-build run install clean
 all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
 
-# Idempotent: installs every Debian package the build, the tests and the fuzzers need.
+# Idempotent: installs every Debian package the build, the tests and the fuzzers need (hidapi,
+# libusb and SQLite too: the HID and durable-store work needs them; nothing links them yet).
 deps:
 	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
@@ -63,35 +103,43 @@ $(BUILD)/obj/%.o: %.c
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
 define area_lib
-$(BUILD)/lib/libdf_$(1).a: $(patsubst %.c,$(BUILD)/obj/%.o,$(wildcard core/$(1)/*.c))
+$(call lib,$(1)): $(call objs,$(call srcs,core/$(1)))
 	@mkdir -p $$(dir $$@)
 	rm -f $$@ && ar rcs $$@ $$^
 endef
 $(foreach a,$(AREAS),$(eval $(call area_lib,$(a))))
 
-$(BUILD)/lib/libdf_proto.a: $(patsubst %.c,$(BUILD)/obj/%.o,$(PROTO_SRC))
+$(BUILD)/lib/libdf_proto.a: $(call objs,$(PROTO_SRC))
 	@mkdir -p $(dir $@)
 	rm -f $@ && ar rcs $@ $^
-$(BUILD)/lib/libdeformclient.a: $(patsubst %.c,$(BUILD)/obj/%.o,$(CLIENT_SRC))
+$(BUILD)/lib/libdeformclient.a: $(call objs,$(CLIENT_SRC))
 	@mkdir -p $(dir $@)
 	rm -f $@ && ar rcs $@ $^
 
-$(BUILD)/lib/libdf_server.a: $(patsubst %.c,$(BUILD)/obj/%.o,$(SERVER_SRC))
+$(BUILD)/lib/libdf_server.a: $(call objs,$(SERVER_SRC))
 	@mkdir -p $(dir $@)
 	rm -f $@ && ar rcs $@ $^
-$(BUILD)/bin/deformd: $(BUILD)/obj/server/main.o $(ALL_LIBS)
+$(BUILD)/bin/deformd: $(BUILD)/obj/server/main.o $(SERVER_LINK)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LINK_LIBS) $(SERVER_LIBS)
-$(BUILD)/bin/deformctl: $(patsubst %.c,$(BUILD)/obj/%.o,$(CTL_SRC)) $(ALL_LIBS)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(SERVER_LINK)) $(MATH_LIBS) $(SERVER_SYS)
+$(BUILD)/lib/libdf_ctl.a: $(call objs,$(filter-out client/deformctl/main.c,$(CTL_SRC)))
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LINK_LIBS) $(SERVER_LIBS)
+	rm -f $@ && ar rcs $@ $^
+$(BUILD)/bin/deformctl: $(BUILD)/obj/client/deformctl/main.o $(CTL_LINK)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(CTL_LINK)) $(KELV_SYS)
 
-$(BUILD)/tests/unit/%: tests/unit/%.c $(patsubst %.c,$(BUILD)/obj/%.o,$(UNIT_HELP)) $(ALL_LIBS)
-	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(patsubst %.c,$(BUILD)/obj/%.o,$(UNIT_HELP)) $(LDFLAGS) $(LINK_LIBS) $(SERVER_LIBS) -lcmocka
+define unit_area
+$(BUILD)/tests/unit/$(1)/%: tests/unit/$(1)/%.c $(call objs,$(UNIT_HELP)) $$(UNIT_LINK_$(1))
+	@mkdir -p $$(dir $$@)
+	$$(CC) $$(CPPFLAGS) $$(CFLAGS) -o $$@ $$< $(call objs,$(UNIT_HELP)) $$(LDFLAGS) \
+	  $$(call group,$$(UNIT_LINK_$(1))) $$(UNIT_SYS_$(1)) -lcmocka
+endef
+$(foreach a,$(UNIT_AREAS),$(eval $(call unit_area,$(a))))
 $(BUILD)/bench/%: tests/bench/%.c $(ALL_LIBS)
 	@mkdir -p $(dir $@)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(LDFLAGS) $(LINK_LIBS) $(SERVER_LIBS)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(LDFLAGS) $(call group,$(ALL_LIBS)) $(MATH_LIBS) \
+	  $(SERVER_SYS)
 
 # The README's test command: deps, build, every suite, one closing "N passed, N failed" line.
 test: deps
@@ -101,20 +149,53 @@ test: deps
 unit: all
 	BUILD=$(BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES=unit bash tests/run_tests.sh
 
+# C benches (build/bench/bench_*), then the Python ones (tests/bench/bench_*.py, against the built
+# daemon); each prints its figures with their targets (timing lives here, never in make test).
 bench: all
 	@for b in $(BENCH_BIN); do echo "== $$b"; MESHES=$(MESHES) $$b || exit 1; done
+	@for p in $(wildcard tests/bench/bench_*.py); do echo "== $$p"; \
+	  BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p || exit 1; done
 
+# The fuzzers are ASan+UBSan builds already (make test runs them): here the unit and integration suites.
 asan:
 	$(MAKE) BUILD=build-asan OPT="-O1 -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
-	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) bash tests/run_tests.sh
+	ASAN_OPTIONS=detect_leaks=1 SAN_FLAGS="-fsanitize=address,undefined" BUILD=build-asan MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" bash tests/run_tests.sh
+
+# ThreadSanitizer: the daemon, deformctl, the client library and the server unit tests in
+# build-tsan, then those tests and the integration suite; any report fails the run (halt_on_error,
+# exitcode 66; the pytest fixtures also fail a test whose daemon log holds a TSan warning).
+# Kernels are serial (OMP=-fopenmp-simd: `omp simd` kept, no libgomp, which TSan cannot see
+# into: its barriers would show as races) and DF_NO_TARGET_CLONES drops the Kelvinlet kernel's
+# ifunc clones (their resolver runs before the TSan runtime is up and crashes deformd at load).
+# OMP_THREAD_LIMIT=1 (and OMP_NUM_THREADS / OPENBLAS_NUM_THREADS=1): the prebuilt CHOLMOD opens
+# its own libgomp teams with a fixed num_threads (4) that OMP_NUM_THREADS does not cap; a TSan
+# deformd then reported cholmod_clear_flag's memset in df_admm_create racing a libgomp thread.
+# With the thread limit every region runs on the calling worker, where TSan sees each access.
+# No suppressions.
+# Left out under TSan (every other integration test runs): test_inline's cheap-update test needs
+# an update to cost under the largest inline budget (1000 us), which TSan's ~10x slowdown breaks
+# (a cost assumption, not a race check; under TSan few updates qualify to run inline at all).
+TSAN_DESELECT := --deselect \
+  tests/integration/test_inline.py::test_cheap_updates_run_inline_and_match_the_pool_path
+TSAN_BUILD := build-tsan
+TSAN_VARS  := BUILD=$(TSAN_BUILD) OPT="-O1 -fno-omit-frame-pointer" SAN=-fsanitize=thread \
+              OMP=-fopenmp-simd DEFS=-DDF_NO_TARGET_CLONES
+tsan:
+	$(MAKE) $(TSAN_VARS) tsan-build
+	TSAN_OPTIONS="halt_on_error=1 exitcode=66 second_deadlock_stack=1" SAN_FLAGS=-fsanitize=thread \
+	  OMP_THREAD_LIMIT=1 OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
+	  BUILD=$(TSAN_BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" \
+	  PYTEST_ARGS="$(TSAN_DESELECT)" bash tests/run_tests.sh
+tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN))
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
-# sources (compiled once into $(BUILD)/fuzz/obj). `make fuzz` mutates for FUZZ_SECONDS each, writing new
+# sources (compiled once into $(BUILD)/fuzz/obj; -MMD -MP: header changes rebuild them; their .d
+# files are included at the end). `make fuzz` mutates for FUZZ_SECONDS each, writing new
 # inputs to $(BUILD)/fuzz/corpus/X and only reading the checked-in seeds in tests/fuzz/corpus/X.
 FUZZ_SECONDS ?= 60
 FUZZ_CC     := clang
-FUZZ_FLAGS  := -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=address,undefined -fopenmp=libgomp
-FUZZ_LIBSRC := $(PROTO_SRC) $(wildcard core/*/*.c)
+FUZZ_FLAGS  := -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=address,undefined -fopenmp=libgomp -MMD -MP
+FUZZ_LIBSRC := $(PROTO_SRC) $(call srcs,core)
 FUZZ_OBJ    := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(FUZZ_LIBSRC))
 FUZZ_BIN    := $(patsubst tests/fuzz/%.c,$(BUILD)/fuzz/%,$(FUZZ_SRC))
 
@@ -132,30 +213,37 @@ fuzz: fuzz-build
 	  echo "== $$n for $(FUZZ_SECONDS) s"; \
 	  $$b -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$c tests/fuzz/corpus/$$c || exit 1; done
 
-run: all
-	bash tests/demo_run.sh
+# Like test: installs the Debian packages first, so it works as the first command on a fresh machine.
+run: deps
+	$(MAKE) all
+	BUILD=$(BUILD) MESHES=$(MESHES) bash tests/demo_run.sh
 
 # Installs the daemon, deformctl, the systemd units, libdeformclient (static, with the libraries it
-# needs), its header tree under include/deformd/ and a pkg-config file:
+# needs: client, proto, mesh, common), only the public header deformclient.h and the project headers
+# it includes (computed by the compiler: CLIENT_HEADERS) under include/deformd/, a pkg-config file,
+# and the documents the units name (Documentation=: README.md, PROTOCOL.md) under share/doc/deformd:
 #   cc app.c $$(pkg-config --cflags --libs deformclient)   with  #include <deformclient.h>
 PREFIX  ?= /usr/local
 DESTDIR ?=
-CLIENT_HEADERS := core/common/df_error.h core/mesh/mesh.h core/mesh/mesh_io.h \
-                  proto/frame.h proto/buf.h proto/frame_codec.h proto/wire_error.h proto/messages.h \
-                  proto/wire_schema.h
+DOCDIR  := $(PREFIX)/share/doc/deformd
+CLIENT_INSTALL_LIBS := $(CLIENT_LIB) $(PROTO_LIB) $(BASE_LIBS)
+CLIENT_HEADERS = $(filter-out client/deformclient.h,$(filter %.h,$(shell $(CC) $(CPPFLAGS) -MM \
+                   client/deformclient.h)))
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig \
-	  $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(PREFIX)/share/doc/deformd
+	  $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(DOCDIR)
 	install -m 755 $(BUILD)/bin/deformd $(BUILD)/bin/deformctl $(DESTDIR)$(PREFIX)/bin/
-	install -m 644 $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS) $(DESTDIR)$(PREFIX)/lib/
+	install -m 644 $(CLIENT_INSTALL_LIBS) $(DESTDIR)$(PREFIX)/lib/
 	for h in $(CLIENT_HEADERS); do install -D -m 644 $$h $(DESTDIR)$(PREFIX)/include/deformd/$$h; done
 	install -m 644 client/deformclient.h $(DESTDIR)$(PREFIX)/include/deformd/deformclient.h
 	sed 's|@PREFIX@|$(PREFIX)|' client/deformclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/deformclient.pc
-	sed 's|/usr/local/bin/|$(PREFIX)/bin/|' systemd/deformd.service > $(DESTDIR)$(PREFIX)/lib/systemd/system/deformd.service
+	sed -e 's|/usr/local/bin/|$(PREFIX)/bin/|' \
+	  -e 's|file:///usr/share/doc/deformd/|file://$(DOCDIR)/|' \
+	  systemd/deformd.service > $(DESTDIR)$(PREFIX)/lib/systemd/system/deformd.service
 	install -m 644 systemd/deformd.socket $(DESTDIR)$(PREFIX)/lib/systemd/system/
-	install -m 644 systemd/deformd.conf.example proto/PROTOCOL.md $(DESTDIR)$(PREFIX)/share/doc/deformd/
+	install -m 644 systemd/deformd.conf.example README.md proto/PROTOCOL.md $(DESTDIR)$(DOCDIR)/
 
 clean:
-	rm -rf build build-asan
+	rm -rf build build-asan build-tsan
 
 -include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

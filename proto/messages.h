@@ -91,6 +91,13 @@ enum { DF_WIRE_GET_MESH_FLAGS(DF_X_GM) };
 #define DF_X_SUB(n, v) DF_X_ENUM(DF_SUBSCRIBE_, n, v)
 enum { DF_WIRE_SUBSCRIBE_FLAGS(DF_X_SUB) };
 
+/* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
+ * daemon and the client pass values through, so each value is checked equal here. */
+#define DF_X_FMT_EQ(n, v) _Static_assert(DF_WFMT_##n == (int)DF_FMT_##n, "wire format " #n);
+DF_WIRE_FORMATS(DF_X_FMT_EQ)
+_Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE ==
+               (int)DF_MESH_TRIANGLE && DF_WKIND_TET == (int)DF_MESH_TET, "wire mesh kinds");
+
 /* OR of every bit of a flags list / count of an enum list. */
 #define DF_X_OR(n, v) | (v)
 #define DF_X_COUNT(n, v) +1

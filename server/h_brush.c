@@ -21,10 +21,10 @@
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
  * change. */
 #include <math.h>
-#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/wire_core_map.h"
 #include "server/cache.h"
 #include "server/handlers.h"
 #include "server/job.h"
@@ -33,7 +33,8 @@
 #include "server/stream.h"
 
 /* Below this many vertices a brush field is evaluated by the worker thread alone: waking an
- * OpenMP team costs more than it saves. */
+ * OpenMP team costs more than it saves. Above it, on the `threads` setting (config.h) at most:
+ * passed in the prepared field, never through omp_set_num_threads. */
 #define DF_BRUSH_PARALLEL_MIN_VERTICES 32768
 
 typedef struct brush_req {
@@ -60,10 +61,6 @@ static void req_free(df_job *j)
     free(r);
 }
 
-static const df_kelvinlet_type k_types[] = {DF_KELVINLET_GRAB, DF_KELVINLET_GRAB,
-                                            DF_KELVINLET_TWIST, DF_KELVINLET_SCALE,
-                                            DF_KELVINLET_PINCH, DF_KELVINLET_AFFINE};
-
 /* Computes the displacement of the stroke's brush under `load` at st->startf into disp. */
 static int stroke_field(df_session *s, df_stroke *st, const double *load, float *disp,
                         brush_req *r, df_error *err)
@@ -77,12 +74,12 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
     b.s = k * load[6];
     for (int i = 0; i < 9; i++) b.grad[i] = k * load[7 + i];
     df_kelvinlet_prepared prep;
-    int rc;
-    omp_set_num_threads(s->nv < DF_BRUSH_PARALLEL_MIN_VERTICES ? 1 : omp_get_num_procs());
+    int rc, threads = s->nv < DF_BRUSH_PARALLEL_MIN_VERTICES ? 1 : s->srv->cfg.threads;
     if (st->n_pins) {
         df_kelvinlet_pins pins = {.n = st->n_pins, .points = st->pins,
                                   .flags = st->pin_flags, .radius = b.radius,
-                                  .ratio = b.ratio, .nu = b.nu, .order = b.order};
+                                  .ratio = b.ratio, .nu = b.nu, .order = b.order,
+                                  .threads = threads};
         if (!s->kc) {
             rc = df_kelvinlet_constraints_create(&pins, &s->kc, err);
             r->kc_hit = 0;
@@ -99,6 +96,7 @@ static int stroke_field(df_session *s, df_stroke *st, const double *load, float 
         rc = df_kelvinlet_prepare(&b, &prep, err);
     }
     if (rc != DF_OK) return rc;
+    prep.threads = threads;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
     if (rc == DF_OK && s->mesh.planar) /* 2D session: z stays 0 (planar_check), verified */
@@ -282,25 +280,16 @@ static void begin_work_inner(df_job *j)
     }
     const df_msg_brush *m = &r->begin;
     df_kelvinlet_brush *b = &st->brush;
-    df_kelvinlet_brush_defaults(b);
-    b->type = k_types[m->type];
-    b->dim = m->dim;
-    b->order = m->falloff;
-    b->ratio = m->ratio;
-    b->radius = m->radius;
-    b->nu = m->nu;
-    memcpy(b->centre, m->center, sizeof b->centre);
-    b->mirror = m->has_mirror;
-    memcpy(b->mirror_point, m->mirror_point, sizeof b->mirror_point);
-    memcpy(b->mirror_normal, m->mirror_normal, sizeof b->mirror_normal);
-    b->integrator = m->integrator == DF_INTEG_RK4 ? DF_KELVINLET_RK4 : DF_KELVINLET_EULER;
-    b->steps = m->steps;
-    b->moving = m->moving;
+    int pin_flags = 0;
+    if ((j->rc = df_wire_brush_to_core(m, b, &j->err)) != DF_OK) return;
+    if (df_wire_pin_flags_to_core(m->pin_flags, &pin_flags) != DF_OK) {
+        j->rc = df_error_set(&j->err, DF_EINVAL, "brush: pin_flags 0x%x", m->pin_flags);
+        return;
+    }
     st->strength = m->strength;
     st->conn_id = j->conn_id;
     st->n_pins = m->n_pinned;
-    st->pin_flags = ((m->pin_flags & DF_PIN_DISPLACEMENT) ? DF_KELVINLET_PIN_DISPLACEMENT : 0) |
-                    ((m->pin_flags & DF_PIN_GRADIENT) ? DF_KELVINLET_PIN_GRADIENT : 0);
+    st->pin_flags = pin_flags;
     if (m->n_pinned) memcpy(st->pins, m->pinned, 3 * (size_t)m->n_pinned * sizeof(double));
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];

@@ -115,12 +115,15 @@ void df_h_stats(df_conn *c, const df_frame_header *h, const uint8_t *p)
         put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
         put(&st, "open_strokes", strokes);
         put(&st, "job_running", s->running != NULL);
-        put(&st, "handles", s->hs ? s->hs->nh : 0);
-        put(&st, "cache.admm_chol.cached", s->hs && s->hs->solver);
-        put(&st, "cache.kelvinlet_lu.cached", s->kc != NULL);
-        put(&st, "cache.bytes", (double)((s->hs ? s->hs->solver_bytes : 0) + s->kc_bytes));
-        put(&st, "brush.last_ms", s->brush_last_ms);
-        put(&st, "move.last_ms", s->move_last_ms);
+        /* A worker may be writing the compute state: read the loop-owned copies (session.h). */
+        if (!s->running) df_session_seen_sync(s);
+        const df_session_seen *v = &s->seen;
+        put(&st, "handles", v->handles);
+        put(&st, "cache.admm_chol.cached", v->solver_cached);
+        put(&st, "cache.kelvinlet_lu.cached", v->kc_cached);
+        put(&st, "cache.bytes", (double)v->cache_bytes);
+        put(&st, "brush.last_ms", v->brush_last_ms);
+        put(&st, "move.last_ms", v->move_last_ms);
     }
     df_reply_stats(c, h->type, h->request_id, &st, 1);
 }

@@ -109,7 +109,10 @@ static void finish(df_job *j)
     j->done(j);
     job_free(j);
     srv->stats.jobs_completed++;
-    if (s) s->running = NULL;
+    if (s) {
+        s->running = NULL;
+        df_session_seen_sync(s); /* stats reads these copies while the next job runs */
+    }
 }
 
 static void work_cb(uv_work_t *w)

@@ -424,3 +424,14 @@ void df_session_drop_stroke(df_session *s, uint64_t conn_id)
             return;
         }
 }
+
+void df_session_seen_sync(df_session *s)
+{
+    df_session_seen *v = &s->seen;
+    v->handles = s->hs ? s->hs->nh : 0;
+    v->solver_cached = s->hs && s->hs->solver;
+    v->kc_cached = s->kc != NULL;
+    v->cache_bytes = (s->hs ? s->hs->solver_bytes : 0) + s->kc_bytes;
+    v->brush_last_ms = s->brush_last_ms;
+    v->move_last_ms = s->move_last_ms;
+}

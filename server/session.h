@@ -61,6 +61,17 @@ typedef struct df_handleset {
     uint64_t lru;                /* srv->lru_clock at last use */
 } df_handleset;
 
+/* Loop-owned copies of compute-state figures, for the stats request (h_stats.c): a worker may be
+ * writing the originals (s->kc, s->hs->solver, the timings) while the loop answers. Refreshed by
+ * df_session_seen_sync when no job runs. */
+typedef struct df_session_seen {
+    int handles;                 /* s->hs->nh, 0 without a handle set */
+    int solver_cached;           /* s->hs->solver != NULL */
+    int kc_cached;               /* s->kc != NULL */
+    size_t cache_bytes;          /* solver_bytes + kc_bytes */
+    double brush_last_ms, move_last_ms;
+} df_session_seen;
+
 typedef struct df_session {
     struct df_server *srv;
     uint64_t id;
@@ -91,6 +102,7 @@ typedef struct df_session {
     float *scratch_disp;         /* brush field, nv x 3 */
     double brush_last_ms;        /* worker time of the last brush begin/update/cancel */
     double move_last_ms;         /* worker time of the last handle move */
+    df_session_seen seen;        /* loop thread only: the above as of the last finished job */
     uint64_t mem_bytes;          /* charged to srv->mem: DF_MEM_SESSIONS (the estimate) */
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
@@ -163,6 +175,10 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
 /* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
  * Errors: DF_ENOMEM (history unchanged). */
 int df_session_history_reset(df_session *s, df_error *err);
+
+/* Copies the compute-state figures into s->seen. Loop thread, only while no job of s runs
+ * (job.c calls it after each job's done; the stats request when the session is idle). */
+void df_session_seen_sync(df_session *s);
 
 /* Frees the handle set (and its solver, uncharging the cache). NULL-safe. */
 void df_handleset_free(df_server *srv, df_handleset *hs);

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "client/dc_brush.h"
+#include "client/deformctl/dc_brush.h"
 #include "client/dc_files.h"
 #include "client/deformctl/ctl.h"
 

@@ -1,7 +1,9 @@
 /* admm_api.c — solver lifetime and state access: create (validation, operators, factorization),
  * set_targets, set_positions, positions, evaluate, reset_rest (sculpting), stats, free. */
 #include <math.h>
+#ifdef _OPENMP
 #include <omp.h>
+#endif
 #include <stdlib.h>
 #include <string.h>
 
@@ -128,7 +130,11 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->esz = df_mesh_elem_size(mesh->kind);
     /* 2D only when the mesh is declared 2D: a flat 3D mesh (every z = 0) deforms in 3D */
     s->planar = mesh->planar != 0;
+#ifdef _OPENMP
     s->nthreads = params->threads > 0 ? params->threads : omp_get_max_threads();
+#else
+    s->nthreads = 1; /* built without OpenMP (make tsan): every kernel is serial */
+#endif
     s->family = (mesh->kind == DF_MESH_TET || params->energy == DF_ADMM_CLOTH) ? ADMM_FAM_ELEMENT : ADMM_FAM_VERTEX;
     s->q = mesh->kind == DF_MESH_TET ? 3 : 2;
     df_admm_lame(params->youngs, params->poisson, &s->mu, &s->lambda);

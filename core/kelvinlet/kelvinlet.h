@@ -96,6 +96,12 @@ typedef struct df_kelvinlet_prepared {
     size_t nsrc;                     /* number of loads                                          */
     df_kelvinlet_source src[2];      /* loads when ext == NULL (brush and its mirror image)      */
     df_kelvinlet_source *ext;        /* heap loads of a constrained field (nsrc of them) or NULL */
+    int threads;                     /* OpenMP threads of apply/displacements: 0 (what prepare
+                                        and constraints_solve set) = OpenMP's default
+                                        (omp_get_max_threads), n > 0 = at most n, 1 = serial on
+                                        the caller's thread. The caller sets it after preparing;
+                                        the library never calls omp_set_num_threads. Results are
+                                        bit-identical for every value.                           */
 } df_kelvinlet_prepared;
 
 /* Fills `b` with defaults: GRAB, dim 3, order 1, ratio 1.1, radius 1, nu 0.5, everything else 0,
@@ -132,8 +138,8 @@ void df_kelvinlet_prepared_free(df_kelvinlet_prepared *p);
 void df_kelvinlet_brush_advance(df_kelvinlet_brush *b);
 
 /* Deforms n float32 xyz points in place along the field with the brush's integrator/steps
- * (2D brushes leave z untouched). OpenMP over blocks, SIMD kernel dispatched at run time
- * (AVX2/FMA or SSE4.2). Errors: DF_EINVAL (NULL with n > 0, non-finite input coordinate or
+ * (2D brushes leave z untouched). OpenMP over blocks on p->threads, SIMD kernel dispatched at
+ * run time (AVX2/FMA or SSE4.2). Errors: DF_EINVAL (NULL with n > 0, non-finite input coordinate or
  * |coordinate| > MAX_VALUE, invalid prepared field), DF_ENOMEM, DF_ESINGULAR (a moving brush
  * whose substep normalization becomes singular); points untouched on error. */
 int df_kelvinlet_apply(const df_kelvinlet_prepared *p, float *xyz, size_t n, df_error *err);
@@ -174,6 +180,9 @@ typedef struct df_kelvinlet_pins {
     int flags;               /* DF_KELVINLET_PIN_* bit set, non-zero              */
     double radius, ratio, nu;/* kernel of the pinned loads (same rules as brushes) */
     int order;
+    int threads;             /* OpenMP threads of the K_pp assembly (create/update):
+                                0 = OpenMP's default, n > 0 = at most n, 1 = serial;
+                                not part of the pinned set's identity */
 } df_kelvinlet_pins;
 
 /* Opaque solver; not thread-safe (one per session/stroke owner). Every other function of this

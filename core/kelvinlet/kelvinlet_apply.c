@@ -7,11 +7,15 @@
  * "arch=x86-64-v3", "default"))): gcc emits AVX-512 and AVX2/FMA clones next to the portable
  * x86-64-v2 (SSE4.2) build and an ifunc picks one at load time from the running CPU. No FMA
  * contraction happens (-ffp-contract=off is global), so every clone rounds identically per
- * operation and results do not depend on the machine.
+ * operation and results do not depend on the machine. -DDF_NO_TARGET_CLONES drops the clones
+ * (sanitizer builds: the ifunc resolver runs before the ThreadSanitizer runtime is up).
+ * Threads: p->threads (kelvinlet.h); built without OpenMP (_OPENMP undefined) everything is serial.
  * 1/sqrt is computed as the bit-level estimate plus three Newton steps (relative error at
  * float rounding level): plain C that vectorizes, where sqrtf would not (errno semantics). */
 #include <math.h>
+#ifdef _OPENMP
 #include <omp.h>
+#endif
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,6 +25,23 @@
 #define BLOCK 256                 /* points per SoA block (fits L1 with all temporaries) */
 #define PAR_MIN_BLOCKS 4          /* below this many blocks run on one thread            */
 #define MO DF_KELVINLET_MAX_ORDER
+
+#ifdef DF_NO_TARGET_CLONES
+#define DF_SIMD_CLONES
+#else
+#define DF_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#endif
+
+/* OpenMP threads of one evaluation of p: p->threads, or OpenMP's default when 0. */
+static int eval_threads(const df_kelvinlet_prepared *p)
+{
+#ifdef _OPENMP
+    return p->threads > 0 ? p->threads : omp_get_max_threads();
+#else
+    (void)p;
+    return 1;
+#endif
+}
 
 typedef struct fsrc {
     int dim, order, affine;
@@ -424,7 +445,7 @@ static inline __attribute__((always_inline)) void stage(blk *restrict pos, blk *
 /* Integrates one block of cnt <= BLOCK points (xyz interleaved) and writes positions
  * (want_disp = 0) or displacements (want_disp = 1) to out. plans[nplans]: one per step when
  * moving, else one reused for every step. */
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+DF_SIMD_CLONES
 static void integrate_block(const fplan *plans, int moving, int steps, int rk4, const float *in,
                             int cnt, float *out, int want_disp)
 {
@@ -491,14 +512,14 @@ static int chunk_bad(const float *xyz, size_t lo, size_t hi, float lim)
     return flag;
 }
 
-int dfk_points_ok_f(const float *xyz, size_t n, size_t *bad)
+int dfk_points_ok_f(const float *xyz, size_t n, int nthreads, size_t *bad)
 {
     const size_t m = 3 * n, chunk = 4096;
     const size_t nc = (m + chunk - 1) / chunk;
     const float lim = (float)DF_KELVINLET_MAX_VALUE;
     int any = 0;
-    if (nc >= 16 && omp_get_max_threads() > 1) {
-#pragma omp parallel for reduction(| : any) schedule(static)
+    if (nc >= 16 && nthreads > 1) {
+#pragma omp parallel for reduction(| : any) schedule(static) num_threads(nthreads)
         for (size_t c = 0; c < nc; c++)
             any |= chunk_bad(xyz, c * chunk, c * chunk + chunk < m ? c * chunk + chunk : m, lim);
     } else { /* no parallel region: it costs microseconds even with one thread */
@@ -526,7 +547,8 @@ static int run(const df_kelvinlet_prepared *p, const float *in, size_t n, float 
     if (!in || !out)
         return df_error_set(err, DF_EINVAL, "kelvinlet apply: NULL points or output");
     size_t bad;
-    if (!dfk_points_ok_f(in, n, &bad))
+    const int nt = eval_threads(p);
+    if (!dfk_points_ok_f(in, n, nt, &bad))
         return df_error_set(err, DF_EINVAL, "kelvinlet apply: point %zu not finite or beyond %g",
                             bad, DF_KELVINLET_MAX_VALUE);
     df_kelvinlet_prepared *mv;
@@ -544,8 +566,8 @@ static int run(const df_kelvinlet_prepared *p, const float *in, size_t n, float 
     if (rc == DF_OK) {
         int rk4 = p->brush.integrator == DF_KELVINLET_RK4, moving = mv != NULL;
         size_t nb = (n + BLOCK - 1) / BLOCK;
-        if (nb >= PAR_MIN_BLOCKS && omp_get_max_threads() > 1) {
-#pragma omp parallel for schedule(dynamic, 8)
+        if (nb >= PAR_MIN_BLOCKS && nt > 1) {
+#pragma omp parallel for schedule(dynamic, 8) num_threads(nt)
             for (size_t b = 0; b < nb; b++) {
                 size_t lo = b * BLOCK, cnt = n - lo < BLOCK ? n - lo : BLOCK;
                 integrate_block(plans, moving, steps, rk4, in + 3 * lo, (int)cnt, out + 3 * lo,

@@ -10,6 +10,9 @@
  * trace(1); at nu = 0.5 the trace load vanishes (divergence-free field), so it is dropped. */
 #include <lapacke.h>
 #include <math.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <stdlib.h>
 #include <string.h>
 
@@ -145,6 +148,17 @@ static int check_pins(const df_kelvinlet_pins *pins, df_kelvinlet_kernel *k, df_
 }
 
 /* Builds and factorizes K_pp for `pins` into fresh buffers of `t`. */
+/* OpenMP threads of the K_pp assembly: pins->threads, or OpenMP's default when 0. */
+static int assembly_threads(const df_kelvinlet_pins *pins)
+{
+#ifdef _OPENMP
+    return pins->threads > 0 ? pins->threads : omp_get_max_threads();
+#else
+    (void)pins;
+    return 1;
+#endif
+}
+
 static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k,
                      df_kelvinlet_constraints *t, df_error *err)
 {
@@ -163,7 +177,9 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
         return df_error_set(err, DF_ENOMEM, "kelvinlet constraints: out of memory (%zu DoF)", m);
     memcpy(t->pts, pins->points, 3 * pins->n * sizeof *t->pts);
     /* Column-major: column (pin q, dof c) holds the functionals at every pin p. */
-#pragma omp parallel for schedule(dynamic, 4) if (pins->n >= 32)
+    const int nt = assembly_threads(pins);
+    (void)nt; /* only the pragma reads it: unused without OpenMP */
+#pragma omp parallel for schedule(dynamic, 4) if (pins->n >= 32 && nt > 1) num_threads(nt)
     for (size_t col = 0; col < m; col++) {
         df_kelvinlet_source s;
         double buf[12];

@@ -59,7 +59,8 @@ int dfk_small_solve(int m, double *A, double *b, double tol);
 int dfk_moving_substeps(const df_kelvinlet_prepared *p, df_kelvinlet_prepared **fields,
                         df_error *err);
 
-/* 1 if all n*3 floats are finite and within DF_KELVINLET_MAX_VALUE (parallel scan). */
-int dfk_points_ok_f(const float *xyz, size_t n, size_t *bad);
+/* 1 if all n*3 floats are finite and within DF_KELVINLET_MAX_VALUE (scan on up to nthreads
+ * OpenMP threads). */
+int dfk_points_ok_f(const float *xyz, size_t n, int nthreads, size_t *bad);
 
 #endif

@@ -8,7 +8,9 @@
  * lag: largest distance of a reported handle from its target over the largest full-drag displacement).
  * Weights: w = rho s / 10 (what the paper's released code minimized; see core/admm/admm.h). */
 #include <math.h>
+#ifdef _OPENMP
 #include <omp.h>
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -239,7 +241,11 @@ int main(int argc, char **argv)
     }
     fclose(f);
     setvbuf(stdout, NULL, _IOLBF, 0);
+#ifdef _OPENMP
     printf("bench_admm: %d OpenMP threads, OMP_WAIT_POLICY=%s\n", omp_get_max_threads(), getenv("OMP_WAIT_POLICY"));
+#else
+    printf("bench_admm: built without OpenMP (serial kernels)\n");
+#endif
     experiment ex[4] = {
         {"pig ARAP", "pig", "pig_init0.4.node", DF_ADMM_ARAP, 0.1, 0.01},
         {"pig Neo-Hookean", "pig", "pig_init0.4.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01},

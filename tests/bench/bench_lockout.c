@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "client/deformclient.h"
+#include "tests/bench/bench_grid.h"
 
 #define ROUNDS 500
 #define WARMUP 30
@@ -49,39 +50,6 @@ static void pct(double *t, int n, double *p50, double *p99)
     qsort(t, (size_t)n, sizeof *t, cmp_double);
     *p50 = t[(n - 1) / 2];
     *p99 = t[(int)((n - 1) * 0.99)];
-}
-
-/* Binary PLY of an n x n grid over [0,1]^2 (z = 0 except a gentle bump). */
-static uint8_t *grid_ply(int n, size_t *len)
-{
-    size_t nv = (size_t)n * n, nf = 2 * (size_t)(n - 1) * (n - 1);
-    char head[256];
-    int hl = snprintf(head, sizeof head,
-                      "ply\nformat binary_little_endian 1.0\nelement vertex %zu\nproperty float x\n"
-                      "property float y\nproperty float z\nelement face %zu\n"
-                      "property list uchar int vertex_indices\nend_header\n", nv, nf);
-    *len = (size_t)hl + nv * 12 + nf * 13;
-    uint8_t *b = malloc(*len), *p = b;
-    if (!b) return NULL;
-    memcpy(p, head, (size_t)hl);
-    p += hl;
-    for (int j = 0; j < n; j++)
-        for (int i = 0; i < n; i++) {
-            float x = (float)i / (float)(n - 1), y = (float)j / (float)(n - 1);
-            float v[3] = {x, y, 0.05f * (x - x * x) * (y - y * y) * 16.0f};
-            memcpy(p, v, 12);
-            p += 12;
-        }
-    for (int j = 0; j + 1 < n; j++)
-        for (int i = 0; i + 1 < n; i++) {
-            int32_t a = j * n + i, t[2][3] = {{a, a + 1, a + n + 1}, {a, a + n + 1, a + n}};
-            for (int k = 0; k < 2; k++) {
-                *p++ = 3;
-                memcpy(p, t[k], 12);
-                p += 12;
-            }
-        }
-    return b;
 }
 
 static uint64_t load_grid(df_client *c, int n)

@@ -44,6 +44,7 @@
 
 #include "client/dc_net.h"
 #include "client/deformclient.h"
+#include "tests/bench/bench_grid.h"
 
 #define ECHO_BYTES 16
 #define ECHO_WARMUP 500
@@ -60,6 +61,16 @@
 #define TARGET_100K_P50_US 2000.0
 #define TARGET_1M_FPS 60.0
 #define TARGET_SUB_COST 2.0
+/* The figures README.md recorded before the server pipeline rework (2026-11-22, quiet 2-core
+ * machine), printed beside each new measurement so a regression shows. */
+#define OLD_1K_P50_US_UNIX 30.0
+#define OLD_1K_P50_US_TCP 32.0
+#define OLD_100K_P50_US_UNIX 860.0
+#define OLD_100K_P50_US_TCP 1150.0
+#define OLD_1M_FPS_STREAM 345.0
+#define OLD_1M_FPS_BRUSH 96.0
+#define OLD_SUB_COST_SOCKET 2.26
+#define OLD_SUB_COST_SHM 1.26
 
 typedef struct stats {
     double p50, p99, mean;
@@ -244,41 +255,6 @@ static void daemon_stop(daemon_proc *d)
         kill(d->pid, SIGTERM);
         waitpid(d->pid, NULL, 0);
     }
-}
-
-/* Binary little-endian PLY of an n x n vertex grid over [0,1]^2 with a gentle z bump, 2(n-1)^2
- * triangles. Returns a malloc'd buffer and its size. */
-static uint8_t *grid_ply(int n, size_t *len)
-{
-    size_t nv = (size_t)n * n, nf = 2 * (size_t)(n - 1) * (n - 1);
-    char head[256];
-    int hl = snprintf(head, sizeof head,
-                      "ply\nformat binary_little_endian 1.0\nelement vertex %zu\nproperty float x\n"
-                      "property float y\nproperty float z\nelement face %zu\n"
-                      "property list uchar int vertex_indices\nend_header\n", nv, nf);
-    *len = (size_t)hl + nv * 12 + nf * 13;
-    uint8_t *b = malloc(*len), *p = b;
-    if (!b)
-        return NULL;
-    memcpy(p, head, (size_t)hl);
-    p += hl;
-    for (int j = 0; j < n; j++)
-        for (int i = 0; i < n; i++) {
-            float x = (float)i / (float)(n - 1), y = (float)j / (float)(n - 1);
-            float v[3] = {x, y, 0.05f * (x - x * x) * (y - y * y) * 16.0f};
-            memcpy(p, v, 12);
-            p += 12;
-        }
-    for (int j = 0; j + 1 < n; j++)
-        for (int i = 0; i + 1 < n; i++) {
-            int32_t a = j * n + i, t[2][3] = {{a, a + 1, a + n + 1}, {a, a + n + 1, a + n}};
-            for (int k = 0; k < 2; k++) {
-                *p++ = 3;
-                memcpy(p, t[k], 12);
-                p += 12;
-            }
-        }
-    return b;
 }
 
 static uint64_t load_grid(df_client *c, int n, const char *name)
@@ -725,11 +701,16 @@ int main(int argc, char **argv)
         double r = rt[0][0].p50 / eu.p50, rtcp = rt[0][1].p50 / et.p50;
         printf("  target 1k p50 <= %.0fx raw echo: unix %.1fx %s, tcp %.1fx %s\n", TARGET_ECHO_RATIO,
                r, verdict(r <= TARGET_ECHO_RATIO), rtcp, verdict(rtcp <= TARGET_ECHO_RATIO));
+        printf("  1k p50 now / README before: unix %.1f / %.0f us, tcp %.1f / %.0f us\n",
+               rt[0][0].p50, OLD_1K_P50_US_UNIX, rt[0][1].p50, OLD_1K_P50_US_TCP);
     }
     if (rt_ok[1])
         printf("  target 100k p50 <= %.0f us: unix %.1f us %s, tcp %.1f us %s\n", TARGET_100K_P50_US,
                rt[1][0].p50, verdict(rt[1][0].p50 <= TARGET_100K_P50_US), rt[1][1].p50,
                verdict(rt[1][1].p50 <= TARGET_100K_P50_US));
+    if (rt_ok[1])
+        printf("  100k p50 now / README before: unix %.0f / %.0f us, tcp %.0f / %.0f us\n",
+               rt[1][0].p50, OLD_100K_P50_US_UNIX, rt[1][1].p50, OLD_100K_P50_US_TCP);
     uint64_t big = section_on("frames") ? load_grid(cu, 1000, "grid-1M") : 0;
     double fps[2] = {0, 0}, mbps[2] = {0, 0};
     if (!section_on("frames"))
@@ -744,6 +725,8 @@ int main(int argc, char **argv)
                fps[1], mbps[1]);
         printf("  target >= %.0f frames/s: stream %s, brush-driven %s\n", TARGET_1M_FPS,
                verdict(fps[0] >= TARGET_1M_FPS), verdict(fps[1] >= TARGET_1M_FPS));
+        printf("  1M frames/s now / README before: stream %.0f / %.0f, brush-driven %.0f / %.0f\n",
+               fps[0], OLD_1M_FPS_STREAM, fps[1], OLD_1M_FPS_BRUSH);
     }
     /* [transport: 0 socket, 1 shm][0: 1 subscriber, 1: MANY_SUBS]; best of BENCH_REPEAT, the
      * four cases interleaved so that machine noise hits them alike */
@@ -777,6 +760,8 @@ int main(int argc, char **argv)
             printf("  target %d subscribers cost the writer <= %.0fx: %.2fx -> %s%s\n", MANY_SUBS,
                    TARGET_SUB_COST, cost, verdict(cost <= TARGET_SUB_COST && all),
                    all ? "" : " (a subscriber missed versions)");
+            printf("  %d-subscriber cost now / README before: %.2fx / %.2fx\n", MANY_SUBS, cost,
+                   t ? OLD_SUB_COST_SHM : OLD_SUB_COST_SOCKET);
         }
         printf("  %d shared-memory subscribers against 1 socket subscriber: %.2fx\n", MANY_SUBS,
                best[0][0].rate / best[1][1].rate);

@@ -3,8 +3,11 @@
 `daemon` (session scope) starts the real $BUILD/bin/deformd (BUILD defaults to "build", relative
 to the repo root) in the foreground on a temporary Unix socket and a free loopback TCP port, waits
 until it answers a ping on both, and on teardown stops it with SIGTERM and checks it exits with
-status 0. `make_daemon` starts extra daemons with their own config (e.g. a small output queue).
-Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent.
+status 0 and that its log holds no ThreadSanitizer report (`make tsan` builds an instrumented
+deformd; TSAN_OPTIONS=halt_on_error=1 also ends it at the first report, failing the suite).
+`make_daemon` starts extra daemons with their own config (e.g. a small output queue).
+Meshes come from $MESHES (default ../shared/meshes next to the repo); `meshes` skips when absent
+(skip_or_fail: under CI=true every skip is a failure). A missing deformd always fails.
 """
 import os
 import signal
@@ -130,6 +133,21 @@ class Daemon:
         return self.proc.returncode
 
 
+TSAN_MARK = "WARNING: ThreadSanitizer"
+
+
+def check_stopped(d: "Daemon", rc: int) -> None:
+    """Fails when the stopped daemon `d` (exit status rc) logged a sanitizer report or did not exit
+    with status 0 (the log is kept in the tmp dir's deformd-it-last-failure.log)."""
+    log = d.log()
+    if rc != 0 or TSAN_MARK in log:
+        with open(os.path.join(tempfile.gettempdir(), "deformd-it-last-failure.log"), "w") as f:
+            f.write(log)
+    at = log.find(TSAN_MARK)
+    assert at < 0, "ThreadSanitizer report in deformd's log:\n%s" % log[max(0, at - 200):at + 6000]
+    assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, log[-4000:])
+
+
 def _require_binary() -> None:
     if not os.access(DEFORMD, os.X_OK):
         pytest.fail("%s is missing: build it first (make -j2)" % DEFORMD, pytrace=False)
@@ -141,11 +159,7 @@ def daemon():
     with tempfile.TemporaryDirectory(prefix="deformd-it-") as tmp:
         d = Daemon(tmp)
         yield d
-        rc = d.stop()
-        if rc != 0:   # keep the log for the report
-            with open(os.path.join(tempfile.gettempdir(), "deformd-it-last-failure.log"), "w") as f:
-                f.write(d.log())
-        assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, d.log()[-4000:])
+        check_stopped(d, d.stop())
 
 
 @pytest.fixture
@@ -164,15 +178,22 @@ def make_daemon():
 
     yield make
     for d in made:
-        rc = d.stop()
-        assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, d.log()[-4000:])
+        check_stopped(d, d.stop())
     for t in tmps:
         t.cleanup()
 
 
+def skip_or_fail(reason: str) -> None:
+    """The suite's one skip helper: skips the running test with `reason`, or, under CI (environment
+    CI=true), fails it, so that a missing prerequisite fails a CI run instead of thinning it out."""
+    if os.environ.get("CI") == "true":
+        pytest.fail("%s (CI=true: a skip is a failure)" % reason, pytrace=False)
+    pytest.skip(reason)
+
+
 @pytest.fixture(scope="session")
 def meshes() -> str:
-    """The shared mesh folder; skips the test (with the reason) when it is absent."""
+    """The shared mesh folder; skips the test (with the reason) when it is absent (fails under CI)."""
     if not os.path.isdir(MESHES):
-        pytest.skip("shared meshes not found at %s (set MESHES)" % MESHES)
+        skip_or_fail("shared meshes not found at %s (set MESHES)" % MESHES)
     return MESHES

@@ -1,5 +1,6 @@
 """Shared helpers of the integration suite: generated meshes, a reference Kelvinlet grab
 (de Goes & James 2017, eqs. 6-7), small file readers for what deformctl writes."""
+import contextlib
 import math
 from array import array
 from typing import List, Sequence, Tuple
@@ -142,3 +143,21 @@ def tet_grid_medit(n: int, size: float = 1.0) -> bytes:
     out += ["%d %d %d %d 0" % tuple(v + 1 for v in t) for t in tets]
     out.append("End")
     return ("\n".join(out) + "\n").encode()
+
+
+@contextlib.contextmanager
+def grid_session(daemon, n: int):
+    """Loads a fresh n x n grid_obj as an unnamed session of `daemon`; yields (session_info,
+    positions as array('f')) and closes the session afterwards (if it still exists)."""
+    from deformd_client import DeformdError  # the client package is importable in tests
+    data = grid_obj(n, n)
+    with daemon.unix_client() as c:
+        info = c.load_mesh(data, fmt=".obj", name="")
+    try:
+        yield info, obj_bytes_positions(data)
+    finally:
+        with daemon.unix_client() as c:
+            try:
+                c.close_session(info.session_id)
+            except DeformdError:
+                pass

@@ -36,34 +36,32 @@ def test_newer_move_supersedes_the_running_one(daemon):
 
 
 def test_long_solve_does_not_stall_another_sessions_strokes(daemon):
+    """Strokes on session B complete while a solve on session A is still running (A's move has
+    no reply yet after all of B's strokes; it ends only when superseded). No durations are
+    asserted: tests/bench/bench_integration.py prints idle vs busy stroke times."""
     with daemon.unix_client() as solver, daemon.unix_client() as artist:
         sid, handles, targets = cube_session(solver, n=9)
         solver.set_handles(sid, handles, tol=0.0, max_iters=LONG_ITERS)
         data = grid_obj(30, 30)
         X = obj_bytes_positions(data)
         other = artist.load_mesh(data, fmt=".obj").session_id
-        idle = []
-        for k in range(5):
-            t0 = time.perf_counter()
-            artist.stroke(other, Brush(type="grab", center=X[0:3], move=(0, 0, 0.01 * k),
-                                       radius=0.3))
-            idle.append(time.perf_counter() - t0)
-        rid = solver.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, max_ms=3000,
-                                                                progress_every=0))
-        time.sleep(0.2)
-        busy = []
+        rid = solver.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, progress_every=0))
+        versions = []
         for k in range(10):
-            t0 = time.perf_counter()
-            artist.stroke(other, Brush(type="grab", center=X[0:3], move=(0, 0, 0.01 * k),
-                                       radius=0.3))
-            busy.append(time.perf_counter() - t0)
-        res = m.decode_move_result(solver.wait_reply(rid, 30)[0].payload)
-        print("stroke on B: idle median %.1f ms, during A's %.0f ms solve median %.1f ms max %.1f"
-              % (1e3 * sorted(idle)[2], res.elapsed_ms, 1e3 * sorted(busy)[5], 1e3 * max(busy)))
-        assert res.status == m.MOVE_BUDGET and res.elapsed_ms >= 2500, res
-        # strokes during the 3 s solve finished long before it did, near their idle cost
-        assert sum(busy) < 1.5, busy
-        assert sorted(busy)[5] < max(10 * sorted(idle)[2], 0.05), (idle, busy)
+            versions.append(artist.stroke(other, Brush(type="grab", center=X[0:3],
+                                                       move=(0, 0, 0.01 * k), radius=0.3)).version)
+        assert versions == sorted(versions) and len(set(versions)) == 10
+        # a million iterations of a 9^3 cube: still running after B's ten strokes
+        try:
+            solver.wait_reply(rid, 0)
+            still_running = False
+        except TimeoutError:
+            still_running = True
+        assert still_running, "A's %d-iteration solve ended before B's strokes" % LONG_ITERS
+        stop = solver.send(m.HANDLES_MOVE, m.encode_handle_move(sid, targets, max_iters=1))
+        res = m.decode_move_result(solver.wait_reply(rid, 60)[0].payload)
+        assert res.status == m.MOVE_SUPERSEDED, res
+        m.decode_move_result(solver.wait_reply(stop, 60)[0].payload)
         solver.close_session(sid)
         artist.close_session(other)
 
@@ -107,7 +105,7 @@ def test_disconnect_ends_an_open_stroke(daemon):
             gone.brush_begin(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1),
                                         radius=0.3))
             assert c.stats(sid)["open_strokes"] == 1
-        for _ in range(100):
+        for _ in range(3000):                                # polls up to 60 s (a guard only)
             if c.stats(sid)["open_strokes"] == 0:
                 break
             time.sleep(0.02)

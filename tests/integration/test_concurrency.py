@@ -72,8 +72,9 @@ def test_eight_clients_stroking_one_session_converge(daemon):
 
 def test_a_client_that_never_reads_is_dropped_and_others_keep_pace(make_daemon):
     """output_queue_limit 4 MiB, 1.08 MB dense frames: the silent subscriber overflows after a
-    few versions and is dropped (stats clients.dropped, a log line); the writer's round trips
-    stay near their unloaded value and a reading subscriber receives every version."""
+    few versions and is dropped (stats clients.dropped, a log line); the writer is never blocked
+    and a reading subscriber receives every version. (The writer's round trips, early vs late, are
+    timing: printed here, compared by tests/bench/bench_integration.py.)"""
     d = make_daemon("output_queue_limit = 4m\n")
     data = grid_obj(300, 300)         # 90,000 vertices, dense frame ~1.08 MB
     X = obj_bytes_positions(data)
@@ -114,7 +115,7 @@ def test_a_client_that_never_reads_is_dropped_and_others_keep_pace(make_daemon):
             while (not received or received[-1] < acked[-1]) and time.monotonic() < deadline:
                 time.sleep(0.001)
         writer.brush_end(sid)
-        deadline = time.monotonic() + 10
+        deadline = time.monotonic() + 120   # a guard only: the reader normally catches up at once
         while (not received or received[-1] < acked[-1]) and time.monotonic() < deadline:
             time.sleep(0.05)
     finally:
@@ -125,8 +126,7 @@ def test_a_client_that_never_reads_is_dropped_and_others_keep_pace(make_daemon):
     early = sorted(latencies[:5])[2]
     late = sorted(latencies[-10:])[5]
     print("writer update round trip: median of first 5 %.2f ms, of last 10 %.2f ms, max %.2f ms"
-          % (early, late, max(latencies)))
-    assert late < max(10 * early, 200.0), (early, late, latencies)
+          % (early, late, max(latencies)))   # printed only: tests/bench/bench_integration.py
     # the silent one is gone: its socket reaches EOF after the queued bytes
     silent.settimeout(10)
     got = 0

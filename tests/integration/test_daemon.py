@@ -48,7 +48,7 @@ def test_tcp_is_off_unless_configured_and_the_default_socket_is_under_xdg():
                                 stderr=subprocess.PIPE, env=env, text=True)
         try:
             path = os.path.join(xdg, "deformd.sock")
-            for _ in range(200):
+            for _ in range(1200):                          # 60 s guard
                 if os.path.exists(path):
                     break
                 time.sleep(0.05)

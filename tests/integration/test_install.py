@@ -47,6 +47,24 @@ def test_installed_client_library_builds_and_talks_to_the_daemon(daemon, tmp_pat
         assert (prefix / rel).exists(), rel
     unit = (prefix / "lib/systemd/system/deformd.service").read_text()
     assert "ExecStart=%s/bin/deformd " % prefix in unit
+    # every document a unit refers to is installed where the unit says
+    docs = [line.split("=", 1)[1] for u in ("deformd.service", "deformd.socket")
+            for line in (prefix / "lib/systemd/system" / u).read_text().splitlines()
+            if line.startswith("Documentation=")]
+    assert docs, "no Documentation= line"
+    for url in docs:
+        for doc in url.split():
+            assert doc.startswith("file://%s/" % prefix), doc
+            assert os.path.isfile(doc[len("file://"):]), doc
+    assert (prefix / "share/doc/deformd/PROTOCOL.md").is_file()
+    # only the public header and what it includes; only the libraries the client needs
+    headers = sorted(str(h.relative_to(prefix / "include/deformd"))
+                     for h in (prefix / "include/deformd").rglob("*.h"))
+    assert "deformclient.h" in headers
+    for h in headers:
+        assert h == "deformclient.h" or h.startswith(("proto/", "core/common/", "core/mesh/")), h
+    libs = sorted(p.name for p in (prefix / "lib").glob("*.a"))
+    assert libs == ["libdeformclient.a", "libdf_common.a", "libdf_mesh.a", "libdf_proto.a"], libs
 
     env = dict(os.environ, PKG_CONFIG_PATH=str(prefix / "lib/pkgconfig"))
     flags = subprocess.run(["pkg-config", "--cflags", "--libs", "deformclient"], env=env,

@@ -8,7 +8,7 @@ import pytest
 from deformd_client import (Brush, DeformdError, MeshState, SessionClosed, errors as E,
                             messages as m, stream as st)
 from conftest import MESHES
-from helpers import (grab_displacement, grid_obj, obj_bytes_positions, tet_grid,
+from helpers import (grab_displacement, grid_session, grid_obj, obj_bytes_positions, tet_grid,
                      tet_grid_medit)
 
 GRID_N = 20   # 400 vertices
@@ -24,15 +24,8 @@ def conn(daemon, request):
 @pytest.fixture
 def grid(daemon):
     """A fresh 20x20 grid session; closed afterwards."""
-    data = grid_obj(GRID_N, GRID_N)
-    with daemon.unix_client() as c:
-        info = c.load_mesh(data, fmt=".obj", name="")
-    yield info, obj_bytes_positions(data)
-    with daemon.unix_client() as c:
-        try:
-            c.close_session(info.session_id)
-        except DeformdError:
-            pass
+    with grid_session(daemon, GRID_N) as g:
+        yield g
 
 
 @pytest.fixture

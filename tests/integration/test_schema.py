@@ -6,6 +6,8 @@ prints every entry of those headers, and fails on any drift of
   - proto/PROTOCOL.md: the message type tables of section 3 (types and bodies), the enum and bit
     columns of section 4 and 1.1, the limits table of section 8,
   - the C headers: no limit is defined outside the schema.
+  - the error codes: core/common/df_error.h + proto/wire_error.h vs deformd_client.errors and
+    PROTOCOL.md section 7.
 It also checks that the daemon advertises only features that exist."""
 import enum
 import math
@@ -16,6 +18,8 @@ import subprocess
 import pytest
 
 from deformd_client import Client, schema
+from deformd_client import errors as pe
+from deformd_client import frame as pf
 from deformd_client import messages as m
 
 ROOT = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", ".."))
@@ -120,6 +124,52 @@ def test_defaults_match(dump):
             want.update(dump["admm_nh_default"])
         for k, v in want.items():
             assert float(getattr(p, k)) == v and not math.isnan(v), (energy, k)
+
+
+def _c_names(dump):
+    """Every C name the dump knows, DF_X -> value."""
+    c = dict(dump["limit"])
+    c.update(dump["const"])
+    for name, value, *_ in dump["type"]:
+        c["DF_MSG_" + name] = value
+    for e in dump["enum"].values():
+        for name, value in e["members"].items():
+            c[e["prefix"] + name] = value
+    return c
+
+
+def test_every_shared_name_matches(dump):
+    """Any DF_X of the schema that a Python module also defines as X (DF_MSG_HELLO: HELLO)
+    has the same value."""
+    drift = []
+    for mod in (m, pf, pe, schema):
+        for cname, value in _c_names(dump).items():
+            short = cname[3:]
+            for py in ({short, short[4:]} if short.startswith("MSG_") else {short}):
+                v = getattr(mod, py, None)
+                if isinstance(v, int) and not isinstance(v, bool) and v != value:
+                    drift.append("%s.%s = %r vs %s = %r" % (mod.__name__, py, v, cname, value))
+    assert not drift, "\n".join(drift)
+
+
+def _c_error_codes():
+    """The negative DF_E* codes of core/common/df_error.h and proto/wire_error.h, by name."""
+    out = {}
+    for rel in ("core/common/df_error.h", "proto/wire_error.h"):
+        text = open(os.path.join(ROOT, rel)).read()
+        out.update({k[3:]: int(v) for k, v in re.findall(r"\b(DF_E[A-Z_]+)\s*=\s*(-\d+)", text)})
+    assert out["EINVAL"] == -1 and out["EPROTO_CHUNK"] == -110
+    return out
+
+
+def test_error_codes_match():
+    c = _c_error_codes()
+    assert {name: code for code, name in pe.ERROR_NAMES.items() if code != 0} == c
+    for name, code in c.items():
+        assert getattr(pe, name) == code, name
+    doc = {r[1]: int(r[0]) for r in _rows(_section(_doc(), "7. Errors"))
+           if re.fullmatch(r"-\d+", r[0])}
+    assert doc == c, "PROTOCOL.md section 7 vs the C error codes"
 
 
 # ------------------------------------------------------------------ PROTOCOL.md

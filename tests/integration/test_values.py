@@ -8,22 +8,15 @@ import pytest
 
 from conftest import DEFORMCTL
 from deformd_client import Brush, DeformdError, errors as E
-from helpers import grid_obj, obj_bytes_positions, read_obj_positions
+from helpers import grid_session, read_obj_positions
 
 GRID_N = 12
 
 
 @pytest.fixture
 def grid(daemon):
-    data = grid_obj(GRID_N, GRID_N)
-    with daemon.unix_client() as c:
-        info = c.load_mesh(data, fmt=".obj", name="")
-    yield info, obj_bytes_positions(data)
-    with daemon.unix_client() as c:
-        try:
-            c.close_session(info.session_id)
-        except DeformdError:
-            pass
+    with grid_session(daemon, GRID_N) as g:
+        yield g
 
 
 # -- item 15: SET_BRUSH_PARAM is validated when set ------------------------------------------

@@ -243,10 +243,21 @@ class Client:
         if request_id is None:
             request_id = self._next_id
             self._next_id += 1
+        frame = fr.encode_frame(msg_type, payload, request_id, flags)
+        self.sock.settimeout(self.timeout)   # blocking (with the call timeout), whatever came before
         try:
-            self.sock.sendall(fr.encode_frame(msg_type, payload, request_id, flags))
+            self.sock.sendall(frame)
         except (BrokenPipeError, ConnectionResetError) as e:
+            # the server closed the connection: report its ERROR event when it sent one
             self._raise_why_closed(e)
+        except BaseException as e:
+            # part of the frame may be on the wire: nothing more can be framed on this
+            # connection, so it is closed rather than left to send a corrupt stream
+            self.close()
+            if isinstance(e, OSError):
+                raise ConnectionClosed("sending a %d-byte frame failed (%s): connection closed"
+                                       % (len(frame), e)) from e
+            raise
         self._pending.setdefault(request_id, [])
         return request_id
 
@@ -275,7 +286,9 @@ class Client:
             self._done[f.request_id] = self._pending.pop(f.request_id)
 
     def _read_more(self, deadline: Optional[float]) -> bool:
-        """Reads from the socket into the frame queue. False on timeout."""
+        """Reads from the socket into the frame queue. False on timeout. The socket's timeout
+        is back at self.timeout on return, on every path (a deadline in the past makes the read
+        non-blocking, and a later sendall must not inherit that)."""
         if deadline is not None:
             # past the deadline: one non-blocking read still collects what already arrived
             self.sock.settimeout(max(0.0, deadline - time.monotonic()))
@@ -287,6 +300,8 @@ class Client:
             return False
         except ConnectionResetError as e:
             raise ConnectionClosed("connection reset by deformd") from e
+        finally:
+            self.sock.settimeout(self.timeout)
         if not data:
             raise ConnectionClosed("deformd closed the connection")
         self._frames.extend(self._decoder.feed(data))

@@ -161,10 +161,10 @@ static void test_time_budget(void **st)
         printf("budget %.1f ms (iteration ~%.2f ms): %d iterations, last ended at %.1f ms, run returned at %.1f ms\n",
                budget, it_ms, r.iterations, sp.last, el);
         assert_int_equal(r.stop, DF_ADMM_STOP_TIME);
-        assert_true(r.iterations >= 2);
+        assert_true(r.iterations >= 1);
         assert_int_equal(sp.n, r.iterations);
-        /* overshoot at most about one iteration (generous slack: the machine may be loaded) */
-        assert_true(el <= budget + 3.0 * it_ms + 30.0);
+        /* the overshoot (el - budget) is timing: printed above, not asserted (no wall-clock
+         * assertions in make test) */
     }
     /* a budget smaller than one iteration: exactly one iteration runs */
     assert_int_equal(df_admm_run(s, &(df_admm_budget){100, 1e-3, 0, NULL, NULL}, &r, &err), DF_OK);

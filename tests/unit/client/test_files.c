@@ -10,6 +10,7 @@
 #include <cmocka.h>
 
 #include "client/dc_files.h"
+#include "tests/unit/unit_skip.h"
 
 static void test_index_text(void **state)
 {
@@ -132,10 +133,8 @@ static void test_pig_experiment(void **state)
     snprintf(ip, sizeof ip, "%s/pig_init0.4.node", dir);
     snprintf(rp, sizeof rp, "%s/pig_rest.node", dir);
     FILE *f = fopen(hp, "r");
-    if (!f) {
-        printf("skipping: %s not found (set MESHES to the shared meshes folder)\n", hp);
-        skip();
-    }
+    if (!f)
+        unit_skip("%s not found (set MESHES to the shared meshes folder)", hp);
     fclose(f);
     df_error e;
     int32_t *h = NULL, nh = 0;

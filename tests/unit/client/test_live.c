@@ -20,6 +20,7 @@
 
 #include "client/deformclient.h"
 #include "tests/unit/client/live_daemon.h"
+#include "tests/unit/unit_skip.h"
 
 #define LIVE_CLIENTS 4      /* connections with a replica; clients 0 and 1 also write */
 #define LIVE_UPDATES 6      /* brush updates per writer */
@@ -35,10 +36,8 @@ typedef struct live {
 /* Fills `exe` with the deformd next to this test, or skips the test (naming why). */
 static void daemon_or_skip(char *exe, size_t cap)
 {
-    if (live_daemon_path(exe, cap) != 0) {
-        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
-        skip();
-    }
+    if (live_daemon_path(exe, cap) != 0)
+        unit_skip("deformd is not built next to this test (make -j2 builds it)");
 }
 
 /* Value of stats key `key` (asserts it is present). */

@@ -28,6 +28,7 @@
 
 #include "client/deformclient.h"
 #include "tests/unit/client/live_daemon.h"
+#include "tests/unit/unit_skip.h"
 #include "core/admm/admm.h"
 #include "core/kelvinlet/kelvinlet.h"
 #include "core/mesh/mesh_io.h"
@@ -44,10 +45,8 @@ typedef live_daemon daemon_proc;
 static df_client *setup(daemon_proc *d)
 {
     char exe[PATH_MAX];
-    if (live_daemon_path(exe, sizeof exe) != 0) {
-        printf("skipping: deformd is not built next to this test (make -j2 builds it)\n");
-        skip();
-    }
+    if (live_daemon_path(exe, sizeof exe) != 0)
+        unit_skip("deformd is not built next to this test (make -j2 builds it)");
     memset(d, 0, sizeof *d);
     assert_int_equal(live_daemon_start(d, exe, "parity"), 0);
     df_client *c = NULL;

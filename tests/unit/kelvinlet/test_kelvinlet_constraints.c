@@ -11,6 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "core/kelvinlet/kelvinlet.h"
 
@@ -30,7 +33,7 @@ static double *sphere(size_t n, double R)
 
 static df_kelvinlet_pins pins_of(const double *pts, size_t n, int flags, double nu)
 {
-    df_kelvinlet_pins p = {n, pts, flags, 0.12, 1.1, nu, 1};
+    df_kelvinlet_pins p = {n, pts, flags, 0.12, 1.1, nu, 1, 0};
     return p;
 }
 
@@ -275,6 +278,39 @@ static void test_singular_and_unsupported(void **state)
     assert_int_equal(df_kelvinlet_constraints_create(&pins, &cs, &e), DF_EINVAL);
 }
 
+/* pins.threads: the K_pp assembly on 1 thread (and on 2) gives the loads of the default team bit
+ * for bit, and the call leaves the process's OpenMP setting alone. */
+static void test_pin_threads_do_not_change_bits(void **state)
+{
+    (void)state;
+    size_t n = 160;
+    double *pts = sphere(n, 0.45);
+    df_kelvinlet_brush b = live(DF_KELVINLET_GRAB, 0.4);
+    df_kelvinlet_prepared ref, f;
+    df_kelvinlet_constraints *cs = NULL;
+    df_kelvinlet_pins pins = pins_of(pts, n, DF_KELVINLET_PIN_DISPLACEMENT, 0.4);
+    assert_int_equal(df_kelvinlet_constraints_create(&pins, &cs, NULL), DF_OK);
+    assert_int_equal(df_kelvinlet_constraints_solve(cs, &b, &ref, NULL), DF_OK);
+    df_kelvinlet_constraints_free(cs);
+#ifdef _OPENMP
+    int nt = omp_get_max_threads();
+#endif
+    for (int threads = 1; threads <= 2; threads++) {
+        pins.threads = threads;
+        assert_int_equal(df_kelvinlet_constraints_create(&pins, &cs, NULL), DF_OK);
+        assert_int_equal(df_kelvinlet_constraints_solve(cs, &b, &f, NULL), DF_OK);
+        assert_int_equal(f.nsrc, ref.nsrc);
+        assert_memory_equal(f.ext, ref.ext, ref.nsrc * sizeof *ref.ext);
+#ifdef _OPENMP
+        assert_int_equal(omp_get_max_threads(), nt);
+#endif
+        df_kelvinlet_prepared_free(&f);
+        df_kelvinlet_constraints_free(cs);
+    }
+    df_kelvinlet_prepared_free(&ref);
+    free(pts);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -282,6 +318,7 @@ int main(void)
         cmocka_unit_test(test_gradient_pins),
         cmocka_unit_test(test_cache_counts_and_invalidation),
         cmocka_unit_test(test_singular_and_unsupported),
+        cmocka_unit_test(test_pin_threads_do_not_change_bits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

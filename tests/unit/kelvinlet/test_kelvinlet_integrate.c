@@ -2,9 +2,13 @@
  * and Euler at 1st order in the substep count, a moving Euler brush carries its centre exactly
  * along the stroke, the multi-threaded SIMD float path matches the double scalar reference
  * within 1e-5 (relative to the largest displacement) on 100k random points, apply equals
- * input + displacements bit for bit, 2D brushes leave z untouched, threads do not change bits. */
+ * input + displacements bit for bit, 2D brushes leave z untouched, threads do not change bits:
+ * p.threads = 1 (serial) and p.threads = 2 give the bits of the default team, and the call
+ * leaves the process's OpenMP thread setting alone (no omp_set_num_threads). */
 #include <math.h>
+#ifdef _OPENMP
 #include <omp.h>
+#endif
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -248,11 +252,19 @@ static void test_apply_equals_displacements_and_threads(void **state)
             moved += d[i] != 0.0f;
         }
         assert_true(moved > n);
+        assert_int_equal(p.threads, 0);              /* prepare: OpenMP's default team */
+#ifdef _OPENMP
         int nt = omp_get_max_threads();
-        omp_set_num_threads(1);
-        assert_int_equal(df_kelvinlet_displacements(&p, x, n, d1, NULL), DF_OK);
-        omp_set_num_threads(nt);
-        assert_memory_equal(d, d1, 3 * n * sizeof *d);
+#endif
+        for (int threads = 1; threads <= 2; threads++) {
+            p.threads = threads;
+            memset(d1, 0, 3 * n * sizeof *d1);
+            assert_int_equal(df_kelvinlet_displacements(&p, x, n, d1, NULL), DF_OK);
+            assert_memory_equal(d, d1, 3 * n * sizeof *d);
+#ifdef _OPENMP
+            assert_int_equal(omp_get_max_threads(), nt); /* the caller's setting untouched */
+#endif
+        }
     }
     free(x); free(y); free(d); free(d1);
 }

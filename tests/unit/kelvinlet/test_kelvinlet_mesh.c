@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "core/kelvinlet/kelvinlet.h"
+#include "tests/unit/unit_skip.h"
 
 static const char *meshes_dir(void)
 {
@@ -73,10 +74,8 @@ static void test_bunny_volume(void **state)
     char path[1024];
     struct stat st;
     snprintf(path, sizeof path, "%s/bunny.off", meshes_dir());
-    if (stat(path, &st) != 0) {
-        printf("SKIP: %s not found (set MESHES to the shared mesh folder)\n", path);
-        skip();
-    }
+    if (stat(path, &st) != 0)
+        unit_skip("%s not found (set MESHES to the shared mesh folder)", path);
     tri_mesh m;
     assert_int_equal(read_off(path, &m), 0);
     assert_int_equal(m.nv, 3485);

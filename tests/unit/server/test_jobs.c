@@ -1,12 +1,15 @@
 /* Unit tests for server/job.c + server/session.c on a real libuv loop (no sockets): jobs of one
  * session run strictly in submission order (worker jobs and loop-only jobs interleaved), jobs of
- * two sessions run in parallel on the pool, queued jobs can be dropped (their `done` sees
- * ESTATE), a closed session is freed once its FIFO drains, and the session limit. */
+ * two sessions run in parallel on the pool (each waits until the other has started: no timing),
+ * the per-iteration cap of inline jobs, queued jobs can be dropped (their `done` sees ESTATE), a
+ * closed session is freed once its FIFO drains, and the session limit. How long the parallel jobs
+ * take is measured by tests/bench/bench_server.c, not asserted here. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
 #include <pthread.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -17,15 +20,9 @@
 #include "server/session.h"
 
 static pthread_mutex_t g_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_cond_t g_cond = PTHREAD_COND_INITIALIZER;
 static int g_log[64], g_n;
-static double g_start[8], g_end[8];
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
+static int g_started[8], g_saw_other[8];
 
 static void record(int v)
 {
@@ -34,15 +31,30 @@ static void record(int v)
     pthread_mutex_unlock(&g_lock);
 }
 
-/* body = (intptr_t) index; work sleeps (12 - 2 * index) ms so that unordered runs would finish
- * out of order. */
+/* Jobs 6 and 7 (two sessions): each marks itself started and waits until the other has started
+ * too (a 60 s guard turns a serialized pool into a failure instead of a hang). */
+static void rendezvous(int i)
+{
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    until.tv_sec += 60;
+    pthread_mutex_lock(&g_lock);
+    g_started[i] = 1;
+    pthread_cond_broadcast(&g_cond);
+    while (!g_started[i == 6 ? 7 : 6])
+        if (pthread_cond_timedwait(&g_cond, &g_lock, &until) != 0) break;
+    g_saw_other[i] = g_started[i == 6 ? 7 : 6];
+    pthread_mutex_unlock(&g_lock);
+}
+
+/* body = (intptr_t) index; jobs 0..5 sleep (12 - 2 * index) ms so that unordered runs would
+ * finish out of order; jobs 6 and 7 meet (rendezvous). */
 static void sleepy_work(df_job *j)
 {
     int i = (int)(intptr_t)j->body;
-    g_start[i % 8] = now_ms();
-    usleep((useconds_t)(1000 * (i < 6 ? 12 - 2 * i : 150)));
+    if (i >= 6) rendezvous(i);
+    else usleep((useconds_t)(1000 * (12 - 2 * i)));
     record(i);
-    g_end[i % 8] = now_ms();
 }
 
 static int g_done_rc[64];
@@ -132,17 +144,85 @@ static void test_sessions_run_in_parallel(void **state)
     assert_ptr_equal(df_session_find_name(&srv, "session-2"), b);
     assert_ptr_equal(df_session_find(&srv, a->id), a);
     g_n = 0;
-    double t0 = now_ms();
-    df_job_submit(job(&srv, a, 6, 1)); /* 150 ms each */
+    memset(g_started, 0, sizeof g_started);
+    memset(g_saw_other, 0, sizeof g_saw_other);
+    df_job_submit(job(&srv, a, 6, 1)); /* each waits for the other to start */
     df_job_submit(job(&srv, b, 7, 1));
     uv_run(&loop, UV_RUN_DEFAULT);
-    double total = now_ms() - t0;
     assert_int_equal(g_n, 2);
-    /* both ran at once: each started before the other ended */
-    assert_true(g_start[6] < g_end[7] && g_start[7] < g_end[6]);
-    assert_true(total < 290.0);
+    /* both ran at once: each saw the other started while it was still running */
+    assert_true(g_saw_other[6] && g_saw_other[7]);
     df_session_destroy(a);
     df_session_destroy(b);
+    assert_int_equal(uv_loop_close(&loop), 0);
+}
+
+/* Inline cap (job.h): a job predicted at exactly inline_us runs on the loop thread, but inline
+ * work of one loop iteration stops at DF_JOB_INLINE_ITER_FACTOR x inline_us. Each job's work
+ * sleeps at least inline_us, so at most FACTOR of them can run inline before the cap; the rest are
+ * deferred to the pool. Deterministic: it relies only on a sleep lasting at least what it asks. */
+#define INLINE_JOBS 10
+static uint64_t predict_budget(const df_job *j)
+{
+    return (uint64_t)j->srv->cfg.inline_us * 1000u;
+}
+
+static void inline_work(df_job *j)
+{
+    usleep((useconds_t)j->srv->cfg.inline_us);
+    record((int)(intptr_t)j->body);
+}
+
+static void test_inline_jobs_capped_per_iteration(void **state)
+{
+    (void)state;
+    uv_loop_t loop;
+    uv_loop_init(&loop);
+    static df_server srv;
+    server_init(&srv, &loop);
+    srv.cfg.inline_us = 200;
+    df_mesh m = tiny_mesh();
+    df_session *s;
+    df_error e;
+    assert_int_equal(df_session_create(&srv, &m, "inline", &s, &e), DF_OK);
+    g_n = 0;
+    for (int i = 0; i < INLINE_JOBS; i++) {
+        df_job *j = df_job_new(&srv, s, NULL, 0, (uint64_t)i, inline_work, record_done);
+        assert_non_null(j);
+        j->body = (void *)(intptr_t)i;
+        j->inline_cost = predict_budget;
+        df_job_submit(j);
+    }
+    uv_run(&loop, UV_RUN_DEFAULT);
+    assert_int_equal(g_n, INLINE_JOBS);
+    for (int i = 0; i < INLINE_JOBS; i++) assert_int_equal(g_log[i], i); /* FIFO either way */
+    uint64_t in = srv.stats.jobs_inline, deferred = srv.stats.jobs_inline_deferred;
+    printf("inline %llu, deferred %llu of %d\n", (unsigned long long)in,
+           (unsigned long long)deferred, INLINE_JOBS);
+    assert_true(in >= 1 && in <= DF_JOB_INLINE_ITER_FACTOR);
+    assert_true(deferred >= 1 && in + deferred <= INLINE_JOBS);
+    assert_true(srv.stats.jobs_completed == INLINE_JOBS);
+    df_session_destroy(s);
+    assert_int_equal(uv_loop_close(&loop), 0);
+
+    /* inline_us = 0: never inline, never deferred */
+    uv_loop_init(&loop);
+    server_init(&srv, &loop);
+    srv.cfg.inline_us = 0;
+    df_mesh m2 = tiny_mesh();
+    assert_int_equal(df_session_create(&srv, &m2, "pool", &s, &e), DF_OK);
+    g_n = 0;
+    for (int i = 0; i < 3; i++) {
+        df_job *j = df_job_new(&srv, s, NULL, 0, (uint64_t)i, inline_work, record_done);
+        assert_non_null(j);
+        j->body = (void *)(intptr_t)i;
+        j->inline_cost = predict_budget;
+        df_job_submit(j);
+    }
+    uv_run(&loop, UV_RUN_DEFAULT);
+    assert_int_equal(g_n, 3);
+    assert_true(srv.stats.jobs_inline == 0 && srv.stats.jobs_inline_deferred == 0);
+    df_session_destroy(s);
     assert_int_equal(uv_loop_close(&loop), 0);
 }
 
@@ -193,6 +273,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fifo_order_within_a_session),
         cmocka_unit_test(test_sessions_run_in_parallel),
+        cmocka_unit_test(test_inline_jobs_capped_per_iteration),
         cmocka_unit_test(test_drop_queued_and_close),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

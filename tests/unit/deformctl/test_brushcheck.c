@@ -1,4 +1,5 @@
-/* Unit tests for client/dc_brush (the local Kelvinlet pre-flight check of deformctl brush) and
+/* Unit tests for client/deformctl/dc_brush (the local Kelvinlet pre-flight check of deformctl
+ * brush, linked into deformctl only) and
  * client/dc_meshout's tet -> boundary-surface fallback. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,7 +12,7 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-#include "client/dc_brush.h"
+#include "client/deformctl/dc_brush.h"
 #include "client/dc_meshout.h"
 
 static void grab(df_msg_brush *b, df_msg_brush_update *u)

@@ -1,9 +1,11 @@
-/* dc_brush.h — local pre-flight check of a brush stroke: runs the Kelvinlet engine's own
- * validation (core/kelvinlet) on the stroke that deformctl is about to send, so that strokes the
- * daemon would reject (pinch gradient not symmetric/traceless, nu outside [-1, 0.5], scale at
- * nu = 0.5, radius out of range, coincident pins...) fail with a clear message before connecting. */
-#ifndef DF_CLIENT_DC_BRUSH_H
-#define DF_CLIENT_DC_BRUSH_H
+/* dc_brush.h — deformctl's local pre-flight check of a brush stroke (part of deformctl, not of
+ * libdeformclient, which needs no Kelvinlet solver): runs the Kelvinlet engine's own validation
+ * (core/kelvinlet) on the stroke that deformctl is about to send, so that strokes the daemon
+ * would reject (pinch gradient not symmetric/traceless, nu outside [-1, 0.5], scale at
+ * nu = 0.5, radius out of range, coincident pins...) fail with a clear message before
+ * connecting. */
+#ifndef DF_CTL_DC_BRUSH_H
+#define DF_CTL_DC_BRUSH_H
 
 #include "core/common/df_error.h"
 #include "core/kelvinlet/kelvinlet.h"
@@ -14,8 +16,9 @@
 #define DC_BRUSH_LOCAL_PIN_CHECK_MAX 64u
 
 /* Converts a begin message `b` and the cumulative load `u` into the engine's brush description,
- * the way the daemon does (loads multiplied by b->strength; df_brush_type 1..5 -> GRAB, TWIST,
- * SCALE, PINCH, AFFINE). No validation. */
+ * the way the daemon does (df_wire_brush_to_core of proto/wire_core_map.h, loads multiplied by
+ * b->strength). No validation: a type or integrator outside the wire enums gives type -1, which
+ * the engine refuses. */
 void dc_brush_to_kelvinlet(const df_msg_brush *b, const df_msg_brush_update *u,
                            df_kelvinlet_brush *out);
 
