@@ -14,7 +14,7 @@ from .schema import (MAX_AFFINE_SETS, MAX_HANDLES, MAX_PATH_LEN, BrushParam,  # 
                      BrushType, ChangeKind, DispEncoding, Energy, Feature, Format, GetMeshFlag,
                      Integrator, LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType,
                      PinFlag, SubscribeFlag)
-from .wire import ProtocolError, Reader, f64_rows, pack_str, u32_array, vec
+from .wire import ProtocolError, Reader, enum_value, f64_rows, pack_str, u32_array, vec
 
 # ------------------------------------------------------------------ numbers (schema.py)
 # Every wire number lives in schema.py (mirror of proto/wire_schema.h, checked by a test); the
@@ -76,7 +76,7 @@ def decode_hello_reply(p: bytes) -> HelloReply:
     v = r.take("HHIIIIIIQQBB")
     name = r.str()
     r.end()
-    return HelloReply(*v[:11], server_name=name)
+    return HelloReply(v[0], v[1], Feature(v[2]), *v[3:11], server_name=name)
 
 
 def encode_auth(method: int, token: bytes) -> bytes:
@@ -157,8 +157,9 @@ class LoadReport:
 
 
 def _read_session_info(r: Reader) -> SessionInfo:
-    v = r.take("QQBBHIIII")
-    return SessionInfo(*v, name=r.str())
+    sid, ver, kind, *rest = r.take("QQBBHIIII")
+    return SessionInfo(sid, ver, enum_value(MeshKind, kind, "session_info: kind"), *rest,
+                       name=r.str())
 
 
 def decode_session_info(p: bytes) -> SessionInfo:
@@ -392,9 +393,9 @@ class MoveResult:
 
 def decode_move_result(p: bytes) -> MoveResult:
     r = Reader(p, "move_result")
-    v = r.take("QQBIddd")
+    sid, ver, status, *rest = r.take("QQBIddd")
     r.end()
-    return MoveResult(*v)
+    return MoveResult(sid, ver, enum_value(MoveStatus, status, "move_result: status"), *rest)
 
 
 def encode_get_mesh(session_id: int, flags: int = 0) -> bytes:

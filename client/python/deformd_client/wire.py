@@ -9,6 +9,15 @@ class ProtocolError(ValueError):
     """A payload that does not decode (truncated, trailing bytes, bad value)."""
 
 
+def enum_value(cls, v: int, what: str):
+    """The member of IntEnum/IntFlag `cls` with value v; ProtocolError naming `what` when v is not
+    a value of the wire enum (as the C decoders refuse it)."""
+    try:
+        return cls(v)
+    except ValueError:
+        raise ProtocolError("%s %d is not a %s value" % (what, v, cls.__name__)) from None
+
+
 class Reader:
     """Sequential little-endian reader over one payload; every read checks the bounds and raises
     ProtocolError naming the message (`what`) when the payload is short."""
