@@ -154,7 +154,8 @@ unit: all
 bench: all
 	@for b in $(BENCH_BIN); do echo "== $$b"; MESHES=$(MESHES) $$b || exit 1; done
 	@for p in $(wildcard tests/bench/bench_*.py); do echo "== $$p"; \
-	  BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p || exit 1; done
+	  PYTHONPATH=client/python:tests/integration BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p \
+	  || exit 1; done
 
 # The fuzzers are ASan+UBSan builds already (make test runs them): here the unit and integration suites.
 asan:

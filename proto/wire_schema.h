@@ -63,6 +63,12 @@
     X(DF_MAX_AFFINE_SETS) X(DF_MAX_ANDERSON) X(DF_MAX_MOVE_ITERS) X(DF_MAX_STATS_ENTRIES)    \
     X(DF_MAX_STATS_KEY_LEN) X(DF_STREAM_CHUNK_BYTES)
 
+/* ------------------------------------------- shared-memory ring file (PROTOCOL.md 6.1, shm_ring.h) */
+#define DF_SHM_MAGIC "DFSHMRG1"             /* 8 bytes at offset 0 */
+#define DF_SHM_HEADER_BYTES 4096u           /* data starts here (one page) */
+#define DF_SHM_MIN_CAPACITY 4096u           /* smallest ring a server may make */
+#define DF_SHM_MAX_CAPACITY (4ull << 30)    /* largest (4 GiB) */
+
 /* ----------------------------------------------------------------------------- message types
  * Requests are sent by clients (flags 0, or MORE on all but the last chunk of a load). The reply
  * reuses the request's type with REPLY (| ERROR with an error body). Events carry EVENT. */

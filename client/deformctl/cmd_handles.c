@@ -34,6 +34,8 @@ static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
 };
 
 static const char *const ENERGIES[] = {"arap", "acap", "neohookean", "cloth", "polyline", NULL};
+/* --energy name i is the wire value i + 1 (df_energy is 1..DF_ENERGY_MAX, contiguous) */
+_Static_assert(sizeof ENERGIES / sizeof ENERGIES[0] - 1 == DF_ENERGY_MAX, "one name per energy");
 
 /* Each numeric option in its range; the message names the option and the value given. */
 static int check_ranges(const dc_cli_args *a, const df_msg_handles *h, df_error *e)

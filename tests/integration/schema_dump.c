@@ -3,7 +3,8 @@
  *   type NAME value lower_name request reply event
  *   enum PyClass kind C_PREFIX NAME value
  *   limit DF_NAME value
- *   const DF_NAME value            (frame constants, reserved feature bit)
+ *   const DF_NAME value            (frame and ring constants, reserved feature bit)
+ *   magic DF_SHM_MAGIC text
  *   brush_default field value      admm_default field value      admm_nh_default field value
  * Header-only on purpose: it includes nothing else, so it proves the schema stands alone. */
 #include <stdio.h>
@@ -35,6 +36,10 @@ int main(void)
     printf("const\tDF_PROTO_VERSION\t%llu\n", (unsigned long long)DF_PROTO_VERSION);
     printf("const\tDF_FRAME_HEADER_SIZE\t%llu\n", (unsigned long long)DF_FRAME_HEADER_SIZE);
     printf("const\tDF_FEAT_RESERVED\t%llu\n", (unsigned long long)DF_FEAT_RESERVED);
+    printf("const\tDF_SHM_HEADER_BYTES\t%llu\n", (unsigned long long)DF_SHM_HEADER_BYTES);
+    printf("const\tDF_SHM_MIN_CAPACITY\t%llu\n", (unsigned long long)DF_SHM_MIN_CAPACITY);
+    printf("const\tDF_SHM_MAX_CAPACITY\t%llu\n", (unsigned long long)DF_SHM_MAX_CAPACITY);
+    printf("magic\tDF_SHM_MAGIC\t%s\n", DF_SHM_MAGIC);
     /* defaults: %.17g of the value as a double; enum-valued defaults print their number */
 #define BRUSH_DEF(field, value) printf("brush_default\t%s\t%.17g\n", #field, (double)(value));
 #define ADMM_DEF(field, value) printf("admm_default\t%s\t%.17g\n", #field, (double)(value));

@@ -46,6 +46,8 @@ def dump(tmp_path_factory):
             cls, kind, prefix, name, value = f[1:]
             e = d["enum"].setdefault(cls, {"kind": kind, "prefix": prefix, "members": {}})
             e["members"][name] = int(value)
+        elif f[0] == "magic":
+            d["const"][f[1]] = f[2].encode()
         elif f[0] in ("limit", "const"):
             d[f[0]][f[1]] = int(f[2])
         else:
@@ -83,6 +85,9 @@ def test_limits_and_constants_match(dump):
     assert (schema.FRAME_MAGIC, schema.PROTO_VERSION, schema.FRAME_HEADER_SIZE) == (
         c["DF_FRAME_MAGIC"], c["DF_PROTO_VERSION"], c["DF_FRAME_HEADER_SIZE"])
     assert schema.FEATURE_RESERVED == c["DF_FEAT_RESERVED"]
+    assert (schema.SHM_MAGIC, schema.SHM_HEADER_BYTES, schema.SHM_MIN_CAPACITY,
+            schema.SHM_MAX_CAPACITY) == (c["DF_SHM_MAGIC"], c["DF_SHM_HEADER_BYTES"],
+                                         c["DF_SHM_MIN_CAPACITY"], c["DF_SHM_MAX_CAPACITY"])
     assert not schema.FEATURE_RESERVED & sum(schema.Feature)
 
 
@@ -91,6 +96,7 @@ def test_every_limit_define_is_listed_once():
     defined = set(re.findall(r"^#define (DF_(?:MAX_\w+|STREAM_CHUNK_BYTES)) ", text, re.M))
     listed = set(re.findall(r"X\((DF_\w+)\)", text))
     assert defined == listed
+    defined |= set(re.findall(r"^#define (DF_(?:SHM|FRAME|PROTO)_\w+) ", text, re.M))
     # nothing else in the tree restates them
     for top in ("core", "proto", "server", "client", "tests"):
         for dirpath, _, files in os.walk(os.path.join(ROOT, top)):

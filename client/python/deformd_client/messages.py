@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from . import schema
+from .schema import SHM_HEADER_BYTES, SHM_MAGIC, SHM_MIN_CAPACITY  # noqa: F401
 from .schema import (MAX_AFFINE_SETS, MAX_HANDLES, MAX_PATH_LEN, BrushParam,  # noqa: F401
                      BrushType, ChangeKind, DispEncoding, Energy, Feature, Format, GetMeshFlag,
                      Integrator, LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType,
@@ -422,9 +423,6 @@ def decode_stats(p: bytes) -> Dict[str, float]:
 
 
 # ------------------------------------------------------------------ shared-memory stream (6.1)
-SHM_MAGIC = b"DFSHMRG1"
-SHM_HEADER_BYTES = 4096
-SHM_MIN_CAPACITY = 4096
 SHM_REF_STRUCT = struct.Struct("<QQII")
 assert SHM_REF_STRUCT.size == 24
 

@@ -21,6 +21,12 @@ class FrameFlag(IntFlag):
     MORE = 1 << 3
 
 
+# ------------------------------------------------------------------ shared-memory ring file (6.1)
+SHM_MAGIC = b"DFSHMRG1"
+SHM_HEADER_BYTES = 4096
+SHM_MIN_CAPACITY = 4096
+SHM_MAX_CAPACITY = 4 << 30
+
 # ------------------------------------------------------------------ limits (reported in hello)
 MAX_FRAME_PAYLOAD = 64 << 20
 MAX_MESH_VERTICES = 8 << 20
