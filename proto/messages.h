@@ -111,6 +111,14 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_CHANGE_MAX (0 DF_WIRE_CHANGE_KINDS(DF_X_COUNT))
 #define DF_MOVE_STATUS_MAX (0 DF_WIRE_MOVE_STATUSES(DF_X_COUNT) - 1) /* 0..MAX */
 #define DF_SECTION_MAX (0 DF_WIRE_MESH_SECTIONS(DF_X_COUNT))
+_Static_assert(DF_WFMT_TETGEN == DF_FMT_MAX && DF_BRUSH_AFFINE == DF_BRUSH_TYPE_MAX &&
+               DF_BP_RATIO == DF_BP_MAX && DF_ENERGY_POLYLINE == DF_ENERGY_MAX &&
+               DF_CHANGE_SNAPSHOT == DF_CHANGE_MAX && DF_MOVE_FAILED == DF_MOVE_STATUS_MAX &&
+               DF_SECTION_FACES == DF_SECTION_MAX, "the range-checked enums stay contiguous");
+/* load_mesh `format` on the wire is 0..DF_FMT_MAX (core's DF_FMT_PLY_BINARY is write-only, not a
+ * wire value). load_mesh `options`: unknown bits are refused with EPROTO_RESERVED (a server
+ * without a bit answers that way too, so a client can tell and load without it); the same in
+ * every chunk of an upload. */
 
 /* ------------------------------------------------------------------------------ bodies */
 

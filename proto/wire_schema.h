@@ -105,9 +105,11 @@
 
 /* ------------------------------------------------------------------------------ feature bits
  * hello_reply `features`. Only what this build implements: a server sets a bit only when the
- * feature works on that connection. Bit 6 is reserved (DF_FEAT_RESERVED: it was HID, which does
- * not exist yet): never sent, ignored on receipt, so hellos of clients built before it was
- * withdrawn (features = 0xFF) still decode. HID will take it back when it lands. */
+ * feature works on that connection. Bit 6 (DF_FEAT_RESERVED) was HID, which does not exist yet:
+ * this daemon never sets it and DF_FEAT_ALL lacks it, but hello_reply decoders accept it (and
+ * ignore it), so clients built now keep working with a daemon that has HID and sets it; any
+ * other unknown bit is refused. The features of a client's hello are informative and never
+ * checked (clients built before the change announce 0xFF). HID takes bit 6 back when it lands. */
 #define DF_WIRE_FEATURES(X)                                                                  \
     X(KELVINLET, 1u << 0)     /* brush messages supported */                                 \
     X(ADMM, 1u << 1)          /* handle set / move supported */                              \
