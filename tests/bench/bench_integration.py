@@ -13,7 +13,6 @@ $BUILD/bin/deformd and printed with their targets by `make bench`:
 Every line reads "what: measured (target ...) ok|MISS". Exit status 0 when every measurement ran
 (targets are reported, not enforced). Environment: BUILD (default build), MESHES, PYTHONPATH (see make bench).
 """
-import os
 import socket
 import sys
 import tempfile

@@ -108,10 +108,6 @@ def test_every_limit_define_is_listed_once():
                         assert not re.search(r"#define %s\b" % name, src), (p, name)
 
 
-def _num(x):
-    return int(round(x)) if float(x).is_integer() else x
-
-
 def test_defaults_match(dump):
     bd = dict(schema.BRUSH_DEFAULTS)
     assert {k: float(v) for k, v in bd.items()} == dump["brush_default"]
