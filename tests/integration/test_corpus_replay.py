@@ -4,6 +4,7 @@ identical bytes, the oracle fuzz_proto.c applies to the C codecs: header and bod
 chosen by (type, flags) as df_msg_body_kind does. Every body of PROTOCOL.md section 4 has a
 Python codec (deformd_client.bodies), and every one is exercised by some seed."""
 import os
+import random
 
 import pytest
 
@@ -62,3 +63,45 @@ def test_every_cut_of_a_seed_is_refused_or_reencodes(seed):
         except ProtocolError:
             continue
         assert bodies.encode_body(name, obj) == payload[:n], "%s cut at %d" % (seed, n)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_every_decoder_on_every_seed(seed):
+    """Step 2 of fuzz_proto.c: every body decoder runs on the whole seed (header included) and
+    on its payload; each refuses with ProtocolError or accepts bytes it re-encodes exactly."""
+    data = open(os.path.join(CORPUS, seed), "rb").read()
+    for blob in (data, data[fr.HEADER_SIZE:]):
+        for name in bodies.BODY_CODECS:
+            try:
+                obj = bodies.decode_body(name, blob)
+            except ProtocolError:
+                continue
+            assert bodies.encode_body(name, obj) == blob, "%s as %s" % (seed, name)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_fixed_seed_mutations(seed):
+    """A short deterministic fuzz run (random.Random(1), like the fuzz step's -seed=1 run): 200
+    copies of the payload with 1..4 bytes overwritten, through every decoder: each is refused with
+    ProtocolError (no other exception) or re-encodes exactly. Error messages are the one
+    exception to exactness: their bytes that are not UTF-8 read as U+FFFD (they are shown)."""
+    rng = random.Random("%s:1" % seed)
+    data = bytes(fr.FrameDecoder().feed(open(os.path.join(CORPUS, seed), "rb").read())[0].payload)
+    for _ in range(200):
+        b = bytearray(data)
+        for _ in range(rng.randint(1, 4)):
+            if b:
+                b[rng.randrange(len(b))] = rng.randrange(256)
+        b = bytes(b)
+        for name in bodies.BODY_CODECS:
+            try:
+                obj = bodies.decode_body(name, b)
+            except ProtocolError:
+                continue
+            again = bodies.encode_body(name, obj)
+            if name == "error" and again != b:
+                try:
+                    b[6:].decode("utf-8")
+                except UnicodeDecodeError:
+                    continue
+            assert again == b, "%s mutated, as %s: %s" % (seed, name, b.hex())

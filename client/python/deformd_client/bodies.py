@@ -122,6 +122,10 @@ def decode_brush(p: bytes) -> BrushBegin:
         raise ProtocolError("brush: type %d / integrator %d" % (btype, integ))
     if n_pinned > schema.MAX_PINNED_POINTS:
         raise ProtocolError("brush: %d pinned points" % n_pinned)
+    if moving > 1 or has_mirror > 1:
+        raise ProtocolError("brush: moving %d / has_mirror %d not 0 or 1" % (moving, has_mirror))
+    if (pin_flags != 0) if n_pinned == 0 else not 1 <= pin_flags <= 3:
+        raise ProtocolError("brush: pin_flags %d with %d pinned points" % (pin_flags, n_pinned))
     if not has_mirror and any(mirror):
         raise ProtocolError("brush: mirror plane given without has_mirror (not representable)")
     pinned = [tuple(r.take("3d")) for _ in range(n_pinned)]

@@ -77,6 +77,8 @@ def decode_hello_reply(p: bytes) -> HelloReply:
     v = r.take("HHIIIIIIQQBB")
     name = r.str()
     r.end()
+    if v[10] > 1 or v[11]:
+        raise ProtocolError("hello_reply: auth_required %d / reserved %d" % (v[10], v[11]))
     return HelloReply(v[0], v[1], Feature(v[2]), *v[3:11], server_name=name)
 
 
@@ -85,10 +87,10 @@ def encode_auth(method: int, token: bytes) -> bytes:
 
 
 def decode_error(p: bytes):
-    """Returns (code, message)."""
+    """Returns (code, message); bytes of the message that are not UTF-8 read as U+FFFD."""
     r = Reader(p, "error")
     code = r.take("i")
-    msg = r.str()
+    msg = r.text()
     r.end()
     return code, msg
 
@@ -351,6 +353,9 @@ def decode_handles(p: bytes) -> HandleSet:
      bending, max_iters, nh) = v
     if energy not in ENERGY_NAMES:
         raise ProtocolError("handles: energy %d not in 1..%d" % (energy, len(ENERGIES)))
+    if area > 1 or accel > 1:
+        raise ProtocolError("handles: area_weighting %d / accelerate %d not 0 or 1"
+                            % (area, accel))
     if nh > MAX_HANDLES:
         raise ProtocolError("handles: n_handles %d exceeds limit %d" % (nh, MAX_HANDLES))
     handles = list(r.farray("I", nh))
@@ -417,6 +422,8 @@ def decode_stats(p: bytes) -> Dict[str, float]:
     out: Dict[str, float] = {}
     for _ in range(n):
         k = r.str()
+        if k in out:
+            raise ProtocolError("stats: key %r twice" % k)
         out[k] = r.take("d")
     r.end()
     return out
