@@ -96,7 +96,7 @@ deps:
 	else echo "deps: all $(words $(DEB_PKGS)) Debian packages present"; fi
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
-            python3 python3-pytest clang libclang-rt-14-dev
+            python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -154,7 +154,8 @@ unit: all
 bench: all
 	@for b in $(BENCH_BIN); do echo "== $$b"; MESHES=$(MESHES) $$b || exit 1; done
 	@for p in $(wildcard tests/bench/bench_*.py); do echo "== $$p"; \
-	  BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p || exit 1; done
+	  PYTHONPATH=client/python:tests/integration BUILD=$(BUILD) MESHES=$(MESHES) $(PYTHON) $$p \
+	  || exit 1; done
 
 # The fuzzers are ASan+UBSan builds already (make test runs them): here the unit and integration suites.
 asan:

@@ -35,8 +35,6 @@ extern "C" {
 /* Buffered bytes read from the socket at once, and the client name sent in hello. */
 #define DF_CLIENT_READ_BUF 65536
 #define DF_CLIENT_NAME "libdeformclient"
-/* Largest reply reassembled from chunks (get mesh of the largest mesh with every section). */
-#define DF_CLIENT_MAX_REPLY_BYTES (2ull << 30)
 
 typedef struct df_client df_client;
 

@@ -17,17 +17,13 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define DF_FRAME_MAGIC 0x444D4644u       /* bytes "DFMD" read as a little-endian u32 */
-#define DF_PROTO_VERSION 1u
-#define DF_FRAME_HEADER_SIZE 24u
-#define DF_MAX_FRAME_PAYLOAD (64u << 20) /* 64 MiB: larger messages are chunked */
+/* DF_FRAME_MAGIC, DF_PROTO_VERSION, DF_FRAME_HEADER_SIZE, DF_MAX_FRAME_PAYLOAD and the flags
+ * come from the wire schema. */
+#include "proto/wire_schema.h"
 
-enum {
-    DF_FLAG_REPLY = 1u << 0,  /* answers the request with the same request_id */
-    DF_FLAG_EVENT = 1u << 1,  /* server-initiated (stream frames, progress) */
-    DF_FLAG_ERROR = 1u << 2,  /* payload is an error body (code + message) */
-    DF_FLAG_MORE = 1u << 3    /* more chunks of the same message follow */
-};
+#define DF_X_FLAG(n, v) DF_FLAG_##n = (v),
+enum { DF_WIRE_FLAGS(DF_X_FLAG) };
+#undef DF_X_FLAG
 
 typedef struct df_frame_header {
     uint32_t magic;

@@ -35,64 +35,18 @@
 #include "proto/frame_codec.h"
 #include "proto/wire_error.h"
 
-/* ---------------------------------------------------------------- limits (reported in hello) */
-#define DF_MAX_MESH_VERTICES (8u << 20)       /* 8,388,608 vertices per mesh */
-#define DF_MAX_MESH_ELEMENTS (32u << 20)      /* 33,554,432 elements per mesh */
-#define DF_MAX_MESH_BYTES (1ull << 30)        /* 1 GiB: largest inline mesh upload (all chunks) */
-#define DF_MAX_PENDING_REQUESTS 64u           /* unanswered requests per client; more -> EBUSY */
-#define DF_MAX_SESSIONS 1024u                 /* sessions per daemon (and per list reply) */
-#define DF_MAX_NAME_LEN 255u                  /* bytes of a session / client / server name */
-#define DF_MAX_PATH_LEN 4095u                 /* bytes of a server-side path */
-#define DF_MAX_ERROR_MSG_LEN (DF_ERROR_MSG_MAX - 1) /* 255 bytes of error message on the wire */
-#define DF_MAX_AUTH_TOKEN 4096u               /* bytes of an auth token */
-#define DF_MAX_PING_BYTES 65536u              /* bytes echoed by ping */
-#define DF_MAX_PINNED_POINTS 2048u            /* pinned points of one brush stroke */
-#define DF_MAX_BRUSH_STEPS 1024u              /* integrator steps of one brush update */
-#define DF_MAX_FALLOFF 8u                     /* falloff order: 1 single, 2 bi, 3 tri-scale, .. 8 */
-#define DF_MAX_HANDLES (1u << 20)             /* handle vertices of one handle set */
-#define DF_MAX_AFFINE_SETS 64u                /* affine constraint sets of one handle set */
-#define DF_MAX_ANDERSON 20u                   /* Anderson history length of accelerated ADMM */
-#define DF_MAX_MOVE_ITERS 1000000u            /* ADMM iteration budget of one move */
-#define DF_MAX_STATS_ENTRIES 1024u            /* key/value pairs in one stats reply */
-#define DF_MAX_STATS_KEY_LEN 63u              /* bytes of a stats key */
-#define DF_STREAM_CHUNK_BYTES (16u << 20)     /* recommended payload bound of a stream chunk */
+/* Limits (reported in hello), message types, feature bits, enums and brush defaults: every
+ * number of the wire comes from proto/wire_schema.h (the one source of truth, checked against
+ * the Python client and PROTOCOL.md by tests/integration/test_schema.py). */
+#include "proto/wire_schema.h"
+
+_Static_assert(DF_MAX_ERROR_MSG_LEN == DF_ERROR_MSG_MAX - 1, "error message limit vs df_error");
 
 /* -------------------------------------------------------------------------- message types
- * Requests are sent by clients (flags 0, or DF_FLAG_MORE on all but the last chunk of a load).
- * The reply reuses the request's type with DF_FLAG_REPLY (| DF_FLAG_ERROR with an error body).
- * Events are sent by the server with DF_FLAG_EVENT. Request body / reply body per type: */
-typedef enum df_msg_type {
-    DF_MSG_HELLO = 0x0001,          /* df_msg_hello            -> df_msg_hello_reply */
-    DF_MSG_AUTH = 0x0002,           /* df_msg_auth             -> empty (or error EUNSUPPORTED) */
-    DF_MSG_PING = 0x0003,           /* df_msg_ping             -> df_msg_ping (same bytes) */
-    DF_MSG_LOAD_MESH = 0x0010,      /* df_msg_load_mesh chunks -> df_msg_session_info */
-    DF_MSG_LIST_SESSIONS = 0x0011,  /* empty                   -> df_msg_session_list */
-    DF_MSG_OPEN_SESSION = 0x0012,   /* df_msg_session_ref      -> df_msg_session_info */
-    DF_MSG_CLOSE_SESSION = 0x0013,  /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_SUBSCRIBE = 0x0014,      /* df_msg_subscribe        -> df_msg_session_info */
-    DF_MSG_UNSUBSCRIBE = 0x0015,    /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_STREAM_SHM = 0x0016,     /* df_msg_session_ref      -> df_msg_shm_info (shm_ring.h) */
-    DF_MSG_BRUSH_BEGIN = 0x0020,    /* df_msg_brush            -> df_msg_ack */
-    DF_MSG_BRUSH_UPDATE = 0x0021,   /* df_msg_brush_update     -> df_msg_ack */
-    DF_MSG_BRUSH_END = 0x0022,      /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_BRUSH_CANCEL = 0x0023,   /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_SET_BRUSH_PARAM = 0x0024,/* df_msg_brush_param      -> df_msg_ack */
-    DF_MSG_HANDLES_SET = 0x0030,    /* df_msg_handles          -> df_msg_ack */
-    DF_MSG_HANDLES_MOVE = 0x0031,   /* df_msg_handle_move      -> df_msg_move_result (at the end) */
-    DF_MSG_RESET_REST = 0x0032,     /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_UNDO = 0x0033,           /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_REDO = 0x0034,           /* df_msg_session_ref      -> df_msg_ack */
-    DF_MSG_HANDLES_GET = 0x0035,    /* df_msg_session_ref      -> df_msg_handles (the current set;
-                                     * error ENOTFOUND when the session has none) */
-    DF_MSG_GET_MESH = 0x0040,       /* df_msg_get_mesh         -> df_msg_mesh_chunk chunks */
-    DF_MSG_SNAPSHOT = 0x0041,       /* df_msg_snapshot_req     -> df_msg_disp chunks (dense) */
-    DF_MSG_STATS = 0x0042,          /* df_msg_stats_req        -> df_msg_stats */
-    DF_MSG_DISPLACEMENT = 0x0080,   /* event: df_msg_disp chunks (one session version) */
-    DF_MSG_PROGRESS = 0x0081,       /* event: df_msg_progress chunks (one iterate = one version) */
-    DF_MSG_SESSION_CLOSED = 0x0082, /* event: df_msg_session_ref (session destroyed) */
-    DF_MSG_SHM_REF = 0x0083,        /* event: df_msg_shm_ref (next event frame is in the ring) */
-    DF_MSG_ERROR = 0x00FF           /* error body not tied to a request type (framing errors) */
-} df_msg_type;
+ * Request body -> reply body (or event body) per type: see DF_WIRE_MSG_TYPES. */
+#define DF_X_TYPE(n, v, name, req, rep, ev) DF_MSG_##n = (v),
+typedef enum df_msg_type { DF_WIRE_MSG_TYPES(DF_X_TYPE) } df_msg_type;
+#undef DF_X_TYPE
 
 /* 1 if `type` is one of the values above, else 0. */
 int df_msg_type_valid(uint16_t type);
@@ -100,111 +54,71 @@ int df_msg_type_valid(uint16_t type);
 /* Stable lower-case name ("brush_begin"), "unknown" for anything else. */
 const char *df_msg_type_name(uint16_t type);
 
-/* ------------------------------------------------------------------------------ enums */
-typedef enum df_feature {            /* hello reply `features` bits */
-    DF_FEAT_KELVINLET = 1u << 0,     /* brush messages supported */
-    DF_FEAT_ADMM = 1u << 1,          /* handle set / move supported */
-    DF_FEAT_PATH_LOAD = 1u << 2,     /* load mesh from a server-side path allowed by config */
-    DF_FEAT_AUTH = 1u << 3,          /* auth is implemented (and may be required) */
-    DF_FEAT_SPARSE_STREAM = 1u << 4, /* server sends sparse displacement frames */
-    DF_FEAT_TCP = 1u << 5,           /* the daemon also listens on TCP */
-    DF_FEAT_HID = 1u << 6,           /* the daemon drives HID knob devices */
-    DF_FEAT_SHM_STREAM = 1u << 7     /* STREAM_SHM available to Unix-socket clients */
-} df_feature;
-#define DF_FEAT_ALL 0xFFu
+/* ------------------------------------------------------------------------------ enums
+ * One C enum per wire enum of proto/wire_schema.h (meanings there), and the largest value of
+ * each contiguous 1..MAX enum. Mappings to core's enums: proto/wire_core_map.h. */
+#define DF_X_ENUM(prefix, n, v) prefix##n = (v),
+#define DF_X_FEAT(n, v) DF_X_ENUM(DF_FEAT_, n, v)
+typedef enum df_feature { DF_WIRE_FEATURES(DF_X_FEAT) } df_feature;
+#define DF_X_LSRC(n, v) DF_X_ENUM(DF_LOAD_, n, v)
+typedef enum df_load_source { DF_WIRE_LOAD_SOURCES(DF_X_LSRC) } df_load_source;
+#define DF_X_LOPT(n, v) DF_X_ENUM(DF_LOAD_OPT_, n, v)
+enum { DF_WIRE_LOAD_OPTS(DF_X_LOPT) };
+#define DF_X_WFMT(n, v) DF_X_ENUM(DF_WFMT_, n, v)
+typedef enum df_wire_format { DF_WIRE_FORMATS(DF_X_WFMT) } df_wire_format;
+#define DF_X_WKIND(n, v) DF_X_ENUM(DF_WKIND_, n, v)
+typedef enum df_wire_mesh_kind { DF_WIRE_MESH_KINDS(DF_X_WKIND) } df_wire_mesh_kind;
+#define DF_X_BRUSH(n, v) DF_X_ENUM(DF_BRUSH_, n, v)
+typedef enum df_brush_type { DF_WIRE_BRUSH_TYPES(DF_X_BRUSH) } df_brush_type;
+#define DF_X_INTEG(n, v) DF_X_ENUM(DF_INTEG_, n, v)
+typedef enum df_integrator { DF_WIRE_INTEGRATORS(DF_X_INTEG) } df_integrator;
+#define DF_X_BP(n, v) DF_X_ENUM(DF_BP_, n, v)
+typedef enum df_brush_param_id { DF_WIRE_BRUSH_PARAMS(DF_X_BP) } df_brush_param_id;
+#define DF_X_ENERGY(n, v) DF_X_ENUM(DF_ENERGY_, n, v)
+typedef enum df_energy { DF_WIRE_ENERGIES(DF_X_ENERGY) } df_energy;
+#define DF_X_CHANGE(n, v) DF_X_ENUM(DF_CHANGE_, n, v)
+typedef enum df_change_kind { DF_WIRE_CHANGE_KINDS(DF_X_CHANGE) } df_change_kind;
+#define DF_X_DISP(n, v) DF_X_ENUM(DF_DISP_, n, v)
+typedef enum df_disp_encoding { DF_WIRE_DISP_ENCODINGS(DF_X_DISP) } df_disp_encoding;
+#define DF_X_MOVE(n, v) DF_X_ENUM(DF_MOVE_, n, v)
+typedef enum df_move_status { DF_WIRE_MOVE_STATUSES(DF_X_MOVE) } df_move_status;
+#define DF_X_SECTION(n, v) DF_X_ENUM(DF_SECTION_, n, v)
+typedef enum df_mesh_section { DF_WIRE_MESH_SECTIONS(DF_X_SECTION) } df_mesh_section;
+#define DF_X_PIN(n, v) DF_X_ENUM(DF_PIN_, n, v)
+enum { DF_WIRE_PIN_FLAGS(DF_X_PIN) };
+#define DF_X_GM(n, v) DF_X_ENUM(DF_GET_MESH_, n, v)
+enum { DF_WIRE_GET_MESH_FLAGS(DF_X_GM) };
+#define DF_X_SUB(n, v) DF_X_ENUM(DF_SUBSCRIBE_, n, v)
+enum { DF_WIRE_SUBSCRIBE_FLAGS(DF_X_SUB) };
 
-/* Load mesh `format`: the df_mesh_format values of core/mesh/mesh_io.h, 0..DF_FMT_MAX:
- * DF_FMT_AUTO 0 (sniff content / extension), DF_FMT_OBJ 1, DF_FMT_OFF 2, DF_FMT_PLY 3 (ASCII or
- * binary), DF_FMT_MEDIT 4 (.mesh), DF_FMT_TETGEN 5 (.node + .ele: inline data is the node bytes
- * then the ele bytes). DF_FMT_PLY_BINARY (write-only) is not valid on the wire. */
-#define DF_FMT_MAX 5
+/* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
+ * daemon and the client pass values through, so each value is checked equal here. */
+#define DF_X_FMT_EQ(n, v) _Static_assert(DF_WFMT_##n == (int)DF_FMT_##n, "wire format " #n);
+DF_WIRE_FORMATS(DF_X_FMT_EQ)
+_Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE ==
+               (int)DF_MESH_TRIANGLE && DF_WKIND_TET == (int)DF_MESH_TET, "wire mesh kinds");
 
-/* load_mesh `options` (the u16 at offset 2, reserved = 0 before these bits existed; the same in
- * every chunk of an upload). Unknown bits are refused with EPROTO_RESERVED (a server without a
- * bit answers that way too, so a client can tell and load without it). */
-#define DF_LOAD_OPT_EXT 0x0001u  /* a str file_name follows the data, and the reply is a
-                                  * load_reply: session_info + load_report */
-#define DF_LOAD_OPT_2D 0x0002u   /* a 2D session even if the file gives z (every z must be 0,
-                                  * no tetrahedra); without it a mesh is 2D only when its file
-                                  * declares 2D (OBJ `v x y`, MEDIT Dimension 2, TetGen .node
-                                  * dimension 2, PLY without z) */
-#define DF_LOAD_OPTS_ALL (DF_LOAD_OPT_EXT | DF_LOAD_OPT_2D)
-
-typedef enum df_load_source {
-    DF_LOAD_INLINE = 0,        /* file bytes are in the message(s) */
-    DF_LOAD_PATH = 1           /* server reads `path` (only with DF_FEAT_PATH_LOAD) */
-} df_load_source;
-
-typedef enum df_brush_type {
-    DF_BRUSH_GRAB = 1,         /* uses move[] (tip displacement) */
-    DF_BRUSH_TWIST = 2,        /* uses twist[] (rotation vector: centre vorticity) */
-    DF_BRUSH_SCALE = 3,        /* uses scale (centre dilation) */
-    DF_BRUSH_PINCH = 4,        /* uses matrix[] (symmetric, traceless centre gradient) */
-    DF_BRUSH_AFFINE = 5        /* uses matrix[] (general centre gradient) */
-} df_brush_type;
-#define DF_BRUSH_TYPE_MAX 5
-
-typedef enum df_integrator {
-    DF_INTEG_EULER = 1,        /* forward Euler along the displacement field */
-    DF_INTEG_RK4 = 2           /* classic 4th-order Runge-Kutta */
-} df_integrator;
-
-typedef enum df_brush_param_id { /* set brush parameter */
-    DF_BP_RADIUS = 1,          /* value > 0, finite, mesh units */
-    DF_BP_NU = 2,              /* Poisson ratio, not NaN; +-inf allowed */
-    DF_BP_STRENGTH = 3,        /* multiplier on the load, finite */
-    DF_BP_FALLOFF = 4,         /* integer 1..DF_MAX_FALLOFF */
-    DF_BP_RATIO = 5            /* multi-scale radius ratio, finite, > 1 */
-} df_brush_param_id;
-#define DF_BP_MAX 5
-
-typedef enum df_energy {         /* handle set elastic energy */
-    DF_ENERGY_ARAP = 1,
-    DF_ENERGY_ACAP = 2,
-    DF_ENERGY_NEOHOOKEAN = 3,
-    DF_ENERGY_CLOTH = 4,
-    DF_ENERGY_POLYLINE = 5
-} df_energy;
-#define DF_ENERGY_MAX 5
-
-typedef enum df_change_kind {    /* what produced a session version (displacement stream) */
-    DF_CHANGE_BRUSH = 1,         /* a brush begin/update of a stroke */
-    DF_CHANGE_BRUSH_CANCEL = 2,  /* a stroke cancelled: back to its start */
-    DF_CHANGE_HANDLE_MOVE = 3,   /* an ADMM iterate (progress events) */
-    DF_CHANGE_UNDO = 4,
-    DF_CHANGE_REDO = 5,
-    DF_CHANGE_RESET_REST = 6,    /* rest shape := current positions; positions unchanged */
-    DF_CHANGE_SNAPSHOT = 7       /* full resync (snapshot reply / subscribe snapshot) */
-} df_change_kind;
-#define DF_CHANGE_MAX 7
-
-typedef enum df_disp_encoding {
-    DF_DISP_DENSE = 1,           /* rows are vertices offset .. offset+count-1: f32 x,y,z each */
-    DF_DISP_SPARSE = 2           /* rows are (u32 vertex index, f32 x,y,z) */
-} df_disp_encoding;
-
-typedef enum df_move_status {
-    DF_MOVE_RUNNING = 0,         /* more iterates follow */
-    DF_MOVE_CONVERGED = 1,       /* residual <= tol */
-    DF_MOVE_BUDGET = 2,          /* stopped by max_iters or max_ms */
-    DF_MOVE_SUPERSEDED = 3,      /* a newer move on the same session replaced it */
-    DF_MOVE_FAILED = 4           /* solver error (see stats / log) */
-} df_move_status;
-#define DF_MOVE_STATUS_MAX 4
-
-typedef enum df_mesh_section {   /* get mesh reply chunk contents */
-    DF_SECTION_POSITIONS = 1,    /* current positions, nv rows of f32 x,y,z */
-    DF_SECTION_BASE = 2,         /* base (load-time) positions: the stream's reference, nv rows */
-    DF_SECTION_REST = 3,         /* current rest shape, nv rows of f32 x,y,z */
-    DF_SECTION_ELEMENTS = 4,     /* ne rows of elem_size u32 indices */
-    DF_SECTION_FACES = 5         /* nf rows of 3 u32 indices (tet boundary), may be absent */
-} df_mesh_section;
-#define DF_SECTION_MAX 5
-
-enum { DF_PIN_DISPLACEMENT = 1u << 0,   /* df_msg_brush.pin_flags: u = 0 at each pinned point */
-       DF_PIN_GRADIENT = 1u << 1 };     /* grad u = 0 at each pinned point */
-enum { DF_GET_MESH_REST = 1u << 0, DF_GET_MESH_BASE = 1u << 1 };  /* df_msg_get_mesh.flags */
-enum { DF_SUBSCRIBE_SNAPSHOT = 1u << 0 };                          /* df_msg_subscribe.flags */
+/* OR of every bit of a flags list / count of an enum list. */
+#define DF_X_OR(n, v) | (v)
+#define DF_X_COUNT(n, v) +1
+#define DF_FEAT_ALL (0u DF_WIRE_FEATURES(DF_X_OR)) /* what this build implements */
+#define DF_FEAT_DECODE_MASK (DF_FEAT_ALL | DF_FEAT_RESERVED) /* accepted in hello / hello_reply */
+#define DF_LOAD_OPTS_ALL (0u DF_WIRE_LOAD_OPTS(DF_X_OR))
+#define DF_FMT_MAX (0 DF_WIRE_FORMATS(DF_X_COUNT) - 1)        /* formats are 0..DF_FMT_MAX */
+#define DF_BRUSH_TYPE_MAX (0 DF_WIRE_BRUSH_TYPES(DF_X_COUNT)) /* the 1..MAX enums: */
+#define DF_BP_MAX (0 DF_WIRE_BRUSH_PARAMS(DF_X_COUNT))
+#define DF_ENERGY_MAX (0 DF_WIRE_ENERGIES(DF_X_COUNT))
+#define DF_CHANGE_MAX (0 DF_WIRE_CHANGE_KINDS(DF_X_COUNT))
+#define DF_MOVE_STATUS_MAX (0 DF_WIRE_MOVE_STATUSES(DF_X_COUNT) - 1) /* 0..MAX */
+#define DF_SECTION_MAX (0 DF_WIRE_MESH_SECTIONS(DF_X_COUNT))
+_Static_assert(DF_WFMT_TETGEN == DF_FMT_MAX && DF_BRUSH_AFFINE == DF_BRUSH_TYPE_MAX &&
+               DF_BP_RATIO == DF_BP_MAX && DF_ENERGY_POLYLINE == DF_ENERGY_MAX &&
+               DF_CHANGE_SNAPSHOT == DF_CHANGE_MAX && DF_MOVE_FAILED == DF_MOVE_STATUS_MAX &&
+               DF_SECTION_FACES == DF_SECTION_MAX, "the range-checked enums stay contiguous");
+/* load_mesh `format` on the wire is 0..DF_FMT_MAX (core's DF_FMT_PLY_BINARY is write-only, not a
+ * wire value). load_mesh `options`: unknown bits are refused with EPROTO_RESERVED (a server
+ * without a bit answers that way too, so a client can tell and load without it); the same in
+ * every chunk of an upload. */
 
 /* ------------------------------------------------------------------------------ bodies */
 
@@ -522,15 +436,16 @@ DF_MSG_CODEC(shm_info)
 DF_MSG_CODEC(shm_ref)
 #undef DF_MSG_CODEC
 
-/* Fills `m` with the defaults clients should start from: GRAB, dim 3, falloff 1, ratio 1.1,
- * radius 1, nu 0.5, strength 1, Euler 1 step, stationary, no mirror (normal (1,0,0)), loads 0,
- * no pinned points; session_id 0 (set it). */
+/* Fills `m` with the defaults clients should start from (DF_WIRE_BRUSH_DEFAULTS of
+ * proto/wire_schema.h): GRAB, dim 3, falloff 1, ratio 1.1, radius 1, nu 0.5, strength 1, Euler
+ * 1 step, stationary, no mirror (normal (1,0,0)), loads 0, no pinned points; session_id 0. */
 void df_msg_brush_defaults(df_msg_brush *m);
 
-/* Fills `m` with the paper defaults for `energy` (df_energy; 0 or unknown -> ARAP): w 1e-4,
- * s 0.01, rho 0.1, tol 1e-11, max_iters 500, E 1e7 Pa, Poisson 0.45, strain [0.9, 1.1],
- * bending 1e-3, a_i = 1, no acceleration, Anderson m 5; NEOHOOKEAN: rho 5e5, w 500. No handles
- * (set n_handles/handles), session_id 0. */
+/* Fills `m` with the solver's defaults for `energy` (df_energy; 0 or unknown -> ARAP), from
+ * core/admm/admm_defaults.h (the one place of them: w 1e-4, s 0.01, rho 0.1, tol 1e-11,
+ * max_iters 500, E 1e7 Pa, Poisson 0.45, strain [0.9, 1.1], bending 1e-3, a_i = 1, no
+ * acceleration, Anderson m 5; NEOHOOKEAN: rho 5e5, w 500). No handles (set n_handles/handles),
+ * session_id 0. */
 void df_msg_handles_defaults(df_msg_handles *m, uint8_t energy);
 
 /* Frees what the decoder allocated and zeroes the pointer/count fields; NULL-safe. */

@@ -273,14 +273,8 @@ int df_msg_brush_param_decode(const uint8_t *p, size_t n, df_msg_brush_param *m,
 void df_msg_brush_defaults(df_msg_brush *m)
 {
     memset(m, 0, sizeof *m);
-    m->type = DF_BRUSH_GRAB;
-    m->dim = 3;
-    m->falloff = 1;
-    m->integrator = DF_INTEG_EULER;
-    m->steps = 1;
-    m->radius = 1;
-    m->ratio = 1.1;
-    m->nu = 0.5;
-    m->strength = 1;
+#define DF_X_DEFAULT(field, value) m->field = (value);
+    DF_WIRE_BRUSH_DEFAULTS(DF_X_DEFAULT)
+#undef DF_X_DEFAULT
     m->mirror_normal[0] = 1;
 }

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/admm/admm_defaults.h" /* constants only: the solver owns its defaults */
 #include "proto/codec_util.h"
 #include "proto/messages.h"
 
@@ -334,19 +335,10 @@ void df_msg_handles_defaults(df_msg_handles *m, uint8_t energy)
 {
     memset(m, 0, sizeof *m);
     m->energy = energy >= 1 && energy <= DF_ENERGY_MAX ? energy : DF_ENERGY_ARAP;
-    m->w = 1e-4;
-    m->s = 0.01;
-    m->rho = 0.1;
+#define DF_X_DEFAULT(field, value) m->field = (value);
+    DF_ADMM_DEFAULTS(DF_X_DEFAULT)
     if (m->energy == DF_ENERGY_NEOHOOKEAN) {
-        m->w = 500;
-        m->rho = 5e5;
+        DF_ADMM_DEFAULTS_NEOHOOKEAN(DF_X_DEFAULT)
     }
-    m->tol = 1e-11;
-    m->max_iters = 500;
-    m->youngs = 1e7;
-    m->poisson = 0.45;
-    m->strain_min = 0.9;
-    m->strain_max = 1.1;
-    m->bending = 1e-3;
-    m->anderson_m = 5;
+#undef DF_X_DEFAULT
 }

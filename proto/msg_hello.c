@@ -51,9 +51,9 @@ static int hello_reply_check(const df_msg_hello_reply *m, df_error *err)
     if (m->version < 1 || m->version > m->server_max_version)
         return df_error_set(err, DF_EINVAL, "hello_reply: version %u not in 1..%u", m->version,
                             m->server_max_version);
-    if (m->features & ~DF_FEAT_ALL)
+    if (m->features & ~DF_FEAT_DECODE_MASK) /* the reserved bit 6 (future HID) is accepted */
         return df_error_set(err, DF_EINVAL, "hello_reply: unknown feature bits 0x%x",
-                            m->features & ~DF_FEAT_ALL);
+                            m->features & ~DF_FEAT_DECODE_MASK);
     if (m->max_frame_payload < 1024 || m->max_frame_payload > DF_MAX_FRAME_PAYLOAD)
         return df_error_set(err, DF_EINVAL, "hello_reply: max_frame_payload %u not in 1024..%u",
                             m->max_frame_payload, DF_MAX_FRAME_PAYLOAD);

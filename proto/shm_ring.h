@@ -15,10 +15,9 @@
 
 #include "core/common/df_error.h"
 
-#define DF_SHM_MAGIC "DFSHMRG1"             /* 8 bytes at offset 0 */
-#define DF_SHM_HEADER_BYTES 4096u           /* data starts here (one page) */
-#define DF_SHM_MIN_CAPACITY 4096u           /* smallest ring a server may make */
-#define DF_SHM_MAX_CAPACITY (4ull << 30)    /* largest (4 GiB) */
+/* DF_SHM_MAGIC, DF_SHM_HEADER_BYTES, DF_SHM_MIN_CAPACITY, DF_SHM_MAX_CAPACITY: the ring file's
+ * numbers are wire numbers, in proto/wire_schema.h. */
+#include "proto/wire_schema.h"
 enum {                                      /* header field offsets */
     DF_SHM_OFF_HEADER_BYTES = 8,            /* u32 */
     DF_SHM_OFF_CAPACITY = 16,               /* u64 */

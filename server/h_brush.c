@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/wire_core_map.h"
 #include "server/cache.h"
 #include "server/handlers.h"
 #include "server/job.h"
@@ -49,10 +50,6 @@ static void req_free(df_server *srv, void *body)
     df_msg_brush_free(&r->begin);
     df_stroke_free(r->created);
 }
-
-static const df_kelvinlet_type k_types[] = {DF_KELVINLET_GRAB, DF_KELVINLET_GRAB,
-                                            DF_KELVINLET_TWIST, DF_KELVINLET_SCALE,
-                                            DF_KELVINLET_PINCH, DF_KELVINLET_AFFINE};
 
 /* Computes the displacement of the stroke's brush under `load` at st->startf into disp. A pin
  * LU built here goes to the change (ch->kc); an existing one (s->kc, the running job's cache
@@ -286,25 +283,16 @@ static void begin_work_inner(df_job *j)
     }
     const df_msg_brush *m = &r->begin;
     df_kelvinlet_brush *b = &st->brush;
-    df_kelvinlet_brush_defaults(b);
-    b->type = k_types[m->type];
-    b->dim = m->dim;
-    b->order = m->falloff;
-    b->ratio = m->ratio;
-    b->radius = m->radius;
-    b->nu = m->nu;
-    memcpy(b->centre, m->center, sizeof b->centre);
-    b->mirror = m->has_mirror;
-    memcpy(b->mirror_point, m->mirror_point, sizeof b->mirror_point);
-    memcpy(b->mirror_normal, m->mirror_normal, sizeof b->mirror_normal);
-    b->integrator = m->integrator == DF_INTEG_RK4 ? DF_KELVINLET_RK4 : DF_KELVINLET_EULER;
-    b->steps = m->steps;
-    b->moving = m->moving;
+    int pin_flags = 0;
+    if ((j->rc = df_wire_brush_to_core(m, b, &j->err)) != DF_OK) return;
+    if (df_wire_pin_flags_to_core(m->pin_flags, &pin_flags) != DF_OK) {
+        j->rc = df_error_set(&j->err, DF_EINVAL, "brush: pin_flags 0x%x", m->pin_flags);
+        return;
+    }
     st->strength = m->strength;
     st->conn_id = j->conn_id;
     st->n_pins = m->n_pinned;
-    st->pin_flags = ((m->pin_flags & DF_PIN_DISPLACEMENT) ? DF_KELVINLET_PIN_DISPLACEMENT : 0) |
-                    ((m->pin_flags & DF_PIN_GRADIENT) ? DF_KELVINLET_PIN_GRADIENT : 0);
+    st->pin_flags = pin_flags;
     if (m->n_pinned) memcpy(st->pins, m->pinned, 3 * (size_t)m->n_pinned * sizeof(double));
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];

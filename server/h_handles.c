@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "proto/wire_core_map.h"
 #include "server/cache.h"
 #include "server/conn.h"
 #include "server/handlers.h"
@@ -70,13 +71,19 @@ static void set_work(df_job *j)
                                  "out of range (%d vertices)", i, m->handles[i], s->nv);
             return;
         }
+    df_admm_energy energy;
+    if (df_wire_energy_to_core(m->energy, &energy) != DF_OK) {
+        j->rc = df_error_set(&j->err, DF_EINVAL, "handles: energy %u not in 1..%d", m->energy,
+                             DF_ENERGY_MAX);
+        return;
+    }
     df_handleset *hs = calloc(1, sizeof *hs);
     if (!hs) {
         j->rc = df_error_set(&j->err, DF_ENOMEM, "out of memory");
         return;
     }
     r->hs = hs;
-    df_admm_params_default(&hs->params, (df_admm_energy)m->energy);
+    df_admm_params_default(&hs->params, energy);
     hs->params.w = m->w;
     hs->params.s = m->s;
     hs->params.rho = m->rho;
@@ -152,7 +159,13 @@ static void get_done(df_job *j)
     df_msg_handles m;
     memset(&m, 0, sizeof m);
     m.session_id = s->id;
-    m.energy = (uint8_t)hs->params.energy;
+    if (df_core_energy_to_wire(hs->params.energy, &m.energy) != DF_OK) {
+        df_error e;
+        df_error_set(&e, DF_EINTERNAL, "handles_get: energy %d has no wire value",
+                     (int)hs->params.energy);
+        df_req_fail(&j->req, &e);
+        return;
+    }
     m.area_weighting = (uint8_t)hs->params.area_weighting;
     m.accelerate = (uint8_t)hs->params.accelerate;
     m.anderson_m = (uint8_t)hs->params.anderson_m;

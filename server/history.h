@@ -18,8 +18,6 @@
 
 #include "core/common/df_error.h"
 
-#define DF_HISTORY_DEFAULT_MAX 64
-
 /* One step: state k -> state k + 1. */
 typedef struct df_history_step {
     uint32_t count;    /* vertices changed */

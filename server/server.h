@@ -21,7 +21,6 @@ struct df_job;
 struct df_change;
 
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
-#define DF_CONN_MAX_SUBS 64            /* sessions one connection may subscribe to */
 
 typedef struct df_conn {
     union {

@@ -7,12 +7,17 @@
 #   FROM               TO
 #   core/common/       core/common/                        (the error type: depends on nothing)
 #   core/              core/                               (math only: no proto, client, server)
+#   proto/wire_core_map.h  proto/ core/                    (header-only: the one mapping of each
+#                                                           wire enum to core's; see below)
 #   proto/             proto/ core/common/ core/mesh/      (the wire format carries meshes: df_mesh,
-#                                                           mesh_io; never a solver)
+#                      core/admm/admm_defaults.h            mesh_io; never a solver; the ADMM
+#                                                           defaults header is macros only)
 #   client/deformctl/  client/ proto/ core/                (the CLI; core/kelvinlet for its local
 #                                                           brush check)
 #   client/            client/ proto/ core/common/ core/mesh/   (libdeformclient: no solver, no
 #                                                           server; never client/deformctl/)
+# proto/wire_core_map.h includes solver headers, so only server/ and client/deformctl/ (and
+# tests) may include it: never the rest of proto/ nor libdeformclient (client/ outside deformctl).
 #   server/            server/ proto/ core/                (the daemon)
 #   tests/             anything                            (tests may reach every layer)
 # System headers (#include <...>) are not checked. A file under a folder not listed fails (a new
@@ -27,9 +32,12 @@ allowed() { # $1 = file, $2 = included path -> status 0 when allowed
     tests/*) return 0 ;;
     core/common/*) [[ $inc == core/common/* ]] ;;
     core/*) [[ $inc == core/* ]] ;;
-    proto/*) [[ $inc == proto/* || $inc == core/common/* || $inc == core/mesh/* ]] ;;
+    proto/wire_core_map.h) [[ $inc == proto/* || $inc == core/* ]] ;;
+    proto/*) [[ ( $inc == proto/* && $inc != proto/wire_core_map.h ) || $inc == core/common/* \
+                || $inc == core/mesh/* || $inc == core/admm/admm_defaults.h ]] ;;
     client/deformctl/*) [[ $inc == client/* || $inc == proto/* || $inc == core/* ]] ;;
-    client/*) [[ ( $inc == client/* && $inc != client/deformctl/* ) || $inc == proto/* \
+    client/*) [[ ( $inc == client/* && $inc != client/deformctl/* ) \
+                 || ( $inc == proto/* && $inc != proto/wire_core_map.h ) \
                  || $inc == core/common/* || $inc == core/mesh/* ]] ;;
     server/*) [[ $inc == server/* || $inc == proto/* || $inc == core/* ]] ;;
     *) return 1 ;;

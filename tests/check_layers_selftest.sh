@@ -15,7 +15,10 @@ clean_tree() { # $1 = dir: one legitimate include per layer
   put "$1/core/kelvinlet/k.c" '#include "core/kelvinlet/k.h"' '#include "core/common/df_error.h"'
   put "$1/proto/messages.h" '#include "core/mesh/mesh.h"' '#include "proto/frame.h"'
   put "$1/client/dc.c" '#include "proto/messages.h"' '#include "client/dc.h"'
-  put "$1/client/deformctl/cmd.c" '#include "core/kelvinlet/k.h"' '#include "client/dc.h"'
+  put "$1/client/deformctl/cmd.c" '#include "core/kelvinlet/k.h"' '#include "client/dc.h"' \
+    '#include "proto/wire_core_map.h"'
+  put "$1/proto/wire_core_map.h" '#include "core/kelvinlet/k.h"' '#include "proto/messages.h"'
+  put "$1/proto/msg_h.c" '#include "core/admm/admm_defaults.h"'
   put "$1/server/net/conn.c" '#include "server/exec/pool.h"' '#include "core/admm/admm.h"'
   put "$1/tests/unit/x/test_x.c" '#include "server/net/conn.h"'
 }
@@ -41,6 +44,9 @@ case_bad core/admm/sub/a.c server/session.h
 case_bad core/common/e.c core/mesh/mesh.h
 case_bad proto/p.c core/kelvinlet/kelvinlet.h
 case_bad proto/p.c client/dc.h
+case_bad proto/p.c proto/wire_core_map.h
+case_bad proto/p.c core/admm/admm.h
+case_bad client/dc_w.c proto/wire_core_map.h
 case_bad client/dc_x.c server/session.h
 case_bad client/sub/dc_y.c core/kelvinlet/kelvinlet.h
 case_bad client/dc_z.c client/deformctl/ctl.h

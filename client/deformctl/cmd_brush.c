@@ -58,6 +58,10 @@ static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
 
 static const char *const TYPES[] = {"grab", "twist", "scale", "pinch", "affine", NULL};
 static const char *const INTEGRATORS[] = {"euler", "rk4", NULL};
+/* --type / --integrator name i is the wire value i + 1 (the wire enums are 1..MAX, contiguous) */
+_Static_assert(sizeof TYPES / sizeof TYPES[0] - 1 == DF_BRUSH_TYPE_MAX, "one name per brush type");
+_Static_assert(sizeof INTEGRATORS / sizeof INTEGRATORS[0] - 1 == DF_INTEG_RK4,
+               "one name per integrator");
 static const char *const PIN_MODES[] = {"displacement", "gradient", "both", NULL};
 
 /* The load option each type needs, indexed by type - 1. */

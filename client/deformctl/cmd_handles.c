@@ -6,6 +6,7 @@
 #include <strings.h>
 
 #include "client/dc_files.h"
+#include "core/admm/admm_defaults.h"
 #include "client/deformctl/ctl.h"
 
 enum {
@@ -13,22 +14,28 @@ enum {
     H_ACCEL, H_AREA, H_COUNT
 };
 
+/* Defaults in the help text come from core/admm/admm_defaults.h (the values themselves from
+ * df_msg_handles_defaults). */
+#define S_(x) #x
+#define S(x) S_(x)
 static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
     CTL_GLOBAL_OPTS,
     {"energy", 1, "--energy arap|acap|neohookean|cloth|polyline   elastic energy (required)"},
     {"handles", 1, "--handles FILE     handle vertices, one 0-based index per line (required)"},
-    {"w", 1, "--w W              SC-L1 locality weight >= 0 (default 1e-4; neohookean 500)"},
-    {"s", 1, "--s S              SC-L1 threshold distance > 0, mesh units (default 0.01)"},
-    {"rho", 1, "--rho RHO          ADMM penalty > w/s (default 0.1; neohookean 5e5)"},
-    {"iters", 1, "--iters N          default iteration budget of a move (default 500)"},
-    {"tol", 1, "--tol T            residual tolerance >= 0 (default 1e-11)"},
-    {"youngs", 1, "--youngs E         neohookean Young's modulus, Pa (default 1e7)"},
-    {"poisson", 1, "--poisson NU       neohookean Poisson ratio in (-1, 0.5) (default 0.45)"},
+    {"w", 1, "--w W              SC-L1 locality weight >= 0 (default " S(DF_ADMM_DEFAULT_W) "; neohookean " S(DF_ADMM_DEFAULT_NH_W) ")"},
+    {"s", 1, "--s S              SC-L1 threshold distance > 0, mesh units (default " S(DF_ADMM_DEFAULT_S) ")"},
+    {"rho", 1, "--rho RHO          ADMM penalty > w/s (default " S(DF_ADMM_DEFAULT_RHO) "; neohookean " S(DF_ADMM_DEFAULT_NH_RHO) ")"},
+    {"iters", 1, "--iters N          default iteration budget of a move (default " S(DF_ADMM_DEFAULT_MAX_ITERS) ")"},
+    {"tol", 1, "--tol T            residual tolerance >= 0 (default " S(DF_ADMM_DEFAULT_TOL) ")"},
+    {"youngs", 1, "--youngs E         neohookean Young's modulus, Pa (default " S(DF_ADMM_DEFAULT_YOUNGS) ")"},
+    {"poisson", 1, "--poisson NU       neohookean Poisson ratio in (-1, 0.5) (default " S(DF_ADMM_DEFAULT_POISSON) ")"},
     {"accelerate", 0, "--accelerate       Anderson-accelerated ADMM"},
     {"area-weighting", 0, "--area-weighting   weight the locality term by vertex area/volume"},
 };
 
 static const char *const ENERGIES[] = {"arap", "acap", "neohookean", "cloth", "polyline", NULL};
+/* --energy name i is the wire value i + 1 (df_energy is 1..DF_ENERGY_MAX, contiguous) */
+_Static_assert(sizeof ENERGIES / sizeof ENERGIES[0] - 1 == DF_ENERGY_MAX, "one name per energy");
 
 /* Each numeric option in its range; the message names the option and the value given. */
 static int check_ranges(const dc_cli_args *a, const df_msg_handles *h, df_error *e)

@@ -16,8 +16,9 @@
 #define DC_BRUSH_LOCAL_PIN_CHECK_MAX 64u
 
 /* Converts a begin message `b` and the cumulative load `u` into the engine's brush description,
- * the way the daemon does (loads multiplied by b->strength; df_brush_type 1..5 -> GRAB, TWIST,
- * SCALE, PINCH, AFFINE). No validation. */
+ * the way the daemon does (df_wire_brush_to_core of proto/wire_core_map.h, loads multiplied by
+ * b->strength). No validation: a type or integrator outside the wire enums gives type -1, which
+ * the engine refuses. */
 void dc_brush_to_kelvinlet(const df_msg_brush *b, const df_msg_brush_update *u,
                            df_kelvinlet_brush *out);
 

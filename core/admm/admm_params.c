@@ -2,6 +2,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/admm/admm_defaults.h"
 #include "core/admm/admm_internal.h"
 
 void df_admm_params_default(df_admm_params *p, df_admm_energy energy)
@@ -9,23 +10,12 @@ void df_admm_params_default(df_admm_params *p, df_admm_energy energy)
     if (!p) return;
     memset(p, 0, sizeof(*p));
     p->energy = energy;
-    p->w = 1e-4;
-    p->s = 0.01;
-    p->rho = 0.1;
-    p->tol = 1e-11;
-    p->max_iters = 500;
-    p->youngs = 1e7;
-    p->poisson = 0.45;
-    p->area_weighting = 0;
-    p->accelerate = 0;
-    p->anderson_m = 5;
-    p->strain_min = 0.9;
-    p->strain_max = 1.1;
-    p->bending = 1e-3;
+#define DF_X_DEFAULT(field, value) p->field = (value);
+    DF_ADMM_DEFAULTS(DF_X_DEFAULT)
     if (energy == DF_ADMM_NEOHOOKEAN) {
-        p->rho = 5e5;
-        p->w = 500;
+        DF_ADMM_DEFAULTS_NEOHOOKEAN(DF_X_DEFAULT)
     }
+#undef DF_X_DEFAULT
 }
 
 int admm_validate_params(const df_admm_params *p, df_error *err)

@@ -11,24 +11,21 @@ $BUILD/bin/deformd and printed with their targets by `make bench`:
   3. the writer's update round trip while a silent subscriber overflows and is dropped
      (test_concurrency.py): median of the last 10 against the first 5 (target < max(10x, 200 ms)).
 Every line reads "what: measured (target ...) ok|MISS". Exit status 0 when every measurement ran
-(targets are reported, not enforced). Environment: BUILD (default build), MESHES.
+(targets are reported, not enforced). Environment: BUILD (default build), MESHES, PYTHONPATH (see make bench).
 """
-import os
 import socket
 import sys
 import tempfile
 import threading
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tests", "integration"))
-
-from conftest import Daemon  # noqa: E402  (also puts client/python on sys.path)
-from deformd_client import Brush, frame as fr, messages as m  # noqa: E402
-from helpers import grid_obj, obj_bytes_positions  # noqa: E402
-import test_compute  # noqa: E402
-import test_inline  # noqa: E402
+# The client package and the integration suite's modules come from PYTHONPATH (make bench sets
+# client/python:tests/integration), as tests/pytest.ini gives them to pytest: no sys.path edits.
+from conftest import Daemon
+from deformd_client import Brush, frame as fr, messages as m
+from helpers import grid_obj, obj_bytes_positions
+import test_compute
+import test_inline
 
 
 def report(what, value, unit, target, ok):

@@ -13,18 +13,14 @@ import os
 import signal
 import socket
 import subprocess
-import sys
 import tempfile
 import time
 
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "client", "python"))
-sys.path.insert(0, os.path.dirname(__file__))
-
-from deformd_client import Client, DeformdError, FrameDecoder, encode_frame  # noqa: E402
-from deformd_client.messages import HELLO, encode_hello  # noqa: E402
+from deformd_client import Client, DeformdError, FrameDecoder, encode_frame
+from deformd_client.messages import HELLO, encode_hello
 
 BUILD = os.path.join(ROOT, os.environ.get("BUILD", "build"))
 DEFORMD = os.path.join(BUILD, "bin", "deformd")

@@ -8,20 +8,27 @@
 
 Errors from the daemon raise DeformdError(code, name, message).
 """
-from .client import Client, MeshData, SessionClosed, ShmLost, ShmRing
-from .errors import ConnectionClosed, DeformdError, error_name
+from .client import Client, MeshData, SessionClosed, ShmLost
+from .errors import ConnectionClosed, DeformdError, ErrorCode, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
 from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, MoveResult,
                        SessionInfo, ShmInfo)
-from .stream import Disp, Progress
+from .schema import (BrushParam, BrushType, ChangeKind, DispEncoding, Energy, Feature, Format,
+                     FrameFlag, GetMeshFlag, Integrator, LoadOpt, LoadSource, MeshKind,
+                     MeshSection, MoveStatus, MsgType, PinFlag, SubscribeFlag)
+from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
 __all__ = [
-    "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "error_name",
+    "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "ErrorCode",
+    "error_name",
     "Frame", "FrameDecoder", "FrameError", "encode_frame", "encode_header", "MeshState",
     "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "LoadReport",
     "MoveResult",
     "Progress", "ProtocolError", "SessionInfo", "ShmInfo", "ShmLost", "ShmRing",
+    "BrushParam", "BrushType", "ChangeKind", "DispEncoding", "Energy", "Feature", "Format",
+    "FrameFlag", "GetMeshFlag", "Integrator", "LoadOpt", "LoadSource", "MeshKind", "MeshSection",
+    "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
 ]
 __version__ = "0.1.0"

@@ -16,10 +16,8 @@ shared-memory ring the daemon writes once for all subscribers (PROTOCOL.md 6.1);
 them from the ring transparently, and reports frames overwritten before they were read as ShmLost
 events (resync with snapshot()).
 """
-import mmap
 import os
 import socket
-import struct
 import time
 from array import array
 from collections import deque
@@ -29,6 +27,7 @@ from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, 
 from . import frame as fr
 from . import messages as m
 from . import stream as st
+from .stream import ShmRing
 from .errors import ConnectionClosed, DeformdError, error_name
 from .wire import ProtocolError
 
@@ -82,102 +81,6 @@ class ShmLost:
 
 
 Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost]
-
-_SHM_HEADER = struct.Struct("<8sIIQQQQ")   # magic, header_bytes, reserved, capacity, session,
-#                                            valid_from, head
-_U64 = struct.Struct("<Q")
-_SHM_OFF_VALID_FROM = 32
-_SHM_OFF_HEAD = 40
-
-
-class ShmRing:
-    """A read-only mapping of one session's shared-memory stream ring (PROTOCOL.md 6.1), made by
-    Client.stream_shm. `frames` and `lost` count the references read from it and the frames
-    found overwritten. Raises OSError when the file cannot be opened or mapped and
-    ProtocolError when its header does not match `info`."""
-
-    def __init__(self, info: m.ShmInfo) -> None:
-        self.info = info
-        self.frames = 0
-        self.lost = 0
-        fd = os.open(info.path, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
-        try:
-            size = os.fstat(fd).st_size
-            if size < m.SHM_HEADER_BYTES + info.capacity:
-                raise ProtocolError("shm ring %s: %d bytes, need %d header + %d data"
-                                    % (info.path, size, m.SHM_HEADER_BYTES, info.capacity))
-            self.map = mmap.mmap(fd, 0, access=mmap.ACCESS_READ)
-        finally:
-            os.close(fd)
-        try:
-            self._check()
-        except ProtocolError:
-            self.map.close()
-            raise
-
-    def _check(self) -> None:
-        magic, header_bytes, reserved, capacity, sid, _, _ = _SHM_HEADER.unpack_from(self.map, 0)
-        what = "shm ring %s" % self.info.path
-        if magic != m.SHM_MAGIC:
-            raise ProtocolError("%s: magic %r, not %r" % (what, magic, m.SHM_MAGIC))
-        if header_bytes != m.SHM_HEADER_BYTES or reserved != 0:
-            raise ProtocolError("%s: header_bytes %d (reserved %d), not %d"
-                                % (what, header_bytes, reserved, m.SHM_HEADER_BYTES))
-        if capacity != self.info.capacity:
-            raise ProtocolError("%s: capacity %d, the reply said %d"
-                                % (what, capacity, self.info.capacity))
-        if sid != self.info.session_id:
-            raise ProtocolError("%s: session %d, the reply said %d"
-                                % (what, sid, self.info.session_id))
-        if len(self.map) < header_bytes + capacity:
-            raise ProtocolError("%s: %d bytes mapped, need %d"
-                                % (what, len(self.map), header_bytes + capacity))
-
-    def valid_from(self) -> int:
-        """Stream positions below this may have been overwritten."""
-        return _U64.unpack_from(self.map, _SHM_OFF_VALID_FROM)[0]
-
-    def head(self) -> int:
-        """Stream position after the last frame the daemon wrote."""
-        return _U64.unpack_from(self.map, _SHM_OFF_HEAD)[0]
-
-    def read(self, position: int, length: int) -> Optional[fr.Frame]:
-        """The frame an SHM_REF (position, length) names, or None when it was overwritten before
-        or while it was copied (lost). ProtocolError when (position, length) cannot be a frame of
-        this ring or the bytes are not one whole frame.
-
-        Python issues no fences: the protocol's acquire loads are approximated by reading
-        valid_from with struct.unpack_from before and after copying the bytes."""
-        cap = self.info.capacity
-        off = position % cap
-        if off + length > cap:
-            raise ProtocolError("shm_ref: frame of %d bytes at %d crosses the end of the %d-byte"
-                                " ring" % (length, position, cap))
-        if position + length > self.head():
-            raise ProtocolError("shm_ref: frame [%d, +%d) beyond the ring's head %d"
-                                % (position, length, self.head()))
-        if position < self.valid_from():
-            self.lost += 1
-            return None
-        start = m.SHM_HEADER_BYTES + off
-        head = self.map[start:start + fr.HEADER_SIZE]
-        payload = self.map[start + fr.HEADER_SIZE:start + length]
-        if position < self.valid_from():
-            self.lost += 1
-            return None
-        try:
-            mtype, flags, rid, plen, ver = fr.decode_header(head)
-        except fr.FrameError as e:
-            raise ProtocolError("shm ring frame at %d: %s" % (position, e)) from None
-        if fr.HEADER_SIZE + plen != length:
-            raise ProtocolError("shm ring frame at %d: %d payload bytes, the reference says %d"
-                                % (position, plen, length - fr.HEADER_SIZE))
-        self.frames += 1
-        return fr.Frame(mtype, flags, rid, payload, ver)
-
-    def close(self) -> None:
-        self.map.close()
-
 
 class Client:
     """A connection to deformd. Not thread-safe: use one Client per thread."""

@@ -1,40 +1,38 @@
 """Error codes of deformd (core/common/df_error.h, proto/wire_error.h) and the client's exceptions."""
 
-OK = 0
-EINVAL = -1
-ENOMEM = -2
-ESINGULAR = -3
-EIO = -4
-EFORMAT = -5
-ELIMIT = -6
-ENOTFOUND = -7
-ESTATE = -8
-EUNSUPPORTED = -9
-EINTERNAL = -10
-EEXIST = -11
-# protocol codes (proto/wire_error.h)
-EPROTO_BADMAGIC = -100
-EPROTO_BADVERSION = -101
-EPROTO_BADTYPE = -102
-EPROTO_TOOLARGE = -103
-EPROTO_TRUNCATED = -104
-EPROTO_TRAILING = -105
-EPROTO_BADFLAGS = -106
-EPROTO_RESERVED = -107
-EPROTO_BUSY = -108
-EPROTO_AUTH = -109
-EPROTO_CHUNK = -110
+from enum import IntEnum
 
-ERROR_NAMES = {
-    OK: "OK", EINVAL: "EINVAL", ENOMEM: "ENOMEM", ESINGULAR: "ESINGULAR", EIO: "EIO",
-    EFORMAT: "EFORMAT", ELIMIT: "ELIMIT", ENOTFOUND: "ENOTFOUND", ESTATE: "ESTATE",
-    EUNSUPPORTED: "EUNSUPPORTED", EINTERNAL: "EINTERNAL", EEXIST: "EEXIST",
-    EPROTO_BADMAGIC: "EPROTO_BADMAGIC", EPROTO_BADVERSION: "EPROTO_BADVERSION",
-    EPROTO_BADTYPE: "EPROTO_BADTYPE", EPROTO_TOOLARGE: "EPROTO_TOOLARGE",
-    EPROTO_TRUNCATED: "EPROTO_TRUNCATED", EPROTO_TRAILING: "EPROTO_TRAILING",
-    EPROTO_BADFLAGS: "EPROTO_BADFLAGS", EPROTO_RESERVED: "EPROTO_RESERVED",
-    EPROTO_BUSY: "EPROTO_BUSY", EPROTO_AUTH: "EPROTO_AUTH", EPROTO_CHUNK: "EPROTO_CHUNK",
-}
+
+class ErrorCode(IntEnum):
+    """Wire error codes: core/common/df_error.h (-1 ..) and proto/wire_error.h (-100 ..);
+    tests/integration/test_schema.py checks them against both headers and PROTOCOL.md 7."""
+    OK = 0
+    EINVAL = -1
+    ENOMEM = -2
+    ESINGULAR = -3
+    EIO = -4
+    EFORMAT = -5
+    ELIMIT = -6
+    ENOTFOUND = -7
+    ESTATE = -8
+    EUNSUPPORTED = -9
+    EINTERNAL = -10
+    EEXIST = -11
+    EPROTO_BADMAGIC = -100
+    EPROTO_BADVERSION = -101
+    EPROTO_BADTYPE = -102
+    EPROTO_TOOLARGE = -103
+    EPROTO_TRUNCATED = -104
+    EPROTO_TRAILING = -105
+    EPROTO_BADFLAGS = -106
+    EPROTO_RESERVED = -107
+    EPROTO_BUSY = -108
+    EPROTO_AUTH = -109
+    EPROTO_CHUNK = -110
+
+
+globals().update(ErrorCode.__members__)   # the flat names: errors.EINVAL, errors.EPROTO_BUSY, ...
+ERROR_NAMES = {int(c): c.name for c in ErrorCode}
 
 
 def error_name(code: int) -> str:

@@ -16,15 +16,13 @@ Pure functions and a small incremental decoder; no I/O here.
 import struct
 from typing import List, NamedTuple, Optional
 
-FRAME_MAGIC = 0x444D4644
-PROTO_VERSION = 1
-HEADER_SIZE = 24
-MAX_FRAME_PAYLOAD = 64 << 20
+from .schema import FRAME_HEADER_SIZE as HEADER_SIZE
+from .schema import FRAME_MAGIC, MAX_FRAME_PAYLOAD, PROTO_VERSION, FrameFlag  # noqa: F401
 
-FLAG_REPLY = 1 << 0
-FLAG_EVENT = 1 << 1
-FLAG_ERROR = 1 << 2
-FLAG_MORE = 1 << 3
+FLAG_REPLY = FrameFlag.REPLY
+FLAG_EVENT = FrameFlag.EVENT
+FLAG_ERROR = FrameFlag.ERROR
+FLAG_MORE = FrameFlag.MORE
 
 _HEADER = struct.Struct("<IHHHHQI")
 assert _HEADER.size == HEADER_SIZE

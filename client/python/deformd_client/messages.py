@@ -9,84 +9,45 @@ import struct
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from .wire import ProtocolError, Reader, f64_rows, pack_str, u32_array, vec
+from . import schema
+from .schema import SHM_HEADER_BYTES, SHM_MAGIC, SHM_MIN_CAPACITY  # noqa: F401
+from .schema import (MAX_AFFINE_SETS, MAX_HANDLES, MAX_PATH_LEN, BrushParam,  # noqa: F401
+                     BrushType, ChangeKind, DispEncoding, Energy, Feature, Format, GetMeshFlag,
+                     Integrator, LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType,
+                     PinFlag, SubscribeFlag)
+from .wire import ProtocolError, Reader, enum_value, f64_rows, pack_str, u32_array, vec
 
-# ------------------------------------------------------------------ message types
-HELLO = 0x0001
-AUTH = 0x0002
-PING = 0x0003
-LOAD_MESH = 0x0010
-LIST_SESSIONS = 0x0011
-OPEN_SESSION = 0x0012
-CLOSE_SESSION = 0x0013
-SUBSCRIBE = 0x0014
-UNSUBSCRIBE = 0x0015
-STREAM_SHM = 0x0016
-BRUSH_BEGIN = 0x0020
-BRUSH_UPDATE = 0x0021
-BRUSH_END = 0x0022
-BRUSH_CANCEL = 0x0023
-SET_BRUSH_PARAM = 0x0024
-HANDLES_SET = 0x0030
-HANDLES_MOVE = 0x0031
-RESET_REST = 0x0032
-UNDO = 0x0033
-REDO = 0x0034
-HANDLES_GET = 0x0035
-GET_MESH = 0x0040
-SNAPSHOT = 0x0041
-STATS = 0x0042
-DISPLACEMENT = 0x0080
-PROGRESS = 0x0081
-SESSION_CLOSED = 0x0082
-SHM_REF = 0x0083
-ERROR = 0x00FF
-
-TYPE_NAMES = {v: k.lower() for k, v in dict(globals()).items()
-              if k.isupper() and isinstance(v, int) and 0 < v <= 0xFF}
-
-# ------------------------------------------------------------------ limits (messages.h)
-MAX_MESH_VERTICES = 8 << 20
-MAX_MESH_ELEMENTS = 32 << 20
-MAX_MESH_BYTES = 1 << 30
-MAX_PENDING_REQUESTS = 64
-MAX_NAME_LEN = 255
-MAX_PATH_LEN = 4095
-MAX_PING_BYTES = 65536
-MAX_PINNED_POINTS = 2048
-MAX_BRUSH_STEPS = 1024
-MAX_FALLOFF = 8
-STREAM_CHUNK_BYTES = 16 << 20
+# ------------------------------------------------------------------ numbers (schema.py)
+# Every wire number lives in schema.py (mirror of proto/wire_schema.h, checked by a test); the
+# flat names below (HELLO, MAX_FALLOFF, FEAT_TCP, CHANGE_UNDO, ...) are aliases of its members.
+globals().update({t.name: t for t in MsgType})
+TYPE_NAMES = {int(t): t.name.lower() for t in MsgType}
+globals().update(schema.LIMITS)
 LOAD_CHUNK_BYTES = 8 << 20     # bytes of mesh data per load chunk this client sends
 
-# ------------------------------------------------------------------ enums
-FEAT_KELVINLET, FEAT_ADMM, FEAT_PATH_LOAD, FEAT_AUTH = 1, 2, 4, 8
-FEAT_SPARSE_STREAM, FEAT_TCP, FEAT_HID, FEAT_SHM_STREAM = 16, 32, 64, 128
-
-FMT_AUTO, FMT_OBJ, FMT_OFF, FMT_PLY, FMT_MEDIT, FMT_TETGEN = range(6)
-FORMAT_BY_EXT = {".obj": FMT_OBJ, ".off": FMT_OFF, ".ply": FMT_PLY, ".mesh": FMT_MEDIT,
-                 ".node": FMT_TETGEN}
-LOAD_INLINE, LOAD_PATH = 0, 1
-LOAD_OPT_EXT = 1               # load_mesh options: file_name follows; reply carries a LoadReport
-LOAD_OPT_2D = 2                # load_mesh options: a 2D session even if the file gives z (z all 0)
+globals().update({"FEAT_" + f.name: f for f in Feature})
+globals().update({"FMT_" + f.name: f for f in Format})
+FORMAT_BY_EXT = {".obj": Format.OBJ, ".off": Format.OFF, ".ply": Format.PLY,
+                 ".mesh": Format.MEDIT, ".node": Format.TETGEN}
+LOAD_INLINE, LOAD_PATH = LoadSource.INLINE, LoadSource.PATH
+LOAD_OPT_EXT = LoadOpt.EXT       # load_mesh options: file_name follows; reply has a LoadReport
+LOAD_OPT_2D = LoadOpt.TWO_D      # load_mesh options: a 2D session even if the file gives z
 LOAD_OPTS_ALL = LOAD_OPT_EXT | LOAD_OPT_2D
 
-BRUSH_TYPES = {"grab": 1, "twist": 2, "scale": 3, "pinch": 4, "affine": 5}
-INTEGRATORS = {"euler": 1, "rk4": 2}
-BRUSH_PARAMS = {"radius": 1, "nu": 2, "strength": 3, "falloff": 4, "ratio": 5}
-ENERGIES = {"arap": 1, "acap": 2, "neohookean": 3, "cloth": 4, "polyline": 5}
+BRUSH_TYPES = {t.name.lower(): t for t in BrushType}
+INTEGRATORS = {t.name.lower(): t for t in Integrator}
+BRUSH_PARAMS = {t.name.lower(): t for t in BrushParam}
+ENERGIES = {t.name.lower(): t for t in Energy}
 
-CHANGE_BRUSH, CHANGE_BRUSH_CANCEL, CHANGE_HANDLE_MOVE = 1, 2, 3
-CHANGE_UNDO, CHANGE_REDO, CHANGE_RESET_REST, CHANGE_SNAPSHOT = 4, 5, 6, 7
-CHANGE_NAMES = {1: "brush", 2: "brush_cancel", 3: "handle_move", 4: "undo", 5: "redo",
-                6: "reset_rest", 7: "snapshot"}
-DISP_DENSE, DISP_SPARSE = 1, 2
-MOVE_RUNNING, MOVE_CONVERGED, MOVE_BUDGET, MOVE_SUPERSEDED, MOVE_FAILED = range(5)
-MOVE_STATUS_NAMES = {0: "running", 1: "converged", 2: "budget", 3: "superseded", 4: "failed"}
-SECTION_POSITIONS, SECTION_BASE, SECTION_REST, SECTION_ELEMENTS, SECTION_FACES = 1, 2, 3, 4, 5
-GET_MESH_REST, GET_MESH_BASE = 1, 2
-SUBSCRIBE_SNAPSHOT = 1
-ELEM_SIZE = {1: 2, 2: 3, 3: 4}
+globals().update({"CHANGE_" + k.name: k for k in ChangeKind})
+CHANGE_NAMES = {int(k): k.name.lower() for k in ChangeKind}
+DISP_DENSE, DISP_SPARSE = DispEncoding.DENSE, DispEncoding.SPARSE
+globals().update({"MOVE_" + k.name: k for k in MoveStatus})
+MOVE_STATUS_NAMES = {int(k): k.name.lower() for k in MoveStatus}
+globals().update({"SECTION_" + k.name: k for k in MeshSection})
+GET_MESH_REST, GET_MESH_BASE = GetMeshFlag.REST, GetMeshFlag.BASE
+SUBSCRIBE_SNAPSHOT = SubscribeFlag.SNAPSHOT
+ELEM_SIZE = {MeshKind.POLYLINE: 2, MeshKind.TRIANGLE: 3, MeshKind.TET: 4}
 
 
 # ------------------------------------------------------------------ bodies
@@ -116,7 +77,9 @@ def decode_hello_reply(p: bytes) -> HelloReply:
     v = r.take("HHIIIIIIQQBB")
     name = r.str()
     r.end()
-    return HelloReply(*v[:11], server_name=name)
+    if v[10] > 1 or v[11]:
+        raise ProtocolError("hello_reply: auth_required %d / reserved %d" % (v[10], v[11]))
+    return HelloReply(v[0], v[1], Feature(v[2]), *v[3:11], server_name=name)
 
 
 def encode_auth(method: int, token: bytes) -> bytes:
@@ -124,10 +87,10 @@ def encode_auth(method: int, token: bytes) -> bytes:
 
 
 def decode_error(p: bytes):
-    """Returns (code, message)."""
+    """Returns (code, message); bytes of the message that are not UTF-8 read as U+FFFD."""
     r = Reader(p, "error")
     code = r.take("i")
-    msg = r.str()
+    msg = r.text()
     r.end()
     return code, msg
 
@@ -197,8 +160,9 @@ class LoadReport:
 
 
 def _read_session_info(r: Reader) -> SessionInfo:
-    v = r.take("QQBBHIIII")
-    return SessionInfo(*v, name=r.str())
+    sid, ver, kind, *rest = r.take("QQBBHIIII")
+    return SessionInfo(sid, ver, enum_value(MeshKind, kind, "session_info: kind"), *rest,
+                       name=r.str())
 
 
 def decode_session_info(p: bytes) -> SessionInfo:
@@ -245,27 +209,27 @@ def decode_ack(p: bytes) -> Ack:
 @dataclass
 class Brush:
     """Every Kelvinlet brush parameter of a stroke (proto/messages.h df_msg_brush)."""
-    type: str = "grab"
+    type: str = schema.BRUSH_DEFAULTS["type"].name.lower()
     center: Sequence[float] = (0.0, 0.0, 0.0)
     move: Optional[Sequence[float]] = None
     twist: Optional[Sequence[float]] = None
     scale: float = 0.0
     matrix: Optional[Sequence[float]] = None
-    radius: float = 1.0
-    nu: float = 0.5
-    strength: float = 1.0
-    falloff: int = 1
-    ratio: float = 1.1
-    dim: int = 3
-    integrator: str = "euler"
-    steps: int = 1
+    radius: float = schema.BRUSH_DEFAULTS["radius"]
+    nu: float = schema.BRUSH_DEFAULTS["nu"]
+    strength: float = schema.BRUSH_DEFAULTS["strength"]
+    falloff: int = schema.BRUSH_DEFAULTS["falloff"]
+    ratio: float = schema.BRUSH_DEFAULTS["ratio"]
+    dim: int = schema.BRUSH_DEFAULTS["dim"]
+    integrator: str = schema.BRUSH_DEFAULTS["integrator"].name.lower()
+    steps: int = schema.BRUSH_DEFAULTS["steps"]
     moving: bool = False
     mirror: Optional[Sequence[float]] = None   # (px, py, pz, nx, ny, nz)
     pinned: Sequence[Sequence[float]] = field(default_factory=list)
     pin_flags: int = 0   # PIN_* bits; 0 = PIN_DISPLACEMENT when points are pinned
 
 
-PIN_DISPLACEMENT, PIN_GRADIENT = 1, 2
+PIN_DISPLACEMENT, PIN_GRADIENT = PinFlag.DISPLACEMENT, PinFlag.GRADIENT
 BRUSH_STRUCT = struct.Struct("<QBBBBHBB4d3d3d3dd9d3d3dIB")
 assert BRUSH_STRUCT.size == 253
 
@@ -310,23 +274,23 @@ class AffineSet:
 class HandleParams:
     """Solver settings of a handle set (proto/PROTOCOL.md 4.15). for_energy() gives the
     reference defaults (df_msg_handles_defaults)."""
-    w: float = 1e-4
-    s: float = 0.01
-    rho: float = 0.1
-    tol: float = 1e-11
-    max_iters: int = 500
-    youngs: float = 1e7
-    poisson: float = 0.45
-    strain_min: float = 0.9
-    strain_max: float = 1.1
-    bending: float = 1e-3
-    area_weighting: bool = False
-    accelerate: bool = False
-    anderson_m: int = 5
+    w: float = schema.ADMM_DEFAULTS["w"]
+    s: float = schema.ADMM_DEFAULTS["s"]
+    rho: float = schema.ADMM_DEFAULTS["rho"]
+    tol: float = schema.ADMM_DEFAULTS["tol"]
+    max_iters: int = schema.ADMM_DEFAULTS["max_iters"]
+    youngs: float = schema.ADMM_DEFAULTS["youngs"]
+    poisson: float = schema.ADMM_DEFAULTS["poisson"]
+    strain_min: float = schema.ADMM_DEFAULTS["strain_min"]
+    strain_max: float = schema.ADMM_DEFAULTS["strain_max"]
+    bending: float = schema.ADMM_DEFAULTS["bending"]
+    area_weighting: bool = bool(schema.ADMM_DEFAULTS["area_weighting"])
+    accelerate: bool = bool(schema.ADMM_DEFAULTS["accelerate"])
+    anderson_m: int = schema.ADMM_DEFAULTS["anderson_m"]
 
     @classmethod
     def for_energy(cls, energy: str, **overrides) -> "HandleParams":
-        p = cls(w=500.0, rho=5e5) if energy == "neohookean" else cls()
+        p = cls(**schema.ADMM_DEFAULTS_NEOHOOKEAN) if energy == "neohookean" else cls()
         for k, v in overrides.items():
             if v is not None:
                 if not hasattr(p, k):
@@ -372,8 +336,6 @@ class HandleSet:
 
 
 ENERGY_NAMES = {v: k for k, v in ENERGIES.items()}
-MAX_HANDLES = 1 << 20
-MAX_AFFINE_SETS = 64
 
 
 def _count(r: Reader, what: str, limit: int) -> int:
@@ -391,6 +353,9 @@ def decode_handles(p: bytes) -> HandleSet:
      bending, max_iters, nh) = v
     if energy not in ENERGY_NAMES:
         raise ProtocolError("handles: energy %d not in 1..%d" % (energy, len(ENERGIES)))
+    if area > 1 or accel > 1:
+        raise ProtocolError("handles: area_weighting %d / accelerate %d not 0 or 1"
+                            % (area, accel))
     if nh > MAX_HANDLES:
         raise ProtocolError("handles: n_handles %d exceeds limit %d" % (nh, MAX_HANDLES))
     handles = list(r.farray("I", nh))
@@ -434,9 +399,9 @@ class MoveResult:
 
 def decode_move_result(p: bytes) -> MoveResult:
     r = Reader(p, "move_result")
-    v = r.take("QQBIddd")
+    sid, ver, status, *rest = r.take("QQBIddd")
     r.end()
-    return MoveResult(*v)
+    return MoveResult(sid, ver, enum_value(MoveStatus, status, "move_result: status"), *rest)
 
 
 def encode_get_mesh(session_id: int, flags: int = 0) -> bytes:
@@ -457,15 +422,14 @@ def decode_stats(p: bytes) -> Dict[str, float]:
     out: Dict[str, float] = {}
     for _ in range(n):
         k = r.str()
+        if k in out:
+            raise ProtocolError("stats: key %r twice" % k)
         out[k] = r.take("d")
     r.end()
     return out
 
 
 # ------------------------------------------------------------------ shared-memory stream (6.1)
-SHM_MAGIC = b"DFSHMRG1"
-SHM_HEADER_BYTES = 4096
-SHM_MIN_CAPACITY = 4096
 SHM_REF_STRUCT = struct.Struct("<QQII")
 assert SHM_REF_STRUCT.size == 24
 

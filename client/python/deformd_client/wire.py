@@ -9,6 +9,15 @@ class ProtocolError(ValueError):
     """A payload that does not decode (truncated, trailing bytes, bad value)."""
 
 
+def enum_value(cls, v: int, what: str):
+    """The member of IntEnum/IntFlag `cls` with value v; ProtocolError naming `what` when v is not
+    a value of the wire enum (as the C decoders refuse it)."""
+    try:
+        return cls(v)
+    except ValueError:
+        raise ProtocolError("%s %d is not a %s value" % (what, v, cls.__name__)) from None
+
+
 class Reader:
     """Sequential little-endian reader over one payload; every read checks the bounds and raises
     ProtocolError naming the message (`what`) when the payload is short."""
@@ -34,6 +43,14 @@ class Reader:
         return b
 
     def str(self) -> str:
+        """A u16-length string. UTF-8 by the protocol, but like the C decoders any bytes are
+        accepted: undecodable bytes become lone surrogates ("surrogateescape"), which pack_str
+        writes back as the same bytes, so every string round-trips exactly."""
+        n = self.take("H")
+        return self.raw(n).decode("utf-8", "surrogateescape")
+
+    def text(self) -> str:
+        """A u16-length string for people (error messages): undecodable bytes become U+FFFD."""
         n = self.take("H")
         return self.raw(n).decode("utf-8", "replace")
 
@@ -52,7 +69,7 @@ class Reader:
 
 
 def pack_str(s: str) -> bytes:
-    b = s.encode("utf-8")
+    b = s.encode("utf-8", "surrogateescape")
     if len(b) > 0xFFFF:
         raise ValueError("string of %d bytes too long" % len(b))
     return struct.pack("<H", len(b)) + b

@@ -1,0 +1,281 @@
+"""Every message body both ways, by name (PROTOCOL.md section 4, schema.BODIES): decode_body(name,
+payload) returns a Python object and encode_body(name, obj) gives the payload back, byte for byte
+for every payload the decoder accepts. decode_frame_body picks the body from (type, flags) as the
+C df_msg_body_kind does. The per-message functions live in messages.py and stream.py; this module
+adds the directions a client does not need in normal use (decoding requests, encoding replies and
+events), for tools, tests and fake servers."""
+import struct
+from dataclasses import dataclass
+from typing import Any, Callable, Dict, List, Sequence, Tuple
+
+from . import messages as m
+from . import schema
+from . import stream as st
+from .wire import ProtocolError, Reader, pack_str
+
+
+@dataclass
+class Hello:
+    min_version: int
+    max_version: int
+    features: int
+    client_name: str
+
+
+@dataclass
+class LoadMesh:
+    """One load_mesh chunk (4.5); file_name only with options LOAD_OPT_EXT."""
+    source: int
+    format: int
+    options: int
+    total_size: int
+    part2_offset: int
+    offset: int
+    name: str
+    path: str
+    data: bytes
+    file_name: str = ""
+
+
+@dataclass
+class BrushBegin:
+    session_id: int
+    brush: m.Brush
+
+
+@dataclass
+class BrushUpdate:
+    session_id: int
+    move: List[float]
+    twist: List[float]
+    scale: float
+    matrix: List[float]
+
+
+@dataclass
+class HandleMove:
+    session_id: int
+    max_iters: int
+    max_ms: int
+    progress_every: int
+    targets: List[Tuple[float, float, float]]
+
+
+def _end(r: Reader, v):
+    r.end()
+    return v
+
+
+def _fixed(fmt: str, what: str) -> Callable[[bytes], tuple]:
+    def dec(p: bytes) -> tuple:
+        r = Reader(p, what)
+        return _end(r, r.take(fmt))
+    return dec
+
+
+# ------------------------------------------------------------------ decoders a client lacks
+def decode_empty(p: bytes) -> None:
+    if len(p):
+        raise ProtocolError("empty body: %d trailing bytes" % len(p))
+
+
+def decode_hello(p: bytes) -> Hello:
+    r = Reader(p, "hello")
+    lo, hi, feat = r.take("HHI")
+    return _end(r, Hello(lo, hi, feat, r.str()))
+
+
+def decode_auth(p: bytes) -> Tuple[int, bytes]:
+    r = Reader(p, "auth")
+    method, reserved, n = r.take("HHI")
+    if reserved:
+        raise ProtocolError("auth: reserved field %d" % reserved)
+    return _end(r, (method, r.raw(n)))
+
+
+def decode_load_mesh(p: bytes) -> LoadMesh:
+    r = Reader(p, "load_mesh")
+    source, fmt, options, total, part2, offset = r.take("BBHQQQ")
+    name, path = r.str(), r.str()
+    data = r.raw(r.take("I"))
+    file_name = r.str() if options & m.LOAD_OPT_EXT else ""
+    return _end(r, LoadMesh(source, fmt, options, total, part2, offset, name, path, data,
+                            file_name))
+
+
+def decode_open_session(p: bytes) -> Tuple[int, str]:
+    r = Reader(p, "open_session")
+    sid = r.take("Q")
+    return _end(r, (sid, r.str()))
+
+
+def decode_brush(p: bytes) -> BrushBegin:
+    r = Reader(p, "brush")
+    v = r.take(m.BRUSH_STRUCT.format.lstrip("<"))
+    (sid, btype, dim, falloff, integ, steps, moving, has_mirror, radius, ratio, nu,
+     strength) = v[:12]
+    center, move, twist, scale = v[12:15], v[15:18], v[18:21], v[21]
+    matrix, mirror, n_pinned, pin_flags = v[22:31], v[31:37], v[37], v[38]
+    names = {int(t): k for k, t in m.BRUSH_TYPES.items()}
+    integs = {int(t): k for k, t in m.INTEGRATORS.items()}
+    if btype not in names or integ not in integs:
+        raise ProtocolError("brush: type %d / integrator %d" % (btype, integ))
+    if n_pinned > schema.MAX_PINNED_POINTS:
+        raise ProtocolError("brush: %d pinned points" % n_pinned)
+    if moving > 1 or has_mirror > 1:
+        raise ProtocolError("brush: moving %d / has_mirror %d not 0 or 1" % (moving, has_mirror))
+    if (pin_flags != 0) if n_pinned == 0 else not 1 <= pin_flags <= 3:
+        raise ProtocolError("brush: pin_flags %d with %d pinned points" % (pin_flags, n_pinned))
+    if not has_mirror and any(mirror):
+        raise ProtocolError("brush: mirror plane given without has_mirror (not representable)")
+    pinned = [tuple(r.take("3d")) for _ in range(n_pinned)]
+    b = m.Brush(type=names[btype], center=list(center), move=list(move), twist=list(twist),
+                scale=scale, matrix=list(matrix), radius=radius, nu=nu, strength=strength,
+                falloff=falloff, ratio=ratio, dim=dim, integrator=integs[integ], steps=steps,
+                moving=bool(moving), mirror=list(mirror) if has_mirror else None,
+                pinned=pinned, pin_flags=pin_flags)
+    return _end(r, BrushBegin(sid, b))
+
+
+def decode_brush_update(p: bytes) -> BrushUpdate:
+    v = _fixed("Q3d3dd9d", "brush_update")(p)
+    return BrushUpdate(v[0], list(v[1:4]), list(v[4:7]), v[7], list(v[8:17]))
+
+
+def decode_brush_param(p: bytes) -> Tuple[int, str, float]:
+    sid, param, value = _fixed("QBd", "brush_param")(p)
+    names = {int(t): k for k, t in m.BRUSH_PARAMS.items()}
+    if param not in names:
+        raise ProtocolError("brush_param: param %d" % param)
+    return sid, names[param], value
+
+
+def decode_handle_move(p: bytes) -> HandleMove:
+    r = Reader(p, "handle_move")
+    sid, iters, ms, every, n = r.take("QIIII")
+    if n > schema.MAX_HANDLES:
+        raise ProtocolError("handle_move: %d targets" % n)
+    return _end(r, HandleMove(sid, iters, ms, every, [tuple(r.take("3d")) for _ in range(n)]))
+
+
+def decode_stats_req(p: bytes) -> int:
+    return _fixed("Q", "stats_req")(p)
+
+
+# ------------------------------------------------------------------ encoders a client lacks
+def encode_error(e: Tuple[int, str]) -> bytes:
+    return struct.pack("<i", e[0]) + pack_str(e[1])
+
+
+def encode_hello_reply(h: m.HelloReply) -> bytes:
+    return struct.pack("<HHIIIIIIQQBB", h.version, h.server_max_version, h.features,
+                       h.max_frame_payload, h.max_mesh_vertices, h.max_mesh_elements,
+                       h.max_pending_requests, h.max_sessions, h.max_mesh_bytes,
+                       h.max_client_queue_bytes, h.auth_required, 0) + pack_str(h.server_name)
+
+
+def encode_session_info(s: m.SessionInfo) -> bytes:
+    return struct.pack("<QQBBHIIII", s.session_id, s.version, s.kind, s.planar, s.subscribers,
+                       s.nv, s.ne, s.undo_depth, s.redo_depth) + pack_str(s.name)
+
+
+def encode_load_reply(s: m.SessionInfo) -> bytes:
+    out = encode_session_info(s)
+    if s.report is not None:
+        t = s.report
+        out += struct.pack("<BBH11I", t.format, t.index_base, 0, t.input_polygons,
+                           t.polygons_triangulated, t.dropped_elements, t.duplicate_elements,
+                           t.degenerate_elements, t.inverted_elements, t.nonmanifold_edges,
+                           t.nonmanifold_faces, t.boundary_edges, t.boundary_faces,
+                           t.unused_vertices)
+    return out
+
+
+def encode_session_list(items: Sequence[m.SessionInfo]) -> bytes:
+    return struct.pack("<I", len(items)) + b"".join(encode_session_info(s) for s in items)
+
+
+def encode_ack(a: m.Ack) -> bytes:
+    return struct.pack("<QQ", a.session_id, a.version)
+
+
+def encode_move_result(x: m.MoveResult) -> bytes:
+    return struct.pack("<QQBIddd", x.session_id, x.version, x.status, x.iterations, x.objective,
+                       x.residual, x.elapsed_ms)
+
+
+def encode_mesh_chunk(c: st.MeshChunk) -> bytes:
+    return struct.pack("<QQBBBBIIIII", c.session_id, c.version, c.kind, c.planar, c.section, 0,
+                       c.nv, c.ne, c.nf, c.offset, c.count) + c.data.tobytes()
+
+
+def encode_progress(x: st.Progress) -> bytes:
+    return struct.pack("<BBHIddd", x.status, x.final, 0, x.iteration, x.objective, x.residual,
+                       x.elapsed_ms) + st.encode_disp(x.disp)
+
+
+def encode_stats(items: Dict[str, float]) -> bytes:
+    return struct.pack("<I", len(items)) + b"".join(
+        pack_str(k) + struct.pack("<d", v) for k, v in items.items())
+
+
+# ------------------------------------------------------------------ the table
+BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = {
+    "empty": (decode_empty, lambda _: b""),
+    "error": (m.decode_error, encode_error),
+    "hello": (decode_hello, lambda h: m.encode_hello(h.min_version, h.max_version, h.features,
+                                                     h.client_name)),
+    "hello_reply": (m.decode_hello_reply, encode_hello_reply),
+    "auth": (decode_auth, lambda a: m.encode_auth(*a)),
+    "ping": (bytes, bytes),
+    "load_mesh": (decode_load_mesh, lambda x: m.encode_load_mesh(
+        x.source, x.format, x.name, x.path, x.total_size, x.part2_offset, x.offset, x.data,
+        x.options, x.file_name)),
+    "session_ref": (m.decode_session_ref, m.encode_session_ref),
+    "open_session": (decode_open_session, lambda x: m.encode_open_session(*x)),
+    "subscribe": (_fixed("QI", "subscribe"), lambda x: m.encode_subscribe(*x)),
+    "session_info": (m.decode_session_info, encode_session_info),
+    "load_reply": (m.decode_load_reply, encode_load_reply),
+    "session_list": (m.decode_session_list, encode_session_list),
+    "ack": (m.decode_ack, encode_ack),
+    "brush": (decode_brush, lambda x: m.encode_brush(x.session_id, x.brush)),
+    "brush_update": (decode_brush_update, lambda x: m.encode_brush_update(
+        x.session_id, x.move, x.twist, x.scale, x.matrix)),
+    "brush_param": (decode_brush_param, lambda x: m.encode_brush_param(*x)),
+    "handles": (m.decode_handles, lambda h: m.encode_handles(h.session_id, h.energy, h.handles,
+                                                             h.params, h.affine)),
+    "handle_move": (decode_handle_move, lambda x: m.encode_handle_move(
+        x.session_id, x.targets, x.max_iters, x.max_ms, x.progress_every)),
+    "move_result": (m.decode_move_result, encode_move_result),
+    "get_mesh": (_fixed("QI", "get_mesh"), lambda x: m.encode_get_mesh(*x)),
+    "mesh_chunk": (st.decode_mesh_chunk, encode_mesh_chunk),
+    "snapshot_req": (_fixed("QQ", "snapshot_req"), lambda x: m.encode_snapshot_req(*x)),
+    "disp": (st.decode_disp, st.encode_disp),
+    "progress": (st.decode_progress, encode_progress),
+    "stats_req": (decode_stats_req, m.encode_stats_req),
+    "stats": (m.decode_stats, encode_stats),
+    "shm_info": (m.decode_shm_info, m.encode_shm_info),
+    "shm_ref": (m.decode_shm_ref, lambda x: m.encode_shm_ref(*x)),
+}
+
+
+def decode_body(name: str, payload: bytes) -> Any:
+    """The object of body `name` in `payload`; ProtocolError when it does not decode."""
+    return BODY_CODECS[name][0](bytes(payload))
+
+
+def encode_body(name: str, obj: Any) -> bytes:
+    """The payload of body `name` holding `obj` (inverse of decode_body)."""
+    return BODY_CODECS[name][1](obj)
+
+
+def decode_frame_body(msg_type: int, flags: int, payload: bytes) -> Tuple[str, Any]:
+    """(body name, object) of a frame's payload, the body chosen by (type, flags)."""
+    name = schema.body_of(msg_type, flags)
+    if name is None:
+        raise ProtocolError("type 0x%04x with flags 0x%x has no body" % (msg_type, flags))
+    return name, decode_body(name, payload)
+
+
+__all__ = ["BODY_CODECS", "decode_body", "encode_body", "decode_frame_body", "Hello", "LoadMesh",
+           "BrushBegin", "BrushUpdate", "HandleMove"]

@@ -1,0 +1,272 @@
+"""Every number of the deformd wire protocol as Python values: message types and their bodies,
+flags, feature bits, enums (IntEnum / IntFlag), limits and defaults.
+
+This mirrors proto/wire_schema.h, the one source of truth (and core/admm/admm_defaults.h for the
+ADMM defaults); tests/integration/test_schema.py compiles a dump of those headers and fails on
+any difference with this module or with the tables of proto/PROTOCOL.md. Edit the header first.
+"""
+from enum import IntEnum, IntFlag
+from typing import Dict, NamedTuple, Optional
+
+# ------------------------------------------------------------------ frame
+FRAME_MAGIC = 0x444D4644
+PROTO_VERSION = 1
+FRAME_HEADER_SIZE = 24
+
+
+class FrameFlag(IntFlag):
+    REPLY = 1 << 0
+    EVENT = 1 << 1
+    ERROR = 1 << 2
+    MORE = 1 << 3
+
+
+# ------------------------------------------------------------------ shared-memory ring file (6.1)
+SHM_MAGIC = b"DFSHMRG1"
+SHM_HEADER_BYTES = 4096
+SHM_MIN_CAPACITY = 4096
+SHM_MAX_CAPACITY = 4 << 30
+
+# ------------------------------------------------------------------ limits (reported in hello)
+MAX_FRAME_PAYLOAD = 64 << 20
+MAX_MESH_VERTICES = 8 << 20
+MAX_MESH_ELEMENTS = 32 << 20
+MAX_MESH_BYTES = 1 << 30
+MAX_PENDING_REQUESTS = 64
+MAX_SESSIONS = 1024
+MAX_NAME_LEN = 255
+MAX_PATH_LEN = 4095
+MAX_ERROR_MSG_LEN = 255
+MAX_AUTH_TOKEN = 4096
+MAX_PING_BYTES = 65536
+MAX_PINNED_POINTS = 2048
+MAX_BRUSH_STEPS = 1024
+MAX_FALLOFF = 8
+MAX_HANDLES = 1 << 20
+MAX_AFFINE_SETS = 64
+MAX_ANDERSON = 20
+MAX_MOVE_ITERS = 1000000
+MAX_STATS_ENTRIES = 1024
+MAX_STATS_KEY_LEN = 63
+STREAM_CHUNK_BYTES = 16 << 20
+
+LIMITS: Dict[str, int] = {k: v for k, v in dict(globals()).items()
+                          if k.startswith("MAX_") or k == "STREAM_CHUNK_BYTES"}
+
+
+# ------------------------------------------------------------------ message types
+class MsgType(IntEnum):
+    HELLO = 0x0001
+    AUTH = 0x0002
+    PING = 0x0003
+    LOAD_MESH = 0x0010
+    LIST_SESSIONS = 0x0011
+    OPEN_SESSION = 0x0012
+    CLOSE_SESSION = 0x0013
+    SUBSCRIBE = 0x0014
+    UNSUBSCRIBE = 0x0015
+    STREAM_SHM = 0x0016
+    BRUSH_BEGIN = 0x0020
+    BRUSH_UPDATE = 0x0021
+    BRUSH_END = 0x0022
+    BRUSH_CANCEL = 0x0023
+    SET_BRUSH_PARAM = 0x0024
+    HANDLES_SET = 0x0030
+    HANDLES_MOVE = 0x0031
+    RESET_REST = 0x0032
+    UNDO = 0x0033
+    REDO = 0x0034
+    HANDLES_GET = 0x0035
+    GET_MESH = 0x0040
+    SNAPSHOT = 0x0041
+    STATS = 0x0042
+    DISPLACEMENT = 0x0080
+    PROGRESS = 0x0081
+    SESSION_CLOSED = 0x0082
+    SHM_REF = 0x0083
+    ERROR = 0x00FF
+
+
+class Bodies(NamedTuple):
+    """Body names (PROTOCOL.md section 4) of a type as a request, its reply and as an event;
+    None where the type is not valid that way."""
+    request: Optional[str]
+    reply: Optional[str]
+    event: Optional[str]
+
+
+BODIES: Dict[MsgType, Bodies] = {
+    MsgType.HELLO: Bodies("hello", "hello_reply", None),
+    MsgType.AUTH: Bodies("auth", "empty", None),
+    MsgType.PING: Bodies("ping", "ping", None),
+    MsgType.LOAD_MESH: Bodies("load_mesh", "load_reply", None),
+    MsgType.LIST_SESSIONS: Bodies("empty", "session_list", None),
+    MsgType.OPEN_SESSION: Bodies("open_session", "session_info", None),
+    MsgType.CLOSE_SESSION: Bodies("session_ref", "ack", None),
+    MsgType.SUBSCRIBE: Bodies("subscribe", "session_info", None),
+    MsgType.UNSUBSCRIBE: Bodies("session_ref", "ack", None),
+    MsgType.STREAM_SHM: Bodies("session_ref", "shm_info", None),
+    MsgType.BRUSH_BEGIN: Bodies("brush", "ack", None),
+    MsgType.BRUSH_UPDATE: Bodies("brush_update", "ack", None),
+    MsgType.BRUSH_END: Bodies("session_ref", "ack", None),
+    MsgType.BRUSH_CANCEL: Bodies("session_ref", "ack", None),
+    MsgType.SET_BRUSH_PARAM: Bodies("brush_param", "ack", None),
+    MsgType.HANDLES_SET: Bodies("handles", "ack", None),
+    MsgType.HANDLES_MOVE: Bodies("handle_move", "move_result", None),
+    MsgType.RESET_REST: Bodies("session_ref", "ack", None),
+    MsgType.UNDO: Bodies("session_ref", "ack", None),
+    MsgType.REDO: Bodies("session_ref", "ack", None),
+    MsgType.HANDLES_GET: Bodies("session_ref", "handles", None),
+    MsgType.GET_MESH: Bodies("get_mesh", "mesh_chunk", None),
+    MsgType.SNAPSHOT: Bodies("snapshot_req", "disp", None),
+    MsgType.STATS: Bodies("stats_req", "stats", None),
+    MsgType.DISPLACEMENT: Bodies(None, None, "disp"),
+    MsgType.PROGRESS: Bodies(None, None, "progress"),
+    MsgType.SESSION_CLOSED: Bodies(None, None, "session_ref"),
+    MsgType.SHM_REF: Bodies(None, None, "shm_ref"),
+    MsgType.ERROR: Bodies(None, None, None),
+}
+
+
+def body_of(msg_type: int, flags: int) -> Optional[str]:
+    """Body name selected by (type, flags) as df_msg_body_kind does: "error" with ERROR, else the
+    reply / event / request body; None for an unknown type or a direction it does not have."""
+    try:
+        b = BODIES[MsgType(msg_type)]
+    except ValueError:
+        return None
+    if flags & FrameFlag.ERROR:
+        return "error"
+    if flags & FrameFlag.REPLY:
+        return b.reply
+    if flags & FrameFlag.EVENT:
+        return b.event
+    return b.request
+
+
+# ------------------------------------------------------------------ feature bits
+class Feature(IntFlag):
+    """hello_reply features: only what exists. Bit 6 is reserved (it was HID, which does not
+    exist yet): never sent, accepted on receipt (FEATURE_RESERVED)."""
+    KELVINLET = 1 << 0
+    ADMM = 1 << 1
+    PATH_LOAD = 1 << 2
+    AUTH = 1 << 3
+    SPARSE_STREAM = 1 << 4
+    TCP = 1 << 5
+    SHM_STREAM = 1 << 7
+
+
+FEATURE_RESERVED = 1 << 6
+
+
+# ------------------------------------------------------------------ enums
+class LoadSource(IntEnum):
+    INLINE = 0
+    PATH = 1
+
+
+class LoadOpt(IntFlag):
+    EXT = 0x0001      # a file_name follows the data; the reply is a load_reply (with a report)
+    TWO_D = 0x0002    # C DF_LOAD_OPT_2D: a 2D session even if the file gives z (all z 0)
+
+
+class Format(IntEnum):
+    AUTO = 0
+    OBJ = 1
+    OFF = 2
+    PLY = 3
+    MEDIT = 4
+    TETGEN = 5
+
+
+class MeshKind(IntEnum):
+    POLYLINE = 1
+    TRIANGLE = 2
+    TET = 3
+
+
+class BrushType(IntEnum):
+    GRAB = 1
+    TWIST = 2
+    SCALE = 3
+    PINCH = 4
+    AFFINE = 5
+
+
+class Integrator(IntEnum):
+    EULER = 1
+    RK4 = 2
+
+
+class BrushParam(IntEnum):
+    RADIUS = 1
+    NU = 2
+    STRENGTH = 3
+    FALLOFF = 4
+    RATIO = 5
+
+
+class Energy(IntEnum):
+    ARAP = 1
+    ACAP = 2
+    NEOHOOKEAN = 3
+    CLOTH = 4
+    POLYLINE = 5
+
+
+class ChangeKind(IntEnum):
+    BRUSH = 1
+    BRUSH_CANCEL = 2
+    HANDLE_MOVE = 3
+    UNDO = 4
+    REDO = 5
+    RESET_REST = 6
+    SNAPSHOT = 7
+
+
+class DispEncoding(IntEnum):
+    DENSE = 1
+    SPARSE = 2
+
+
+class MoveStatus(IntEnum):
+    RUNNING = 0
+    CONVERGED = 1
+    BUDGET = 2
+    SUPERSEDED = 3
+    FAILED = 4
+
+
+class MeshSection(IntEnum):
+    POSITIONS = 1
+    BASE = 2
+    REST = 3
+    ELEMENTS = 4
+    FACES = 5
+
+
+class PinFlag(IntFlag):
+    DISPLACEMENT = 1 << 0
+    GRADIENT = 1 << 1
+
+
+class GetMeshFlag(IntFlag):
+    REST = 1 << 0
+    BASE = 1 << 1
+
+
+class SubscribeFlag(IntFlag):
+    SNAPSHOT = 1 << 0
+
+
+# ------------------------------------------------------------------ defaults
+# The brush every client starts from (DF_WIRE_BRUSH_DEFAULTS); Brush() uses these.
+BRUSH_DEFAULTS = {"type": BrushType.GRAB, "dim": 3, "falloff": 1, "integrator": Integrator.EULER,
+                  "steps": 1, "radius": 1.0, "ratio": 1.1, "nu": 0.5, "strength": 1.0}
+
+# The handle-set (ADMM) defaults of core/admm/admm_defaults.h; HandleParams uses these.
+ADMM_DEFAULTS = {"w": 1e-4, "s": 0.01, "rho": 0.1, "tol": 1e-11, "max_iters": 500,
+                 "youngs": 1e7, "poisson": 0.45, "area_weighting": 0, "accelerate": 0,
+                 "anderson_m": 5, "strain_min": 0.9, "strain_max": 1.1, "bending": 1e-3}
+ADMM_DEFAULTS_NEOHOOKEAN = {"w": 500.0, "rho": 5e5}
