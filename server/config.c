@@ -11,7 +11,7 @@
 
 #include "proto/shm_ring.h"
 #include "server/log.h"
-#include "server/membudget.h"
+#include "server/session/membudget.h"
 
 void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
 {

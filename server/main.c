@@ -33,7 +33,7 @@
 
 #include "server/config.h"
 #include "server/log.h"
-#include "server/sd.h"
+#include "server/net/sd.h"
 #include "server/server.h"
 
 #define DF_MAIN_MMAP_THRESHOLD (32 << 20) /* glibc's maximum */

@@ -5,18 +5,18 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "server/cache.h"
-#include "server/conn.h"
-#include "server/dispatch.h"
-#include "server/guard.h"
-#include "server/handlers.h"
-#include "server/job.h"
-#include "server/listener.h"
+#include "server/session/cache.h"
+#include "server/net/conn.h"
+#include "server/handlers/dispatch.h"
+#include "server/net/guard.h"
+#include "server/handlers/handlers.h"
+#include "server/exec/job.h"
+#include "server/net/listener.h"
 #include "server/log.h"
-#include "server/pool.h"
-#include "server/sd.h"
-#include "server/session.h"
-#include "server/shm.h"
+#include "server/exec/pool.h"
+#include "server/net/sd.h"
+#include "server/session/session.h"
+#include "server/net/shm.h"
 
 #define DF_SERVER_SWEEP_MS 1000 /* period of the flush-close deadline sweep */
 

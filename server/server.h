@@ -12,8 +12,8 @@
 
 #include "proto/frame.h"
 #include "server/config.h"
-#include "server/membudget.h"
-#include "server/outq.h"
+#include "server/session/membudget.h"
+#include "server/net/outq.h"
 #include "server/stats.h"
 
 struct df_session;

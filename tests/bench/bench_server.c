@@ -26,9 +26,9 @@
 #include "core/admm/admm.h"
 #include "core/mesh/mesh_io.h"
 #include "proto/messages.h"
-#include "server/job.h"
-#include "server/pool.h"
-#include "server/session.h"
+#include "server/exec/job.h"
+#include "server/exec/pool.h"
+#include "server/session/session.h"
 #include "tests/unit/admm/admm_test_util.h"
 
 static int g_errors;

@@ -67,7 +67,7 @@ def test_long_solve_does_not_stall_another_sessions_strokes(daemon):
 
 
 def test_admm_factorization_is_cached_and_evicted_under_the_cap(make_daemon):
-    # each 9^3 cube solver is estimated at ~3 MB (server/cache.h): two do not fit in 4 MiB
+    # each 9^3 cube solver is estimated at ~3 MB (server/session/cache.h): two do not fit in 4 MiB
     d = make_daemon("cache_memory_mb = 4\n")
     with d.unix_client() as c:
         a, ha, ta = cube_session(c, n=9, name="a")

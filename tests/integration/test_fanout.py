@@ -1,4 +1,4 @@
-"""Subscriber fan-out in slices (server/conn.h DF_CONN_FANOUT_SLICE_US): when writing every
+"""Subscriber fan-out in slices (server/net/conn.h DF_CONN_FANOUT_SLICE_US): when writing every
 subscriber's pending versions takes longer than one slice, the loop goes back to reading requests
 and continues later. Checked here: the continuation happens under a real burst, and every
 subscriber still gets every version, in order, reconstructing the daemon's exact positions."""

@@ -1,4 +1,4 @@
-"""Inline brush updates (server/job.h): a cheap update runs on the loop thread instead of the
+"""Inline brush updates (server/exec/job.h): a cheap update runs on the loop thread instead of the
 compute pool. Checked here, with nothing that depends on how long an update takes: never inline
 with inline_us = 0, never for pinned strokes, both paths give byte-identical streams and
 positions, and a pipelined burst gives the same result whichever way its updates go. How many

@@ -160,7 +160,7 @@ def test_memory_budget_refuses_a_session_and_deformctl_shows_usage(make_daemon):
 
 
 def ring_size(nv: int, cap: int = 64 << 20) -> int:
-    """deformd's ring for a session of nv vertices (server/shm.h df_shm_ring_size)."""
+    """deformd's ring for a session of nv vertices (server/net/shm.h df_shm_ring_size)."""
     want = -(-128 * (12 * nv + 128) // (64 << 10)) * (64 << 10)
     return min(max(want, 64 << 10), cap)
 

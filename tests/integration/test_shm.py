@@ -31,7 +31,7 @@ RING_HEADER = struct.Struct("<8sIIQQQQ")       # magic, header_bytes, reserved, 
 
 
 def ring_size(nv: int, cap: int = 64 << 20) -> int:
-    """deformd's ring for a session of nv vertices (server/shm.h df_shm_ring_size)."""
+    """deformd's ring for a session of nv vertices (server/net/shm.h df_shm_ring_size)."""
     want = -(-128 * (12 * nv + 128) // (64 << 10)) * (64 << 10)
     return min(max(want, 64 << 10), cap)
 

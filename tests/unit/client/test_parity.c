@@ -1,7 +1,7 @@
 /* Parity of the daemon with the core engines (real $BUILD/bin/deformd, skipped when not built):
  *  - every brush kind applied through the daemon (begin with a zero load, one update, end, the
  *    way deformctl strokes) equals core/kelvinlet run on the float32 positions the way
- *    server/h_brush.c runs it (df_kelvinlet_prepare or the pinned solver, then
+ *    server/handlers/h_brush.c runs it (df_kelvinlet_prepare or the pinned solver, then
  *    df_kelvinlet_displacements at the stroke-start floats; positions = base + the float32 motion),
  *    to 1e-6 absolute on unit-size meshes, and to the double reference df_kelvinlet_apply_ref to
  *    PARITY_REF_TOL;

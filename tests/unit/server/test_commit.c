@@ -1,4 +1,4 @@
-/* Unit tests for server/commit.c: df_session_commit applies a change record in its fixed order
+/* Unit tests for server/session/commit.c: df_session_commit applies a change record in its fixed order
  * (state, history, accounting, hook, broadcast, answer): at the hook the new version, positions
  * and undo step are in place and nothing is broadcast yet; the request is answered once, after.
  * A failed compute changes no state, still records its timings, skips the hook and answers the
@@ -11,9 +11,9 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "server/commit.h"
-#include "server/job.h"
-#include "server/session.h"
+#include "server/session/commit.h"
+#include "server/exec/job.h"
+#include "server/session/session.h"
 
 static df_mesh tiny_mesh(void)
 {

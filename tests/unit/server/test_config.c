@@ -12,7 +12,7 @@
 #include <cmocka.h>
 
 #include "server/config.h"
-#include "server/membudget.h"
+#include "server/session/membudget.h"
 #include "server/log.h"
 
 static void test_defaults(void **state)

@@ -1,4 +1,4 @@
-/* Unit tests for server/job.c + server/session.c on a real libuv loop (no sockets): jobs of one
+/* Unit tests for server/exec/job.c + server/session/session.c on a real libuv loop (no sockets): jobs of one
  * session run strictly in submission order (worker jobs and loop-only jobs interleaved), jobs of
  * two sessions run in parallel on the pool (each waits until the other has started: no timing),
  * the per-iteration cap of inline jobs, queued jobs can be dropped (their `done` sees ESTATE), a
@@ -16,9 +16,9 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-#include "server/job.h"
-#include "server/pool.h"
-#include "server/session.h"
+#include "server/exec/job.h"
+#include "server/exec/pool.h"
+#include "server/session/session.h"
 
 static pthread_mutex_t g_lock = PTHREAD_MUTEX_INITIALIZER;
 static pthread_cond_t g_cond = PTHREAD_COND_INITIALIZER;

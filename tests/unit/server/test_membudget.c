@@ -1,7 +1,7 @@
-/* Unit tests for server/membudget.c: charges by kind against the total (memory_max_mb) and the
+/* Unit tests for server/session/membudget.c: charges by kind against the total (memory_max_mb) and the
  * per-kind caps (uploads_max_mb, shm_total_bytes), refusals that name the limit and its config
  * key and charge nothing, release clamping, room, unchecked adjustment; and the shared-memory
- * ring size derived from the session (server/shm.c). */
+ * ring size derived from the session (server/net/shm.c). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -9,8 +9,8 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "server/membudget.h"
-#include "server/shm.h"
+#include "server/session/membudget.h"
+#include "server/net/shm.h"
 
 #define MiB ((uint64_t)1 << 20)
 

@@ -1,4 +1,4 @@
-/* Unit tests for server/pathload.c (issue 9, items 1 and 2): every file read for a client, both
+/* Unit tests for server/session/pathload.c (issue 9, items 1 and 2): every file read for a client, both
  * halves of a TetGen pair included, is checked on its resolved path against allow_paths; a symlink
  * out of the allowed folder, a missing file and a disallowed file all give the same "not allowed
  * or not found" without the resolved path; FIFOs and devices are refused at once; the size cap
@@ -15,7 +15,7 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-#include "server/pathload.h"
+#include "server/session/pathload.h"
 
 static const char *SECRET = "root:*:19000:0:99999:7:::\n";
 static const char *NODE = "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n";

@@ -1,6 +1,6 @@
-/* Unit tests for the server's latency work: server/pool.c (the compute pool and its one completion
+/* Unit tests for the server's latency work: server/exec/pool.c (the compute pool and its one completion
  * channel: progress posts before the completion), the pool-backed job
- * FIFO of server/job.c, the single-allocation displacement frames of server/stream.c (byte-equal
+ * FIFO of server/exec/job.c, the single-allocation displacement frames of server/session/stream.c (byte-equal
  * to the proto encoder's) and the spin_us setting of server/config.c. Nothing here asserts a
  * duration: how fast a short task passes a slow one and how often spinning workers catch
  * back-to-back tasks are printed by tests/bench/bench_server.c (make bench). */
@@ -20,10 +20,10 @@
 #include "proto/buf.h"
 #include "proto/frame_codec.h"
 #include "server/config.h"
-#include "server/job.h"
-#include "server/pool.h"
-#include "server/reply.h"
-#include "server/stream.h"
+#include "server/exec/job.h"
+#include "server/exec/pool.h"
+#include "server/net/reply.h"
+#include "server/session/stream.h"
 
 #define N_TASKS 200
 

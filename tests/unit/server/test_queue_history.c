@@ -11,9 +11,9 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "server/history.h"
-#include "server/outq.h"
-#include "server/sbuf.h"
+#include "server/session/history.h"
+#include "server/net/outq.h"
+#include "server/net/sbuf.h"
 
 static df_sbuf *make(size_t len, uint8_t fill)
 {

@@ -1,4 +1,4 @@
-/* Unit tests for server/req.c: a request is answered exactly once. A second answer is counted in
+/* Unit tests for server/net/req.c: a request is answered exactly once. A second answer is counted in
  * stats.requests_double_answer and sends nothing (release behaviour, df_req_strict = 0), or
  * aborts (df_req_strict = 1, the default of debug builds); df_job_request takes the request
  * over (the original is marked answered, the job's copy answers it) and fails with ENOTFOUND
@@ -14,8 +14,8 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-#include "server/job.h"
-#include "server/req.h"
+#include "server/exec/job.h"
+#include "server/net/req.h"
 
 static void server_init(df_server *srv)
 {

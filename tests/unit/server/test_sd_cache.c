@@ -1,4 +1,4 @@
-/* Unit tests for server/sd.c (sd_notify datagrams, LISTEN_FDS parsing) and server/cache.c (LRU
+/* Unit tests for server/net/sd.c (sd_notify datagrams, LISTEN_FDS parsing) and server/session/cache.c (LRU
  * eviction of cached Kelvinlet pin solvers under the memory cap, sessions with a running job are
  * never evicted, accounting back to zero). */
 #include <stdarg.h>
@@ -13,8 +13,8 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-#include "server/cache.h"
-#include "server/sd.h"
+#include "server/session/cache.h"
+#include "server/net/sd.h"
 
 static void test_sd_notify(void **state)
 {

@@ -1,4 +1,4 @@
-/* Unit tests for server/stream.c: the displacement stream a session publishes. A simulated
+/* Unit tests for server/session/stream.c: the displacement stream a session publishes. A simulated
  * client decodes every frame with the proto decoder and applies it; after each version its
  * float32 positions must be byte-identical to the server's (df_stream_positions) and to an
  * independent computation fl32(fl32(X) + fl32(x - X)). Also: sparse vs dense choice, consecutive
@@ -13,7 +13,7 @@
 #include <string.h>
 #include <cmocka.h>
 
-#include "server/stream.h"
+#include "server/session/stream.h"
 
 typedef struct fake {
     df_session s;

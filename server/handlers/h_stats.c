@@ -1,0 +1,130 @@
+/* h_stats.c — the stats request: daemon-wide or per-session counters (see handlers.h).
+ * Keys are PROTOCOL.md's names (frames_in, cache.admm_chol.hits, version, nv, ...), one per value. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "server/handlers/handlers.h"
+#include "server/exec/pool.h"
+#include "server/net/reply.h"
+#include "server/net/shm.h"
+
+#define DF_STATS_MAX 96 /* entries this server reports */
+
+static void put(df_msg_stats *st, const char *key, double v)
+{
+    if (st->count >= DF_STATS_MAX) return;
+    snprintf(st->items[st->count].key, sizeof st->items[st->count].key, "%s", key);
+    st->items[st->count].value = v;
+    st->count++;
+}
+
+int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
+{
+    df_msg_stats_req m;
+    int rc = df_msg_stats_req_decode(p, r->len, &m, err);
+    if (rc != DF_OK) return rc;
+    df_server *srv = r->srv;
+    df_session *s = NULL;
+    if (m.session_id && !(s = df_session_find(srv, m.session_id)))
+        return df_error_set(err, DF_ENOTFOUND, "stats: no session %llu",
+                            (unsigned long long)m.session_id);
+    df_msg_stat items[DF_STATS_MAX];
+    df_msg_stats st = {0, items};
+    const df_stats *x = &srv->stats;
+    if (!s) {
+        put(&st, "uptime_s", (double)(uv_hrtime() - x->start_ns) / 1e9);
+        put(&st, "sessions", srv->n_sessions);
+        put(&st, "clients", srv->n_conns);
+        put(&st, "clients_total", (double)x->clients_total);
+        put(&st, "clients_dropped", (double)x->clients_dropped);
+        put(&st, "clients_refused", (double)x->clients_refused);
+        put(&st, "clients_refused_fds", (double)x->clients_refused_fds);
+        put(&st, "clients_handshake_timeout", (double)x->clients_handshake_timeout);
+        put(&st, "clients_idle_timeout", (double)x->clients_idle_timeout);
+        put(&st, "frames_in", (double)x->frames_in);
+        put(&st, "frames_out", (double)x->frames_out);
+        put(&st, "bytes_in", (double)x->bytes_in);
+        put(&st, "bytes_out", (double)x->bytes_out);
+        put(&st, "writes_blocked", (double)x->writes_blocked);
+        put(&st, "fanout_resumed", (double)x->fanout_resumed);
+        put(&st, "shm_frames", (double)x->shm_frames);
+        put(&st, "shm_refs", (double)x->shm_refs);
+        put(&st, "requests_ok", (double)x->requests_ok);
+        put(&st, "requests_failed", (double)x->requests_failed);
+        put(&st, "requests_double_answer", (double)x->requests_double_answer);
+        put(&st, "jobs_submitted", (double)x->jobs_submitted);
+        put(&st, "jobs_completed", (double)x->jobs_completed);
+        put(&st, "jobs_running", srv->jobs_running);
+        put(&st, "jobs_superseded", (double)x->jobs_superseded);
+        put(&st, "jobs_inline", (double)x->jobs_inline);
+        put(&st, "jobs_inline_deferred", (double)x->jobs_inline_deferred);
+        put(&st, "jobs_beside_move", (double)x->jobs_beside_move);
+        put(&st, "moves_preempted", (double)x->moves_preempted);
+        put(&st, "moves_orphaned", (double)x->moves_orphaned);
+        put(&st, "inline_us", srv->cfg.inline_us);
+        put(&st, "versions", (double)x->versions);
+        put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);
+        put(&st, "cache.bytes", (double)srv->cache_bytes);
+        put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));
+        put(&st, "cache.kelvinlet_lu.hits", (double)x->kelvin_lu_hits);
+        put(&st, "cache.kelvinlet_lu.misses", (double)x->kelvin_lu_misses);
+        put(&st, "cache.admm_chol.hits", (double)x->admm_hits);
+        put(&st, "cache.admm_chol.misses", (double)x->admm_misses);
+        put(&st, "cache.lru_evictions", (double)x->lru_evictions);
+        const df_membudget *mb = df_server_mem(srv); /* membudget.h */
+        int uploads = 0;
+        for (df_conn *k = srv->conns; k; k = k->next) uploads += k->upload != NULL;
+        put(&st, "memory_used_bytes", (double)df_mem_used(mb));
+        put(&st, "memory_max_bytes", (double)mb->max);
+        put(&st, "memory_refused", (double)mb->refused);
+        put(&st, "memory.uploads_bytes", (double)mb->used[DF_MEM_UPLOADS]);
+        put(&st, "memory.sessions_bytes", (double)mb->used[DF_MEM_SESSIONS]);
+        put(&st, "memory.shm_bytes", (double)mb->used[DF_MEM_SHM]);
+        put(&st, "memory.history_bytes", (double)mb->used[DF_MEM_HISTORY]);
+        put(&st, "uploads_in_flight", uploads);
+        put(&st, "uploads_max_bytes", (double)((uint64_t)srv->cfg.uploads_max_mb << 20));
+        put(&st, "max_upload_bytes", (double)((uint64_t)srv->cfg.max_upload_mb << 20));
+        put(&st, "shm_total_bytes", (double)srv->cfg.shm_total_bytes);
+        put(&st, "history.limit_bytes", (double)((uint64_t)srv->cfg.history_max_mb << 20));
+        put(&st, "history.steps_dropped", (double)srv->history_dropped);
+        if (srv->pool) { /* compute pool hand-offs (pool.h) */
+            df_pool_counters pc;
+            df_pool_counters_get(srv->pool, &pc);
+            put(&st, "pool.threads", srv->cfg.threads);
+            put(&st, "pool.spin_us", srv->cfg.spin_us);
+            put(&st, "pool.tasks", (double)pc.tasks);
+            put(&st, "pool.spin_hits", (double)pc.spin_hits);
+            put(&st, "pool.wakeups", (double)pc.wakeups);
+            put(&st, "pool.long_lane", pc.heavy_max);
+            put(&st, "pool.long_waits", (double)pc.heavy_waits);
+        }
+    } else {
+        int strokes = 0;
+        for (df_stroke *k = s->strokes; k; k = k->next) strokes++;
+        put(&st, "version", (double)atomic_load(&s->version));
+        put(&st, "nv", s->nv);
+        put(&st, "ne", s->mesh.ne);
+        put(&st, "subscribers", s->nsubs);
+        put(&st, "shm_subscribers", s->nshm);
+        put(&st, "shm.ring_bytes", s->shm ? (double)s->shm->capacity : 0);
+        put(&st, "undo_depth", df_history_can_undo(&s->hist));
+        put(&st, "redo_depth", df_history_can_redo(&s->hist));
+        put(&st, "history_bytes", (double)df_history_bytes(&s->hist));
+        put(&st, "history_steps_dropped", (double)s->hist.dropped);
+        put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
+        put(&st, "open_strokes", strokes);
+        put(&st, "job_running", s->running != NULL);
+        /* A worker may be writing the compute state: read the loop-owned copies (session.h). */
+        if (!s->running) df_session_seen_sync(s);
+        const df_session_seen *v = &s->seen;
+        put(&st, "handles", v->handles);
+        put(&st, "cache.admm_chol.cached", v->solver_cached);
+        put(&st, "cache.kelvinlet_lu.cached", v->kc_cached);
+        put(&st, "cache.bytes", (double)v->cache_bytes);
+        put(&st, "brush.last_ms", v->brush_last_ms);
+        put(&st, "move.last_ms", v->move_last_ms);
+    }
+    df_req_reply_stats(r, &st);
+    return DF_OK;
+}

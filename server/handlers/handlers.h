@@ -1,0 +1,54 @@
+/* handlers.h — one handler per request type (dispatch.c routes to them; loop thread).
+ *
+ * Each handler decodes its payload `p` (r->len bytes, valid during the call) with the proto
+ * decoder and answers request `r` itself (df_req_*) and returns DF_OK, or returns an error code
+ * with `err` filled, answered by the dispatcher. Session requests are job kinds instead
+ * (df_k_*, routed by dispatch.c to df_job_request): the job answers when applied. */
+#ifndef DF_SERVER_HANDLERS_H
+#define DF_SERVER_HANDLERS_H
+
+#include <stdint.h>
+
+#include "proto/messages.h"
+#include "server/exec/job.h"
+#include "server/net/req.h"
+#include "server/server.h"
+#include "server/session/session.h"
+
+/* Requests answered on the loop thread at once (no session FIFO). */
+#define DF_HANDLER(name) int df_h_##name(df_req *r, const uint8_t *p, df_error *err)
+DF_HANDLER(hello);
+DF_HANDLER(auth);
+DF_HANDLER(ping);
+DF_HANDLER(load_mesh);
+DF_HANDLER(list_sessions);
+DF_HANDLER(open_session);
+DF_HANDLER(stats);
+#undef DF_HANDLER
+
+/* Session requests: each is a job kind (decode, body, work, done; job.h) queued on its
+ * session's FIFO by df_job_request. */
+extern const df_job_kind df_k_close_session, df_k_subscribe, df_k_unsubscribe, df_k_stream_shm;
+extern const df_job_kind df_k_brush_begin, df_k_brush_update, df_k_brush_end, df_k_brush_cancel;
+extern const df_job_kind df_k_set_brush_param;
+extern const df_job_kind df_k_handles_set, df_k_handles_move, df_k_handles_get, df_k_reset_rest;
+extern const df_job_kind df_k_history; /* undo and redo */
+extern const df_job_kind df_k_get_mesh, df_k_snapshot;
+
+/* Fills a session_info body from `s` (loop thread). */
+void df_session_info_fill(const df_session *s, df_msg_session_info *out);
+
+/* Largest |strength| of a brush stroke (BRUSH_BEGIN, SET_BRUSH_PARAM). */
+#define DF_BRUSH_MAX_STRENGTH 1e6
+
+/* Whether knob `param` (df_brush_param_id) = value may be applied to the open stroke `st`: the
+ * stroke with that value must pass the Kelvinlet engine's rules (nu in [-1, 0.5] or +-inf,
+ * radii radius * ratio^k within [1e-6, 1e6], order 1..8, no singular normalization) and
+ * |strength| <= DF_BRUSH_MAX_STRENGTH. DF_OK, or the engine's code (DF_EINVAL, DF_ESINGULAR)
+ * with a message naming the parameter and value; `st` is never changed. */
+int df_h_brush_knob_check(const df_stroke *st, uint8_t param, double value, df_error *err);
+
+/* Frees a connection's unfinished upload (NULL-safe). */
+void df_upload_free(struct df_upload *u);
+
+#endif

@@ -1,0 +1,187 @@
+/* session.h — the session registry and a session's state.
+ *
+ * A session is one loaded mesh: its topology and BASE positions (load-time, the displacement
+ * stream's reference), the REST shape (ADMM reference; reset-rest replaces it by the current
+ * positions), the CURRENT positions (double), the published float32 displacements `uf`
+ * (u = fl32(cur - base): what every subscriber holds after applying the stream), the version
+ * counter, the undo/redo history, the subscribers, the open strokes, the handle set and the
+ * cached factorizations.
+ *
+ * Ordering: every request that reads or changes a session is a df_job on the session's FIFO
+ * (job.h). Only the head job runs; its `work` (a worker thread, or inline) reads the session and
+ * writes no session field: it fills the job's change record, which df_session_commit applies
+ * on the loop thread (commit.h), the only writer of positions, displacements, version, strokes,
+ * handle set, history and caches. Two things a running work uses in place: the scratch
+ * buffers job.c lends it (s->scratch_*, allocated on the loop thread before the work starts)
+ * and the cached factorization it runs (s->kc refactorized when pins change, hs->solver
+ * iterating), which only an idle session's eviction may free. Subscribers, name and the FIFO
+ * are loop-thread only. */
+#ifndef DF_SERVER_SESSION_H
+#define DF_SERVER_SESSION_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include "core/admm/admm.h"
+#include "core/kelvinlet/kelvinlet.h"
+#include "core/mesh/mesh.h"
+#include "server/session/history.h"
+#include "server/server.h"
+
+#define DF_SESSION_NAME_MAX 256
+#define DF_SESSION_HISTORY_MAX 64   /* committed states kept for undo/redo */
+/* Memory charged per vertex of a session (membudget.h): base, rest and current positions
+ * (3 x 24), float32 base and published displacements (2 x 12), the running job's scratch
+ * (stream.h: 12 + 4 + 12 + 24 + 12). The undo history and the ring are charged separately. */
+#define DF_SESSION_BYTES_PER_VERTEX 160
+
+/* An open brush stroke of one client (begin .. end/cancel). */
+typedef struct df_stroke {
+    uint64_t conn_id;
+    df_kelvinlet_brush brush;    /* from begin (with the client's knob overrides) */
+    double strength;
+    uint32_t n_pins;
+    int pin_flags;               /* DF_KELVINLET_PIN_* bits */
+    double *pins;                /* n_pins x 3, NULL when none */
+    double *base;                /* positions without this stroke's contribution, nv x 3 */
+    float *startf;               /* fl32(positions at begin): the points the field is evaluated at */
+    float *applied;              /* displacement this stroke currently contributes, nv x 3 */
+    uint64_t last_version;       /* session version this stroke produced last */
+    uint64_t work_ns;            /* time of its last field evaluation (begin or update), ns;
+                                  * 0 = none yet. Predicts the next update (job.h, inline) */
+    struct df_stroke *next;
+} df_stroke;
+
+/* The session's handle set (one at a time) and its cached ADMM solver. */
+typedef struct df_handleset {
+    df_admm_params params;
+    int32_t nh;
+    int32_t *handles;
+    int n_affine;
+    df_admm_affine *affine;      /* verts arrays owned (malloc'd) */
+    int max_iters;
+    df_admm *solver;             /* cached factorization; NULL when evicted (re-created on use) */
+    size_t solver_bytes;         /* estimate charged to the cache */
+    uint64_t lru;                /* srv->lru_clock at last use */
+} df_handleset;
+
+/* Loop-owned copies of compute-state figures, for the stats request (h_stats.c): a worker may be
+ * writing the originals (s->kc, s->hs->solver, the timings) while the loop answers. Refreshed by
+ * df_session_seen_sync when no job runs. */
+typedef struct df_session_seen {
+    int handles;                 /* s->hs->nh, 0 without a handle set */
+    int solver_cached;           /* s->hs->solver != NULL */
+    int kc_cached;               /* s->kc != NULL */
+    size_t cache_bytes;          /* solver_bytes + kc_bytes */
+    double brush_last_ms, move_last_ms;
+} df_session_seen;
+
+typedef struct df_session {
+    struct df_server *srv;
+    uint64_t id;
+    char name[DF_SESSION_NAME_MAX];
+    df_mesh mesh;                /* topology; mesh.V = BASE positions */
+    int32_t nv;
+    double *rest, *cur;          /* nv x 3 */
+    float *basef;                /* fl32(base), nv x 3 */
+    float *uf;                   /* published displacements, nv x 3 */
+    atomic_uint_fast64_t version;
+    df_history hist;
+    df_conn **subs;              /* subscribers (each holds a conn reference) */
+    uint8_t *sub_shm;            /* sub_shm[i]: subs[i] reads frames from `shm` (STREAM_SHM) */
+    int nsubs, capsubs, nshm;    /* nshm: subscribers with sub_shm set */
+    struct df_shm_ring *shm;     /* shared-memory stream ring, made by the first STREAM_SHM */
+    struct df_job *jhead, *jtail;/* queued jobs, not started */
+    struct df_job *running;      /* the head job while it runs (or NULL) */
+    df_stroke *strokes;
+    df_handleset *hs;
+    df_kelvinlet_constraints *kc;/* cached K_pp LU of the last pinned set; NULL when none */
+    size_t kc_bytes;
+    uint64_t kc_lru;
+    /* Scratch of the running job (allocated on first use, reused: no per-version allocation). */
+    float *scratch_u;            /* next published displacements, nv x 3 (swapped with uf) */
+    int32_t *scratch_idx;        /* changed vertex indices, nv */
+    float *scratch_rows;         /* sparse rows, nv x 3 */
+    double *scratch_pos;         /* next positions, nv x 3 (brush: swapped with cur) */
+    float *scratch_disp;         /* brush field, nv x 3 */
+    double brush_last_ms;        /* worker time of the last brush begin/update/cancel */
+    double move_last_ms;         /* worker time of the last handle move */
+    df_session_seen seen;        /* loop thread only: the above as of the last finished job */
+    uint64_t mem_bytes;          /* charged to srv->mem: DF_MEM_SESSIONS (the estimate) */
+    uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
+    uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
+    int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
+    struct df_session *next;
+} df_session;
+
+/* Bytes charged to the memory budget for a session on `mesh` (df_session.mem_bytes): per vertex
+ * DF_SESSION_BYTES_PER_VERTEX, plus the elements and boundary faces. */
+uint64_t df_session_estimate_bytes(const df_mesh *mesh);
+
+/* Creates a session owning `mesh` (moved in: the caller's struct is zeroed) named `name`
+ * ("" -> "session-<id>") and links it into srv. Names are unique among live sessions. The
+ * estimate and the history's first state are charged to srv->mem first. Errors: DF_EEXIST (a
+ * live session already has `name`), DF_ELIMIT (max_sessions, or memory_max_mb: the message
+ * names it), DF_ENOMEM. On error the mesh is freed. */
+int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
+                      df_error *err);
+
+/* Finds a live (not closed) session by id / by name; NULL when absent. */
+df_session *df_session_find(df_server *srv, uint64_t id);
+df_session *df_session_find_name(df_server *srv, const char *name);
+
+/* Marks the session closed, tells subscribers (SESSION_CLOSED event) and drops them; the job
+ * FIFO frees it once it is empty (df_job_pump). */
+void df_session_close(df_session *s);
+
+/* Frees a session that has no running job (unlinks it from srv). */
+void df_session_destroy(df_session *s);
+
+/* Adds / removes a subscriber. add: DF_OK (also when already subscribed), DF_ELIMIT. */
+int df_session_subscribe(df_session *s, df_conn *c, df_error *err);
+int df_session_unsubscribe(df_session *s, df_conn *c);
+
+/* Switches subscriber `c` to the shared-memory stream, creating the session's ring first if
+ * needed (server/net/shm.h). DF_OK (also when already switched), DF_ESTATE when c is not subscribed,
+ * or df_shm_create's error. */
+int df_session_attach_shm(df_session *s, df_conn *c, df_error *err);
+
+/* Sends `frame` to every subscriber (loop thread). A slow subscriber is dropped, not waited for.
+ * Subscribers on the shared-memory stream get an SHM_REF to the frame's copy in the ring
+ * instead, when the frame's size qualifies (df_shm_takes). */
+void df_session_broadcast(df_session *s, df_sbuf *frame);
+
+/* Open stroke of connection `conn_id`, or NULL. */
+df_stroke *df_session_stroke(df_session *s, uint64_t conn_id);
+
+/* Frees a stroke that is not linked into a session (NULL-safe). */
+void df_stroke_free(df_stroke *st);
+
+/* Unlinks and frees the stroke of `conn_id` (no-op when none). */
+void df_session_drop_stroke(df_session *s, uint64_t conn_id);
+
+/* Commits s->cur as a new undo step (loop thread) within the history budget: the smaller of
+ * history_max_mb and what the memory budget has left; the oldest steps are dropped to fit
+ * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
+int df_session_history_commit(df_session *s, df_error *err);
+
+/* Charges `bytes` of `kind` to the memory budget (df_mem_charge). When only the total
+ * (memory_max_mb) is short, the undo history of idle sessions (no running job) gives way first:
+ * their oldest undo steps are dropped, largest history first, until the charge fits or no such
+ * step is left. Errors: df_mem_charge's DF_ELIMIT (nothing charged). Loop thread. */
+int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
+                          df_error *err);
+
+/* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
+ * Errors: DF_ENOMEM (history unchanged). */
+int df_session_history_reset(df_session *s, df_error *err);
+
+/* Copies the compute-state figures into s->seen. Loop thread, only while no job of s runs
+ * (job.c calls it after each job's done; the stats request when the session is idle). */
+void df_session_seen_sync(df_session *s);
+
+/* Frees the handle set (and its solver, uncharging the cache). NULL-safe. */
+void df_handleset_free(df_server *srv, df_handleset *hs);
+
+#endif
