@@ -11,26 +11,10 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "tests/unit/server/tiny_mesh.h"
 #include "server/session/commit.h"
 #include "server/exec/job.h"
 #include "server/session/session.h"
-
-static df_mesh tiny_mesh(void)
-{
-    df_mesh m;
-    memset(&m, 0, sizeof m);
-    m.kind = DF_MESH_TRIANGLE;
-    m.nv = 3;
-    m.ne = 1;
-    m.V = calloc(9, sizeof(double));
-    m.E = malloc(3 * sizeof(int32_t));
-    assert_non_null(m.V);
-    assert_non_null(m.E);
-    m.V[3] = 1;
-    m.V[7] = 1;
-    m.E[0] = 0, m.E[1] = 1, m.E[2] = 2;
-    return m;
-}
 
 static void server_init(df_server *srv)
 {

@@ -16,6 +16,7 @@
 #include <unistd.h>
 #include <cmocka.h>
 
+#include "tests/unit/server/tiny_mesh.h"
 #include "server/exec/job.h"
 #include "server/exec/pool.h"
 #include "server/session/session.h"
@@ -64,23 +65,6 @@ static void record_done(df_job *j)
     int i = (int)(intptr_t)j->body;
     g_done_rc[i] = j->rc;
     if (!j->work && j->rc == DF_OK) record(100 + i); /* loop-only job */
-}
-
-static df_mesh tiny_mesh(void)
-{
-    df_mesh m;
-    memset(&m, 0, sizeof m);
-    m.kind = DF_MESH_TRIANGLE;
-    m.nv = 3;
-    m.ne = 1;
-    m.V = calloc(9, sizeof(double));
-    m.E = malloc(3 * sizeof(int32_t));
-    assert_non_null(m.V);
-    assert_non_null(m.E);
-    m.V[3] = 1;
-    m.V[7] = 1;
-    m.E[0] = 0, m.E[1] = 1, m.E[2] = 2;
-    return m;
 }
 
 static void server_init(df_server *srv, uv_loop_t *loop)

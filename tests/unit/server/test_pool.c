@@ -19,6 +19,7 @@
 
 #include "proto/buf.h"
 #include "proto/frame_codec.h"
+#include "tests/unit/server/tiny_mesh.h"
 #include "server/config.h"
 #include "server/exec/job.h"
 #include "server/exec/pool.h"
@@ -413,17 +414,9 @@ static void test_jobs_on_pool_keep_session_fifo(void **state)
     srv.loop = &loop;
     df_error e;
     assert_int_equal(df_pool_start(&loop, 4, 0, &srv.pool, &e), DF_OK);
-    df_mesh m;
-    memset(&m, 0, sizeof m);
-    m.kind = DF_MESH_TRIANGLE;
-    m.nv = 3;
-    m.ne = 1;
-    m.V = calloc(9, sizeof(double));
-    m.E = malloc(3 * sizeof(int32_t));
+    df_mesh m = tiny_mesh();
     assert_non_null(m.V);
     assert_non_null(m.E);
-    m.V[3] = m.V[7] = 1;
-    m.E[0] = 0, m.E[1] = 1, m.E[2] = 2;
     df_session *s;
     assert_int_equal(df_session_create(&srv, &m, "fifo", &s, &e), DF_OK);
     g_n = g_jobs_done = 0;
