@@ -172,7 +172,7 @@ static int main_item(parser *p, int kind, uint32_t data)
             size_t r2 = r;
             uint32_t k2 = k, v;
             if (!next_usage(p, &r2, &k2, &v)) {
-                if (v = last, f.usage_min == f.usage_max && v == f.usage_min) {
+                if (f.usage_min == f.usage_max && last == f.usage_min) {
                     f.count = (uint16_t)(f.count + (g->report_count - i));
                     i = g->report_count;
                 }
