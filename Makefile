@@ -78,6 +78,9 @@ UNIT_LINK_deformctl := $(CTL_LINK)
 UNIT_SYS_deformctl  := $(KELV_SYS)
 UNIT_LINK_server    := $(SERVER_LINK)
 UNIT_SYS_server     := $(MATH_LIBS) $(SERVER_SYS)
+# hid: the pure parsers of server/hid/ (core/common only), taken from the server archive.
+UNIT_LINK_hid       := $(SERVER_LIB) $(call lib,common)
+UNIT_SYS_hid        := -lm
 BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
@@ -196,7 +199,7 @@ tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN
 FUZZ_SECONDS ?= 60
 FUZZ_CC     := clang
 FUZZ_FLAGS  := -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=address,undefined -fopenmp=libgomp -MMD -MP
-FUZZ_LIBSRC := $(PROTO_SRC) $(call srcs,core)
+FUZZ_LIBSRC := $(PROTO_SRC) $(call srcs,core) $(call srcs,server/hid)
 FUZZ_OBJ    := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(FUZZ_LIBSRC))
 FUZZ_BIN    := $(patsubst tests/fuzz/%.c,$(BUILD)/fuzz/%,$(FUZZ_SRC))
 

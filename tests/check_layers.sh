@@ -18,6 +18,7 @@
 #                                                           server; never client/deformctl/)
 # proto/wire_core_map.h includes solver headers, so only server/ and client/deformctl/ (and
 # tests) may include it: never the rest of proto/ nor libdeformclient (client/ outside deformctl).
+#   server/hid/        server/ core/common/                (HID parsers: pure C, no proto, no math)
 #   server/            server/ proto/ core/                (the daemon)
 #   tests/             anything                            (tests may reach every layer)
 # System headers (#include <...>) are not checked. A file under a folder not listed fails (a new
@@ -39,6 +40,7 @@ allowed() { # $1 = file, $2 = included path -> status 0 when allowed
     client/*) [[ ( $inc == client/* && $inc != client/deformctl/* ) \
                  || ( $inc == proto/* && $inc != proto/wire_core_map.h ) \
                  || $inc == core/common/* || $inc == core/mesh/* ]] ;;
+    server/hid/*) [[ $inc == server/* || $inc == core/common/* ]] ;;
     server/*) [[ $inc == server/* || $inc == proto/* || $inc == core/* ]] ;;
     *) return 1 ;;
   esac

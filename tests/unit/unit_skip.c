@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
+#include <dirent.h>
 
 #include "tests/unit/unit_skip.h"
 
@@ -48,5 +49,16 @@ const char *unit_mesh_or_skip(const char *file, char *out, unsigned long cap)
     FILE *f = fopen(out, "r");
     if (!f) unit_skip("mesh file %s not found (set MESHES to the shared meshes folder)", out);
     fclose(f);
+    return out;
+}
+
+const char *unit_hid_dir_or_skip(char *out, unsigned long cap)
+{
+    const char *m = getenv("MESHES");
+    if (m && *m) snprintf(out, (size_t)cap, "%s/../hid", m);
+    else snprintf(out, (size_t)cap, "../shared/hid");
+    DIR *d = opendir(out);
+    if (!d) unit_skip("HID folder %s not found (set MESHES to the shared meshes folder)", out);
+    closedir(d);
     return out;
 }

@@ -22,4 +22,9 @@ const char *unit_meshes_dir(void);
  * otherwise calls unit_skip() naming the path (and does not return). */
 const char *unit_mesh_or_skip(const char *file, char *out, unsigned long cap);
 
+/* The shared HID folder: $MESHES/../hid when MESHES is set and non-empty, else "../shared/hid".
+ * Fills `out` and returns it when that folder can be opened; otherwise calls unit_skip() naming the
+ * path (and does not return). */
+const char *unit_hid_dir_or_skip(char *out, unsigned long cap);
+
 #endif
