@@ -77,6 +77,26 @@ static inline df_mesh tu_bar3d(int nx, int ny, int nz, double lx, double ly, dou
     return m;
 }
 
+/* The handle experiment on a tet bar 6x2x2 over [0,3]x[0,1]x[0,1]: the x = 0 face fixed, the
+ * x = 3 face moved by (0, 0.8, 0.3). Outputs the mesh, the malloc'd handle indices (*nh of them)
+ * and their targets (*nh x 3); the caller frees all three. */
+static inline void tu_bar3d_handles(df_mesh *m, int32_t **h, int *nh, double **tg)
+{
+    *m = tu_bar3d(6, 2, 2, 3.0, 1.0, 1.0);
+    *h = malloc((size_t)m->nv * sizeof(int32_t));
+    *tg = malloc((size_t)m->nv * 3 * sizeof(double));
+    *nh = 0;
+    for (int32_t i = 0; i < m->nv; i++) {
+        double x = m->V[3 * i];
+        if (x == 0.0 || x == 3.0) {
+            (*h)[*nh] = i;
+            memcpy(*tg + 3 * *nh, m->V + 3 * i, 24);
+            if (x == 3.0) { (*tg)[3 * *nh + 1] += 0.8; (*tg)[3 * *nh + 2] += 0.3; }
+            (*nh)++;
+        }
+    }
+}
+
 static inline void tu_free(df_mesh *m)
 {
     free(m->V);

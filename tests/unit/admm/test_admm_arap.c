@@ -198,24 +198,6 @@ static void strip2d(df_mesh *m, int32_t **h, int *nh, double **tg)
     }
 }
 
-/* tet bar 6x2x2 over [0,3]x[0,1]x[0,1]: x = 0 face fixed, x = 3 face moved by (0, 0.8, 0.3) */
-static void bar3d(df_mesh *m, int32_t **h, int *nh, double **tg)
-{
-    *m = tu_bar3d(6, 2, 2, 3.0, 1.0, 1.0);
-    *h = malloc((size_t)m->nv * sizeof(int32_t));
-    *tg = malloc((size_t)m->nv * 3 * sizeof(double));
-    *nh = 0;
-    for (int32_t i = 0; i < m->nv; i++) {
-        double x = m->V[3 * i];
-        if (x == 0.0 || x == 3.0) {
-            (*h)[*nh] = i;
-            memcpy(*tg + 3 * *nh, m->V + 3 * i, 24);
-            if (x == 3.0) { (*tg)[3 * *nh + 1] += 0.8; (*tg)[3 * *nh + 2] += 0.3; }
-            (*nh)++;
-        }
-    }
-}
-
 /* Runs plain ADMM (w = 0, one thread, to tol 1e-14) on m with handles h at targets tg and checks it
  * against the reference local-global ARAP result Vr of energy Eref: the solver's evaluation of Vr
  * equals Eref (same energy definition), its objective equals Eref (same minimum) and its positions
@@ -265,7 +247,7 @@ static void test_plain_arap_tet_matches_reference(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     double *Vr = malloc((size_t)m.nv * 3 * sizeof(double));
     memcpy(Vr, m.V, (size_t)m.nv * 3 * sizeof(double));
     double Eref = ref_arap_tet(&m, h, nh, tg, Vr, 300);
@@ -323,7 +305,7 @@ static void test_objective_monotone_and_handles_exact(void **st)
     strip2d(&m, &h, &nh, &tg);
     check_monotone(&m, h, nh, tg, DF_ADMM_ARAP, 1e-3, 0.05, 0.1, 300);
     free(h); free(tg); tu_free(&m);
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     check_monotone(&m, h, nh, tg, DF_ADMM_ARAP, 1e-3, 0.05, 0.1, 300);
     free(h); free(tg); tu_free(&m);
 }
@@ -332,7 +314,7 @@ static void test_stats_and_warm_start(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     df_admm_params p;
     df_admm_params_default(&p, DF_ADMM_ARAP);
     p.threads = 1; /* correctness tests: one thread (the machine may be shared) */
@@ -390,7 +372,7 @@ static void test_callback_budget_and_reset_rest(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     df_admm_params p;
     df_admm_params_default(&p, DF_ADMM_ARAP);
     p.threads = 1; /* correctness tests: one thread (the machine may be shared) */
@@ -439,7 +421,7 @@ static void test_anderson(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     double E[2];
     int its[2], acc = 0;
     for (int a = 0; a < 2; a++) {

@@ -12,24 +12,6 @@
 #include "core/admm/admm.h"
 #include "tests/unit/admm/admm_test_util.h"
 
-/* tet bar 6x2x2 over [0,3]x[0,1]x[0,1]: x = 0 face fixed, x = 3 face moved by (0, 0.8, 0.3) */
-static void bar3d(df_mesh *m, int32_t **h, int *nh, double **tg)
-{
-    *m = tu_bar3d(6, 2, 2, 3.0, 1.0, 1.0);
-    *h = malloc((size_t)m->nv * sizeof(int32_t));
-    *tg = malloc((size_t)m->nv * 3 * sizeof(double));
-    *nh = 0;
-    for (int32_t i = 0; i < m->nv; i++) {
-        double x = m->V[3 * i];
-        if (x == 0.0 || x == 3.0) {
-            (*h)[*nh] = i;
-            memcpy(*tg + 3 * *nh, m->V + 3 * i, 24);
-            if (x == 3.0) { (*tg)[3 * *nh + 1] += 0.8; (*tg)[3 * *nh + 2] += 0.3; }
-            (*nh)++;
-        }
-    }
-}
-
 /* 2D strip [0,2]x[0,0.5]: left column fixed, right column lifted by 0.6 */
 static void strip2d(df_mesh *m, int32_t **h, int *nh, double **tg)
 {
@@ -108,7 +90,7 @@ static void test_undo_restarts_from_the_given_positions_tets(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     undo_then_one_iteration(&m, h, nh, tg, "tet bar");
     free(h); free(tg); tu_free(&m);
 }
@@ -128,7 +110,7 @@ static void test_same_positions_keep_the_warm_start(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     df_admm *a = make(&m, h, nh, tg), *b = make(&m, h, nh, tg);
     run_iters(a, 15);
     run_iters(b, 15);
@@ -151,7 +133,7 @@ static void test_local_edit_is_the_starting_point(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     df_admm *s = make(&m, h, nh, tg);
     run_iters(s, 0);
     size_t n3 = (size_t)m.nv * 3;
@@ -178,7 +160,7 @@ static void test_bad_input_changes_nothing(void **st)
 {
     (void)st;
     df_mesh m; int32_t *h; int nh; double *tg;
-    bar3d(&m, &h, &nh, &tg);
+    tu_bar3d_handles(&m, &h, &nh, &tg);
     df_admm *s = make(&m, h, nh, tg);
     run_iters(s, 5);
     size_t n3 = (size_t)m.nv * 3;
