@@ -19,14 +19,14 @@
 #include "core/common/df_error.h"
 #include "core/mesh/mesh.h"
 
-typedef struct df_pen_target df_pen_target;
+typedef struct df_pen_cache df_pen_cache;
 
 /* Makes an (empty: no scene yet) cache for the topology of `mesh` (kind, nv, elements; mesh->V is
  * not read). Triangle meshes use their triangles (2D meshes too: they lie in z = 0), tet meshes
  * their boundary (computed here). Errors: DF_EINVAL (NULL, an invalid mesh), DF_EUNSUPPORTED (a
  * polyline: "a polyline session has no surface for a pen to point at"; or no surface faces),
- * DF_ENOMEM. On success *out owns the cache (df_pen_target_free); the mesh is not kept. */
-int df_pen_target_create(const df_mesh *mesh, df_pen_target **out, df_error *err);
+ * DF_ENOMEM. On success *out owns the cache (df_pen_cache_free); the mesh is not kept. */
+int df_pen_cache_create(const df_mesh *mesh, df_pen_cache **out, df_error *err);
 
 /* Casts the pen at (nx, ny) (normalized 0..1 of its X / Y range, y down) through the view
  * (view_proj row-major 4x4 mesh -> clip, OpenGL; viewport x, y, width, height in pixels, y down:
@@ -37,11 +37,11 @@ int df_pen_target_create(const df_mesh *mesh, df_pen_target **out, df_error *err
  * coordinates), 0 when the ray misses the surface (center untouched), or a negative DF_E* code:
  * DF_EINVAL (NULL, a non-finite view/viewport/nx/ny, width or height <= 0, singular view_proj;
  * a non-finite position), DF_EINTERNAL / DF_ENOMEM (Embree), with nothing changed. */
-int df_pen_target(df_pen_target *pt, const double *pos, uint64_t version,
+int df_pen_target(df_pen_cache *pc, const double *pos, uint64_t version,
                   const double view_proj[16], const double viewport[4], double nx, double ny,
                   double center[3], df_error *err);
 
 /* Releases the cache and its scene; NULL-safe. */
-void df_pen_target_free(df_pen_target *pt);
+void df_pen_cache_free(df_pen_cache *pc);
 
 #endif
