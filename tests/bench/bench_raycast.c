@@ -86,8 +86,9 @@ static int subdivide(const df_mesh *m, double **V2, int32_t *nv2, int32_t **F2, 
     qsort(keys, (size_t)ne, sizeof *keys, cmp_i64);   /* df_mesh_edges sorts already */
     for (int32_t f = 0; f < m->ne; f++) {
         const int32_t *t = m->E + 3 * (size_t)f;
-        int32_t a = edge_index(keys, ne, m->nv, t[0], t[1]), b = edge_index(keys, ne, m->nv, t[1], t[2]),
-                c = edge_index(keys, ne, m->nv, t[2], t[0]);
+        int32_t a = edge_index(keys, ne, m->nv, t[0], t[1]);
+        int32_t b = edge_index(keys, ne, m->nv, t[1], t[2]);
+        int32_t c = edge_index(keys, ne, m->nv, t[2], t[0]);
         if (a < 0 || b < 0 || c < 0)
             return 1;
         a += m->nv, b += m->nv, c += m->nv;

@@ -117,7 +117,8 @@ static void test_perspective_known_rays(void **state)
         double px = VIEWPORT[0] + fr[i][0] * VIEWPORT[2], py = VIEWPORT[1] + fr[i][1] * VIEWPORT[3];
         double d[3], o[3], org[3], dir[3];
         for (int k = 0; k < 3; k++) {
-            d[k] = c.f[k] + (2 * fr[i][0] - 1) * th * aspect * c.s[k] + (1 - 2 * fr[i][1]) * th * c.u[k];
+            d[k] = c.f[k] + (2 * fr[i][0] - 1) * th * aspect * c.s[k]
+                   + (1 - 2 * fr[i][1]) * th * c.u[k];
             o[k] = c.eye[k] + n * d[k];
         }
         normalize(d);
