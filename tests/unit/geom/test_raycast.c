@@ -450,6 +450,7 @@ static void test_no_threads_started(void **state)
     assert_int_equal(h.face, 2 * (150 * (N - 1) + 150) + 1);
     assert_true(fabs(h.point[2] - z) <= 1e-12 && fabs(h.t - (10 - z)) <= 1e-12);
     df_raycast_free(rc);
+    assert_int_equal(nthreads(), before);   /* releasing an Embree device would start one */
     free(V);
     free(F);
 }
