@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <time.h>
 #include <unistd.h>
 #include <wchar.h>
@@ -140,6 +141,21 @@ static int ha_enumerate(df_hid_backend *b, df_hid_devinfo **out, size_t *n, df_e
     return DF_OK;
 }
 
+/* 1 when the character device st is a hidraw node (its sysfs subsystem is "hidraw"). hidapi 0.13
+ * crashes (frees garbage) when hid_open_path is given another character device (/dev/null), so
+ * nothing else reaches it. */
+static int is_hidraw(const struct stat *st)
+{
+    char link[128], target[DF_HID_PATH_MAX];
+    snprintf(link, sizeof link, "/sys/dev/char/%u:%u/subsystem", major(st->st_rdev),
+             minor(st->st_rdev));
+    ssize_t k = readlink(link, target, sizeof target - 1);
+    if (k <= 0) return 0;
+    target[k] = '\0';
+    const char *base = strrchr(target, '/');
+    return strcmp(base ? base + 1 : target, "hidraw") == 0;
+}
+
 static int ha_open(df_hid_backend *b, const char *path, df_hid_dev **out, df_error *err)
 {
     if (!b || !path || !out || !path[0])
@@ -151,7 +167,7 @@ static int ha_open(df_hid_backend *b, const char *path, df_hid_dev **out, df_err
     if (stat(path, &st) != 0)
         return df_error_set(err, errno == ENOENT ? DF_ENOTFOUND : DF_EIO, "hidapi: open %s: %s",
                             path, strerror(errno));
-    if (!S_ISCHR(st.st_mode))
+    if (!S_ISCHR(st.st_mode) || !is_hidraw(&st))
         return df_error_set(err, DF_EINVAL, "hidapi: open %s: not a hidraw character device", path);
     ha_dev *d = calloc(1, sizeof *d);
     if (!d) return df_error_set(err, DF_ENOMEM, "hidapi: open: out of memory");
