@@ -46,6 +46,9 @@
  *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
  *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
  *                      membudget.h)
+ *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
+ *                      class knob | 3d-mouse | pen, per-device keys override class keys);
+ *                      checked for consistency once the whole file is read
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
  * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N, --help. */
 #ifndef DF_SERVER_CONFIG_H
@@ -55,6 +58,7 @@
 #include <stdint.h>
 
 #include "core/common/df_error.h"
+#include "server/hid/hid_config.h"
 
 #define DF_CONFIG_PATH_MAX 4096
 #define DF_CONFIG_SOCKET_MAX 108          /* sizeof(sockaddr_un.sun_path) */
@@ -122,6 +126,7 @@ typedef struct df_server_config {
     int handshake_timeout_s;     /* HELLO deadline after accept, s (0 = off) */
     int idle_timeout_s;          /* silent unsubscribed connection deadline, s (0 = off) */
     int foreground;              /* 1: do not daemonize */
+    df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;
 
