@@ -34,10 +34,15 @@
  *
  * Pen: in range -> CURSOR (normalized x/y, tilt radians, flags) per report; out of range -> one
  * CURSOR with flags 0. Tip switch rising edge -> STROKE_BEGIN, falling edge (or leaving range)
- * -> STROKE_END; reports in between -> STROKE_UPDATE with strength = strength_max *
- * (pressure / logical_max) ^ pressure_gamma and twist = the pen axis from tilt
- * normalize(tan tx, tan ty, 1) * twist_angle * pressure. Barrel rising edge -> `barrel` action
- * (next brush type by default). */
+ * -> STROKE_END; reports in between -> STROKE_UPDATE with strength = (session strength when
+ * the stroke began) * strength_max * (pressure / logical_max) ^ pressure_gamma, and twist = the
+ * pen axis from tilt normalize(tan tx, tan ty, 1) (x right, y down, z into the surface) *
+ * twist_angle * pressure. Tilt: physical degrees with the unit exponent when the field's unit is
+ * degrees (GXTP: 0.01 degree), else the logical value read as degrees (Digitizer default,
+ * Huion s8). STROKE_END repeats the last strength and twist. A pen's grab tip is not the
+ * mapper's: move[] stays 0 and the device manager takes the tip from its ray hits. Eraser and
+ * Invert are ignored (no stroke without the Tip Switch). Barrel rising edge in range ->
+ * `barrel` action (next brush type by default; falloff; none). */
 #ifndef DF_SERVER_HID_MAPPER_H
 #define DF_SERVER_HID_MAPPER_H
 
