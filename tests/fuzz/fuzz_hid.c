@@ -3,7 +3,8 @@
  * recording, whose descriptors and events then go through the same parse and decode. Every
  * parsed descriptor is also classified (plain and under each quirk VID:PID) and, when it has a
  * class, fed through its mapper (zeroed reports of every input id, the input itself, an unplug)
- * and its haptic output reports built; the input is also fed as raw PowerMate packets. Any
+ * and its haptic and PID force-feedback output reports built; the input is also fed as raw
+ * PowerMate packets. Any
  * inconsistency (a report longer than its limit, a field outside its report, a decode that refuses
  * a buffer of the report's own length, more actions than DF_HID_MAX_ACTIONS, a haptic report
  * longer than its buffer, a non-finite or non-positive radius) traps; sanitizers catch the rest. */
@@ -15,6 +16,7 @@
 
 #include "server/hid/hid_class.h"
 #include "server/hid/hid_desc.h"
+#include "server/hid/hid_ffb.h"
 #include "server/hid/hid_haptics.h"
 #include "server/hid/hid_mapper.h"
 #include "server/hid/hid_recording.h"
@@ -90,6 +92,27 @@ static void map_desc(const df_hid_desc *d, uint16_t vid, uint16_t pid, const uin
     }
 }
 
+/* PID force-feedback reports: every builder either refuses or writes exactly its report. */
+static void ffb_desc(const df_hid_desc *d)
+{
+    df_hid_ffb f;
+    if (df_hid_ffb_init(d, &f, NULL) != DF_OK) __builtin_trap();
+    uint8_t out[DF_HID_MAX_REPORT_BYTES];
+    size_t n;
+    df_hid_ffb_effect e = {1, 1000, 0.5, 1, 3, {90, 0}};
+    if (df_hid_ffb_set_constant_effect(&f, &e, out, sizeof out, &n, NULL) == DF_OK &&
+        n != f.effect.bytes)
+        __builtin_trap();
+    if (df_hid_ffb_constant_force(&f, 1, -0.5, out, sizeof out, &n, NULL) == DF_OK &&
+        n != f.constant.bytes)
+        __builtin_trap();
+    if (df_hid_ffb_operation(&f, 1, DF_HID_PID_OP_START, 1, out, sizeof out, &n, NULL) == DF_OK &&
+        n != f.operation.bytes)
+        __builtin_trap();
+    (void)df_hid_ffb_device_control(&f, DF_HID_PID_ENABLE_ACTUATORS, out, sizeof out, &n, NULL);
+    (void)df_hid_ffb_device_gain(&f, 1.0, out, sizeof out, &n, NULL);
+}
+
 static void check_desc(const uint8_t *desc, size_t n, const uint8_t *report, size_t rn)
 {
     df_hid_desc d;
@@ -113,6 +136,7 @@ static void check_desc(const uint8_t *desc, size_t n, const uint8_t *report, siz
                                       {0x256c, 0x8251}, {0x077d, 0x0410}};
     for (size_t k = 0; k < sizeof ids / sizeof ids[0]; k++)
         map_desc(&d, ids[k][0], ids[k][1], report, rn);
+    ffb_desc(&d);
     df_hid_desc_free(&d);
 }
 
