@@ -4,10 +4,11 @@
  * parsed descriptor is also classified (plain and under each quirk VID:PID) and, when it has a
  * class, fed through its mapper (zeroed reports of every input id, the input itself, an unplug)
  * and its haptic and PID force-feedback output reports built; the input is also fed as raw
- * PowerMate packets. Any
- * inconsistency (a report longer than its limit, a field outside its report, a decode that refuses
- * a buffer of the report's own length, more actions than DF_HID_MAX_ACTIONS, a haptic report
- * longer than its buffer, a non-finite or non-positive radius) traps; sanitizers catch the rest. */
+ * PowerMate packets. Any inconsistency (a report longer than its limit, a field outside its
+ * report, a decode that refuses a buffer of the report's own length, more actions than
+ * DF_HID_MAX_ACTIONS, an output report of another length than its descriptor gives, a
+ * non-finite or non-positive radius, an LED level outside 0..255) traps; sanitizers catch the
+ * rest. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
