@@ -123,6 +123,12 @@ int df_hid_pen_feed(df_hid_mapper *m, const uint8_t *r, size_t len, uint64_t t,
 void df_hid_mapper_haptic(const df_hid_mapper *m, unsigned wave, unsigned repeat,
                           df_hid_action *out, size_t *n);
 
+/* The LED brightness (0..255) a PowerMate-style knob shows for `radius` (led_min_radius ..
+ * led_max_radius, linear in log radius), or -1 when the device has no LED (not a raw PowerMate)
+ * or radius is not finite and positive: what the device manager sends when a knob starts
+ * driving a session, before any turn. */
+int df_hid_mapper_led_level(const df_hid_mapper *m, double radius);
+
 /* The next brush type after `type` in the configured cycle (the first when type is not in it). */
 uint8_t df_hid_mapper_next_type(const df_hid_params *p, uint8_t type);
 
