@@ -24,11 +24,12 @@
  *
  * 3d-mouse: every report carrying axes adds, per axis a with value v, f = v / logical_max
  * (0 when |f| <= deadzone, clamped to [-1, 1]) * (invert ? -1 : 1), the translation
- * d[a] = f * sensitivity * dt * scale and the
- * rotation w[a] = f * twist_sensitivity * dt, dt = time since the previous report with the same
- * report id, clamped to 50 ms (0 for the first). Translation emits CURSOR deltas; while a
- * stroke is active (stroke_button held) STROKE_UPDATE carries the cumulative tip and twist.
- * Press = STROKE_BEGIN, release = STROKE_END (Buzz when haptics). Axes are read as deflections
+ * d[a] = f * sensitivity * dt * scale and the rotation w[a] = f * twist_sensitivity * dt,
+ * dt = time since the previous report with the same report id, clamped to 50 ms (0 for the
+ * first). Translation emits CURSOR deltas; while a stroke is active (stroke_button held)
+ * STROKE_UPDATE carries the cumulative tip and twist. Press = STROKE_BEGIN (strength = the
+ * session's), release = STROKE_END (Buzz on both when haptics); in one report the press comes
+ * before the axes and the release after them. Axes are read as deflections
  * (absolute); the SpaceNavigator's, declared Relative, are absolute by quirk, and every known
  * 3Dconnexion device reports deflection, so a Relative flag does not change the rule.
  *
