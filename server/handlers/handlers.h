@@ -24,6 +24,8 @@ DF_HANDLER(load_mesh);
 DF_HANDLER(list_sessions);
 DF_HANDLER(open_session);
 DF_HANDLER(stats);
+DF_HANDLER(brush_state_get); /* h_brush_state.c: the session brush (brush_state.h) */
+DF_HANDLER(brush_state_set);
 #undef DF_HANDLER
 
 /* Session requests: each is a job kind (decode, body, work, done; job.h) queued on its
