@@ -245,6 +245,27 @@ def test_deformctl_brush_state_prints_and_sets(daemon):
         assert c.brush_state_get(sid).seq == 2
 
 
+def test_deformctl_brush_use_session(daemon):
+    move = ",".join(str(x) for x in MOVE)
+    center = ",".join(str(x) for x in CENTER)
+
+    def via_session(c, sid):
+        run_ctl(daemon, "brush-state", sid, "--radius", "0.35", "--nu", "0.1", "--falloff", "2")
+        run_ctl(daemon, "brush", sid, "--type", "grab", "--center", center, "--move", move,
+                "--use-session", "radius,nu,falloff")
+
+    def explicit(c, sid):
+        run_ctl(daemon, "brush", sid, "--type", "grab", "--center", center, "--move", move,
+                "--radius", "0.35", "--nu", "0.1", "--falloff", "2")
+
+    assert positions_after(daemon, via_session) == positions_after(daemon, explicit)
+    for bad in (["--use-session", "radius", "--radius", "0.5"], ["--use-session", "size"],
+                ["--use-session", ","]):
+        p = run_ctl(daemon, "brush", "1", "--type", "grab", "--center", center, "--move", move,
+                    *bad, check=False)
+        assert p.returncode == 2 and "--use-session" in p.stderr, (bad, p.stderr)
+
+
 @pytest.mark.parametrize("as_json", [False, True])
 def test_deformctl_watch_prints_brush_state_events(daemon, as_json):
     with grid_session(daemon, 3) as (info, _), \
