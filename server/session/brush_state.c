@@ -248,8 +248,8 @@ static void cursor_on_timer(uv_timer_t *t)
     cursor_flush_due(cl, df_brush_cursor_clock());
 }
 
-/* The slot of origin (kind, id), made when new; when all are taken, the one idle longest goes
- * (a held value is sent first). NULL only when out of memory making the limiter. */
+/* The slot of origin (kind, id), made when new; when all are taken, the one idle longest is
+ * reused (its held value, if any, is sent first). */
 static cursor_slot *cursor_slot_of(struct df_cursor_limiter *cl, uint8_t kind, uint64_t id)
 {
     for (int i = 0; i < cl->n; i++)
