@@ -31,6 +31,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->threads = DF_CONFIG_DEFAULT_THREADS;
     cfg->spin_us = DF_CONFIG_DEFAULT_SPIN_US;
     cfg->inline_us = DF_CONFIG_DEFAULT_INLINE_US;
+    cfg->cursor_hz = DF_CONFIG_DEFAULT_CURSOR_HZ;
     cfg->shm_total_bytes = DF_CONFIG_DEFAULT_SHM_TOTAL;
     cfg->max_upload_mb = DF_CONFIG_DEFAULT_MAX_UPLOAD_MB;
     cfg->uploads_max_mb = DF_CONFIG_DEFAULT_UPLOADS_MB;
@@ -145,6 +146,7 @@ static const int_key k_int_keys[] = {
     {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
     {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
     {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
+    {"cursor_hz", offsetof(df_server_config, cursor_hz), 0, DF_CONFIG_MAX_CURSOR_HZ},
     {"max_upload_mb", offsetof(df_server_config, max_upload_mb), 1,
      DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},
     {"uploads_max_mb", offsetof(df_server_config, uploads_max_mb), 1, DF_CONFIG_MAX_UPLOADS_MB},
@@ -185,6 +187,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
 {
     unsigned long long v;
     if (!cfg || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    if (strncmp(key, "hid.", 4) == 0) return df_hid_config_set(&cfg->hid, key, value, err);
     for (size_t i = 0; i < sizeof k_int_keys / sizeof k_int_keys[0]; i++) {
         const int_key *ik = &k_int_keys[i];
         if (strcmp(key, ik->key) != 0) continue;
@@ -321,6 +324,11 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         rc = df_config_set(tmp, k, val, &e2);
         if (rc != DF_OK) df_error_set(err, rc, "%s:%d: %s", name, lineno, e2.msg);
     }
+    if (rc == DF_OK) { /* hid.* cross-key checks (nu_min <= nu_max, ...) need the whole file */
+        df_error e2;
+        rc = df_hid_config_check(&tmp->hid, &e2);
+        if (rc != DF_OK) df_error_set(err, rc, "%s: %s", name, e2.msg);
+    }
     if (rc == DF_OK) *cfg = *tmp;
     free(tmp);
     free(line);
@@ -376,10 +384,11 @@ static const char k_usage[] =
     "                      who can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes,\n"
+    "                      max_sessions, threads, spin_us, inline_us, cursor_hz, shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
     "                      memory_max_mb, tcp_insecure, socket_mode, socket_group,\n"
-    "                      handshake_timeout_s, idle_timeout_s);\n"
+    "                      handshake_timeout_s, idle_timeout_s, hid.<class>.<key> with\n"
+    "                      class knob|3d-mouse|pen or a VID:PID like 046d:c626);\n"
     "                      command-line options override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"

@@ -59,6 +59,7 @@ DF_REQ_REPLY_DECL(session_list)
 DF_REQ_REPLY_DECL(move_result)
 DF_REQ_REPLY_DECL(stats)
 DF_REQ_REPLY_DECL(shm_info)
+DF_REQ_REPLY_DECL(brush_state)
 #undef DF_REQ_REPLY_DECL
 
 #endif

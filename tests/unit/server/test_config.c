@@ -1,6 +1,7 @@
 /* Unit tests for server/config.c and server/log.c: defaults, the key = value parser (comments,
  * whitespace, sizes with suffixes, every bad value, all-or-nothing on error), the command line
- * (--config then overrides, --opt=value, --help, unknown options) and allow_paths matching. */
+ * (--config then overrides, --opt=value, --help, unknown options), allow_paths matching and the
+ * hid.* keys handed to server/hid/hid_config.c. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -33,6 +34,7 @@ static void test_defaults(void **state)
     assert_int_equal(c.foreground, 0);
     assert_int_equal(c.spin_us, DF_CONFIG_DEFAULT_SPIN_US);
     assert_int_equal(c.inline_us, DF_CONFIG_DEFAULT_INLINE_US);
+    assert_int_equal(c.cursor_hz, 120);
     assert_true(c.shm_ring_bytes == (uint64_t)64 << 20);
     /* memory limits (issue 9, items 10-13): sized from the machine's RAM where it matters */
     assert_true(c.shm_total_bytes == DF_CONFIG_DEFAULT_SHM_TOTAL);
@@ -71,6 +73,7 @@ static void test_parse_file_text(void **state)
                        "threads = 2\r\n"
                        "spin_us = 30\n"
                        "inline_us = 0\n"
+                       "cursor_hz = 0\n"
                        "shm_ring_bytes = 64k\n";
     df_error e;
     assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
@@ -88,6 +91,9 @@ static void test_parse_file_text(void **state)
     assert_int_equal(c.threads, 2);
     assert_int_equal(c.spin_us, 30);
     assert_int_equal(c.inline_us, 0);
+    assert_int_equal(c.cursor_hz, 0); /* unlimited */
+    assert_int_equal(df_config_set(&c, "cursor_hz", "240", &e), DF_OK);
+    assert_int_equal(c.cursor_hz, 240);
     assert_true(c.shm_ring_bytes == 65536);
     assert_int_equal(df_config_set(&c, "shm_ring_bytes", "0", &e), DF_OK); /* disabled */
     assert_true(c.shm_ring_bytes == 0);
@@ -133,6 +139,7 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "socket_group = a b\n",      "socket_group = /etc\n",
         "handshake_timeout_s = -1\n", "handshake_timeout_s = 86401\n",
         "idle_timeout_s = soon\n",   "idle_timeout_s = 1e3\n",
+        "cursor_hz = -1\n",          "cursor_hz = 10001\n",      "cursor_hz = fast\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
@@ -289,6 +296,51 @@ static void test_log_levels(void **state)
     df_log_set_level(DF_LOG_INFO);
 }
 
+/* hid.* keys (issue 11): routed to server/hid/hid_config.c; an unknown hid key or bad value names
+ * file:line, the cross-key check after the file names the file, nothing changes on error. */
+static void test_hid_keys(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    const char *good = "threads = 2\n"
+                       "hid.knob.radius_step = 1.25\n"
+                       "hid.046d:c626.deadzone = 0.2   # SpaceNavigator\n"
+                       "hid.3d-mouse.sensitivity = 3\n";
+    df_error e;
+    assert_int_equal(df_config_parse(&c, good, strlen(good), "h.conf", &e), DF_OK);
+    df_hid_params p;
+    assert_int_equal(df_hid_config_resolve(&c.hid, DF_HID_CLASS_KNOB, 0x045e, 0x091b, &p, &e), DF_OK);
+    assert_true(p.radius_step == 1.25);
+    assert_int_equal(df_hid_config_resolve(&c.hid, DF_HID_CLASS_MOUSE3D, 0x046d, 0xc626, &p, &e),
+                     DF_OK);
+    assert_true(p.deadzone == 0.2 && p.sensitivity == 3.0);
+
+    df_server_config before = c;
+    const char *unknown = "threads = 3\n"
+                          "\n"
+                          "hid.knob.radius_stepp = 1.1\n";
+    assert_int_equal(df_config_parse(&c, unknown, strlen(unknown), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:3: "));
+    assert_non_null(strstr(e.msg, "radius_stepp"));
+    assert_memory_equal(&before, &c, sizeof c);
+    const char *bad = "hid.pen.pressure_gamma = 0\n";
+    assert_int_equal(df_config_parse(&c, bad, strlen(bad), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:1: hid.pen.pressure_gamma"));
+    const char *cls = "hid.pen.deadzone = 0.1\n";
+    assert_int_equal(df_config_parse(&c, cls, strlen(cls), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:1: "));
+    assert_non_null(strstr(e.msg, "not a pen key"));
+    const char *cross = "hid.knob.nu_min = 0.4\nhid.knob.nu_max = 0.3\n";
+    assert_int_equal(df_config_parse(&c, cross, strlen(cross), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf: hid.knob: nu_min 0.4 above nu_max 0.3"));
+    assert_memory_equal(&before, &c, sizeof c);
+    /* the plain df_config_set path too */
+    assert_int_equal(df_config_set(&c, "hid.knob.falloff_max", "5", &e), DF_OK);
+    assert_int_equal(df_config_set(&c, "hid.knob.falloff_max", "0", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "falloff_max"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -299,6 +351,7 @@ int main(void)
         cmocka_unit_test(test_load_file_and_cli),
         cmocka_unit_test(test_allowed_paths),
         cmocka_unit_test(test_log_levels),
+        cmocka_unit_test(test_hid_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
