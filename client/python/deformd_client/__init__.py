@@ -9,6 +9,7 @@
 Errors from the daemon raise DeformdError(code, name, message).
 """
 from .client import Client, MeshData, SessionClosed, ShmLost
+from .devices import DeviceInfo
 from .errors import ConnectionClosed, DeformdError, ErrorCode, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
@@ -16,7 +17,8 @@ from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, Mo
                        SessionInfo, ShmInfo)
 from .schema import (BrushParam, BrushType, ChangeKind, DispEncoding, Energy, Feature, Format,
                      FrameFlag, GetMeshFlag, Integrator, LoadOpt, LoadSource, MeshKind,
-                     MeshSection, MoveStatus, MsgType, PinFlag, SubscribeFlag)
+                     MeshSection, MoveStatus, MsgType, PinFlag, SubscribeFlag, DevClass,
+                     DevBackend, DevState)
 from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
@@ -29,6 +31,7 @@ __all__ = [
     "Progress", "ProtocolError", "SessionInfo", "ShmInfo", "ShmLost", "ShmRing",
     "BrushParam", "BrushType", "ChangeKind", "DispEncoding", "Energy", "Feature", "Format",
     "FrameFlag", "GetMeshFlag", "Integrator", "LoadOpt", "LoadSource", "MeshKind", "MeshSection",
-    "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
+    "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag", "DeviceInfo", "DevClass", "DevBackend",
+    "DevState",
 ]
 __version__ = "0.1.0"

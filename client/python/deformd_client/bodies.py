@@ -8,6 +8,7 @@ import struct
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Sequence, Tuple
 
+from . import devices as dv
 from . import messages as m
 from . import schema
 from . import stream as st
@@ -256,6 +257,12 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "stats": (m.decode_stats, encode_stats),
     "shm_info": (m.decode_shm_info, m.encode_shm_info),
     "shm_ref": (m.decode_shm_ref, lambda x: m.encode_shm_ref(*x)),
+    # devices (HID)
+    "device_info": (dv.decode_device_info, dv.encode_device_info),
+    "device_list": (dv.decode_device_list, dv.encode_device_list),
+    "device_bind": (dv.decode_device_bind, lambda x: dv.encode_device_bind(*x)),
+    "device_view": (dv.decode_device_view, lambda x: dv.encode_device_view(
+        x.device_id, x.session_id, x.view_proj, x.viewport)),
 }
 
 
