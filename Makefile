@@ -10,7 +10,7 @@
 #   tests/fuzz/fuzz_*.c        -> build/fuzz/fuzz_*  (clang libFuzzer, `make fuzz`)
 # Layers (tests/check_layers.sh, run by `make test`, holds the allowed #include matrix):
 #   core <- proto <- client <- deformctl;  core, proto <- server. Each binary links its layers only:
-#   deformd: server proto core + libuv; deformctl: client proto mesh common kelvinlet (local brush
+#   deformd: server proto core + libuv + Embree (core/geom); deformctl: client proto mesh common kelvinlet (local brush
 #   check); libdeformclient needs proto mesh common only (client/deformclient.pc.in).
 # Release flags: -O2 -march=x86-64-v2 (SSE4.2/POPCNT: every x86-64 server of the last decade) plus
 # -ffp-contract=off so float results are reproducible across builds; OpenMP for kernels (OMP).
@@ -35,6 +35,10 @@ LDFLAGS := $(OMP) $(SAN)
 KELV_SYS    := -llapacke -llapack -lopenblas -lm
 MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
 SERVER_SYS  := -luv -lpthread
+# core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
+# daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers
+# (they compile every core source).
+GEOM_SYS    := -lembree3
 
 srcs = $(if $(wildcard $(1)),$(shell find $(1) -name '*.c' $(2) | sort))
 lib  = $(BUILD)/lib/libdf_$(1).a
@@ -70,6 +74,7 @@ $(foreach a,$(AREAS),$(eval UNIT_SYS_$(a) := $(MATH_LIBS)))
 UNIT_SYS_common     := -lm
 UNIT_SYS_mesh       := -lm
 UNIT_SYS_kelvinlet  := $(KELV_SYS)
+UNIT_SYS_geom       := $(GEOM_SYS) -lm
 UNIT_LINK_proto     := $(PROTO_LIB) $(BASE_LIBS)
 UNIT_SYS_proto      := -lm
 UNIT_LINK_client    := $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
@@ -77,7 +82,7 @@ UNIT_SYS_client     := $(MATH_LIBS)
 UNIT_LINK_deformctl := $(CTL_LINK)
 UNIT_SYS_deformctl  := $(KELV_SYS)
 UNIT_LINK_server    := $(SERVER_LINK)
-UNIT_SYS_server     := $(MATH_LIBS) $(SERVER_SYS)
+UNIT_SYS_server     := $(MATH_LIBS) $(GEOM_SYS) $(SERVER_SYS)
 # hid: the pure parsers of server/hid/ (core/common only), taken from the server archive.
 UNIT_LINK_hid       := $(SERVER_LIB) $(call lib,common)
 UNIT_SYS_hid        := -lm
@@ -99,7 +104,8 @@ deps:
 	else echo "deps: all $(words $(DEB_PKGS)) Debian packages present"; fi
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
-            python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev
+            python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
+            libembree-dev
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -124,7 +130,8 @@ $(BUILD)/lib/libdf_server.a: $(call objs,$(SERVER_SRC))
 	rm -f $@ && ar rcs $@ $^
 $(BUILD)/bin/deformd: $(BUILD)/obj/server/main.o $(SERVER_LINK)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(SERVER_LINK)) $(MATH_LIBS) $(SERVER_SYS)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(SERVER_LINK)) $(MATH_LIBS) $(GEOM_SYS) \
+	  $(SERVER_SYS)
 $(BUILD)/lib/libdf_ctl.a: $(call objs,$(filter-out client/deformctl/main.c,$(CTL_SRC)))
 	@mkdir -p $(dir $@)
 	rm -f $@ && ar rcs $@ $^
@@ -142,7 +149,7 @@ $(foreach a,$(UNIT_AREAS),$(eval $(call unit_area,$(a))))
 $(BUILD)/bench/%: tests/bench/%.c $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(LDFLAGS) $(call group,$(ALL_LIBS)) $(MATH_LIBS) \
-	  $(SERVER_SYS)
+	  $(GEOM_SYS) $(SERVER_SYS)
 
 # The README's test command: deps, build, every suite, one closing "N passed, N failed" line.
 test: deps
@@ -208,7 +215,7 @@ $(BUILD)/fuzz/obj/%.o: %.c
 	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
 $(BUILD)/fuzz/%: tests/fuzz/%.c $(FUZZ_OBJ)
 	@mkdir -p $(dir $@)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer $< $(FUZZ_OBJ) -o $@ $(MATH_LIBS) -lgomp
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer $< $(FUZZ_OBJ) -o $@ $(MATH_LIBS) $(GEOM_SYS) -lgomp
 
 .SECONDARY: $(FUZZ_OBJ)
 fuzz-build: $(FUZZ_BIN)

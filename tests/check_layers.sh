@@ -18,6 +18,8 @@
 #                                                           server; never client/deformctl/)
 # proto/wire_core_map.h includes solver headers, so only server/ and client/deformctl/ (and
 # tests) may include it: never the rest of proto/ nor libdeformclient (client/ outside deformctl).
+#   server/hid/hid_pen_target.*  server/ core/common/ core/mesh/ core/geom/   (the pen's ray cast:
+#                                                           session topology + Embree scene)
 #   server/hid/        server/ core/common/                (HID parsers: pure C, no proto, no math)
 #   server/            server/ proto/ core/                (the daemon)
 #   tests/             anything                            (tests may reach every layer)
@@ -40,6 +42,8 @@ allowed() { # $1 = file, $2 = included path -> status 0 when allowed
     client/*) [[ ( $inc == client/* && $inc != client/deformctl/* ) \
                  || ( $inc == proto/* && $inc != proto/wire_core_map.h ) \
                  || $inc == core/common/* || $inc == core/mesh/* ]] ;;
+    server/hid/hid_pen_target.*) [[ $inc == server/* || $inc == core/common/* \
+                                     || $inc == core/mesh/* || $inc == core/geom/* ]] ;;
     server/hid/*) [[ $inc == server/* || $inc == core/common/* ]] ;;
     server/*) [[ $inc == server/* || $inc == proto/* || $inc == core/* ]] ;;
     *) return 1 ;;

@@ -21,6 +21,7 @@ clean_tree() { # $1 = dir: one legitimate include per layer
   put "$1/proto/msg_h.c" '#include "core/admm/admm_defaults.h"'
   put "$1/server/net/conn.c" '#include "server/exec/pool.h"' '#include "core/admm/admm.h"'
   put "$1/tests/unit/x/test_x.c" '#include "server/net/conn.h"'
+  put "$1/server/hid/hid_pen_target.c" '#include "core/geom/raycast.h"' '#include "core/mesh/mesh.h"'
 }
 
 case_ok() { # $1 = name
@@ -53,5 +54,7 @@ case_bad client/dc_z.c client/deformctl/ctl.h
 case_bad client/deformctl/c.c server/net/conn.h
 case_bad server/net/x.c client/dc_client.h
 case_bad hid/x.c core/common/df_error.h
+case_bad server/hid/hid_x.c core/geom/raycast.h
+case_bad server/hid/hid_pen_target.c proto/messages.h
 [ "$fails" -eq 0 ] && echo "check_layers selftest: all cases pass"
 [ "$fails" -eq 0 ]
