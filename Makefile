@@ -31,10 +31,13 @@ WARN    := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes
 CPPFLAGS := -I. -I/usr/include/suitesparse -D_GNU_SOURCE $(DEFS)
 CFLAGS  := -std=c11 $(OPT) $(SAN) $(WARN) $(OMP) -g -MMD -MP
 LDFLAGS := $(OMP) $(SAN)
-# System libraries per layer (hidapi, libusb, SQLite: only with the code that uses them, none yet).
+# System libraries per layer (SQLite: only with the code that uses it, none yet). HID_SYS: the
+# device sources of server/hid/ (hid_hidapi.c: hidapi-hidraw, hid_libusb.c: libusb-1.0; headers
+# included as <hidapi/hidapi.h>, <libusb-1.0/libusb.h>, so no -I is needed).
 KELV_SYS    := -llapacke -llapack -lopenblas -lm
 MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
-SERVER_SYS  := -luv -lpthread
+HID_SYS     := -lhidapi-hidraw -lusb-1.0
+SERVER_SYS  := -luv $(HID_SYS) -lpthread
 # core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers
 # (they compile every core source).
@@ -83,9 +86,10 @@ UNIT_LINK_deformctl := $(CTL_LINK)
 UNIT_SYS_deformctl  := $(KELV_SYS)
 UNIT_LINK_server    := $(SERVER_LINK)
 UNIT_SYS_server     := $(MATH_LIBS) $(GEOM_SYS) $(SERVER_SYS)
-# hid: the pure parsers of server/hid/ (core/common only), taken from the server archive.
+# hid: server/hid/ (parsers: core/common only; device sources: hidapi, libusb, pthread), taken
+# from the server archive.
 UNIT_LINK_hid       := $(SERVER_LIB) $(call lib,common)
-UNIT_SYS_hid        := -lm
+UNIT_SYS_hid        := -lm $(HID_SYS) -lpthread
 BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
@@ -95,7 +99,7 @@ BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SR
 all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need (hidapi,
-# libusb and SQLite too: the HID and durable-store work needs them; nothing links them yet).
+# libusb for the HID device sources; SQLite for the durable-store work, nothing links it yet).
 deps:
 	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
@@ -206,7 +210,9 @@ tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN
 FUZZ_SECONDS ?= 60
 FUZZ_CC     := clang
 FUZZ_FLAGS  := -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=address,undefined -fopenmp=libgomp -MMD -MP
-FUZZ_LIBSRC := $(PROTO_SRC) $(call srcs,core) $(call srcs,server/hid)
+# server/hid: its pure code only (the device sources and the manager need hidapi/libusb/libuv).
+FUZZ_HID_IO := $(addprefix server/hid/,hid_hidapi.c hid_libusb.c hid_manager.c)
+FUZZ_LIBSRC := $(PROTO_SRC) $(call srcs,core) $(filter-out $(FUZZ_HID_IO),$(call srcs,server/hid))
 FUZZ_OBJ    := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(FUZZ_LIBSRC))
 FUZZ_BIN    := $(patsubst tests/fuzz/%.c,$(BUILD)/fuzz/%,$(FUZZ_SRC))
 

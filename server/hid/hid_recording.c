@@ -45,6 +45,7 @@ typedef struct rec_parser {
     size_t cap_events, cap_bytes;
     df_error *err;
     size_t line;
+    unsigned flags;          /* DF_HID_REC_* */
 } rec_parser;
 
 /* `len` (decimal) then exactly len hex bytes, appended into *buf (grown) at *used. */
@@ -163,7 +164,8 @@ static int line(rec_parser *p, cursor *c, unsigned *cur)
         dev->bus = (uint32_t)v[0]; dev->vid = (uint32_t)v[1]; dev->pid = (uint32_t)v[2];
         return DF_OK;
     case 'E': {
-        if (*cur >= r->n_devices || !r->devices[*cur].desc)
+        if ((p->flags & DF_HID_REC_RAW) && (rc = device(p, *cur, &dev))) return rc;
+        if (!(p->flags & DF_HID_REC_RAW) && (*cur >= r->n_devices || !r->devices[*cur].desc))
             return df_error_set(p->err, DF_EFORMAT, "hid recording: line %zu: E: for device %u, which "
                                 "has no R: line", p->line, *cur);
         uint64_t sec, usec;
@@ -203,9 +205,15 @@ static int line(rec_parser *p, cursor *c, unsigned *cur)
 
 int df_hid_recording_parse(const char *text, size_t n, df_hid_recording *out, df_error *err)
 {
+    return df_hid_recording_parse_flags(text, n, 0, out, err);
+}
+
+int df_hid_recording_parse_flags(const char *text, size_t n, unsigned flags, df_hid_recording *out,
+                                 df_error *err)
+{
     if (!out || (!text && n)) return df_error_set(err, DF_EINVAL, "hid recording: NULL argument");
     memset(out, 0, sizeof *out);
-    rec_parser p = { .r = out, .err = err };
+    rec_parser p = { .r = out, .err = err, .flags = flags };
     unsigned cur = 0;
     size_t i = 0;
     int rc = DF_OK;

@@ -48,6 +48,12 @@ typedef struct df_hid_recording {
  * more than DF_HID_REC_MAX_EVENTS events), DF_ENOMEM. */
 int df_hid_recording_parse(const char *text, size_t n, df_hid_recording *out, df_error *err);
 
+/* df_hid_recording_parse with flags: DF_HID_REC_RAW accepts E: lines for a device without an R:
+ * line (its desc stays NULL): the PowerMate raw file (E: lines only). 0 = df_hid_recording_parse. */
+enum { DF_HID_REC_RAW = 1 };
+int df_hid_recording_parse_flags(const char *text, size_t n, unsigned flags, df_hid_recording *out,
+                                 df_error *err);
+
 /* Frees what df_hid_recording_parse allocated and zeroes *rec (NULL is fine). */
 void df_hid_recording_free(df_hid_recording *rec);
 

@@ -118,12 +118,40 @@ static void test_shared_file(void **state)
     free(text);
 }
 
+/* DF_HID_REC_RAW: E: lines without an R: line (the PowerMate raw file) parse, desc stays NULL;
+ * without the flag they are refused as before. */
+static void test_raw_flag(void **state)
+{
+    (void)state;
+    static const char text[] = "# raw\nE: 000000.024000 6 00 01 00 80 10 00\nD: 1\nE: 1.000001 1 ff\n";
+    df_hid_recording rec;
+    df_error e;
+    assert_int_equal(df_hid_recording_parse(text, strlen(text), &rec, &e), DF_EFORMAT);
+    assert_non_null(strstr(e.msg, "line 2"));
+    assert_int_equal(df_hid_recording_parse_flags(text, strlen(text), DF_HID_REC_RAW, &rec, &e), DF_OK);
+    assert_int_equal(rec.n_devices, 2);
+    assert_null(rec.devices[0].desc);
+    assert_null(rec.devices[1].desc);
+    assert_int_equal(rec.n_events, 2);
+    assert_int_equal(rec.events[0].device, 0);
+    assert_int_equal(rec.events[0].time_us, 24000);
+    assert_int_equal(rec.events[0].len, 6);
+    assert_memory_equal(df_hid_rec_event_bytes(&rec, &rec.events[0]), "\x00\x01\x00\x80\x10\x00", 6);
+    assert_int_equal(rec.events[1].device, 1);
+    assert_int_equal(rec.events[1].time_us, 1000001);
+    df_hid_recording_free(&rec);
+    /* other refusals still apply with the flag */
+    assert_int_equal(df_hid_recording_parse_flags("E: 1.0 2 00\n", 12, DF_HID_REC_RAW, &rec, &e),
+                     DF_EFORMAT);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_two_devices),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_shared_file),
+        cmocka_unit_test(test_raw_flag),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
