@@ -47,7 +47,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->socket_mode = DF_CONFIG_DEFAULT_SOCKET_MODE;
     cfg->handshake_timeout_s = DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S;
     cfg->idle_timeout_s = DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S;
-    cfg->hid = 1;
+    cfg->hid_on = 1;
     cfg->hid_replay_speed = 1.0;
     cfg->hid_enumerate_s = DF_CONFIG_DEFAULT_HID_ENUMERATE_S;
 }
@@ -227,6 +227,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
 {
     unsigned long long v;
     if (!cfg || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    if (strncmp(key, "hid.", 4) == 0) return df_hid_config_set(&cfg->hid, key, value, err);
     for (size_t i = 0; i < sizeof k_int_keys / sizeof k_int_keys[0]; i++) {
         const int_key *ik = &k_int_keys[i];
         if (strcmp(key, ik->key) != 0) continue;
@@ -263,7 +264,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     }
     if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
     if (strcmp(key, "hid") == 0) {
-        if (parse_bool(value, &cfg->hid) != DF_OK)
+        if (parse_bool(value, &cfg->hid_on) != DF_OK)
             return df_error_set(err, DF_EINVAL, "hid: '%s' is not on or off", value);
         return DF_OK;
     }
@@ -278,7 +279,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         cfg->hid_replay_speed = speed;
         return DF_OK;
     }
-    if (strncmp(key, "hid.", 4) == 0) return df_hid_config_set(&cfg->hid_map, key, value, err);
+
     if (strcmp(key, "log_level") == 0) {
         int l;
         if (df_log_parse_level(value, &l) != DF_OK)
@@ -380,6 +381,11 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         rc = df_config_set(tmp, k, val, &e2);
         if (rc != DF_OK) df_error_set(err, rc, "%s:%d: %s", name, lineno, e2.msg);
     }
+    if (rc == DF_OK) { /* hid.* cross-key checks (nu_min <= nu_max, ...) need the whole file */
+        df_error e2;
+        rc = df_hid_config_check(&tmp->hid, &e2);
+        if (rc != DF_OK) df_error_set(err, rc, "%s: %s", name, e2.msg);
+    }
     if (rc == DF_OK) *cfg = *tmp;
     free(tmp);
     free(line);
@@ -438,7 +444,8 @@ static const char k_usage[] =
     "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
     "                      memory_max_mb, tcp_insecure, socket_mode, socket_group,\n"
-    "                      handshake_timeout_s, idle_timeout_s);\n"
+    "                      handshake_timeout_s, idle_timeout_s, hid.<class>.<key> with\n"
+    "                      class knob|3d-mouse|pen or a VID:PID like 046d:c626);\n"
     "                      command-line options override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"

@@ -56,8 +56,9 @@
  *                      the mappers)
  *   hid_enumerate_s    seconds between device enumerations (hotplug without libusb hotplug;
  *                      0 = only at start; default 2, at most 3600)
- *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>  device mapping per class (knob, 3d-mouse, pen) and
- *                      per VID:PID: server/hid/hid_config.h lists the keys
+ *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
+ *                      class knob | 3d-mouse | pen, per-device keys override class keys);
+ *                      checked for consistency once the whole file is read
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
  * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
  * --hid-replay FILE[,FILE...], --help. */
@@ -138,13 +139,13 @@ typedef struct df_server_config {
     char socket_group[DF_CONFIG_GROUP_MAX]; /* "" = the daemon's group */
     int handshake_timeout_s;     /* HELLO deadline after accept, s (0 = off) */
     int idle_timeout_s;          /* silent unsubscribed connection deadline, s (0 = off) */
-    int hid;                     /* 1: hidapi + libusb backends (config `hid`, default 1) */
+    int hid_on;                  /* 1: hidapi + libusb backends (config `hid`, default 1) */
     int n_hid_replay;
     char hid_replay[DF_CONFIG_MAX_HID_REPLAY][DF_CONFIG_PATH_MAX]; /* replay files */
     double hid_replay_speed;     /* > 0, or 0 = at once */
     int hid_enumerate_s;         /* 0 = at start only */
-    df_hid_config hid_map;       /* hid.* keys (hid_config.h) */
     int foreground;              /* 1: do not daemonize */
+    df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;
 

@@ -59,6 +59,8 @@ typedef struct df_hid_loc {
     uint32_t array_usage_min;/* array: usage of logical_min */
     int64_t logical_min, logical_max;
     int64_t physical_min, physical_max;
+    uint32_t unit;           /* HID unit code (0x14: degrees) */
+    int8_t unit_exponent;
 } df_hid_loc;
 
 /* Controls a mapper reads (df_hid_class_info.ctl index). */

@@ -161,7 +161,7 @@ static void classify(df_hid_device *d)
     df_hid_classify(d->have_desc ? &d->desc : NULL, d->info.vid, d->info.pid, &d->cls);
     if (d->cls.cls == DF_HID_CLASS_NONE) return;
     if (df_hid_mapper_init(&d->map, &d->cls, d->have_desc ? &d->desc : NULL,
-                           &d->mgr->srv->cfg.hid_map, &err) == DF_OK)
+                           &d->mgr->srv->cfg.hid, &err) == DF_OK)
         d->mapper_ok = 1;
     else
         df_log(DF_LOG_WARN, "hid: %s (%s): no mapping: %s", d->info.path, d->info.name, err.msg);
@@ -312,7 +312,7 @@ static int start_backends(df_hid_manager *m, df_error *err)
 {
     const df_server_config *cfg = &m->srv->cfg;
     df_error e;
-    if (cfg->hid) {
+    if (cfg->hid_on) {
         if (df_hid_backend_hidapi(&m->be[DF_HID_BE_HIDAPI], &e) != DF_OK) {
             m->be[DF_HID_BE_HIDAPI] = NULL;
             df_log(DF_LOG_WARN, "hid: hidapi backend unavailable: %s", e.msg);
@@ -357,7 +357,7 @@ static void destroy_backends(df_hid_manager *m)
 int df_hid_manager_start(df_server *srv, df_error *err)
 {
     srv->hid = NULL;
-    if (!srv->cfg.hid && srv->cfg.n_hid_replay == 0) return DF_OK;
+    if (!srv->cfg.hid_on && srv->cfg.n_hid_replay == 0) return DF_OK;
     df_hid_manager *m = calloc(1, sizeof *m);
     if (!m) return df_error_set(err, DF_ENOMEM, "hid: out of memory");
     m->srv = srv;
@@ -373,10 +373,10 @@ int df_hid_manager_start(df_server *srv, df_error *err)
     uint32_t open = 0;
     for (df_hid_device *d = m->devs; d; d = d->next) open += d->state == DF_DEVSTATE_OPEN;
     if (m->ndev == 0)
-        df_log(DF_LOG_INFO, "hid: no HID devices%s", srv->cfg.hid ? " (hidapi, libusb)" : "");
+        df_log(DF_LOG_INFO, "hid: no HID devices%s", srv->cfg.hid_on ? " (hidapi, libusb)" : "");
     else
         df_log(DF_LOG_INFO, "hid: %u device(s), %u open", m->ndev, open);
-    if (srv->cfg.hid && srv->cfg.hid_enumerate_s > 0) {
+    if (srv->cfg.hid_on && srv->cfg.hid_enumerate_s > 0) {
         uv_timer_init(srv->loop, &m->enum_timer);
         m->enum_timer.data = m;
         uint64_t ms = (uint64_t)srv->cfg.hid_enumerate_s * 1000;

@@ -36,7 +36,7 @@
 struct df_session;
 
 /* Starts the HID subsystem of srv (srv->hid) per srv->cfg: hid (on/off), hid_replay (files),
- * hid_enumerate_s, hid.* mapping (srv->cfg.hid_map). With hid off and no replay files it does
+ * hid_enumerate_s, hid.* mapping (srv->cfg.hid). With hid off and no replay files it does
  * nothing (srv->hid stays NULL: no feature bit, DEVICES_LIST lists none). Backends that cannot
  * start (no hidraw support, libusb_init failing) are logged and skipped. Errors: a replay file
  * that cannot be read or parsed (DF_EIO / DF_EFORMAT, message names it), DF_ENOMEM. */

@@ -70,7 +70,8 @@ typedef struct df_hid_mapper {
     double pen_twist[3];
     /* shared */
     int stroke;              /* 1: a stroke is open */
-    double stroke_strength;
+    double stroke_strength;  /* session strength when the stroke began */
+    double last_strength;    /* strength of the stroke's last action */
 } df_hid_mapper;
 
 /* Prepares *m for a device classified as *info with descriptor desc (may be NULL for raw
