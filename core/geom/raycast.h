@@ -3,17 +3,18 @@
  * A df_raycast holds one Embree device and a scene of one triangle mesh. Embree works in float32:
  * the double positions are converted once per create/refit (every coordinate must be finite and
  * within float range). The topology (the faces) is fixed at create; df_raycast_refit moves the
- * vertices and refits the BVH (geometry build quality RTC_BUILD_QUALITY_REFIT, dynamic scene)
- * instead of rebuilding it. Triangle meshes in 3D and 2D (z = 0) work as they are; for a tet mesh
- * pass its boundary faces (df_mesh_boundary_faces, core/mesh/operators.h); polylines have no
- * surface.
+ * vertices and refits the BVH (geometry build quality RTC_BUILD_QUALITY_REFIT in a dynamic,
+ * compact scene) instead of rebuilding it. Triangle meshes in 3D and 2D (z = 0) work as they
+ * are; for a tet mesh pass its boundary faces (df_mesh_boundary_faces, core/mesh/operators.h);
+ * polylines have no surface.
  *
- * Threads: core starts no threads of its own (OpenMP inside kernels only). Embree 3 (Debian's build
- * uses TBB tasking) is configured with "threads=1,start_threads=0,set_affinity=0": every BVH build
- * and refit runs on the thread that calls df_raycast_create / df_raycast_refit, in a TBB arena of
- * one slot, so no worker thread is ever started (tests/unit/geom/test_raycast.c checks that the
- * process's thread count does not grow). This also caps TBB's process-wide parallelism to 1
- * (global_control), which nothing else in deformd uses.
+ * Threads: core starts no threads of its own (OpenMP inside kernels only). Embree 3 (Debian's
+ * build uses TBB tasking) is configured with "threads=1,user_threads=1,start_threads=0,
+ * set_affinity=0": every BVH build and refit runs on the thread that calls df_raycast_create /
+ * df_raycast_refit, in a TBB arena of one slot, so no worker thread is ever started
+ * (tests/unit/geom/test_raycast.c checks that the process's thread count does not grow over a
+ * build and a refit). Embree enforces the count with a process-wide tbb::global_control, which
+ * caps any other TBB user in the process too (deformd has none).
  *
  * Devices: one Embree device per df_raycast (no shared or global state in this module; a device
  * costs little next to the BVH build; Embree's own process-wide state is its TBB scheduler).

@@ -4,7 +4,8 @@
  * mesh (object) coordinates to clip coordinates in the OpenGL convention (column vectors:
  * clip = M * (x, y, z, 1), clip z in [-w, w], NDC = clip / w, NDC x right, y up, z -1 at the near
  * plane), and viewport {x, y, width, height} in pixels with y growing down from the top of the
- * window (window systems' convention, not glViewport's bottom-left origin). Pure math, any thread. */
+ * window (window systems' convention, not glViewport's bottom-left origin). Pure math, any
+ * thread. */
 #ifndef DF_GEOM_VIEW_RAY_H
 #define DF_GEOM_VIEW_RAY_H
 

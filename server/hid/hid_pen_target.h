@@ -9,8 +9,10 @@
  *
  * Thread: loop thread only (it reads s->cur, which only the loop's commit writes); starts no
  * threads (Embree runs single-threaded, see raycast.h). One cache per session; free it before the
- * session's mesh goes away. Memory: the float positions plus Embree's BVH (roughly 100 bytes per
- * face), not charged to the memory budget. */
+ * session's mesh goes away. Memory: a double and a float copy of the positions plus Embree's BVH,
+ * not charged to the memory budget. Cost (bench_raycast, ~140k vertices): the first query builds
+ * the scene on the calling thread (~100 ms), a changed version refits it (~3 ms), a cast is well
+ * under 1 us. */
 #ifndef DF_SERVER_HID_PEN_TARGET_H
 #define DF_SERVER_HID_PEN_TARGET_H
 
