@@ -91,6 +91,8 @@
     X(BRUSH_END, 0x0022, brush_end, SESSION_REF, ACK, NONE)                                  \
     X(BRUSH_CANCEL, 0x0023, brush_cancel, SESSION_REF, ACK, NONE)                            \
     X(SET_BRUSH_PARAM, 0x0024, set_brush_param, BRUSH_PARAM, ACK, NONE)                      \
+    X(BRUSH_STATE_GET, 0x0025, brush_state_get, SESSION_REF, BRUSH_STATE, NONE)              \
+    X(BRUSH_STATE_SET, 0x0026, brush_state_set, BRUSH_STATE_SET, BRUSH_STATE, NONE)          \
     X(HANDLES_SET, 0x0030, handles_set, HANDLES, ACK, NONE)                                  \
     X(HANDLES_MOVE, 0x0031, handles_move, HANDLE_MOVE, MOVE_RESULT, NONE) /* at the end */   \
     X(RESET_REST, 0x0032, reset_rest, SESSION_REF, ACK, NONE)                                \
@@ -104,11 +106,13 @@
     X(DEVICES_LIST, 0x0050, devices_list, EMPTY, DEVICE_LIST, NONE)                          \
     X(DEVICE_BIND, 0x0051, device_bind, DEVICE_BIND, EMPTY, NONE)                            \
     X(DEVICE_VIEW, 0x0052, device_view, DEVICE_VIEW, EMPTY, NONE)                            \
-    X(DEVICE_STATE, 0x0086, device_state, NONE, NONE, DEVICE_INFO) /* a device changed */    \
     X(DISPLACEMENT, 0x0080, displacement, NONE, NONE, DISP)     /* one session version */    \
     X(PROGRESS, 0x0081, progress, NONE, NONE, PROGRESS)         /* one ADMM iterate */       \
     X(SESSION_CLOSED, 0x0082, session_closed, NONE, NONE, SESSION_REF)                       \
     X(SHM_REF, 0x0083, shm_ref, NONE, NONE, SHM_REF) /* next event frame is in the ring */   \
+    X(BRUSH_STATE, 0x0084, brush_state, NONE, NONE, BRUSH_STATE) /* session brush changed */ \
+    X(BRUSH_CURSOR, 0x0085, brush_cursor, NONE, NONE, BRUSH_CURSOR) /* rate-limited */       \
+    X(DEVICE_STATE, 0x0086, device_state, NONE, NONE, DEVICE_INFO) /* a device changed */    \
     X(ERROR, 0x00FF, error, NONE, NONE, NONE) /* error body not tied to a request type */
 
 /* ------------------------------------------------------------------------------ feature bits
@@ -186,6 +190,22 @@
 #define DF_WIRE_GET_MESH_FLAGS(X) X(REST, 1u << 0) X(BASE, 1u << 1) /* extra sections */
 #define DF_WIRE_SUBSCRIBE_FLAGS(X) X(SNAPSHOT, 1u << 0) /* a dense snapshot right after */
 
+/* Session brush state fields (DF_BS_*): brush_state_set `mask`, brush_state `changed`,
+ * brush `use_session` (take these fields from the session brush instead of the message). */
+#define DF_WIRE_BRUSH_STATE_FIELDS(X)                                                        \
+    X(TYPE, 1u << 0) X(RADIUS, 1u << 1) X(NU, 1u << 2) X(STRENGTH, 1u << 3)                  \
+    X(FALLOFF, 1u << 4) X(RATIO, 1u << 5)                                                    \
+    X(INTEGRATOR, 1u << 6) /* integrator and steps */                                        \
+    X(MIRROR, 1u << 7)     /* has_mirror, mirror_point, mirror_normal */
+
+/* Who changed the session brush / moved a cursor (DF_ORIGIN_*; brush_state, brush_cursor). */
+#define DF_WIRE_ORIGINS(X)                                                                   \
+    X(NONE, 0)   /* nobody yet (the defaults) */                                             \
+    X(CLIENT, 1) /* a client connection: id = connection id, name = its HELLO name */       \
+    X(DEVICE, 2) /* an input device: id = device id, name = device name */
+
+#define DF_WIRE_CURSOR_FLAGS(X) X(IN_RANGE, 1u << 0) X(STROKE_ACTIVE, 1u << 1) /* DF_CURSOR_* */
+
 /* devices (HID, issue 11): device_info `class`, `backend`, `state` (PROTOCOL.md 4.30) */
 #define DF_WIRE_DEV_CLASSES(X)                                                               \
     X(NONE, 0)    /* not classified (not driven) */                                          \
@@ -218,6 +238,9 @@
     X(DF_WIRE_PIN_FLAGS, DF_PIN_, PinFlag, flags)                                            \
     X(DF_WIRE_GET_MESH_FLAGS, DF_GET_MESH_, GetMeshFlag, flags)                              \
     X(DF_WIRE_SUBSCRIBE_FLAGS, DF_SUBSCRIBE_, SubscribeFlag, flags)                          \
+    X(DF_WIRE_BRUSH_STATE_FIELDS, DF_BS_, BrushStateField, flags)                            \
+    X(DF_WIRE_ORIGINS, DF_ORIGIN_, Origin, enum)                                             \
+    X(DF_WIRE_CURSOR_FLAGS, DF_CURSOR_, CursorFlag, flags)                                   \
     X(DF_WIRE_DEV_CLASSES, DF_DEVCLASS_, DevClass, enum)                                     \
     X(DF_WIRE_DEV_BACKENDS, DF_DEVBACKEND_, DevBackend, enum)                                \
     X(DF_WIRE_DEV_STATES, DF_DEVSTATE_, DevState, enum)

@@ -43,6 +43,11 @@
  *   uploads_max_mb     buffers of all uploads in flight together, MiB (default 1024)
  *   history_max_mb     undo history of one session, MiB; the oldest steps are dropped beyond it
  *                      (0 .. 1048576; default physical RAM / 32, clamped to 64 .. 1024)
+ *   cursor_hz          BRUSH_CURSOR events per second at most, per session and origin (a
+ *                      device or client moving a brush cursor; brush_state.h): a value within
+ *                      1/cursor_hz of the previous event waits for the end of that interval,
+ *                      the latest one wins, never lost (0 .. DF_CONFIG_MAX_CURSOR_HZ, default
+ *                      DF_CONFIG_DEFAULT_CURSOR_HZ; 0 = unlimited)
  *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
  *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
  *                      membudget.h)
@@ -79,6 +84,7 @@
 #define DF_CONFIG_MAX_THREADS 64
 #define DF_CONFIG_MAX_SPIN_US 1000
 #define DF_CONFIG_MAX_INLINE_US 1000
+#define DF_CONFIG_MAX_CURSOR_HZ 10000
 
 #define DF_CONFIG_DEFAULT_MAX_CLIENTS 256
 #define DF_CONFIG_DEFAULT_QUEUE_LIMIT ((size_t)256 << 20) /* 256 MiB per client */
@@ -88,6 +94,7 @@
 #define DF_CONFIG_DEFAULT_THREADS 4
 #define DF_CONFIG_DEFAULT_SPIN_US 0
 #define DF_CONFIG_DEFAULT_INLINE_US 50 /* ~ two thread hand-offs on the 2-core test machine */
+#define DF_CONFIG_DEFAULT_CURSOR_HZ 120 /* BRUSH_CURSOR events per second per (session, origin) */
 #define DF_CONFIG_DEFAULT_SHM_RING ((uint64_t)64 << 20) /* 64 MiB: ~5k 1k-vertex versions */
 #define DF_CONFIG_MIN_SHM_RING ((uint64_t)64 << 10)
 #define DF_CONFIG_DEFAULT_SHM_TOTAL ((uint64_t)256 << 20) /* all rings: 256 MiB */
@@ -128,6 +135,7 @@ typedef struct df_server_config {
     int threads;
     int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
     int inline_us;               /* loop-thread budget of a cheap brush update, us (0 = off) */
+    int cursor_hz;               /* BRUSH_CURSOR rate per (session, origin), Hz (0 = unlimited) */
     uint64_t shm_ring_bytes;     /* shared-memory stream ring per session, bytes (0 = off) */
     uint64_t shm_total_bytes;    /* all rings together, bytes */
     int max_upload_mb;           /* largest inline upload, MiB */

@@ -44,6 +44,7 @@ typedef struct df_conn {
     uv_buf_t wbufs[DF_OUTQ_MAX_BATCH];
     int pending;             /* requests accepted and not yet answered */
     int hello_done;          /* a HELLO succeeded (required before most requests) */
+    char name[DF_MAX_NAME_LEN + 1]; /* the client_name of its HELLO ("" before / when none) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */

@@ -14,7 +14,7 @@
 #include "client/deformctl/ctl.h"
 
 static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
-                                        ctl_cmds_mesh};
+                                        ctl_cmds_mesh, ctl_cmds_brush_state};
 
 static void usage_top(FILE *f)
 {

@@ -34,6 +34,8 @@ static const struct {
     {DF_MSG_BRUSH_END, NULL, &df_k_brush_end},
     {DF_MSG_BRUSH_CANCEL, NULL, &df_k_brush_cancel},
     {DF_MSG_SET_BRUSH_PARAM, NULL, &df_k_set_brush_param},
+    {DF_MSG_BRUSH_STATE_GET, df_h_brush_state_get, NULL},
+    {DF_MSG_BRUSH_STATE_SET, df_h_brush_state_set, NULL},
     {DF_MSG_HANDLES_SET, NULL, &df_k_handles_set},
     {DF_MSG_HANDLES_MOVE, NULL, &df_k_handles_move},
     {DF_MSG_HANDLES_GET, NULL, &df_k_handles_get},

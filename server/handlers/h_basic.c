@@ -81,6 +81,7 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
     if (m.client_name[0])
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
     c->hello_done = 1;
+    snprintf(c->name, sizeof c->name, "%s", m.client_name);
     df_req_reply_hello_reply(rq, &r);
     return DF_OK;
 }

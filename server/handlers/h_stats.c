@@ -66,6 +66,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "moves_orphaned", (double)x->moves_orphaned);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
+        put(&st, "brush_state_changes", (double)x->brush_state_changes);
+        put(&st, "brush_cursor_events", (double)x->brush_cursor_events);
+        put(&st, "cursor_hz", srv->cfg.cursor_hz);
         put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);
         put(&st, "cache.bytes", (double)srv->cache_bytes);
         put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));
@@ -122,6 +125,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "history_steps_dropped", (double)s->hist.dropped);
         put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
         put(&st, "open_strokes", strokes);
+        put(&st, "brush.seq", (double)s->brush_seq);
         put(&st, "job_running", s->running != NULL);
         /* A worker may be writing the compute state: read the loop-owned copies (session.h). */
         if (!s->running) df_session_seen_sync(s);

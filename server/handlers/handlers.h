@@ -24,6 +24,8 @@ DF_HANDLER(load_mesh);
 DF_HANDLER(list_sessions);
 DF_HANDLER(open_session);
 DF_HANDLER(stats);
+DF_HANDLER(brush_state_get); /* h_brush_state.c: the session brush (brush_state.h) */
+DF_HANDLER(brush_state_set);
 DF_HANDLER(devices_list); /* devices (HID): h_devices.c */
 DF_HANDLER(device_bind);
 DF_HANDLER(device_view);

@@ -16,18 +16,23 @@
 
 /* The mapper's brush bits are the wire's (hid_action.h defines them apart: server/hid/ does not
  * see proto/); checked here, where both are visible. */
-_Static_assert(DF_HID_BS_TYPE == DF_BS_TYPE && DF_HID_BS_RADIUS == DF_BS_RADIUS &&
-               DF_HID_BS_NU == DF_BS_NU && DF_HID_BS_STRENGTH == DF_BS_STRENGTH &&
-               DF_HID_BS_FALLOFF == DF_BS_FALLOFF && DF_HID_BS_RATIO == DF_BS_RATIO &&
-               DF_HID_BS_INTEGRATOR == DF_BS_INTEGRATOR && DF_HID_BS_MIRROR == DF_BS_MIRROR,
-               "hid brush bits = wire DF_BS_*");
-_Static_assert(DF_HID_CUR_IN_RANGE == DF_CURSOR_IN_RANGE &&
-               DF_HID_CUR_STROKE == DF_CURSOR_STROKE_ACTIVE, "hid cursor flags = wire");
-_Static_assert(DF_HID_CLASS_KNOB == DF_DEVCLASS_KNOB && DF_HID_CLASS_MOUSE3D ==
-               DF_DEVCLASS_MOUSE3D && DF_HID_CLASS_PEN == DF_DEVCLASS_PEN, "classes = wire");
-_Static_assert(DF_HID_BACKEND_HIDAPI == DF_DEVBACKEND_HIDAPI && DF_HID_BACKEND_LIBUSB ==
-               DF_DEVBACKEND_LIBUSB && DF_HID_BACKEND_REPLAY == DF_DEVBACKEND_REPLAY,
-               "backends = wire");
+#define SAME(a, b) ((int)(a) == (int)(b))
+_Static_assert(SAME(DF_HID_BS_TYPE, DF_BS_TYPE) && SAME(DF_HID_BS_RADIUS, DF_BS_RADIUS) &&
+               SAME(DF_HID_BS_NU, DF_BS_NU) && SAME(DF_HID_BS_STRENGTH, DF_BS_STRENGTH) &&
+               SAME(DF_HID_BS_FALLOFF, DF_BS_FALLOFF) && SAME(DF_HID_BS_RATIO, DF_BS_RATIO) &&
+               SAME(DF_HID_BS_INTEGRATOR, DF_BS_INTEGRATOR) &&
+               SAME(DF_HID_BS_MIRROR, DF_BS_MIRROR), "hid brush bits = wire DF_BS_*");
+_Static_assert(SAME(DF_HID_CUR_IN_RANGE, DF_CURSOR_IN_RANGE) &&
+               SAME(DF_HID_CUR_STROKE, DF_CURSOR_STROKE_ACTIVE), "hid cursor flags = wire");
+_Static_assert(SAME(DF_HID_CLASS_KNOB, DF_DEVCLASS_KNOB) &&
+               SAME(DF_HID_CLASS_MOUSE3D, DF_DEVCLASS_MOUSE3D) &&
+               SAME(DF_HID_CLASS_PEN, DF_DEVCLASS_PEN), "classes = wire");
+_Static_assert(SAME(DF_HID_BACKEND_HIDAPI, DF_DEVBACKEND_HIDAPI) &&
+               SAME(DF_HID_BACKEND_LIBUSB, DF_DEVBACKEND_LIBUSB) &&
+               SAME(DF_HID_BACKEND_REPLAY, DF_DEVBACKEND_REPLAY), "backends = wire");
+_Static_assert(SAME(DF_HID_BRUSH_GRAB, DF_BRUSH_GRAB) && SAME(DF_HID_BRUSH_AFFINE,
+               DF_BRUSH_AFFINE), "brush types = wire");
+#undef SAME
 
 /* Fields a device stroke takes from the session brush (all but the strength: a pen's comes from
  * its pressure, a 3D mouse's is the session's). */

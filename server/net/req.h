@@ -71,6 +71,7 @@ DF_REQ_REPLY_DECL(session_list)
 DF_REQ_REPLY_DECL(move_result)
 DF_REQ_REPLY_DECL(stats)
 DF_REQ_REPLY_DECL(shm_info)
+DF_REQ_REPLY_DECL(brush_state)
 DF_REQ_REPLY_DECL(device_list)
 #undef DF_REQ_REPLY_DECL
 

@@ -135,6 +135,7 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     memcpy(s->cur, s->mesh.V, n * sizeof(double));
     for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
     atomic_init(&s->version, 0);
+    df_brush_state_defaults(&s->brush);
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
@@ -192,6 +193,7 @@ void df_session_destroy(df_session *s)
     free(s->subs);
     free(s->sub_shm);
     df_shm_destroy(s->shm);
+    df_brush_state_release(s);
     while (s->strokes) {
         df_stroke *st = s->strokes;
         s->strokes = st->next;

@@ -24,6 +24,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
+from . import brush_state as bs
 from . import devices as dv
 from . import frame as fr
 from . import messages as m
@@ -81,7 +82,7 @@ class ShmLost:
     kind_name: str = "shm_lost"
 
 
-Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost]
+Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor]
 
 class Client:
     """A connection to deformd. Not thread-safe: use one Client per thread."""
@@ -232,6 +233,10 @@ class Client:
             else:
                 self._take_event_frame(inner)
             return
+        if f.type in (m.BRUSH_STATE, m.BRUSH_CURSOR):
+            self._events.append(bs.decode_brush_state(f.payload) if f.type == m.BRUSH_STATE
+                                else bs.decode_brush_cursor(f.payload))
+            return
         if f.type == m.SESSION_CLOSED:
             sid = m.decode_session_ref(f.payload)
             self._drop_shm(sid)
@@ -320,7 +325,8 @@ class Client:
         return self._shm.get(session_id)
 
     def events(self, timeout: float = 1.0, max_events: Optional[int] = None) -> Iterator[Event]:
-        """Yields queued and arriving events (Disp, Progress, SessionClosed, ShmLost) until none
+        """Yields queued and arriving events (Disp, Progress, SessionClosed, ShmLost, BrushState,
+        BrushCursor: tell them apart by kind_name) until none
         arrives for `timeout` seconds (or max_events were yielded). Frames of a shared-memory
         stream (stream_shm) come as if they had arrived on the socket. Replies arriving
         meanwhile are kept for wait_reply()."""
@@ -548,6 +554,24 @@ class Client:
         """param: radius | nu | strength | falloff | ratio."""
         return m.decode_ack(self._one(m.SET_BRUSH_PARAM,
                                       m.encode_brush_param(session_id, param, value)))
+
+    def brush_state_get(self, session_id: int) -> bs.BrushState:
+        """The session brush (PROTOCOL.md 4.14a): values, seq, last changer (changed 0)."""
+        return bs.decode_brush_state(self._one(m.BRUSH_STATE_GET,
+                                               m.encode_session_ref(session_id)))
+
+    def brush_state_set(self, session_id: int, **fields) -> bs.BrushState:
+        """Sets fields of the session brush: type, radius, nu, strength, falloff, ratio,
+        integrator, steps, mirror (None = off, or (px, py, pz, nx, ny, nz)). Giving only one of
+        integrator / steps (one wire field) reads the other from the daemon first. Returns the
+        new state; subscribers get it as a BrushState event naming this client. DeformdError
+        EINVAL (nothing changed) for a bad value."""
+        base = bs.BrushValues()
+        if ("integrator" in fields) != ("steps" in fields):
+            base = self.brush_state_get(session_id).values
+        mask, v = bs.values_with(base, **fields)
+        return bs.decode_brush_state(self._one(m.BRUSH_STATE_SET,
+                                               bs.encode_brush_state_set(session_id, mask, v)))
 
     # ------------------------------------------------------------------ handles
     def set_handles(self, session_id: int, handles: Sequence[int], energy: str = "arap",

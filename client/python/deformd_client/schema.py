@@ -72,6 +72,8 @@ class MsgType(IntEnum):
     BRUSH_END = 0x0022
     BRUSH_CANCEL = 0x0023
     SET_BRUSH_PARAM = 0x0024
+    BRUSH_STATE_GET = 0x0025
+    BRUSH_STATE_SET = 0x0026
     HANDLES_SET = 0x0030
     HANDLES_MOVE = 0x0031
     RESET_REST = 0x0032
@@ -88,6 +90,8 @@ class MsgType(IntEnum):
     PROGRESS = 0x0081
     SESSION_CLOSED = 0x0082
     SHM_REF = 0x0083
+    BRUSH_STATE = 0x0084
+    BRUSH_CURSOR = 0x0085
     DEVICE_STATE = 0x0086      # devices (HID)
     ERROR = 0x00FF
 
@@ -116,6 +120,8 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.BRUSH_END: Bodies("session_ref", "ack", None),
     MsgType.BRUSH_CANCEL: Bodies("session_ref", "ack", None),
     MsgType.SET_BRUSH_PARAM: Bodies("brush_param", "ack", None),
+    MsgType.BRUSH_STATE_GET: Bodies("session_ref", "brush_state", None),
+    MsgType.BRUSH_STATE_SET: Bodies("brush_state_set", "brush_state", None),
     MsgType.HANDLES_SET: Bodies("handles", "ack", None),
     MsgType.HANDLES_MOVE: Bodies("handle_move", "move_result", None),
     MsgType.RESET_REST: Bodies("session_ref", "ack", None),
@@ -129,6 +135,8 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.PROGRESS: Bodies(None, None, "progress"),
     MsgType.SESSION_CLOSED: Bodies(None, None, "session_ref"),
     MsgType.SHM_REF: Bodies(None, None, "shm_ref"),
+    MsgType.BRUSH_STATE: Bodies(None, None, "brush_state"),
+    MsgType.BRUSH_CURSOR: Bodies(None, None, "brush_cursor"),
     # devices (HID)
     MsgType.DEVICES_LIST: Bodies("empty", "device_list", None),
     MsgType.DEVICE_BIND: Bodies("device_bind", "empty", None),
@@ -265,6 +273,31 @@ class GetMeshFlag(IntFlag):
 
 class SubscribeFlag(IntFlag):
     SNAPSHOT = 1 << 0
+
+
+class BrushStateField(IntFlag):
+    """DF_BS_*: fields of the session brush (brush_state_set mask, brush_state changed, brush
+    use_session). INTEGRATOR covers integrator and steps; MIRROR has_mirror, point and normal."""
+    TYPE = 1 << 0
+    RADIUS = 1 << 1
+    NU = 1 << 2
+    STRENGTH = 1 << 3
+    FALLOFF = 1 << 4
+    RATIO = 1 << 5
+    INTEGRATOR = 1 << 6
+    MIRROR = 1 << 7
+
+
+class Origin(IntEnum):
+    """Who changed the session brush / moved a brush cursor."""
+    NONE = 0
+    CLIENT = 1
+    DEVICE = 2
+
+
+class CursorFlag(IntFlag):
+    IN_RANGE = 1 << 0
+    STROKE_ACTIVE = 1 << 1
 
 
 # ------------------------------------------------------------------ devices (HID)

@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES_BASE = 35, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
+enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -206,6 +206,36 @@ static inline void build_samples(sample *s)
     df_msg_load_mesh l2 = lp;
     l2.options = DF_LOAD_OPT_2D;
     ADD("load_path_2d", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&l2, out, &e));
+    /* session brush state (issue 11): a begin taking radius and nu from the session brush
+     * (the optional trailing use_session), get / set, the reply and both events */
+    df_msg_brush bus = sample_brush();
+    bus.use_session = DF_BS_RADIUS | DF_BS_NU;
+    ADD("brush_use_session", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bus, out, &e));
+    df_msg_session_ref bg = {42};
+    ADD("brush_state_get", DF_MSG_BRUSH_STATE_GET, 0, df_msg_session_ref_encode(&bg, out, &e));
+    df_msg_brush_state_set bss = {42, DF_BS_RADIUS | DF_BS_INTEGRATOR | DF_BS_MIRROR,
+                                  {DF_BRUSH_GRAB, 1, DF_INTEG_RK4, 1, 4, 0.125, 0.5, 1, 1.1,
+                                   {0.5, 0, 0}, {1, 0, 0}}};
+    ADD("brush_state_set", DF_MSG_BRUSH_STATE_SET, 0,
+        df_msg_brush_state_set_encode(&bss, out, &e));
+    df_msg_brush_state bst = {42, 0, 0, DF_ORIGIN_NONE, 0, "",
+                              {DF_BRUSH_TWIST, 3, DF_INTEG_EULER, 0, 1, 0.25, 0.45, -2, 1.5,
+                               {0, 0, 0}, {1, 0, 0}}};
+    ADD("brush_state_reply", DF_MSG_BRUSH_STATE_GET, DF_FLAG_REPLY,
+        df_msg_brush_state_encode(&bst, out, &e));
+    df_msg_brush_state bev = bst;
+    bev.seq = 7;
+    bev.changed = DF_BS_RADIUS | DF_BS_NU;
+    bev.origin_kind = DF_ORIGIN_DEVICE;
+    bev.origin_id = (1ull << 63) | 3;
+    snprintf(bev.origin_name, sizeof bev.origin_name, "Surface Dial");
+    bev.v.nu = INFINITY;
+    ADD("brush_state_event", DF_MSG_BRUSH_STATE, DF_FLAG_EVENT,
+        df_msg_brush_state_encode(&bev, out, &e));
+    df_msg_brush_cursor bc = {42, DF_ORIGIN_CLIENT, 12, DF_CURSOR_IN_RANGE,
+                              {0.5, -0.25, 1e-3}, 0.25};
+    ADD("brush_cursor", DF_MSG_BRUSH_CURSOR, DF_FLAG_EVENT,
+        df_msg_brush_cursor_encode(&bc, out, &e));
     /* devices (HID): a knob and a pen, their list, a bind and a view */
     static df_msg_device_info dev[2];
     memset(dev, 0, sizeof dev);
