@@ -30,6 +30,15 @@ static void close_device(df_hid_device *d, int state, const char *why);
 static void rescan(df_hid_manager *m);
 
 /* ---------------------------------------------------------------------------------- posting */
+/* The loop handled d's posted report: a lock-step reader may read the next. */
+static void ack(df_hid_device *d)
+{
+    pthread_mutex_lock(&d->mu);
+    d->unacked = 0;
+    pthread_cond_signal(&d->cv);
+    pthread_mutex_unlock(&d->mu);
+}
+
 static void on_msg(df_task *t)
 {
     hid_msg *msg = (hid_msg *)t;
@@ -47,6 +56,7 @@ static void on_msg(df_task *t)
             rescan(m);
         }
     }
+    if (msg->kind == MSG_REPORT && msg->d->lockstep) ack(msg->d);
     free(msg);
 }
 
@@ -80,7 +90,17 @@ static void *reader_main(void *arg)
         msg->time_us = t;
         msg->len = (size_t)rc;
         memcpy(msg->data, buf, (size_t)rc);
+        if (d->lockstep) {
+            pthread_mutex_lock(&d->mu);
+            d->unacked = 1;
+            pthread_mutex_unlock(&d->mu);
+        }
         post(d->mgr, msg);
+        if (d->lockstep) {
+            pthread_mutex_lock(&d->mu);
+            while (d->unacked && !atomic_load(&d->stop)) pthread_cond_wait(&d->cv, &d->mu);
+            pthread_mutex_unlock(&d->mu);
+        }
     }
     free(buf);
     if (rc < 0 && !atomic_load(&d->stop)) {
@@ -185,6 +205,9 @@ static df_hid_device *add_device(df_hid_manager *m, int be, const df_hid_devinfo
     d->id = DF_HID_ID_BIT | ++m->next_n;
     d->state = DF_DEVSTATE_CLOSED;
     atomic_init(&d->stop, 0);
+    d->lockstep = be == DF_HID_BE_REPLAY;
+    pthread_mutex_init(&d->mu, NULL);
+    pthread_cond_init(&d->cv, NULL);
     classify(d);
     df_hid_device **pp = &m->devs; /* ids grow: append */
     while (*pp) pp = &(*pp)->next;
@@ -212,6 +235,7 @@ static void open_device(df_hid_device *d)
         return;
     }
     atomic_store(&d->stop, 0);
+    d->unacked = 0;
     d->state = DF_DEVSTATE_OPEN;
     d->error[0] = '\0';
     d->logged_error = 0;
@@ -234,7 +258,10 @@ static void close_device(df_hid_device *d, int state, const char *why)
 {
     df_hid_manager *m = d->mgr;
     if (d->th_running) {
+        pthread_mutex_lock(&d->mu);
         atomic_store(&d->stop, 1);
+        pthread_cond_signal(&d->cv);
+        pthread_mutex_unlock(&d->mu);
         pthread_join(d->th, NULL);
         d->th_running = 0;
     }
@@ -444,6 +471,8 @@ void df_hid_manager_free(df_server *srv)
         df_hid_device *d = m->devs;
         m->devs = d->next;
         df_hid_desc_free(&d->desc);
+        pthread_mutex_destroy(&d->mu);
+        pthread_cond_destroy(&d->cv);
         free(d->info.desc);
         free(d);
     }

@@ -46,6 +46,13 @@ struct df_hid_device {
     pthread_t th;
     int th_running;              /* a reader thread exists (joined by close) */
     atomic_int stop;             /* set by the loop: the reader returns */
+    /* Replay devices run in lock step with the loop: the reader posts one report and waits
+     * until the loop has handled it (so output reports are captured at the replay time of the
+     * report that caused them, and the end of the recording comes after its last report). */
+    int lockstep;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    int unacked;                 /* under mu: a posted report not handled yet */
     int present;                 /* seen by the last enumeration of its backend */
     /* driving */
     uint64_t bound;              /* DEVICE_BIND / DEVICE_VIEW session, 0 none */
