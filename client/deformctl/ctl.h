@@ -44,7 +44,7 @@ typedef struct ctl_cmd {
     const char *summary;   /* one line of what it does */
     const dc_cli_opt *opts;
     int nopts;
-    int npos;              /* positional arguments it requires */
+    int npos;              /* positional arguments it requires; -1: any, run checks them */
     int (*run)(ctl_ctx *ctx, const struct ctl_cmd *cmd, const dc_cli_args *a);
 } ctl_cmd;
 
@@ -54,6 +54,7 @@ extern const ctl_cmd ctl_cmds_brush[];     /* brush */
 extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
 extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
 extern const ctl_cmd ctl_cmds_brush_state[]; /* brush-state */
+extern const ctl_cmd ctl_cmds_devices[];   /* devices [bind DEVICE SESSION] */
 
 /* Prints a session brush (cmd_brush_state.c): event 0 as `brush-state` does ('key value' lines,
  * or one JSON object), event 1 as one `watch` line ("brush_state seq N changed radius,nu by
