@@ -86,6 +86,27 @@ static void print_text(const df_msg_device_list *l)
     }
 }
 
+void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d)
+{
+    if (ctx->json) {
+        printf("{\"kind\":\"device_state\",\"device\":%" PRIu64 ",\"class\":\"%s\","
+               "\"state\":\"%s\",\"vid\":\"%04x\",\"pid\":\"%04x\",\"bound_session\":%" PRIu64
+               ",\"active_session\":%" PRIu64 ",\"name\":", d->device_id,
+               class_name(d->dev_class), state_name(d->state), d->vid, d->pid, d->bound_session,
+               d->active_session);
+        ctl_json_str(stdout, d->name);
+        printf(",\"error\":");
+        ctl_json_str(stdout, d->error);
+        printf("}\n");
+    } else {
+        printf("device %" PRIu64 " %s %04x:%04x %s session %" PRIu64 " '%s'%s%s\n",
+               d->device_id & ~DEVICE_ID_BIT, class_name(d->dev_class), d->vid, d->pid,
+               state_name(d->state), d->active_session ? d->active_session : d->bound_session,
+               d->name, d->error[0] ? ": " : "", d->error);
+    }
+    fflush(stdout);
+}
+
 static int run_devices(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
     int bind = a->npos > 0 && strcmp(a->pos[0], "bind") == 0;

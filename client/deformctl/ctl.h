@@ -65,6 +65,10 @@ void ctl_brush_state_print(const ctl_ctx *ctx, const df_msg_brush_state *s, int 
  * [in_range] [stroke_active]", or a JSON object with "kind":"brush_cursor"). */
 void ctl_brush_cursor_print(const ctl_ctx *ctx, const df_msg_brush_cursor *m);
 
+/* Prints a DEVICE_STATE event as one `watch` line (cmd_devices.c): "device N knob 045e:091b
+ * open session S 'NAME'" (+ ": ERROR"), or a JSON object with "kind":"device_state". */
+void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d);
+
 /* Prints `cmd`'s usage to `f`. */
 void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd);
 

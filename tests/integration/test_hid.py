@@ -300,3 +300,28 @@ def test_bad_replay_config_is_refused(tmp_path):
                         "--hid-replay", str(tmp_path / "missing.hid")], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 2 and "missing.hid" in r.stderr, r.stderr
+
+
+def test_deformctl_watch_prints_device_and_brush_events(make_daemon):
+    """`deformctl watch` (its subscribe starts the replay) prints the knob's brush changes and
+    the device's state lines; it ends when the session is closed after the unplug line."""
+    d = make_daemon(replay_config(["griffin-powermate_077d-0410_usb.raw.txt"]))
+    with d.unix_client() as c:
+        sid = c.load_file(SPOT).session_id
+        p = subprocess.Popen([DEFORMCTL, "--socket", d.socket_path, "watch", str(sid)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        lines = []
+        for line in p.stdout:
+            lines.append(line.strip())
+            if line.startswith("device ") and " unplugged " in line:
+                break
+        c.close_session(sid)
+        rest, err = p.communicate(timeout=60)
+        assert p.returncode == 0, err
+    dev = [x for x in lines if x.startswith("device 1 knob 077d:0410 ")]
+    assert dev[0].split()[4] == "open" and dev[-1].split()[4] == "unplugged", lines
+    assert "end of the recording" in dev[-1]
+    node = hf.read_recording(os.path.join(hf.HID_DIR, "griffin-powermate_077d-0410_usb.raw.txt"))
+    want = knob_expected([e for _, e in node[0].events], lambda r: r[0] & 1,
+                         lambda r: struct_s8(r[1]))     # nu stays at its 0.5 limit here
+    assert sum(x.startswith("brush_state ") for x in lines) == len(want) == 10, lines
