@@ -152,6 +152,7 @@ void df_hid_device_info(const df_hid_device *d, df_msg_device_info *out)
 void df_hid_device_announce(df_hid_device *d, uint64_t session_id)
 {
     df_session *s = session_id ? df_session_find(d->mgr->srv, session_id) : NULL;
+    if (!s && !session_id) s = df_hid_drive_session(d); /* the session it would drive */
     if (!s) return;
     df_msg_device_info *info = malloc(sizeof *info);
     if (!info) return;
