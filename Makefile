@@ -211,7 +211,7 @@ FUZZ_SECONDS ?= 60
 FUZZ_CC     := clang
 FUZZ_FLAGS  := -std=c11 -g -O1 $(CPPFLAGS) -fsanitize=address,undefined -fopenmp=libgomp -MMD -MP
 # server/hid: its pure code only (the device sources and the manager need hidapi/libusb/libuv).
-FUZZ_HID_IO := $(addprefix server/hid/,hid_hidapi.c hid_libusb.c hid_manager.c)
+FUZZ_HID_IO := $(addprefix server/hid/,hid_hidapi.c hid_libusb.c hid_manager.c hid_mgr_%)
 FUZZ_LIBSRC := $(PROTO_SRC) $(call srcs,core) $(filter-out $(FUZZ_HID_IO),$(call srcs,server/hid))
 FUZZ_OBJ    := $(patsubst %.c,$(BUILD)/fuzz/obj/%.o,$(FUZZ_LIBSRC))
 FUZZ_BIN    := $(patsubst tests/fuzz/%.c,$(BUILD)/fuzz/%,$(FUZZ_SRC))
@@ -219,9 +219,15 @@ FUZZ_BIN    := $(patsubst tests/fuzz/%.c,$(BUILD)/fuzz/%,$(FUZZ_SRC))
 $(BUILD)/fuzz/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
-$(BUILD)/fuzz/%: tests/fuzz/%.c $(FUZZ_OBJ)
+# Linked through an archive: a fuzzer takes only the objects it needs, so sources whose system
+# libraries the fuzzers do not link (server/hid device code, Embree) cannot break the link.
+FUZZ_LIB    := $(BUILD)/fuzz/lib/libdf_fuzz.a
+$(FUZZ_LIB): $(FUZZ_OBJ)
 	@mkdir -p $(dir $@)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer $< $(FUZZ_OBJ) -o $@ $(MATH_LIBS) $(GEOM_SYS) -lgomp
+	rm -f $@ && ar rcs $@ $^
+$(BUILD)/fuzz/%: tests/fuzz/%.c $(FUZZ_LIB)
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer $< $(FUZZ_LIB) -o $@ $(MATH_LIBS) $(GEOM_SYS) -lgomp
 
 .SECONDARY: $(FUZZ_OBJ)
 fuzz-build: $(FUZZ_BIN)

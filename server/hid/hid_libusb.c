@@ -25,6 +25,7 @@
 #include <libusb-1.0/libusb.h>
 
 #define LU_CONTROL_TIMEOUT_MS 1000
+#define LU_MAX_PACKET 64          /* full-speed interrupt max packet size */
 
 typedef struct lu_backend {
     df_hid_backend base;          /* first: the vtable the caller holds */
@@ -194,10 +195,18 @@ static int lu_read(df_hid_dev *dd, uint8_t *buf, size_t cap, int timeout_ms, uin
     if (!d || !buf || !time_us || cap == 0 || timeout_ms < 0)
         return df_error_set(err, DF_EINVAL, "libusb: read: NULL buffer, cap 0 or timeout < 0");
     int got = 0;
+    /* a short caller buffer gets the packet truncated (the seam's rule), not LIBUSB_ERROR_OVERFLOW */
+    uint8_t small[LU_MAX_PACKET];
+    uint8_t *dst = cap < LU_MAX_PACKET ? small : buf;
+    int len = cap < LU_MAX_PACKET ? LU_MAX_PACKET : cap > INT_MAX ? INT_MAX : (int)cap;
     /* libusb takes timeout 0 as "forever": a poll waits 1 ms */
-    int r = libusb_interrupt_transfer(d->h, d->ep_in, buf, cap > INT_MAX ? INT_MAX : (int)cap, &got,
+    int r = libusb_interrupt_transfer(d->h, d->ep_in, dst, len, &got,
                                       timeout_ms > 0 ? (unsigned)timeout_ms : 1u);
     if ((r == 0 || r == LIBUSB_ERROR_TIMEOUT) && got > 0) {
+        if (dst == small) {
+            if ((size_t)got > cap) got = (int)cap;
+            memcpy(buf, small, (size_t)got);
+        }
         struct timespec ts;
         clock_gettime(CLOCK_MONOTONIC, &ts);
         *time_us = (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;

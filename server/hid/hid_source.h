@@ -59,8 +59,10 @@ typedef struct df_hid_devinfo {
 typedef struct df_hid_dev df_hid_dev;          /* an open device of some backend */
 typedef struct df_hid_backend df_hid_backend;  /* vtable + backend state */
 
-/* Called by a backend's own thread (libusb's event thread) when devices arrived or left; the
- * callee should only note it (e.g. post to the loop) and re-enumerate on its own thread. */
+/* Called by a backend's own thread (libusb's event thread, or a reader thread inside a libusb
+ * transfer) when devices arrived or left; the callee should only note it (e.g. post to the loop)
+ * and re-enumerate on its own thread. It must not call watch or destroy (it runs under the
+ * backend's lock). */
 typedef void (*df_hid_change_fn)(void *user);
 
 struct df_hid_backend {

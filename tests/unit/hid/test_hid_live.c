@@ -21,14 +21,34 @@
 
 #define MAX_DEV 256
 
-/* The /dev/hidraw* nodes (sorted by glob). */
+/* The bus of hidraw node /dev/<name> from its sysfs uevent (HID_ID=BBBB:VVVVVVVV:PPPPPPPP), or
+ * -1 when unreadable. */
+static int hidraw_bus(const char *devpath)
+{
+    char p[512], line[256];
+    snprintf(p, sizeof p, "/sys/class/hidraw/%s/device/uevent", strrchr(devpath, '/') + 1);
+    FILE *f = fopen(p, "r");
+    if (!f) return -1;
+    int bus = -1;
+    unsigned b;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "HID_ID=%x:", &b) == 1) bus = (int)b;
+    fclose(f);
+    return bus;
+}
+
+/* The /dev/hidraw* nodes hidapi 0.13 lists: those on a bus it handles (USB, Bluetooth, I2C, SPI;
+ * it skips others, e.g. BUS_VIRTUAL uhid devices). */
 static size_t dev_hidraw(char out[][DF_HID_PATH_MAX])
 {
     glob_t g;
     size_t n = 0;
     if (glob("/dev/hidraw*", 0, NULL, &g) == 0) {
-        for (size_t i = 0; i < g.gl_pathc && n < MAX_DEV; i++)
-            snprintf(out[n++], DF_HID_PATH_MAX, "%s", g.gl_pathv[i]);
+        for (size_t i = 0; i < g.gl_pathc && n < MAX_DEV; i++) {
+            int bus = hidraw_bus(g.gl_pathv[i]);
+            if (bus == 0x03 || bus == 0x05 || bus == 0x18 || bus == 0x1c)
+                snprintf(out[n++], DF_HID_PATH_MAX, "%s", g.gl_pathv[i]);
+        }
         globfree(&g);
     }
     return n;
@@ -70,6 +90,7 @@ static void test_hidapi_matches_machine(void **state)
         for (size_t k = 0; k < i; k++) assert_string_not_equal(list[k].path, list[i].path);
         assert_int_equal(list[i].backend, DF_HID_BACKEND_HIDAPI);
         assert_int_equal(list[i].raw_powermate, 0);
+        assert_int_equal(list[i].bus, hidraw_bus(list[i].path));
         char sys[512];
         snprintf(sys, sizeof sys, "/sys/class/hidraw/%s/device/report_descriptor",
                  strrchr(list[i].path, '/') + 1);
