@@ -34,6 +34,7 @@ static void test_defaults(void **state)
     assert_int_equal(c.foreground, 0);
     assert_int_equal(c.spin_us, DF_CONFIG_DEFAULT_SPIN_US);
     assert_int_equal(c.inline_us, DF_CONFIG_DEFAULT_INLINE_US);
+    assert_int_equal(c.cursor_hz, 120);
     assert_true(c.shm_ring_bytes == (uint64_t)64 << 20);
     /* memory limits (issue 9, items 10-13): sized from the machine's RAM where it matters */
     assert_true(c.shm_total_bytes == DF_CONFIG_DEFAULT_SHM_TOTAL);
@@ -72,6 +73,7 @@ static void test_parse_file_text(void **state)
                        "threads = 2\r\n"
                        "spin_us = 30\n"
                        "inline_us = 0\n"
+                       "cursor_hz = 0\n"
                        "shm_ring_bytes = 64k\n";
     df_error e;
     assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
@@ -89,6 +91,9 @@ static void test_parse_file_text(void **state)
     assert_int_equal(c.threads, 2);
     assert_int_equal(c.spin_us, 30);
     assert_int_equal(c.inline_us, 0);
+    assert_int_equal(c.cursor_hz, 0); /* unlimited */
+    assert_int_equal(df_config_set(&c, "cursor_hz", "240", &e), DF_OK);
+    assert_int_equal(c.cursor_hz, 240);
     assert_true(c.shm_ring_bytes == 65536);
     assert_int_equal(df_config_set(&c, "shm_ring_bytes", "0", &e), DF_OK); /* disabled */
     assert_true(c.shm_ring_bytes == 0);
@@ -134,6 +139,7 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "socket_group = a b\n",      "socket_group = /etc\n",
         "handshake_timeout_s = -1\n", "handshake_timeout_s = 86401\n",
         "idle_timeout_s = soon\n",   "idle_timeout_s = 1e3\n",
+        "cursor_hz = -1\n",          "cursor_hz = 10001\n",      "cursor_hz = fast\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
