@@ -4,6 +4,7 @@
 #include <embree3/rtcore.h>
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,17 +13,24 @@
  * builds and refits run on the caller (raycast.h, "Threads"). */
 #define DF_EMBREE_CONFIG "threads=1,user_threads=1,start_threads=0,set_affinity=0,verbose=0"
 
+/* The process's one Embree device, made on first use and never released (raycast.h, "Device"):
+ * releasing the last Embree device makes TBB start a thread. */
+static pthread_once_t g_dev_once = PTHREAD_ONCE_INIT;
+static RTCDevice g_dev;
+static enum RTCError g_dev_error;   /* why rtcNewDevice failed (g_dev NULL) */
+
+/* Embree errors of the calling thread's current create/refit (the callback runs on the thread
+ * whose call failed, so concurrent calls never share these). */
+static _Thread_local enum RTCError tl_code;
+static _Thread_local char tl_msg[160];
+
 struct df_raycast {
-    RTCDevice dev;
     RTCScene scene;
     RTCGeometry geom;       /* owned by the scene after attach; kept to update its buffers */
     int32_t nv, nf;
     double *V;              /* nv x 3: the positions of the last create/refit (double) */
     const uint32_t *F;      /* nf x 3: Embree's index buffer (owned by geom) */
     int broken;             /* the last refit failed inside Embree: every hit misses */
-    int recording;          /* 1 while create/refit runs: the error callback may write emsg */
-    enum RTCError ecode;    /* first Embree error while recording */
-    char emsg[160];
 };
 
 static const char *rtc_error_name(enum RTCError e)
@@ -38,29 +46,54 @@ static const char *rtc_error_name(enum RTCError e)
     }
 }
 
-/* Embree's error callback: runs on the thread whose call failed. Records only while create/refit
- * (exclusive calls) run, so concurrent hits never write here. */
+/* Embree's error callback: keeps the calling thread's first error and its text. */
 static void on_rtc_error(void *user, enum RTCError code, const char *str)
 {
-    df_raycast *rc = user;
-    if (!rc || !rc->recording || rc->ecode != RTC_ERROR_NONE)
+    (void)user;
+    if (tl_code != RTC_ERROR_NONE)
         return;
-    rc->ecode = code;
-    snprintf(rc->emsg, sizeof rc->emsg, "%s", str ? str : "");
+    tl_code = code;
+    snprintf(tl_msg, sizeof tl_msg, "%s", str ? str : "");
 }
 
-/* DF_OK, or the DF_E* for the first Embree error since recording began (device error state as a
- * fallback when the callback gave nothing), with a message naming `what`. */
-static int rtc_check(df_raycast *rc, const char *what, df_error *err)
+static void dev_init(void)
 {
-    enum RTCError e = rtcGetDeviceError(rc->dev);
-    if (rc->ecode != RTC_ERROR_NONE)
-        e = rc->ecode;
+    g_dev = rtcNewDevice(DF_EMBREE_CONFIG);
+    if (!g_dev)
+        g_dev_error = rtcGetDeviceError(NULL);
+    else
+        rtcSetDeviceErrorFunction(g_dev, on_rtc_error, NULL);
+}
+
+/* DF_OK with the shared device (made once) in *dev, or DF_ENOMEM / DF_EINTERNAL when Embree
+ * could not make it. Clears the calling thread's Embree error state. */
+static int device(RTCDevice *dev, df_error *err)
+{
+    pthread_once(&g_dev_once, dev_init);
+    if (!g_dev)
+        return df_error_set(err, g_dev_error == RTC_ERROR_OUT_OF_MEMORY ? DF_ENOMEM
+                                                                        : DF_EINTERNAL,
+                            "raycast: Embree device creation failed: %s",
+                            rtc_error_name(g_dev_error));
+    tl_code = RTC_ERROR_NONE;
+    tl_msg[0] = 0;
+    (void)rtcGetDeviceError(g_dev);   /* drop a stale per-thread error code */
+    *dev = g_dev;
+    return DF_OK;
+}
+
+/* DF_OK, or the DF_E* for the calling thread's first Embree error since device() (the device's
+ * per-thread error code as a fallback when the callback gave nothing), naming `what`. */
+static int rtc_check(const char *what, df_error *err)
+{
+    enum RTCError e = rtcGetDeviceError(g_dev);
+    if (tl_code != RTC_ERROR_NONE)
+        e = tl_code;
     if (e == RTC_ERROR_NONE)
         return DF_OK;
     return df_error_set(err, e == RTC_ERROR_OUT_OF_MEMORY ? DF_ENOMEM : DF_EINTERNAL,
                         "raycast: Embree %s failed: %s%s%s", what, rtc_error_name(e),
-                        rc->emsg[0] ? ": " : "", rc->emsg);
+                        tl_msg[0] ? ": " : "", tl_msg);
 }
 
 /* DF_OK when every coordinate of V (nv x 3) is finite and within float range. */
@@ -112,21 +145,18 @@ int df_raycast_create(const double *V, int32_t nv, const int32_t *F, int32_t nf,
     rc->V = Vc;
     rc->nv = nv;
     rc->nf = nf;
-    rc->dev = rtcNewDevice(DF_EMBREE_CONFIG);
-    if (!rc->dev) {
-        enum RTCError e = rtcGetDeviceError(NULL);
-        free(Vc);
-        free(rc);
-        return df_error_set(err, e == RTC_ERROR_OUT_OF_MEMORY ? DF_ENOMEM : DF_EINTERNAL,
-                            "raycast: Embree device creation failed: %s", rtc_error_name(e));
-    }
-    rc->recording = 1;
-    rtcSetDeviceErrorFunction(rc->dev, on_rtc_error, rc);
-    int rv = DF_OK;
-    rc->scene = rtcNewScene(rc->dev);
-    rc->geom = rtcNewGeometry(rc->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-    if ((rv = rtc_check(rc, "scene setup", err)) != DF_OK || !rc->scene || !rc->geom)
+    RTCDevice dev = NULL;
+    int rv = device(&dev, err);
+    if (rv != DF_OK)
         goto fail;
+    rc->scene = rtcNewScene(dev);
+    rc->geom = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if ((rv = rtc_check("scene setup", err)) != DF_OK)
+        goto fail;
+    if (!rc->scene || !rc->geom) {
+        rv = df_error_set(err, DF_EINTERNAL, "raycast: Embree returned no scene/geometry");
+        goto fail;
+    }
     /* Dynamic scene, low-quality top level, refittable geometry: a commit after a vertex-buffer
      * update refits the mesh's BVH instead of rebuilding it (bench_raycast: ~3% of a build).
      * Compact: leaves hold vertex indices, not vertex copies, so a refit only recomputes bounds
@@ -140,7 +170,7 @@ int df_raycast_create(const double *V, int32_t nv, const int32_t *F, int32_t nf,
                                         3 * sizeof(float), (size_t)nv);
     uint32_t *ib = rtcSetNewGeometryBuffer(rc->geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                            3 * sizeof(uint32_t), (size_t)nf);
-    if ((rv = rtc_check(rc, "buffer allocation", err)) != DF_OK)
+    if ((rv = rtc_check("buffer allocation", err)) != DF_OK)
         goto fail;
     if (!vb || !ib) {
         rv = df_error_set(err, DF_ENOMEM, "raycast: Embree buffers for %d vertices, %d faces",
@@ -154,13 +184,11 @@ int df_raycast_create(const double *V, int32_t nv, const int32_t *F, int32_t nf,
     rtcCommitGeometry(rc->geom);
     rtcAttachGeometry(rc->scene, rc->geom);
     rtcCommitScene(rc->scene);
-    if ((rv = rtc_check(rc, "build", err)) != DF_OK)
+    if ((rv = rtc_check("build", err)) != DF_OK)
         goto fail;
-    rc->recording = 0;
     *out = rc;
     return DF_OK;
 fail:
-    rc->recording = 0;
     df_raycast_free(rc);
     return rv;
 }
@@ -172,16 +200,15 @@ int df_raycast_refit(df_raycast *rc, const double *V, df_error *err)
     int rv = check_positions(V, rc->nv, err);
     if (rv != DF_OK)
         return rv;
-    rc->recording = 1;
-    rc->ecode = RTC_ERROR_NONE;
-    rc->emsg[0] = 0;
+    RTCDevice dev = NULL;
+    if ((rv = device(&dev, err)) != DF_OK)
+        return rv;
     load_positions(rc, V);
     rtcUpdateGeometryBuffer(rc->geom, RTC_BUFFER_TYPE_VERTEX, 0);
     rtcCommitGeometry(rc->geom);
     rtcCommitScene(rc->scene);
-    rv = rtc_check(rc, "refit", err);
+    rv = rtc_check("refit", err);
     rc->broken = rv != DF_OK;
-    rc->recording = 0;
     return rv;
 }
 
@@ -289,8 +316,6 @@ void df_raycast_free(df_raycast *rc)
         rtcReleaseGeometry(rc->geom);
     if (rc->scene)
         rtcReleaseScene(rc->scene);
-    if (rc->dev)
-        rtcReleaseDevice(rc->dev);
     free(rc->V);
     free(rc);
 }

@@ -1,8 +1,8 @@
 /* raycast.h — nearest ray / triangle-mesh hit through Embree 3 (the pen's ray cast, issue 11).
  *
- * A df_raycast holds one Embree device and a scene of one triangle mesh. Embree works in float32:
- * the double positions are converted once per create/refit (every coordinate must be finite and
- * within float range). The topology (the faces) is fixed at create; df_raycast_refit moves the
+ * A df_raycast holds an Embree scene of one triangle mesh. Embree works in float32: the double
+ * positions are converted once per create/refit (every coordinate must be finite and within
+ * float range). The topology (the faces) is fixed at create; df_raycast_refit moves the
  * vertices and refits the BVH (geometry build quality RTC_BUILD_QUALITY_REFIT in a dynamic,
  * compact scene) instead of rebuilding it. Triangle meshes in 3D and 2D (z = 0) work as they
  * are; for a tet mesh pass its boundary faces (df_mesh_boundary_faces, core/mesh/operators.h);
@@ -12,12 +12,16 @@
  * build uses TBB tasking) is configured with "threads=1,user_threads=1,start_threads=0,
  * set_affinity=0": every BVH build and refit runs on the thread that calls df_raycast_create /
  * df_raycast_refit, in a TBB arena of one slot, so no worker thread is ever started
- * (tests/unit/geom/test_raycast.c checks that the process's thread count does not grow over a
- * build and a refit). Embree enforces the count with a process-wide tbb::global_control, which
- * caps any other TBB user in the process too (deformd has none).
+ * (tests/unit/geom/test_raycast.c checks that the process's thread count does not grow over
+ * builds, refits and frees). Embree enforces the count with a process-wide
+ * tbb::global_control, which caps any other TBB user in the process too (deformd has none).
  *
- * Devices: one Embree device per df_raycast (no shared or global state in this module; a device
- * costs little next to the BVH build; Embree's own process-wide state is its TBB scheduler).
+ * Device: one Embree device for the process, made on the first df_raycast_create (pthread_once)
+ * and never released: releasing Embree's last device makes TBB start a thread (measured with
+ * Debian's Embree 3.13 / oneTBB 2021.8), which would break the promise above, and a device per
+ * object would release one with every df_raycast_free. It stays reachable until exit (leak
+ * checkers do not report it). Embree errors are collected per calling thread (thread-local), so
+ * objects on different threads do not mix their messages. No other global state.
  *
  * Thread safety: df_raycast_hit may run concurrently from any number of threads on the same
  * df_raycast (Embree's intersect is read-only on a committed scene); create, refit and free must
@@ -43,8 +47,9 @@ typedef struct df_ray_hit {
 } df_ray_hit;
 
 /* Builds the scene of the triangle mesh V (nv x 3, row-major, double) / F (nf x 3, 0-based
- * indices) on a new Embree device. The positions are copied (converted to float); V and F are not
- * kept. Degenerate faces are allowed (they are never hit). The build runs on the calling thread.
+ * indices) on the shared Embree device (made by the first call). The positions are copied
+ * (converted to float); V and F are not kept. Degenerate faces are allowed (they are never hit).
+ * The build runs on the calling thread.
  * Errors: DF_EINVAL (NULL arrays, nv < 1, nf < 1, an index out of [0, nv), a coordinate NaN/Inf or
  * beyond float range: the message names the row), DF_ENOMEM, DF_EINTERNAL (Embree failed: the
  * message carries Embree's error). On success *out owns the scene (df_raycast_free); on error
@@ -68,7 +73,7 @@ int df_raycast_hit(const df_raycast *rc, const double org[3], const double dir[3
 int32_t df_raycast_nv(const df_raycast *rc);
 int32_t df_raycast_nf(const df_raycast *rc);
 
-/* Releases the scene and its device; NULL-safe. */
+/* Releases the scene (the shared device stays); NULL-safe. */
 void df_raycast_free(df_raycast *rc);
 
 #endif

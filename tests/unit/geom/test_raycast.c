@@ -2,7 +2,7 @@
  * face, barycentrics), misses, the nearest of stacked layers, refit after moving vertices, bad
  * input refused, real meshes from $MESHES (a surface and a tet boundary) against a brute-force
  * double-precision Möller-Trumbore over every face for many random rays, and no thread started
- * by a build or refit. */
+ * by a build or refit of a mesh big enough for Embree to build in parallel by default. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -239,6 +239,8 @@ static double rnd(void)
     return (double)(rng_state >> 11) * 0x1.0p-53;
 }
 
+static int threads_at_start;   /* the process's thread count before any test (main) */
+
 static int nthreads(void)
 {
     DIR *d = opendir("/proc/self/task");
@@ -264,7 +266,7 @@ static void compare_brute(const double *V, int32_t nv, const int32_t *F, int32_t
             lo[k] = fmin(lo[k], V[3 * i + k]), hi[k] = fmax(hi[k], V[3 * i + k]);
     double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1])
                        + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    int threads0 = nthreads();
+    int threads0 = threads_at_start;
     df_raycast *rc = NULL;
     df_error e;
     assert_int_equal(df_raycast_create(V, nv, F, nf, &rc, &e), DF_OK);
@@ -405,8 +407,57 @@ static void test_real_tet_boundary_vs_brute_force(void **state)
     df_mesh_free(&m);
 }
 
+/* A 300 x 300 grid (178k faces): big enough that Embree's default configuration builds it in
+ * parallel (on this 2-core machine a default device starts a TBB worker during the build); the
+ * configured device must not start any thread, neither for the build nor for a refit. */
+static void test_no_threads_started(void **state)
+{
+    (void)state;
+    enum { N = 300 };
+    double *V = malloc(3 * (size_t)N * N * sizeof *V);
+    int32_t *F = malloc(6 * (size_t)(N - 1) * (N - 1) * sizeof *F);
+    assert_non_null(V);
+    assert_non_null(F);
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++) {
+            double *p = V + 3 * (size_t)(j * N + i);
+            p[0] = i, p[1] = j, p[2] = sin(0.1 * i) * cos(0.07 * j);
+        }
+    size_t f = 0;
+    for (int j = 0; j + 1 < N; j++)
+        for (int i = 0; i + 1 < N; i++) {
+            int32_t a = j * N + i, t[6] = {a, a + 1, a + N + 1, a, a + N + 1, a + N};
+            memcpy(F + 3 * f, t, sizeof t);
+            f += 2;
+        }
+    int before = threads_at_start;
+    assert_true(before >= 1);
+    df_raycast *rc = NULL;
+    df_error e;
+    assert_int_equal(df_raycast_create(V, N * N, F, (int32_t)f, &rc, &e), DF_OK);
+    assert_int_equal(nthreads(), before);
+    for (int i = 0; i < N * N; i++)
+        V[3 * i + 2] += 0.5;
+    assert_int_equal(df_raycast_refit(rc, V, &e), DF_OK);
+    assert_int_equal(nthreads(), before);
+    double o[3] = {150.25, 150.5, 10}, d[3] = {0, 0, -1};
+    df_ray_hit h;
+    assert_int_equal(df_raycast_hit(rc, o, d, &h), 1);
+    /* (150.25, 150.5) lies in the upper triangle (a, a+N+1, a+N) of cell (150, 150) with
+     * u = 0.25, v = 0.25 (x = i + u, y = j + u + v). */
+    const double *za = V + 3 * (150 * N + 150), *zb = za + 3 * (N + 1), *zc = za + 3 * N;
+    double z = 0.5 * za[2] + 0.25 * zb[2] + 0.25 * zc[2];
+    assert_int_equal(h.face, 2 * (150 * (N - 1) + 150) + 1);
+    assert_true(fabs(h.point[2] - z) <= 1e-12 && fabs(h.t - (10 - z)) <= 1e-12);
+    df_raycast_free(rc);
+    assert_int_equal(nthreads(), before);   /* releasing an Embree device would start one */
+    free(V);
+    free(F);
+}
+
 int main(void)
 {
+    threads_at_start = nthreads();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_triangle_analytic),
         cmocka_unit_test(test_quad_faces_and_misses),
@@ -414,6 +465,7 @@ int main(void)
         cmocka_unit_test(test_create_refuses_bad_input),
         cmocka_unit_test(test_real_surface_vs_brute_force),
         cmocka_unit_test(test_real_tet_boundary_vs_brute_force),
+        cmocka_unit_test(test_no_threads_started),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
