@@ -608,3 +608,13 @@ void df_hid_manager_counts(const df_server *srv, uint32_t *devices, uint32_t *op
     *events = m->events;
     for (const df_hid_device *d = m->devs; d; d = d->next) *open += d->state == DF_DEVSTATE_OPEN;
 }
+
+const df_hid_ops df_hid_manager_ops = {
+    .list = df_hid_manager_list,
+    .bind = df_hid_manager_bind,
+    .view = df_hid_manager_view,
+    .device_stats = df_hid_manager_device_stats,
+    .counts = df_hid_manager_counts,
+    .session_active = df_hid_manager_session_active,
+    .session_gone = df_hid_manager_session_gone,
+};
