@@ -3,8 +3,9 @@
  * its reports become a stroke on the session (an internal BRUSH_BEGIN keyed by the device id), a
  * read error mid-stroke closes it as ERROR and ends the stroke through BRUSH_END (one undo step),
  * a hotplug notification reopens it with the same id, an enumeration without it marks it
- * UNPLUGGED, binding checks its arguments, and shutdown joins the reader thread and closes the
- * device. The loop is run until each expected state is reached (no sleeps; a guard fails a test
+ * UNPLUGGED, binding checks its arguments, an unbound device follows the most recently active
+ * session (its stroke on the previous one ends first), and shutdown joins the reader thread and
+ * closes the device. The loop is run until each expected state is reached (no sleeps; a guard fails a test
  * that would hang). */
 #include <stdarg.h>
 #include <stddef.h>
@@ -182,6 +183,15 @@ static int stroke_gone(void *a)
     return g_s->strokes == NULL && !g_s->running && !g_s->jhead;
 }
 static int idle(void *a) { return !df_hid_manager_busy(a); }
+static uint64_t g_want_events;
+static df_session *g_s2;
+static int n_events(void *a) { return the_dev(a)->events >= g_want_events; }
+static int stroke_open_s2(void *a) { return df_session_stroke(g_s2, the_dev(a)->id) != NULL; }
+static int s2_stroke_gone(void *a)
+{
+    (void)a;
+    return g_s2->strokes == NULL && !g_s2->running && !g_s2->jhead;
+}
 
 static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
 {
@@ -283,10 +293,35 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
     assert_int_equal(df_hid_manager_bind(&srv, id, g_s->id, &e), DF_OK);
     assert_int_equal(d->bound, g_s->id);
 
-    /* back again, then shutdown joins its reader and closes it */
+    /* back again; unbound, it follows the most recently active session: a stroke there, and
+     * when another session becomes the most recent, that stroke ends (BRUSH_END) first */
     set_fail(f, 0, 1);
     f->fn(f->user);
     run_until(&loop, is_open, &srv, "reopened");
+    assert_int_equal(df_hid_manager_bind(&srv, id, 0, &e), DF_OK);
+    df_mesh m2 = tiny_mesh();
+    df_session *s2;
+    assert_int_equal(df_session_create(&srv, &m2, "t2", &s2, &e), DF_OK);
+    srv.last_change_session = s2->id;
+    const uint8_t up[3] = {3, 0, 0};
+    g_want_events = d->events + 4;
+    push(f, 100000, up, 3);
+    push(f, 108000, down, 3);
+    push(f, 116000, mv, 7);
+    push(f, 124000, mv, 7);     /* the first after a reopen has no dt yet */
+    run_until(&loop, n_events, &srv, "reports after the reopen handled");
+    g_s2 = s2;
+    run_until(&loop, stroke_open_s2, &srv, "a stroke on the most recent session");
+    assert_int_equal(d->active, s2->id);
+    srv.last_change_session = g_s->id;
+    g_want_events = d->events + 1;
+    push(f, 132000, mv, 7);
+    run_until(&loop, n_events, &srv, "one more report");
+    run_until(&loop, s2_stroke_gone, &srv, "the stroke on the other session ended");
+    assert_int_equal(d->active, g_s->id);
+    assert_true(df_history_can_undo(&s2->hist) >= 1);
+
+    /* shutdown joins its reader and closes it */
     df_hid_manager_stop(&srv);
     assert_int_equal(d->th_running, 0);
     assert_int_equal(f->open_now, 0);
@@ -294,6 +329,8 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
     run_until(&loop, idle, &srv, "posted reports drained");
     df_session_close(g_s);
     df_job_pump(g_s);
+    df_session_close(s2);
+    df_job_pump(s2);
     df_hid_manager_free(&srv);
     assert_null(srv.hid);
     uv_close((uv_handle_t *)&tick, NULL);
