@@ -96,6 +96,12 @@ enum { DF_WIRE_BRUSH_STATE_FIELDS(DF_X_BS) };
 typedef enum df_origin_kind { DF_WIRE_ORIGINS(DF_X_ORIGIN) } df_origin_kind;
 #define DF_X_CURSOR(n, v) DF_X_ENUM(DF_CURSOR_, n, v)
 enum { DF_WIRE_CURSOR_FLAGS(DF_X_CURSOR) };
+#define DF_X_DEVCLASS(n, v) DF_X_ENUM(DF_DEVCLASS_, n, v)
+enum { DF_WIRE_DEV_CLASSES(DF_X_DEVCLASS) };
+#define DF_X_DEVBACKEND(n, v) DF_X_ENUM(DF_DEVBACKEND_, n, v)
+enum { DF_WIRE_DEV_BACKENDS(DF_X_DEVBACKEND) };
+#define DF_X_DEVSTATE(n, v) DF_X_ENUM(DF_DEVSTATE_, n, v)
+enum { DF_WIRE_DEV_STATES(DF_X_DEVSTATE) };
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -108,7 +114,7 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_X_OR(n, v) | (v)
 #define DF_X_COUNT(n, v) +1
 #define DF_FEAT_ALL (0u DF_WIRE_FEATURES(DF_X_OR)) /* what this build implements */
-#define DF_FEAT_DECODE_MASK (DF_FEAT_ALL | DF_FEAT_RESERVED) /* accepted in hello / hello_reply */
+#define DF_FEAT_DECODE_MASK DF_FEAT_ALL /* accepted in hello / hello_reply */
 #define DF_LOAD_OPTS_ALL (0u DF_WIRE_LOAD_OPTS(DF_X_OR))
 #define DF_BS_ALL (0u DF_WIRE_BRUSH_STATE_FIELDS(DF_X_OR))  /* every brush state field */
 #define DF_CURSOR_FLAGS_ALL (0u DF_WIRE_CURSOR_FLAGS(DF_X_OR))
@@ -120,6 +126,11 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_CHANGE_MAX (0 DF_WIRE_CHANGE_KINDS(DF_X_COUNT))
 #define DF_MOVE_STATUS_MAX (0 DF_WIRE_MOVE_STATUSES(DF_X_COUNT) - 1) /* 0..MAX */
 #define DF_SECTION_MAX (0 DF_WIRE_MESH_SECTIONS(DF_X_COUNT))
+#define DF_DEVCLASS_MAX (0 DF_WIRE_DEV_CLASSES(DF_X_COUNT) - 1)   /* 0..MAX */
+#define DF_DEVBACKEND_MAX (0 DF_WIRE_DEV_BACKENDS(DF_X_COUNT))    /* 1..MAX */
+#define DF_DEVSTATE_MAX (0 DF_WIRE_DEV_STATES(DF_X_COUNT))        /* 1..MAX */
+_Static_assert(DF_DEVCLASS_PEN == DF_DEVCLASS_MAX && DF_DEVBACKEND_REPLAY == DF_DEVBACKEND_MAX &&
+               DF_DEVSTATE_UNPLUGGED == DF_DEVSTATE_MAX, "the device enums stay contiguous");
 _Static_assert(DF_WFMT_TETGEN == DF_FMT_MAX && DF_BRUSH_AFFINE == DF_BRUSH_TYPE_MAX &&
                DF_BP_RATIO == DF_BP_MAX && DF_ENERGY_POLYLINE == DF_ENERGY_MAX &&
                DF_CHANGE_SNAPSHOT == DF_CHANGE_MAX && DF_MOVE_FAILED == DF_MOVE_STATUS_MAX &&
@@ -455,6 +466,40 @@ typedef struct df_msg_stats {
     df_msg_stat *items;                /* malloc'd on decode */
 } df_msg_stats;
 
+/* ---------------------------------------------------------------- devices (HID, issue 11) */
+typedef struct df_msg_device_info {    /* one device (DEVICES_LIST item, DEVICE_STATE event) */
+    uint64_t device_id;                /* != 0 (the daemon uses (1 << 63) | n) */
+    uint8_t dev_class;                 /* DF_DEVCLASS_* 0..3 */
+    uint8_t backend;                   /* DF_DEVBACKEND_* 1..3 */
+    uint8_t state;                     /* DF_DEVSTATE_* 1..4 */
+    uint8_t bus;                       /* linux/input.h bus: 3 USB, 5 BT, 0x18 I2C (any value) */
+    uint16_t vid, pid;
+    uint64_t bound_session;            /* 0: follows the most recently active session */
+    uint64_t active_session;           /* the session it drives now, 0 none */
+    uint8_t haptics;                   /* 0/1: haptic output enabled */
+    char name[DF_MAX_NAME_LEN + 1];    /* product name, may be "" */
+    char path[DF_MAX_PATH_LEN + 1];    /* backend path, may be "" */
+    char error[DF_MAX_ERROR_MSG_LEN + 1]; /* why it is in state ERROR/UNPLUGGED, else "" */
+} df_msg_device_info;
+
+typedef struct df_msg_device_list {
+    uint32_t count;                    /* 0..DF_MAX_DEVICES */
+    df_msg_device_info *items;         /* malloc'd on decode */
+} df_msg_device_list;
+
+typedef struct df_msg_device_bind {
+    uint64_t device_id;                /* != 0 */
+    uint64_t session_id;               /* 0 = unbind: follow the most recently active session */
+} df_msg_device_bind;
+
+typedef struct df_msg_device_view {    /* the view a pen's 2D position is cast through */
+    uint64_t device_id;                /* != 0 */
+    uint64_t session_id;               /* != 0 */
+    double view_proj[16];              /* row-major 4x4, mesh space -> clip (OpenGL), finite */
+    double viewport[4];                /* x, y, width, height in pixels (y down), finite,
+                                        * width and height > 0 */
+} df_msg_device_view;
+
 /* ------------------------------------------------------------------------------ functions */
 #define DF_MSG_CODEC(T)                                                                \
     int df_msg_##T##_encode(const df_msg_##T *m, df_buf *out, df_error *err);          \
@@ -490,6 +535,10 @@ DF_MSG_CODEC(shm_ref)
 DF_MSG_CODEC(brush_state_set)
 DF_MSG_CODEC(brush_state)
 DF_MSG_CODEC(brush_cursor)
+DF_MSG_CODEC(device_info)
+DF_MSG_CODEC(device_list)
+DF_MSG_CODEC(device_bind)
+DF_MSG_CODEC(device_view)
 #undef DF_MSG_CODEC
 
 /* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
@@ -523,6 +572,7 @@ void df_msg_mesh_chunk_free(df_msg_mesh_chunk *m);
 void df_msg_disp_free(df_msg_disp *m);
 void df_msg_progress_free(df_msg_progress *m);
 void df_msg_stats_free(df_msg_stats *m);
+void df_msg_device_list_free(df_msg_device_list *m);
 
 /* Empty bodies (list sessions request, auth success reply): DF_OK for n == 0, else
  * DF_EPROTO_TRAILING. */
@@ -559,7 +609,9 @@ typedef enum df_body_kind {
     DF_BODY_MOVE_RESULT, DF_BODY_GET_MESH, DF_BODY_MESH_CHUNK, DF_BODY_SNAPSHOT_REQ,
     DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS, DF_BODY_SHM_INFO,
     DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY, DF_BODY_BRUSH_STATE_SET, DF_BODY_BRUSH_STATE,
-    DF_BODY_BRUSH_CURSOR
+    DF_BODY_BRUSH_CURSOR,
+    /* devices (HID) */
+    DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -596,6 +648,10 @@ typedef struct df_msg_any {
         df_msg_brush_state_set brush_state_set;
         df_msg_brush_state brush_state;
         df_msg_brush_cursor brush_cursor;
+        df_msg_device_info device_info;
+        df_msg_device_list device_list;
+        df_msg_device_bind device_bind;
+        df_msg_device_view device_view;
     } u;
 } df_msg_any;
 

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "proto/shm_ring.h"
 #include "server/log.h"
@@ -47,6 +48,45 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->socket_mode = DF_CONFIG_DEFAULT_SOCKET_MODE;
     cfg->handshake_timeout_s = DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S;
     cfg->idle_timeout_s = DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S;
+    cfg->hid_on = 1;
+    cfg->hid_replay_speed = 1.0;
+    cfg->hid_enumerate_s = DF_CONFIG_DEFAULT_HID_ENUMERATE_S;
+}
+
+/* hid_replay: a comma-separated list of files, appended (each must be readable now). */
+static int add_hid_replay(df_server_config *cfg, const char *value, df_error *err)
+{
+    int n = cfg->n_hid_replay;
+    char tmp[DF_CONFIG_MAX_HID_REPLAY][DF_CONFIG_PATH_MAX];
+    const char *p = value;
+    while (*p) {
+        size_t l = strcspn(p, ",");
+        while (l && isspace((unsigned char)*p)) p++, l--;
+        size_t e = l;
+        while (e && isspace((unsigned char)p[e - 1])) e--;
+        if (e) {
+            if (n >= DF_CONFIG_MAX_HID_REPLAY)
+                return df_error_set(err, DF_EINVAL, "hid_replay: more than %d files",
+                                    DF_CONFIG_MAX_HID_REPLAY);
+            if (e >= DF_CONFIG_PATH_MAX)
+                return df_error_set(err, DF_EINVAL, "hid_replay: path longer than %d bytes",
+                                    DF_CONFIG_PATH_MAX - 1);
+            memcpy(tmp[n - cfg->n_hid_replay], p, e);
+            tmp[n - cfg->n_hid_replay][e] = '\0';
+            if (access(tmp[n - cfg->n_hid_replay], R_OK) != 0)
+                return df_error_set(err, DF_EINVAL, "hid_replay: cannot read '%s': %s",
+                                    tmp[n - cfg->n_hid_replay], strerror(errno));
+            n++;
+        }
+        p += l;
+        if (*p == ',') p++;
+    }
+    if (n == cfg->n_hid_replay)
+        return df_error_set(err, DF_EINVAL, "hid_replay: no file given");
+    for (int i = cfg->n_hid_replay; i < n; i++)
+        strcpy(cfg->hid_replay[i], tmp[i - cfg->n_hid_replay]);
+    cfg->n_hid_replay = n;
+    return DF_OK;
 }
 
 /* Parses a non-negative integer with an optional k/m/g (binary) suffix, <= max. */
@@ -156,6 +196,8 @@ static const int_key k_int_keys[] = {
     {"handshake_timeout_s", offsetof(df_server_config, handshake_timeout_s), 0,
      DF_CONFIG_MAX_TIMEOUT_S},
     {"idle_timeout_s", offsetof(df_server_config, idle_timeout_s), 0, DF_CONFIG_MAX_TIMEOUT_S},
+    {"hid_enumerate_s", offsetof(df_server_config, hid_enumerate_s), 0,
+     DF_CONFIG_MAX_HID_ENUMERATE_S},
 };
 
 /* Parses yes/no, true/false, on/off, 1/0 (case-insensitive) into *out. */
@@ -223,6 +265,23 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         return DF_OK;
     }
     if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
+    if (strcmp(key, "hid") == 0) {
+        if (parse_bool(value, &cfg->hid_on) != DF_OK)
+            return df_error_set(err, DF_EINVAL, "hid: '%s' is not on or off", value);
+        return DF_OK;
+    }
+    if (strcmp(key, "hid_replay") == 0) return add_hid_replay(cfg, value, err);
+    if (strcmp(key, "hid_replay_speed") == 0) {
+        char *end = NULL;
+        errno = 0;
+        double speed = strtod(value, &end);
+        if (errno || !end || end == value || *end || !(speed >= 0 && speed <= 1e6))
+            return df_error_set(err, DF_EINVAL, "hid_replay_speed: '%s' is not in 0..1e6 "
+                                "(0 = at once)", value);
+        cfg->hid_replay_speed = speed;
+        return DF_OK;
+    }
+
     if (strcmp(key, "log_level") == 0) {
         int l;
         if (df_log_parse_level(value, &l) != DF_OK)
@@ -396,6 +455,10 @@ static const char k_usage[] =
     "                      (default 0; helps stroke latency only when cores are idle)\n"
     "  --inline-us N       run a brush update on the loop thread when its stroke's last update\n"
     "                      took <= N us (default 50; 0 = always on the compute pool)\n"
+    "  --hid-replay FILES  replay hid-recorder files (comma-separated) as HID devices; they\n"
+    "                      start when a client first subscribes to a session\n"
+    "                      (config hid_replay; also: hid = on|off, hid_replay_speed,\n"
+    "                      hid_enumerate_s, hid.<class>.<key>: see server/hid/hid_config.h)\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
@@ -456,7 +519,8 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         }
         static const char *const map[][2] = {
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
-            {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"}};
+            {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"},
+            {"--hid-replay", "hid_replay"}};
         int done = 0;
         for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);

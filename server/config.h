@@ -51,11 +51,22 @@
  *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
  *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
  *                      membudget.h)
+ *   hid                on | off (default on): read HID devices through hidapi (hidraw) and
+ *                      libusb (PowerMate); with no device present nothing happens
+ *   hid_replay         FILE[,FILE...]: also replay these hid-recorder files (or a PowerMate raw
+ *                      file) as devices (server/hid/hid_source.h); they start when a client first
+ *                      subscribes to a session; repeated lines append. Works with hid = off (replay only)
+ *   hid_replay_speed   replay speed factor: recorded gaps are divided by it (default 1); 0 =
+ *                      deliver every report at once (tests: the recorded timestamps still drive
+ *                      the mappers)
+ *   hid_enumerate_s    seconds between device enumerations (hotplug without libusb hotplug;
+ *                      0 = only at start; default 2, at most 3600)
  *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
  *                      class knob | 3d-mouse | pen, per-device keys override class keys);
  *                      checked for consistency once the whole file is read
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
- * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N, --help. */
+ * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
+ * --hid-replay FILE[,FILE...], --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -105,6 +116,9 @@
 #define DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S 300
 #define DF_CONFIG_MAX_TIMEOUT_S 86400    /* one day */
 #define DF_CONFIG_GROUP_MAX 64
+#define DF_CONFIG_MAX_HID_REPLAY 16       /* replay files */
+#define DF_CONFIG_DEFAULT_HID_ENUMERATE_S 2
+#define DF_CONFIG_MAX_HID_ENUMERATE_S 3600
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -133,6 +147,11 @@ typedef struct df_server_config {
     char socket_group[DF_CONFIG_GROUP_MAX]; /* "" = the daemon's group */
     int handshake_timeout_s;     /* HELLO deadline after accept, s (0 = off) */
     int idle_timeout_s;          /* silent unsubscribed connection deadline, s (0 = off) */
+    int hid_on;                  /* 1: hidapi + libusb backends (config `hid`, default 1) */
+    int n_hid_replay;
+    char hid_replay[DF_CONFIG_MAX_HID_REPLAY][DF_CONFIG_PATH_MAX]; /* replay files */
+    double hid_replay_speed;     /* > 0, or 0 = at once */
+    int hid_enumerate_s;         /* 0 = at start only */
     int foreground;              /* 1: do not daemonize */
     df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */

@@ -302,6 +302,13 @@ static void watch_event(void *user, const df_frame_header *h, const uint8_t *pay
             ctl_brush_state_print(w->ctx, &s, 1);
         else if (h->type == DF_MSG_BRUSH_CURSOR && k.session_id == w->session)
             ctl_brush_cursor_print(w->ctx, &k);
+    } else if (h->type == DF_MSG_DEVICE_STATE) { /* a device that drives this session */
+        df_msg_device_info *dv = malloc(sizeof *dv);
+        if (!dv || df_msg_device_info_decode(payload, h->payload_len, dv, NULL) != DF_OK)
+            w->bad = dv != NULL;
+        else
+            ctl_device_state_print(w->ctx, dv);
+        free(dv);
     } else if (h->type == DF_MSG_SHM_REF) { /* --shm: a frame overwritten before it was read */
         w->lost++;
         w->rows = 0;

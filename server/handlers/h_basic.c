@@ -61,7 +61,8 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
     r.server_max_version = DF_PROTO_VERSION;
     r.features = DF_FEAT_KELVINLET | DF_FEAT_ADMM | DF_FEAT_SPARSE_STREAM |
                  (cfg->n_allow ? DF_FEAT_PATH_LOAD : 0) | (c->srv->have_tcp ? DF_FEAT_TCP : 0) |
-                 (cfg->shm_ring_bytes && !c->is_tcp ? DF_FEAT_SHM_STREAM : 0);
+                 (cfg->shm_ring_bytes && !c->is_tcp ? DF_FEAT_SHM_STREAM : 0) |
+                 (c->srv->hid ? DF_FEAT_HID : 0);
     r.max_frame_payload = DF_MAX_FRAME_PAYLOAD;
     r.max_mesh_vertices = (uint32_t)cfg->max_mesh_vertices < DF_MAX_MESH_VERTICES
                               ? (uint32_t)cfg->max_mesh_vertices
@@ -210,6 +211,8 @@ static void subscribe_done(df_job *j)
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(&j->req, &info);
+    if (s->srv->hid_ops) /* replay devices wait for a subscriber (hid_manager.h) */
+        s->srv->hid_ops->session_active(s->srv, s);
     if (*(const uint8_t *)j->body & DF_SUBSCRIBE_SNAPSHOT) {
         df_frames f = {0};
         if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)

@@ -9,7 +9,7 @@
 #include "server/net/reply.h"
 #include "server/net/shm.h"
 
-#define DF_STATS_MAX 96 /* entries this server reports */
+#define DF_STATS_MAX 128 /* entries this server reports (a device's: h_devices.c) */
 
 static void put(df_msg_stats *st, const char *key, double v)
 {
@@ -25,6 +25,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
     int rc = df_msg_stats_req_decode(p, r->len, &m, err);
     if (rc != DF_OK) return rc;
     df_server *srv = r->srv;
+    if (m.session_id & DF_DEVICE_ID_BIT) return df_h_device_stats(r, m.session_id, err);
     df_session *s = NULL;
     if (m.session_id && !(s = df_session_find(srv, m.session_id)))
         return df_error_set(err, DF_ENOTFOUND, "stats: no session %llu",
@@ -91,6 +92,12 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "shm_total_bytes", (double)srv->cfg.shm_total_bytes);
         put(&st, "history.limit_bytes", (double)((uint64_t)srv->cfg.history_max_mb << 20));
         put(&st, "history.steps_dropped", (double)srv->history_dropped);
+        uint32_t ndev = 0, nopen = 0;
+        uint64_t hid_events = 0;
+        if (srv->hid_ops) srv->hid_ops->counts(srv, &ndev, &nopen, &hid_events);
+        put(&st, "hid.devices", ndev);
+        put(&st, "hid.devices_open", nopen);
+        put(&st, "hid.events", (double)hid_events);
         if (srv->pool) { /* compute pool hand-offs (pool.h) */
             df_pool_counters pc;
             df_pool_counters_get(srv->pool, &pc);

@@ -10,6 +10,7 @@ Errors from the daemon raise DeformdError(code, name, message).
 """
 from .brush_state import BrushCursor, BrushState, BrushValues
 from .client import Client, MeshData, SessionClosed, ShmLost
+from .devices import DeviceInfo
 from .errors import ConnectionClosed, DeformdError, ErrorCode, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
@@ -18,7 +19,7 @@ from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, Mo
 from .schema import (BrushParam, BrushStateField, BrushType, ChangeKind, CursorFlag,
                      DispEncoding, Energy, Feature, Format, FrameFlag, GetMeshFlag, Integrator,
                      LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType, Origin,
-                     PinFlag, SubscribeFlag)
+                     PinFlag, SubscribeFlag, DevClass, DevBackend, DevState)
 from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
@@ -33,5 +34,6 @@ __all__ = [
     "FrameFlag", "GetMeshFlag", "Integrator", "LoadOpt", "LoadSource", "MeshKind", "MeshSection",
     "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
     "BrushCursor", "BrushState", "BrushValues", "BrushStateField", "CursorFlag", "Origin",
+    "DeviceInfo", "DevClass", "DevBackend", "DevState",
 ]
 __version__ = "0.1.0"

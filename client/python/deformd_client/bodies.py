@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Sequence, Tuple
 
 from . import brush_state as bs
+from . import devices as dv
 from . import messages as m
 from . import schema
 from . import stream as st
@@ -263,6 +264,12 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "brush_state_set": (bs.decode_brush_state_set, lambda x: bs.encode_brush_state_set(*x)),
     "brush_state": (bs.decode_brush_state, bs.encode_brush_state),
     "brush_cursor": (bs.decode_brush_cursor, bs.encode_brush_cursor),
+    # devices (HID)
+    "device_info": (dv.decode_device_info, dv.encode_device_info),
+    "device_list": (dv.decode_device_list, dv.encode_device_list),
+    "device_bind": (dv.decode_device_bind, lambda x: dv.encode_device_bind(*x)),
+    "device_view": (dv.decode_device_view, lambda x: dv.encode_device_view(
+        x.device_id, x.session_id, x.view_proj, x.viewport)),
 }
 
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
 from . import brush_state as bs
+from . import devices as dv
 from . import frame as fr
 from . import messages as m
 from . import stream as st
@@ -240,6 +241,9 @@ class Client:
             sid = m.decode_session_ref(f.payload)
             self._drop_shm(sid)
             self._events.append(SessionClosed(sid))
+            return
+        if f.type == m.DEVICE_STATE:    # devices (HID): a DeviceInfo event
+            self._events.append(dv.decode_device_info(f.payload))
             return
         if f.type == m.DISPLACEMENT:
             d = st.decode_disp(f.payload)
@@ -619,3 +623,21 @@ class Client:
     def stats(self, session_id: int = 0) -> Dict[str, float]:
         """Daemon-wide (0) or one session's counters, key -> value."""
         return m.decode_stats(self._one(m.STATS, m.encode_stats_req(session_id)))
+
+    # ------------------------------------------------------------------ devices (HID)
+    def devices_list(self) -> List[dv.DeviceInfo]:
+        """The daemon's HID devices (open or not), in id order."""
+        return dv.decode_device_list(self._one(m.DEVICES_LIST))
+
+    def device_bind(self, device_id: int, session_id: int = 0) -> None:
+        """Binds a device to a session (0: unbind, it follows the most recently active
+        session). ENOTFOUND for an unknown device or session."""
+        self._one(m.DEVICE_BIND, dv.encode_device_bind(device_id, session_id))
+
+    def device_view(self, device_id: int, session_id: int, view_proj: Sequence[float],
+                    viewport: Sequence[float]) -> None:
+        """Publishes the view a pen is cast through: view_proj 16 floats (row-major, mesh space
+        -> OpenGL clip space), viewport (x, y, width, height) in pixels, y down. Also binds the
+        device to session_id."""
+        self._one(m.DEVICE_VIEW, dv.encode_device_view(device_id, session_id, view_proj,
+                                                         viewport))

@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES = 41 };
+enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -236,6 +236,32 @@ static inline void build_samples(sample *s)
                               {0.5, -0.25, 1e-3}, 0.25};
     ADD("brush_cursor", DF_MSG_BRUSH_CURSOR, DF_FLAG_EVENT,
         df_msg_brush_cursor_encode(&bc, out, &e));
+    /* devices (HID): a knob and a pen, their list, a bind and a view */
+    static df_msg_device_info dev[2];
+    memset(dev, 0, sizeof dev);
+    dev[0] = (df_msg_device_info){.device_id = (1ull << 63) | 1, .dev_class = DF_DEVCLASS_KNOB,
+                                  .backend = DF_DEVBACKEND_REPLAY, .state = DF_DEVSTATE_OPEN,
+                                  .bus = 5, .vid = 0x045e, .pid = 0x091b, .bound_session = 0,
+                                  .active_session = 5, .haptics = 1};
+    snprintf(dev[0].name, sizeof dev[0].name, "Surface Dial System Multi Axis");
+    snprintf(dev[0].path, sizeof dev[0].path, "replay:/work/shared/hid/dial.hid#0");
+    dev[1] = (df_msg_device_info){.device_id = (1ull << 63) | 2, .dev_class = DF_DEVCLASS_PEN,
+                                  .backend = DF_DEVBACKEND_HIDAPI, .state = DF_DEVSTATE_ERROR,
+                                  .bus = 3, .vid = 0x1b96, .pid = 0x1000, .bound_session = 7};
+    snprintf(dev[1].name, sizeof dev[1].name, "N-Trig Pen");
+    snprintf(dev[1].path, sizeof dev[1].path, "/dev/hidraw3");
+    snprintf(dev[1].error, sizeof dev[1].error, "read: Input/output error");
+    ADD("device_state", DF_MSG_DEVICE_STATE, DF_FLAG_EVENT,
+        df_msg_device_info_encode(&dev[0], out, &e));
+    df_msg_device_list dl = {2, dev};
+    ADD("device_list", DF_MSG_DEVICES_LIST, DF_FLAG_REPLY, df_msg_device_list_encode(&dl, out, &e));
+    df_msg_device_bind db = {(1ull << 63) | 1, 5};
+    ADD("device_bind", DF_MSG_DEVICE_BIND, 0, df_msg_device_bind_encode(&db, out, &e));
+    df_msg_device_view dv = {(1ull << 63) | 2, 5, {0}, {0, 0, 1920, 1080}};
+    for (int i = 0; i < 16; i++) dv.view_proj[i] = i % 5 == 0 ? 1.0 : 0.0;
+    dv.view_proj[11] = -0.5;
+    ADD("device_view", DF_MSG_DEVICE_VIEW, 0, df_msg_device_view_encode(&dv, out, &e));
+    ADD("devices_list", DF_MSG_DEVICES_LIST, 0, ((void)out, DF_OK)); /* empty request */
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);
