@@ -169,24 +169,30 @@ void df_hid_device_announce(df_hid_device *d, uint64_t session_id)
     free(info);
 }
 
-/* Parses the descriptor, classifies the device and prepares its mapper. */
+/* Parses the descriptor, classifies the device and prepares its mapper. A refused descriptor or
+ * mapping leaves the device in state ERROR with the reason (listed, never opened). */
 static void classify(df_hid_device *d)
 {
     df_error err = {0, ""};
     if (d->info.desc && d->info.desc_len) {
-        if (df_hid_desc_parse(d->info.desc, d->info.desc_len, &d->desc, &err) == DF_OK)
+        if (df_hid_desc_parse(d->info.desc, d->info.desc_len, &d->desc, &err) == DF_OK) {
             d->have_desc = 1;
-        else
-            df_log(DF_LOG_WARN, "hid: %s (%s): report descriptor refused: %s", d->info.path,
-                   d->info.name, err.msg);
+        } else {
+            d->state = DF_DEVSTATE_ERROR;
+            snprintf(d->error, sizeof d->error, "report descriptor refused: %s", err.msg);
+            df_log(DF_LOG_WARN, "hid: %s (%s): %s", d->info.path, d->info.name, d->error);
+        }
     }
     df_hid_classify(d->have_desc ? &d->desc : NULL, d->info.vid, d->info.pid, &d->cls);
     if (d->cls.cls == DF_HID_CLASS_NONE) return;
     if (df_hid_mapper_init(&d->map, &d->cls, d->have_desc ? &d->desc : NULL,
-                           &d->mgr->srv->cfg.hid, &err) == DF_OK)
+                           &d->mgr->srv->cfg.hid, &err) == DF_OK) {
         d->mapper_ok = 1;
-    else
-        df_log(DF_LOG_WARN, "hid: %s (%s): no mapping: %s", d->info.path, d->info.name, err.msg);
+    } else {
+        d->state = DF_DEVSTATE_ERROR;
+        snprintf(d->error, sizeof d->error, "no mapping: %s", err.msg);
+        df_log(DF_LOG_WARN, "hid: %s (%s): %s", d->info.path, d->info.name, d->error);
+    }
 }
 
 static df_hid_device *add_device(df_hid_manager *m, int be, const df_hid_devinfo *info)
@@ -459,7 +465,10 @@ void df_hid_manager_session_gone(df_server *srv, df_session *s)
     if (!m || !s) return;
     df_hid_drive_pen_forget(m, s->id);
     for (df_hid_device *d = m->devs; d; d = d->next) {
-        if (d->stroke && d->stroke_session == s->id) d->stroke = 0; /* gone with the session */
+        if (d->stroke && d->stroke_session == s->id) { /* ended with the session */
+            d->stroke = 0;
+            d->strokes_ended++;
+        }
         if (d->bound == s->id) {
             d->bound = 0;
             d->have_view = 0;
