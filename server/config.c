@@ -200,18 +200,6 @@ static const int_key k_int_keys[] = {
      DF_CONFIG_MAX_HID_ENUMERATE_S},
 };
 
-/* Parses yes/no, true/false, on/off, 1/0 (case-insensitive) into *out. */
-static int parse_bool(const char *s, int *out)
-{
-    static const char *const yes[] = {"yes", "true", "on", "1"}, *const no[] = {"no", "false",
-                                                                                 "off", "0"};
-    for (int i = 0; i < 4; i++) {
-        if (strcasecmp(s, yes[i]) == 0) return *out = 1, DF_OK;
-        if (strcasecmp(s, no[i]) == 0) return *out = 0, DF_OK;
-    }
-    return DF_EINVAL;
-}
-
 /* socket_mode: octal permission bits, 0..0777, with or without a leading 0. */
 static int set_socket_mode(df_server_config *cfg, const char *value, df_error *err)
 {
@@ -252,7 +240,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     }
     if (strcmp(key, "tcp") == 0) return set_tcp(cfg, value, err);
     if (strcmp(key, "tcp_insecure") == 0) {
-        if (parse_bool(value, &cfg->tcp_insecure) != DF_OK)
+        if (df_hid_config_bool(value, &cfg->tcp_insecure) != DF_OK)
             return df_error_set(err, DF_EINVAL, "tcp_insecure: '%s' is not yes or no", value);
         return DF_OK;
     }
@@ -266,7 +254,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     }
     if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
     if (strcmp(key, "hid") == 0) {
-        if (parse_bool(value, &cfg->hid_on) != DF_OK)
+        if (df_hid_config_bool(value, &cfg->hid_on) != DF_OK)
             return df_error_set(err, DF_EINVAL, "hid: '%s' is not on or off", value);
         return DF_OK;
     }
