@@ -58,7 +58,8 @@ static int run_devices(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         df_msg_device_list l;
         rc = df_client_devices_list(c, &l, &e);
         if (rc == DF_OK) {
-            ctl_device_list_print(ctx, &l);
+            ctl_device_list_print(ctx, &l,
+                                  (df_client_server_info(c)->features & DF_FEAT_HID) != 0);
             df_msg_device_list_free(&l);
         }
     }

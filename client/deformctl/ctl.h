@@ -68,8 +68,9 @@ void ctl_brush_cursor_print(const ctl_ctx *ctx, const df_msg_brush_cursor *m);
 
 /* Prints a DEVICES_LIST reply as `deformctl devices` does (device_out.c): a table with one row
  * per device (its number n of id (1 << 63) | n, class, VID:PID, state, bound and active session,
- * name, backend and error), "no HID devices" when empty; or one JSON object {"devices":[...]}. */
-void ctl_device_list_print(const ctl_ctx *ctx, const df_msg_device_list *l);
+ * name, backend and error), "no HID devices" when empty (saying the subsystem is off when hid_on
+ * is 0: the daemon's hello has no HID feature bit); or one JSON object {"devices":[...]}. */
+void ctl_device_list_print(const ctl_ctx *ctx, const df_msg_device_list *l, int hid_on);
 
 /* Prints a DEVICE_STATE event as one `watch` line (device_out.c): "device N knob 045e:091b
  * open session S 'NAME'" (+ ": ERROR"; S is the session it drives, else the bound one, "-" for

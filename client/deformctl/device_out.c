@@ -50,10 +50,12 @@ static void print_json(const df_msg_device_list *l)
     printf("]}\n");
 }
 
-static void print_text(const df_msg_device_list *l)
+static void print_text(const df_msg_device_list *l, int hid_on)
 {
     if (l->count == 0) {
-        printf("no HID devices\n");
+        printf(hid_on ? "no HID devices\n"
+                      : "no HID devices: the daemon's HID subsystem is off (hid = off and no "
+                        "hid_replay)\n");
         return;
     }
     printf("%-4s %-9s %-9s %-10s %-7s %-7s %s\n", "DEV", "CLASS", "VID:PID", "STATE", "BOUND",
@@ -95,11 +97,11 @@ void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d)
     fflush(stdout);
 }
 
-void ctl_device_list_print(const ctl_ctx *ctx, const df_msg_device_list *l)
+void ctl_device_list_print(const ctl_ctx *ctx, const df_msg_device_list *l, int hid_on)
 {
     if (ctx->json)
         print_json(l);
     else
-        print_text(l);
+        print_text(l, hid_on);
     fflush(stdout);
 }

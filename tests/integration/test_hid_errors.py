@@ -114,3 +114,10 @@ def test_session_closed_mid_device_stroke(make_daemon, tmp_path):
     assert ack.version == 1
     assert c.stats(s2)["undo_depth"] == 1 and c.ping(b"x") == b"x"
     c.close()
+
+
+def test_deformctl_devices_says_when_hid_is_off(make_daemon):
+    d = make_daemon("hid = off\n")
+    out = subprocess.run([DEFORMCTL, "--socket", d.socket_path, "devices"], capture_output=True,
+                         text=True, check=True).stdout
+    assert out.startswith("no HID devices: the daemon's HID subsystem is off"), out

@@ -61,6 +61,12 @@ static void print_device(const void *arg, int json)
     ctl_device_state_print(&ctx, arg);
 }
 
+static void print_empty_list(const void *arg, int hid_on)
+{
+    ctl_ctx ctx = {.json = 0, .prog = "deformctl"};
+    ctl_device_list_print(&ctx, arg, hid_on);
+}
+
 static df_msg_brush_state sample_state(void)
 {
     df_msg_brush_state s;
@@ -164,12 +170,27 @@ static void test_device_state_lines(void **state)
     free(t);
 }
 
+/* `deformctl devices` with none says so plainly, and why when the daemon runs no HID subsystem. */
+static void test_no_devices(void **state)
+{
+    (void)state;
+    df_msg_device_list l = {0, NULL};
+    char *t = capture(print_empty_list, &l, 1);
+    assert_string_equal(t, "no HID devices\n");
+    free(t);
+    t = capture(print_empty_list, &l, 0);
+    assert_string_equal(t, "no HID devices: the daemon's HID subsystem is off (hid = off and no "
+                           "hid_replay)\n");
+    free(t);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_key_value_lines),
         cmocka_unit_test(test_watch_lines),
         cmocka_unit_test(test_device_state_lines),
+        cmocka_unit_test(test_no_devices),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
