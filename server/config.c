@@ -493,7 +493,9 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         if (m < 0) rc = df_error_set(err, DF_EINVAL, "--config needs a FILE");
         else if (m > 0) rc = df_config_load(tmp, v, err);
     }
-    /* Pass 2: everything else on top. */
+    /* Pass 2: everything else on top. The first --hid-replay replaces the file's hid_replay
+     * list (options override the file); further --hid-replay options add to it. */
+    int cli_replay = 0;
     for (int i = 1; i < argc && rc == DF_OK; i++) {
         const char *v = NULL;
         int m;
@@ -516,6 +518,8 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
             if (m < 0) rc = df_error_set(err, DF_EINVAL, "%s needs a value", map[k][0]);
             else if (m > 0) {
                 df_error e2;
+                if (strcmp(map[k][1], "hid_replay") == 0 && !cli_replay++)
+                    tmp->n_hid_replay = 0;
                 rc = df_config_set(tmp, map[k][1], v, &e2);
                 if (rc != DF_OK) df_error_set(err, rc, "%s: %s", map[k][0], e2.msg);
                 done = 1;

@@ -398,6 +398,24 @@ static void test_hid_daemon_keys(void **state)
     assert_int_equal(c.n_hid_replay, 1);
     assert_string_equal(c.hid_replay[0], f2);
     assert_non_null(strstr(df_config_usage(), "--hid-replay"));
+    /* --hid-replay overrides the file's hid_replay (as every option overrides the file); two
+     * --hid-replay options add up */
+    char conf[] = "/tmp/df-cfg-hid-conf-XXXXXX";
+    int fdc = mkstemp(conf);
+    assert_true(fdc >= 0);
+    snprintf(text, sizeof text, "hid_replay = %s\n", f1);
+    assert_int_equal(write(fdc, text, strlen(text)), (ssize_t)strlen(text));
+    close(fdc);
+    char *argv2[] = {"deformd", "--config", conf, "--hid-replay", f2, "--hid-replay", f2, NULL};
+    assert_int_equal(df_config_from_args(&c, 7, argv2, NULL, &act, &e), DF_OK);
+    assert_int_equal(c.n_hid_replay, 2);
+    assert_string_equal(c.hid_replay[0], f2);
+    assert_string_equal(c.hid_replay[1], f2);
+    char *argv3[] = {"deformd", "--config", conf, NULL};
+    assert_int_equal(df_config_from_args(&c, 3, argv3, NULL, &act, &e), DF_OK);
+    assert_int_equal(c.n_hid_replay, 1);
+    assert_string_equal(c.hid_replay[0], f1);
+    unlink(conf);
     unlink(f1);
     unlink(f2);
 }
