@@ -169,6 +169,18 @@ void df_hid_device_announce(df_hid_device *d, uint64_t session_id)
     free(info);
 }
 
+/* d->error = what + why, cut to its size (the log line says it all). */
+static void set_error(df_hid_device *d, const char *what, const char *why)
+{
+    size_t n = strlen(what), cap = sizeof d->error;
+    if (n >= cap) n = cap - 1;
+    memcpy(d->error, what, n);
+    size_t m = strlen(why);
+    if (m > cap - 1 - n) m = cap - 1 - n;
+    memcpy(d->error + n, why, m);
+    d->error[n + m] = '\0';
+}
+
 /* Parses the descriptor, classifies the device and prepares its mapper. A refused descriptor or
  * mapping leaves the device in state ERROR with the reason (listed, never opened). */
 static void classify(df_hid_device *d)
@@ -179,8 +191,9 @@ static void classify(df_hid_device *d)
             d->have_desc = 1;
         } else {
             d->state = DF_DEVSTATE_ERROR;
-            snprintf(d->error, sizeof d->error, "report descriptor refused: %s", err.msg);
-            df_log(DF_LOG_WARN, "hid: %s (%s): %s", d->info.path, d->info.name, d->error);
+            set_error(d, "report descriptor refused: ", err.msg);
+            df_log(DF_LOG_WARN, "hid: %s (%s): report descriptor refused: %s", d->info.path,
+                   d->info.name, err.msg);
         }
     }
     df_hid_classify(d->have_desc ? &d->desc : NULL, d->info.vid, d->info.pid, &d->cls);
@@ -190,8 +203,9 @@ static void classify(df_hid_device *d)
         d->mapper_ok = 1;
     } else {
         d->state = DF_DEVSTATE_ERROR;
-        snprintf(d->error, sizeof d->error, "no mapping: %s", err.msg);
-        df_log(DF_LOG_WARN, "hid: %s (%s): %s", d->info.path, d->info.name, d->error);
+        set_error(d, "no mapping: ", err.msg);
+        df_log(DF_LOG_WARN, "hid: %s (%s): no mapping: %s", d->info.path, d->info.name,
+               err.msg);
     }
 }
 
