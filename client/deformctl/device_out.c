@@ -77,11 +77,11 @@ static void print_text(const df_msg_device_list *l, int hid_on)
 void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d)
 {
     if (ctx->json) {
-        printf("{\"kind\":\"device_state\",\"device\":%" PRIu64 ",\"class\":\"%s\","
-               "\"state\":\"%s\",\"vid\":\"%04x\",\"pid\":\"%04x\",\"bound_session\":%" PRIu64
-               ",\"active_session\":%" PRIu64 ",\"name\":", d->device_id,
-               class_name(d->dev_class), state_name(d->state), d->vid, d->pid, d->bound_session,
-               d->active_session);
+        printf("{\"kind\":\"device_state\",\"device\":%" PRIu64 ",\"number\":%" PRIu64
+               ",\"class\":\"%s\",\"state\":\"%s\",\"vid\":\"%04x\",\"pid\":\"%04x\","
+               "\"bound_session\":%" PRIu64 ",\"active_session\":%" PRIu64 ",\"name\":",
+               d->device_id, d->device_id & ~DEVICE_ID_BIT, class_name(d->dev_class),
+               state_name(d->state), d->vid, d->pid, d->bound_session, d->active_session);
         ctl_json_str(stdout, d->name);
         printf(",\"error\":");
         ctl_json_str(stdout, d->error);

@@ -168,6 +168,13 @@ static void test_device_state_lines(void **state)
     assert_string_equal(t, "device 4 knob 077d:0410 unplugged session 9 'Griffin PowerMate': "
                            "end of the recording\n");
     free(t);
+    t = capture(print_device, &d, 1); /* JSON: the full id and the number, as `devices --json` */
+    assert_string_equal(t, "{\"kind\":\"device_state\",\"device\":9223372036854775812,"
+                           "\"number\":4,\"class\":\"knob\",\"state\":\"unplugged\","
+                           "\"vid\":\"077d\",\"pid\":\"0410\",\"bound_session\":7,"
+                           "\"active_session\":9,\"name\":\"Griffin PowerMate\","
+                           "\"error\":\"end of the recording\"}\n");
+    free(t);
 }
 
 /* `deformctl devices` with none says so plainly, and why when the daemon runs no HID subsystem. */
