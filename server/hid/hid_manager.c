@@ -3,6 +3,7 @@
  * stats are in hid_mgr_query.c. */
 #include "server/hid/hid_manager.h"
 
+#include <assert.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +45,7 @@ static void on_msg(df_task *t)
 {
     hid_msg *msg = (hid_msg *)t;
     df_hid_manager *m = msg->mgr;
+    assert(msg->kind == MSG_RESCAN || msg->d); /* reports and GONE name their device */
     atomic_fetch_sub(&m->posted, 1);
     if (!m->stopping) {
         if (msg->kind == MSG_REPORT && msg->d->state == DF_DEVSTATE_OPEN) {
@@ -245,6 +247,7 @@ static df_hid_device *add_device(df_hid_manager *m, int be, const df_hid_devinfo
 static void open_device(df_hid_device *d)
 {
     if (d->state == DF_DEVSTATE_OPEN || !d->mapper_ok) return;
+    assert(!d->th_running && !d->dev); /* close_device joined the last reader, closed the handle */
     df_hid_backend *b = d->mgr->be[d->be];
     df_error err = {0, ""};
     int rc = b->open(b, d->info.path, &d->dev, &err);
