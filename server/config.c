@@ -451,7 +451,9 @@ static const char k_usage[] =
     "  -h, --help          print this help and exit\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
-    "When ready it prints 'deformd: listening on ...' to stderr.\n";
+    "When ready it prints 'deformd: listening on ...' to stderr.\n"
+    "Exit status: 0 after SIGTERM/SIGINT; 1 when it cannot start (socket, daemonize, memory);\n"
+    "2 for a bad option, config key or value, or a hid_replay file that cannot be read or parsed.\n";
 
 const char *df_config_usage(void) { return k_usage; }
 
