@@ -327,7 +327,10 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         return df_error_set(err, DF_ENOMEM, "config: out of memory");
     }
     *tmp = *cfg;
-    int rc = DF_OK, lineno = 0;
+    /* hid.* cross-key checks (nu_min <= nu_max, ...) apply to the whole file (a file may pass
+     * through an inconsistent state, e.g. led_min_radius before led_max_radius); an error names
+     * the line of the hid key from which the keys stay inconsistent to the end. */
+    int rc = DF_OK, lineno = 0, hid_bad_line = 0;
     size_t pos = 0;
     while (pos < len && rc == DF_OK) {
         size_t end = pos;
@@ -370,11 +373,17 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         df_error e2;
         rc = df_config_set(tmp, k, val, &e2);
         if (rc != DF_OK) df_error_set(err, rc, "%s:%d: %s", name, lineno, e2.msg);
+        else if (strncmp(k, "hid.", 4) == 0)
+            hid_bad_line = df_hid_config_check(&tmp->hid, &e2) != DF_OK
+                               ? (hid_bad_line ? hid_bad_line : lineno) : 0;
     }
-    if (rc == DF_OK) { /* hid.* cross-key checks (nu_min <= nu_max, ...) need the whole file */
+    if (rc == DF_OK) {
         df_error e2;
         rc = df_hid_config_check(&tmp->hid, &e2);
-        if (rc != DF_OK) df_error_set(err, rc, "%s: %s", name, e2.msg);
+        if (rc != DF_OK && hid_bad_line)
+            df_error_set(err, rc, "%s:%d: %s", name, hid_bad_line, e2.msg);
+        else if (rc != DF_OK)
+            df_error_set(err, rc, "%s: %s", name, e2.msg);
     }
     if (rc == DF_OK) *cfg = *tmp;
     free(tmp);
