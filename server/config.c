@@ -200,18 +200,6 @@ static const int_key k_int_keys[] = {
      DF_CONFIG_MAX_HID_ENUMERATE_S},
 };
 
-/* Parses yes/no, true/false, on/off, 1/0 (case-insensitive) into *out. */
-static int parse_bool(const char *s, int *out)
-{
-    static const char *const yes[] = {"yes", "true", "on", "1"}, *const no[] = {"no", "false",
-                                                                                 "off", "0"};
-    for (int i = 0; i < 4; i++) {
-        if (strcasecmp(s, yes[i]) == 0) return *out = 1, DF_OK;
-        if (strcasecmp(s, no[i]) == 0) return *out = 0, DF_OK;
-    }
-    return DF_EINVAL;
-}
-
 /* socket_mode: octal permission bits, 0..0777, with or without a leading 0. */
 static int set_socket_mode(df_server_config *cfg, const char *value, df_error *err)
 {
@@ -252,7 +240,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     }
     if (strcmp(key, "tcp") == 0) return set_tcp(cfg, value, err);
     if (strcmp(key, "tcp_insecure") == 0) {
-        if (parse_bool(value, &cfg->tcp_insecure) != DF_OK)
+        if (df_hid_config_bool(value, &cfg->tcp_insecure) != DF_OK)
             return df_error_set(err, DF_EINVAL, "tcp_insecure: '%s' is not yes or no", value);
         return DF_OK;
     }
@@ -266,7 +254,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     }
     if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
     if (strcmp(key, "hid") == 0) {
-        if (parse_bool(value, &cfg->hid_on) != DF_OK)
+        if (df_hid_config_bool(value, &cfg->hid_on) != DF_OK)
             return df_error_set(err, DF_EINVAL, "hid: '%s' is not on or off", value);
         return DF_OK;
     }
@@ -339,7 +327,10 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         return df_error_set(err, DF_ENOMEM, "config: out of memory");
     }
     *tmp = *cfg;
-    int rc = DF_OK, lineno = 0;
+    /* hid.* cross-key checks (nu_min <= nu_max, ...) apply to the whole file (a file may pass
+     * through an inconsistent state, e.g. led_min_radius before led_max_radius); an error names
+     * the line of the hid key from which the keys stay inconsistent to the end. */
+    int rc = DF_OK, lineno = 0, hid_bad_line = 0;
     size_t pos = 0;
     while (pos < len && rc == DF_OK) {
         size_t end = pos;
@@ -382,11 +373,17 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         df_error e2;
         rc = df_config_set(tmp, k, val, &e2);
         if (rc != DF_OK) df_error_set(err, rc, "%s:%d: %s", name, lineno, e2.msg);
+        else if (strncmp(k, "hid.", 4) == 0)
+            hid_bad_line = df_hid_config_check(&tmp->hid, &e2) != DF_OK
+                               ? (hid_bad_line ? hid_bad_line : lineno) : 0;
     }
-    if (rc == DF_OK) { /* hid.* cross-key checks (nu_min <= nu_max, ...) need the whole file */
+    if (rc == DF_OK) {
         df_error e2;
         rc = df_hid_config_check(&tmp->hid, &e2);
-        if (rc != DF_OK) df_error_set(err, rc, "%s: %s", name, e2.msg);
+        if (rc != DF_OK && hid_bad_line)
+            df_error_set(err, rc, "%s:%d: %s", name, hid_bad_line, e2.msg);
+        else if (rc != DF_OK)
+            df_error_set(err, rc, "%s: %s", name, e2.msg);
     }
     if (rc == DF_OK) *cfg = *tmp;
     free(tmp);
@@ -457,12 +454,15 @@ static const char k_usage[] =
     "                      took <= N us (default 50; 0 = always on the compute pool)\n"
     "  --hid-replay FILES  replay hid-recorder files (comma-separated) as HID devices; they\n"
     "                      start when a client first subscribes to a session\n"
-    "                      (config hid_replay; also: hid = on|off, hid_replay_speed,\n"
+    "                      (config hid_replay; also: hid = on|off for the real devices\n"
+    "                      (hidapi, libusb; replay files run either way), hid_replay_speed,\n"
     "                      hid_enumerate_s, hid.<class>.<key>: see server/hid/hid_config.h)\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
-    "When ready it prints 'deformd: listening on ...' to stderr.\n";
+    "When ready it prints 'deformd: listening on ...' to stderr.\n"
+    "Exit status: 0 after SIGTERM/SIGINT; 1 when it cannot start (socket, daemonize, memory);\n"
+    "2 for a bad option, config key or value, or a hid_replay file that cannot be read or parsed.\n";
 
 const char *df_config_usage(void) { return k_usage; }
 
@@ -504,7 +504,9 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         if (m < 0) rc = df_error_set(err, DF_EINVAL, "--config needs a FILE");
         else if (m > 0) rc = df_config_load(tmp, v, err);
     }
-    /* Pass 2: everything else on top. */
+    /* Pass 2: everything else on top. The first --hid-replay replaces the file's hid_replay
+     * list (options override the file); further --hid-replay options add to it. */
+    int cli_replay = 0;
     for (int i = 1; i < argc && rc == DF_OK; i++) {
         const char *v = NULL;
         int m;
@@ -527,6 +529,8 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
             if (m < 0) rc = df_error_set(err, DF_EINVAL, "%s needs a value", map[k][0]);
             else if (m > 0) {
                 df_error e2;
+                if (strcmp(map[k][1], "hid_replay") == 0 && !cli_replay++)
+                    tmp->n_hid_replay = 0;
                 rc = df_config_set(tmp, map[k][1], v, &e2);
                 if (rc != DF_OK) df_error_set(err, rc, "%s: %s", map[k][0], e2.msg);
                 done = 1;

@@ -55,7 +55,8 @@
  *                      libusb (PowerMate); with no device present nothing happens
  *   hid_replay         FILE[,FILE...]: also replay these hid-recorder files (or a PowerMate raw
  *                      file) as devices (server/hid/hid_source.h); they start when a client first
- *                      subscribes to a session; repeated lines append. Works with hid = off (replay only)
+ *                      subscribes to a session; repeated lines append; --hid-replay replaces
+ *                      the file's list (repeated options append). Works with hid = off (replay only)
  *   hid_replay_speed   replay speed factor: recorded gaps are divided by it (default 1); 0 =
  *                      deliver every report at once (tests: the recorded timestamps still drive
  *                      the mappers)

@@ -99,13 +99,16 @@ int main(int argc, char **argv)
         uv_loop_close(loop);
         return 1;
     }
-    if (df_hid_manager_start(&srv, &err) != DF_OK) { /* HID devices (hid_manager.h) */
+    int hrc = df_hid_manager_start(&srv, &err); /* HID devices (hid_manager.h) */
+    if (hrc != DF_OK) {
         fprintf(stderr, "deformd: %s\n", err.msg);
         df_server_stop(&srv);
         uv_run(loop, UV_RUN_DEFAULT);
         df_server_free(&srv);
         uv_loop_close(loop);
-        return 1;
+        /* a hid_replay file that cannot be read or parsed is a configuration error, like a
+         * missing one (status 2); running out of memory is not */
+        return hrc == DF_ENOMEM ? 1 : 2;
     }
     char where[512];
     df_server_describe(&srv, where, sizeof where);

@@ -29,6 +29,16 @@ static const char *origin_name(unsigned k)
     return k <= DF_ORIGIN_MAX ? ORIGINS[k] : "unknown";
 }
 
+/* The origin as a watch line names it: "client 5", "device 2" (a device by its number n of id
+ * (1 << 63) | n, as `deformctl devices` lists it), "none 0". */
+static const char *origin_text(unsigned kind, uint64_t id, char buf[48])
+{
+    if (kind == DF_ORIGIN_DEVICE)
+        id &= ~((uint64_t)1 << 63);
+    snprintf(buf, 48, "%s %" PRIu64, origin_name(kind), id);
+    return buf;
+}
+
 /* The shortest %.{15,16,17}g text of v that reads back as v ("inf", "-inf" for infinities). */
 static const char *num(double v, char buf[32])
 {
@@ -112,16 +122,16 @@ static const char *mirror_text(const df_msg_brush_values *v, char *out, size_t c
 void ctl_brush_state_print(const ctl_ctx *ctx, const df_msg_brush_state *s, int event)
 {
     const df_msg_brush_values *v = &s->v;
-    char b[6][32], mir[200], changed[100];
+    char b[6][32], mir[200], changed[100], who[48];
     mask_text(s->changed, changed, sizeof changed);
     if (ctx->json) {
         printf(event ? "{\"kind\":\"brush_state\"," : "{");
         state_json_members(s);
         printf("}\n");
     } else if (event) {
-        printf("brush_state seq %" PRIu64 " changed %s by %s %" PRIu64 " '%s': type %s radius %s "
-               "nu %s strength %s falloff %u ratio %s integrator %s steps %u mirror %s\n", s->seq,
-               changed, origin_name(s->origin_kind), s->origin_id, s->origin_name,
+        printf("brush_state seq %" PRIu64 " changed %s by %s '%s': type %s radius %s nu %s "
+               "strength %s falloff %u ratio %s integrator %s steps %u mirror %s\n", s->seq,
+               changed, origin_text(s->origin_kind, s->origin_id, who), s->origin_name,
                type_name(v->type), num(v->radius, b[0]), num(v->nu, b[1]),
                num(v->strength, b[2]), v->falloff, num(v->ratio, b[3]), integ_name(v->integrator),
                v->steps, mirror_text(v, mir, sizeof mir));
@@ -139,7 +149,7 @@ void ctl_brush_state_print(const ctl_ctx *ctx, const df_msg_brush_state *s, int 
 
 void ctl_brush_cursor_print(const ctl_ctx *ctx, const df_msg_brush_cursor *m)
 {
-    char b[4][32];
+    char b[4][32], who[48];
     int in = (m->flags & DF_CURSOR_IN_RANGE) != 0, st = (m->flags & DF_CURSOR_STROKE_ACTIVE) != 0;
     if (ctx->json) {
         printf("{\"kind\":\"brush_cursor\",\"session\":%" PRIu64 ",\"origin\":\"%s\",\"origin_id\":"
@@ -154,8 +164,8 @@ void ctl_brush_cursor_print(const ctl_ctx *ctx, const df_msg_brush_cursor *m)
         printf(",\"in_range\":%s,\"stroke_active\":%s}\n", in ? "true" : "false",
                st ? "true" : "false");
     } else {
-        printf("brush_cursor %s %" PRIu64 " center %s,%s,%s radius %s%s%s\n",
-               origin_name(m->origin_kind), m->origin_id, num(m->center[0], b[0]),
+        printf("brush_cursor %s center %s,%s,%s radius %s%s%s\n",
+               origin_text(m->origin_kind, m->origin_id, who), num(m->center[0], b[0]),
                num(m->center[1], b[1]), num(m->center[2], b[2]), num(m->radius, b[3]),
                in ? " in_range" : "", st ? " stroke_active" : "");
     }

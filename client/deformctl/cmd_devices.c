@@ -11,24 +11,6 @@
 
 #include "client/deformctl/ctl.h"
 
-static const char *class_name(unsigned c)
-{
-    static const char *const n[] = {"none", "knob", "3d-mouse", "pen"};
-    return c < 4 ? n[c] : "?";
-}
-
-static const char *state_name(unsigned s)
-{
-    static const char *const n[] = {"?", "open", "closed", "error", "unplugged"};
-    return s < 5 ? n[s] : "?";
-}
-
-static const char *backend_name(unsigned b)
-{
-    static const char *const n[] = {"?", "hidapi", "libusb", "replay"};
-    return b < 4 ? n[b] : "?";
-}
-
 #define DEVICE_ID_BIT ((uint64_t)1 << 63)
 
 /* DEVICE: a full id, or the device number n (id = (1 << 63) | n). DF_EINVAL when not a number. */
@@ -40,71 +22,6 @@ static int device_id(const char *arg, uint64_t *out, df_error *err)
         return df_error_set(err, DF_EINVAL, "DEVICE '%s' is not a device id or number", arg);
     *out = v & DEVICE_ID_BIT ? v : v | DEVICE_ID_BIT;
     return DF_OK;
-}
-
-static void print_json(const df_msg_device_list *l)
-{
-    printf("{\"devices\":[");
-    for (uint32_t i = 0; i < l->count; i++) {
-        const df_msg_device_info *d = &l->items[i];
-        printf("%s{\"device\":%" PRIu64 ",\"number\":%" PRIu64 ",\"class\":\"%s\",\"backend\":"
-               "\"%s\",\"state\":\"%s\",\"bus\":%u,\"vid\":\"%04x\",\"pid\":\"%04x\","
-               "\"bound_session\":%" PRIu64 ",\"active_session\":%" PRIu64 ",\"haptics\":%s,"
-               "\"name\":", i ? "," : "", d->device_id, d->device_id & ~DEVICE_ID_BIT,
-               class_name(d->dev_class), backend_name(d->backend), state_name(d->state), d->bus,
-               d->vid, d->pid, d->bound_session, d->active_session,
-               d->haptics ? "true" : "false");
-        ctl_json_str(stdout, d->name);
-        printf(",\"path\":");
-        ctl_json_str(stdout, d->path);
-        printf(",\"error\":");
-        ctl_json_str(stdout, d->error);
-        printf("}");
-    }
-    printf("]}\n");
-}
-
-static void print_text(const df_msg_device_list *l)
-{
-    if (l->count == 0) {
-        printf("no HID devices\n");
-        return;
-    }
-    printf("%-4s %-9s %-9s %-10s %-7s %-7s %s\n", "DEV", "CLASS", "VID:PID", "STATE", "BOUND",
-           "ACTIVE", "NAME");
-    for (uint32_t i = 0; i < l->count; i++) {
-        const df_msg_device_info *d = &l->items[i];
-        char bound[24], active[24], vp[16];
-        snprintf(bound, sizeof bound, d->bound_session ? "%" PRIu64 : "-", d->bound_session);
-        snprintf(active, sizeof active, d->active_session ? "%" PRIu64 : "-",
-                 d->active_session);
-        snprintf(vp, sizeof vp, "%04x:%04x", d->vid, d->pid);
-        printf("%-4" PRIu64 " %-9s %-9s %-10s %-7s %-7s %s (%s%s%s)\n",
-               d->device_id & ~DEVICE_ID_BIT, class_name(d->dev_class), vp, state_name(d->state),
-               bound, active, d->name[0] ? d->name : "-", backend_name(d->backend),
-               d->error[0] ? ": " : "", d->error);
-    }
-}
-
-void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d)
-{
-    if (ctx->json) {
-        printf("{\"kind\":\"device_state\",\"device\":%" PRIu64 ",\"class\":\"%s\","
-               "\"state\":\"%s\",\"vid\":\"%04x\",\"pid\":\"%04x\",\"bound_session\":%" PRIu64
-               ",\"active_session\":%" PRIu64 ",\"name\":", d->device_id,
-               class_name(d->dev_class), state_name(d->state), d->vid, d->pid, d->bound_session,
-               d->active_session);
-        ctl_json_str(stdout, d->name);
-        printf(",\"error\":");
-        ctl_json_str(stdout, d->error);
-        printf("}\n");
-    } else {
-        printf("device %" PRIu64 " %s %04x:%04x %s session %" PRIu64 " '%s'%s%s\n",
-               d->device_id & ~DEVICE_ID_BIT, class_name(d->dev_class), d->vid, d->pid,
-               state_name(d->state), d->active_session ? d->active_session : d->bound_session,
-               d->name, d->error[0] ? ": " : "", d->error);
-    }
-    fflush(stdout);
 }
 
 static int run_devices(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
@@ -141,8 +58,8 @@ static int run_devices(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         df_msg_device_list l;
         rc = df_client_devices_list(c, &l, &e);
         if (rc == DF_OK) {
-            if (ctx->json) print_json(&l);
-            else print_text(&l);
+            ctl_device_list_print(ctx, &l,
+                                  (df_client_server_info(c)->features & DF_FEAT_HID) != 0);
             df_msg_device_list_free(&l);
         }
     }

@@ -58,15 +58,23 @@ extern const ctl_cmd ctl_cmds_devices[];   /* devices [bind DEVICE SESSION] */
 
 /* Prints a session brush (brush_state_out.c): event 0 as `brush-state` does ('key value' lines,
  * or one JSON object), event 1 as one `watch` line ("brush_state seq N changed radius,nu by
- * client ID 'NAME': type grab radius 0.25 ...", or a JSON object with "kind":"brush_state"). */
+ * client ID 'NAME': type grab radius 0.25 ..."; a device origin is "device N", its number as
+ * `deformctl devices` lists it; or a JSON object with "kind":"brush_state" and the full id). */
 void ctl_brush_state_print(const ctl_ctx *ctx, const df_msg_brush_state *s, int event);
 
-/* Prints a BRUSH_CURSOR event as one `watch` line ("brush_cursor device ID center X,Y,Z radius R
- * [in_range] [stroke_active]", or a JSON object with "kind":"brush_cursor"). */
+/* Prints a BRUSH_CURSOR event as one `watch` line ("brush_cursor device N center X,Y,Z radius R
+ * [in_range] [stroke_active]", N the device number; or a JSON object with "kind":"brush_cursor"). */
 void ctl_brush_cursor_print(const ctl_ctx *ctx, const df_msg_brush_cursor *m);
 
-/* Prints a DEVICE_STATE event as one `watch` line (cmd_devices.c): "device N knob 045e:091b
- * open session S 'NAME'" (+ ": ERROR"), or a JSON object with "kind":"device_state". */
+/* Prints a DEVICES_LIST reply as `deformctl devices` does (device_out.c): a table with one row
+ * per device (its number n of id (1 << 63) | n, class, VID:PID, state, bound and active session,
+ * name, backend and error), "no HID devices" when empty (saying the subsystem is off when hid_on
+ * is 0: the daemon's hello has no HID feature bit); or one JSON object {"devices":[...]}. */
+void ctl_device_list_print(const ctl_ctx *ctx, const df_msg_device_list *l, int hid_on);
+
+/* Prints a DEVICE_STATE event as one `watch` line (device_out.c): "device N knob 045e:091b
+ * open session S 'NAME'" (+ ": ERROR"; S is the session it drives, else the bound one, "-" for
+ * none), or a JSON object with "kind":"device_state". */
 void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d);
 
 /* Prints `cmd`'s usage to `f`. */

@@ -21,23 +21,23 @@ static void put(void *ctx, const char *key, double v)
     a->st.items[a->st.count++].value = v;
 }
 
+/* DF_ENOTFOUND: no HID subsystem at all; the device named by its number n of (1 << 63) | n. */
+static int no_device(uint64_t id, const char *what, df_error *err)
+{
+    return df_error_set(err, DF_ENOTFOUND, "%s: no device %llu (id %llu): no HID subsystem", what,
+                        (unsigned long long)(id & ~(1ull << 63)), (unsigned long long)id);
+}
+
 int df_h_device_stats(df_req *r, uint64_t device_id, df_error *err)
 {
     stats_acc a = {{0, calloc(DF_MAX_STATS_ENTRIES, sizeof(df_msg_stat))}, DF_MAX_STATS_ENTRIES};
     if (!a.st.items) return df_error_set(err, DF_ENOMEM, "stats: out of memory");
     const df_hid_ops *h = r->srv->hid_ops;
     int rc = h ? h->device_stats(r->srv, device_id, put, &a, err)
-               : df_error_set(err, DF_ENOTFOUND, "stats: no device %llu",
-                              (unsigned long long)device_id);
+               : no_device(device_id, "stats", err);
     if (rc == DF_OK) df_req_reply_stats(r, &a.st);
     free(a.st.items);
     return rc;
-}
-
-static int no_device(uint64_t id, const char *what, df_error *err)
-{
-    return df_error_set(err, DF_ENOTFOUND, "%s: no device %llu (no HID subsystem)", what,
-                        (unsigned long long)id);
 }
 
 int df_h_devices_list(df_req *r, const uint8_t *p, df_error *err)

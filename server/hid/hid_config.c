@@ -98,7 +98,7 @@ void df_hid_params_defaults(df_hid_params *p)
     p->n_type_cycle = 2;
 }
 
-static int parse_bool(const char *s, int *out)
+int df_hid_config_bool(const char *s, int *out)
 {
     static const char *const yes[] = {"yes", "true", "on", "1"}, *const no[] = {"no", "false",
                                                                                  "off", "0"};
@@ -156,7 +156,7 @@ static int parse_value(const key_def *kd, const char *key, const char *value, df
     int i;
     switch (kd->type) {
     case T_BOOL:
-        if (parse_bool(value, &i) != DF_OK)
+        if (df_hid_config_bool(value, &i) != DF_OK)
             return df_error_set(err, DF_EINVAL, "%s: '%s' is not yes or no", key, value);
         *(int *)field = i;
         return DF_OK;

@@ -93,6 +93,11 @@ typedef struct df_hid_config {
     struct { uint16_t vid, pid; df_hid_layer l; } dev[DF_HID_CONFIG_MAX_DEVICES];
 } df_hid_config;
 
+/* The boolean words of every deformd config key (hid.*.haptics, hid, tcp_insecure, ...):
+ * yes/no, true/false, on/off, 1/0, case-insensitive. DF_OK with *out = 1 / 0, else DF_EINVAL
+ * (*out untouched). Pure. */
+int df_hid_config_bool(const char *s, int *out);
+
 /* The built-in defaults (the table above) into *p. */
 void df_hid_params_defaults(df_hid_params *p);
 

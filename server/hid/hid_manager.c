@@ -3,6 +3,7 @@
  * stats are in hid_mgr_query.c. */
 #include "server/hid/hid_manager.h"
 
+#include <assert.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +45,7 @@ static void on_msg(df_task *t)
 {
     hid_msg *msg = (hid_msg *)t;
     df_hid_manager *m = msg->mgr;
+    assert(msg->kind == MSG_RESCAN || msg->d); /* reports and GONE name their device */
     atomic_fetch_sub(&m->posted, 1);
     if (!m->stopping) {
         if (msg->kind == MSG_REPORT && msg->d->state == DF_DEVSTATE_OPEN) {
@@ -169,24 +171,44 @@ void df_hid_device_announce(df_hid_device *d, uint64_t session_id)
     free(info);
 }
 
-/* Parses the descriptor, classifies the device and prepares its mapper. */
+/* d->error = what + why, cut to its size (the log line says it all). */
+static void set_error(df_hid_device *d, const char *what, const char *why)
+{
+    size_t n = strlen(what), cap = sizeof d->error;
+    if (n >= cap) n = cap - 1;
+    memcpy(d->error, what, n);
+    size_t m = strlen(why);
+    if (m > cap - 1 - n) m = cap - 1 - n;
+    memcpy(d->error + n, why, m);
+    d->error[n + m] = '\0';
+}
+
+/* Parses the descriptor, classifies the device and prepares its mapper. A refused descriptor or
+ * mapping leaves the device in state ERROR with the reason (listed, never opened). */
 static void classify(df_hid_device *d)
 {
     df_error err = {0, ""};
     if (d->info.desc && d->info.desc_len) {
-        if (df_hid_desc_parse(d->info.desc, d->info.desc_len, &d->desc, &err) == DF_OK)
+        if (df_hid_desc_parse(d->info.desc, d->info.desc_len, &d->desc, &err) == DF_OK) {
             d->have_desc = 1;
-        else
+        } else {
+            d->state = DF_DEVSTATE_ERROR;
+            set_error(d, "report descriptor refused: ", err.msg);
             df_log(DF_LOG_WARN, "hid: %s (%s): report descriptor refused: %s", d->info.path,
                    d->info.name, err.msg);
+        }
     }
     df_hid_classify(d->have_desc ? &d->desc : NULL, d->info.vid, d->info.pid, &d->cls);
     if (d->cls.cls == DF_HID_CLASS_NONE) return;
     if (df_hid_mapper_init(&d->map, &d->cls, d->have_desc ? &d->desc : NULL,
-                           &d->mgr->srv->cfg.hid, &err) == DF_OK)
+                           &d->mgr->srv->cfg.hid, &err) == DF_OK) {
         d->mapper_ok = 1;
-    else
-        df_log(DF_LOG_WARN, "hid: %s (%s): no mapping: %s", d->info.path, d->info.name, err.msg);
+    } else {
+        d->state = DF_DEVSTATE_ERROR;
+        set_error(d, "no mapping: ", err.msg);
+        df_log(DF_LOG_WARN, "hid: %s (%s): no mapping: %s", d->info.path, d->info.name,
+               err.msg);
+    }
 }
 
 static df_hid_device *add_device(df_hid_manager *m, int be, const df_hid_devinfo *info)
@@ -225,6 +247,7 @@ static df_hid_device *add_device(df_hid_manager *m, int be, const df_hid_devinfo
 static void open_device(df_hid_device *d)
 {
     if (d->state == DF_DEVSTATE_OPEN || !d->mapper_ok) return;
+    assert(!d->th_running && !d->dev); /* close_device joined the last reader, closed the handle */
     df_hid_backend *b = d->mgr->be[d->be];
     df_error err = {0, ""};
     int rc = b->open(b, d->info.path, &d->dev, &err);
@@ -459,7 +482,10 @@ void df_hid_manager_session_gone(df_server *srv, df_session *s)
     if (!m || !s) return;
     df_hid_drive_pen_forget(m, s->id);
     for (df_hid_device *d = m->devs; d; d = d->next) {
-        if (d->stroke && d->stroke_session == s->id) d->stroke = 0; /* gone with the session */
+        if (d->stroke && d->stroke_session == s->id) { /* ended with the session */
+            d->stroke = 0;
+            d->strokes_ended++;
+        }
         if (d->bound == s->id) {
             d->bound = 0;
             d->have_view = 0;

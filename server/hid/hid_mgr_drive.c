@@ -2,6 +2,7 @@
  * hid_manager.h): brush-state changes and cursor events on the session, and BRUSH_BEGIN /
  * SET_BRUSH_PARAM / BRUSH_UPDATE / BRUSH_END requests queued through df_job_request with an
  * internal df_req (no connection, origin_id = the device id). Loop thread only. */
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -223,6 +224,7 @@ static double stroke_strength(const df_hid_device *d, df_session *s, const df_hi
 static void stroke_begin(df_hid_device *d, df_session *s, const df_hid_action *a)
 {
     if (d->stroke) df_hid_drive_end_stroke(d);
+    assert(!d->stroke); /* at most one open stroke per device */
     d->stroke_skipped = 0;
     double centre[3];
     if (d->cls.cls == DF_HID_CLASS_PEN) {
@@ -345,6 +347,7 @@ static void to_hid_brush(const df_brush_state *bs, df_hid_brush *out)
 
 void df_hid_drive_report(df_hid_device *d, const uint8_t *buf, size_t len, uint64_t time_us)
 {
+    assert(d->state == DF_DEVSTATE_OPEN); /* on_msg drops reports of closed devices */
     if (!d->mapper_ok) return;
     df_session *s = df_hid_drive_session(d);
     if (!s) {

@@ -20,14 +20,30 @@ int df_hid_manager_list(df_server *srv, df_msg_device_list *out, df_error *err)
     return DF_OK;
 }
 
+/* DF_ENOTFOUND for device id `id`, named as `deformctl devices` numbers it (n of (1 << 63) | n)
+ * with the id, so a user who typed the number recognises it. */
+static int no_device(const df_server *srv, const char *what, uint64_t id, df_error *err)
+{
+    if (id & DF_HID_ID_BIT)
+        return df_error_set(err, DF_ENOTFOUND, "%s: no device %llu (id %llu)%s", what,
+                            (unsigned long long)(id & ~DF_HID_ID_BIT), (unsigned long long)id,
+                            srv->hid ? "" : ": the HID subsystem is off");
+    return df_error_set(err, DF_ENOTFOUND, "%s: no device %llu (device ids have bit 63 set)%s",
+                        what, (unsigned long long)id,
+                        srv->hid ? "" : ": the HID subsystem is off");
+}
+
+/* The device to bind: it exists and drives sessions (a class); the session (0: none) is live. */
 static int lookup(df_server *srv, uint64_t device_id, uint64_t session_id, const char *what,
                   df_hid_device **d, df_error *err)
 {
     *d = srv->hid ? df_hid_find(srv->hid, device_id) : NULL;
-    if (!*d)
-        return df_error_set(err, DF_ENOTFOUND, "%s: no device %llu%s", what,
-                            (unsigned long long)device_id,
-                            srv->hid ? "" : " (the HID subsystem is off)");
+    if (!*d) return no_device(srv, what, device_id, err);
+    if ((*d)->cls.cls == DF_HID_CLASS_NONE)
+        return df_error_set(err, DF_EINVAL, "%s: device %llu (%04x:%04x '%s') is not a knob, "
+                            "3d-mouse or pen: it drives no session", what,
+                            (unsigned long long)(device_id & ~DF_HID_ID_BIT), (*d)->info.vid,
+                            (*d)->info.pid, (*d)->info.name);
     if (session_id && !df_session_find(srv, session_id))
         return df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", what,
                             (unsigned long long)session_id);
@@ -63,6 +79,7 @@ int df_hid_manager_view(df_server *srv, const df_msg_device_view *v, df_error *e
 {
     df_hid_device *d;
     int rc = lookup(srv, v->device_id, v->session_id, "device_view", &d, err);
+    if (rc == DF_OK) rc = df_pen_view_check(v->view_proj, v->viewport, err);
     if (rc != DF_OK) return rc;
     memcpy(d->view_proj, v->view_proj, sizeof d->view_proj);
     memcpy(d->viewport, v->viewport, sizeof d->viewport);
@@ -78,9 +95,7 @@ int df_hid_manager_device_stats(df_server *srv, uint64_t device_id,
                                 df_error *err)
 {
     df_hid_device *d = srv->hid ? df_hid_find(srv->hid, device_id) : NULL;
-    if (!d)
-        return df_error_set(err, DF_ENOTFOUND, "stats: no device %llu",
-                            (unsigned long long)device_id);
+    if (!d) return no_device(srv, "stats", device_id, err);
     put(ctx, "class", d->cls.cls);
     put(ctx, "state", d->state);
     put(ctx, "events", (double)d->events);

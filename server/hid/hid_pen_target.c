@@ -118,3 +118,13 @@ void df_pen_cache_free(df_pen_cache *pc)
     free(pc->F);
     free(pc);
 }
+
+int df_pen_view_check(const double view_proj[16], const double viewport[4], df_error *err)
+{
+    if (!view_proj || !viewport)
+        return df_error_set(err, DF_EINVAL, "pen view: NULL %s", !view_proj ? "view_proj"
+                                                                            : "viewport");
+    double org[3], dir[3];
+    return df_view_ray(view_proj, viewport, viewport[0] + 0.5 * viewport[2],
+                       viewport[1] + 0.5 * viewport[3], org, dir, err);
+}

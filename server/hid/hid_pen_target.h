@@ -43,6 +43,11 @@ int df_pen_target(df_pen_cache *pc, const double *pos, uint64_t version,
                   const double view_proj[16], const double viewport[4], double nx, double ny,
                   double center[3], df_error *err);
 
+/* Checks a view a client publishes for a pen (DEVICE_VIEW) before it is stored: the ray through
+ * the viewport's centre must exist (core/geom/view_ray.h's rules: finite, width and height > 0,
+ * view_proj invertible). DF_OK, or DF_EINVAL with view_ray's reason ("... singular ..."). Pure. */
+int df_pen_view_check(const double view_proj[16], const double viewport[4], df_error *err);
+
 /* Releases the cache and its scene; NULL-safe. */
 void df_pen_cache_free(df_pen_cache *pc);
 

@@ -95,7 +95,9 @@ static int read_whole(const char *path, char **text, size_t *n, df_error *err)
         size_t got = fread(buf + len, 1, cap - len, f);
         len += got;
         if (got == 0) {
-            if (ferror(f)) rc = df_error_set(err, DF_EIO, "hid replay: %s: read error", path);
+            if (ferror(f))
+                rc = df_error_set(err, DF_EIO, "hid replay: %s: cannot read: %s", path,
+                                  strerror(errno));
             break;
         }
     }
@@ -259,8 +261,7 @@ static int rp_read(df_hid_dev *dd, uint8_t *buf, size_t cap, int timeout_ms, uin
     const rp_slot *s = d->s;
     const rp_file *f = &b->files[s->file];
     if (d->gone)
-        return df_error_set(err, DF_ENOTFOUND, "hid replay: %s: unplugged (end of the recording)",
-                            s->info.path);
+        return df_error_set(err, DF_ENOTFOUND, "unplugged: end of the recording");
     uint64_t timeout_us = (uint64_t)timeout_ms * 1000u;
     int at_end = b->opts.at_end;
     for (;;) {
@@ -301,8 +302,7 @@ static int rp_read(df_hid_dev *dd, uint8_t *buf, size_t cap, int timeout_ms, uin
         d->gone = 1;
         d->s->gone = 1;
         pthread_mutex_unlock(&b->mu);
-        return df_error_set(err, DF_ENOTFOUND, "hid replay: %s: unplugged (end of the recording)",
-                            s->info.path);
+        return df_error_set(err, DF_ENOTFOUND, "unplugged: end of the recording");
     }
 }
 

@@ -295,7 +295,7 @@ def test_bad_replay_config_is_refused(tmp_path):
     bad.write_text("R: 3 05 01\nE: 000000.000000 2 01\n")
     r = subprocess.run([deformd, "--foreground", "--socket", str(tmp_path / "s.sock"),
                         "--hid-replay", str(bad)], capture_output=True, text=True, timeout=60)
-    assert r.returncode == 1 and "bad.hid" in r.stderr, r.stderr
+    assert r.returncode == 2 and "bad.hid" in r.stderr, r.stderr   # a config error, as below
     r = subprocess.run([deformd, "--foreground", "--socket", str(tmp_path / "s.sock"),
                         "--hid-replay", str(tmp_path / "missing.hid")], capture_output=True,
                        text=True, timeout=60)

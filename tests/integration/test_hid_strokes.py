@@ -106,6 +106,9 @@ def test_spacenavigator_grab_tip_and_mesh(make_daemon, tmp_path, release):
     want = c.get_mesh(ref)
     assert mesh.positions == want.positions
     assert mesh.positions != c.get_mesh(ref, base=True).base
+    c.undo(sid)                             # the device's stroke is one undo step
+    assert c.get_mesh(sid).positions == c.get_mesh(ref, base=True).base
+    assert c.stats(sid)["undo_depth"] == 0
     assert c.ping(b"x") == b"x"
     c.close()
 

@@ -55,6 +55,18 @@ static void print_cursor(const void *arg, int json)
     ctl_brush_cursor_print(&ctx, arg);
 }
 
+static void print_device(const void *arg, int json)
+{
+    ctl_ctx ctx = {.json = json, .prog = "deformctl"};
+    ctl_device_state_print(&ctx, arg);
+}
+
+static void print_empty_list(const void *arg, int hid_on)
+{
+    ctl_ctx ctx = {.json = 0, .prog = "deformctl"};
+    ctl_device_list_print(&ctx, arg, hid_on);
+}
+
 static df_msg_brush_state sample_state(void)
 {
     df_msg_brush_state s;
@@ -104,7 +116,7 @@ static void test_watch_lines(void **state)
     (void)state;
     df_msg_brush_state s = sample_state();
     char *t = capture(print_state_event, &s, 0);
-    assert_string_equal(t, "brush_state seq 7 changed radius,nu by device 9223372036854775810 "
+    assert_string_equal(t, "brush_state seq 7 changed radius,nu by device 2 "
                            "'Surface Dial': type grab radius 0.25 nu 0.45 strength 1 falloff 1 "
                            "ratio 1.1 integrator euler steps 1 mirror off\n");
     free(t);
@@ -113,16 +125,69 @@ static void test_watch_lines(void **state)
     assert_true(!strncmp(t, head, strlen(head)));
     assert_int_equal(strchr(t, '\n') - t, (long)strlen(t) - 1); /* one line */
     free(t);
-    df_msg_brush_cursor c = {3, DF_ORIGIN_DEVICE, 5, DF_CURSOR_IN_RANGE, {0.5, -0.25, 1e-3}, 0.2};
+    /* a device is named by its number, as `deformctl devices` lists it */
+    df_msg_brush_cursor c = {3, DF_ORIGIN_DEVICE, (1ull << 63) | 5, DF_CURSOR_IN_RANGE,
+                             {0.5, -0.25, 1e-3}, 0.2};
     t = capture(print_cursor, &c, 0);
     assert_string_equal(t, "brush_cursor device 5 center 0.5,-0.25,0.001 radius 0.2 in_range\n");
     free(t);
     c.flags = DF_CURSOR_IN_RANGE | DF_CURSOR_STROKE_ACTIVE;
     c.origin_kind = DF_ORIGIN_CLIENT;
+    c.origin_id = 5;
     t = capture(print_cursor, &c, 1);
     assert_string_equal(t, "{\"kind\":\"brush_cursor\",\"session\":3,\"origin\":\"client\","
                            "\"origin_id\":5,\"center\":[0.5,-0.25,0.001],\"radius\":0.2,"
                            "\"in_range\":true,\"stroke_active\":true}\n");
+    free(t);
+}
+
+/* DEVICE_STATE watch lines: the device by its number, the session it drives (else the bound one),
+ * "-" when it has neither (a replay device opening before any session is active). */
+static void test_device_state_lines(void **state)
+{
+    (void)state;
+    df_msg_device_info d;
+    memset(&d, 0, sizeof d);
+    d.device_id = (1ull << 63) | 4;
+    d.dev_class = DF_DEVCLASS_KNOB;
+    d.state = DF_DEVSTATE_OPEN;
+    d.vid = 0x077d;
+    d.pid = 0x0410;
+    snprintf(d.name, sizeof d.name, "Griffin PowerMate");
+    char *t = capture(print_device, &d, 0);
+    assert_string_equal(t, "device 4 knob 077d:0410 open session - 'Griffin PowerMate'\n");
+    free(t);
+    d.bound_session = 7;
+    t = capture(print_device, &d, 0);
+    assert_string_equal(t, "device 4 knob 077d:0410 open session 7 'Griffin PowerMate'\n");
+    free(t);
+    d.active_session = 9;
+    d.state = DF_DEVSTATE_UNPLUGGED;
+    snprintf(d.error, sizeof d.error, "end of the recording");
+    t = capture(print_device, &d, 0);
+    assert_string_equal(t, "device 4 knob 077d:0410 unplugged session 9 'Griffin PowerMate': "
+                           "end of the recording\n");
+    free(t);
+    t = capture(print_device, &d, 1); /* JSON: the full id and the number, as `devices --json` */
+    assert_string_equal(t, "{\"kind\":\"device_state\",\"device\":9223372036854775812,"
+                           "\"number\":4,\"class\":\"knob\",\"state\":\"unplugged\","
+                           "\"vid\":\"077d\",\"pid\":\"0410\",\"bound_session\":7,"
+                           "\"active_session\":9,\"name\":\"Griffin PowerMate\","
+                           "\"error\":\"end of the recording\"}\n");
+    free(t);
+}
+
+/* `deformctl devices` with none says so plainly, and why when the daemon runs no HID subsystem. */
+static void test_no_devices(void **state)
+{
+    (void)state;
+    df_msg_device_list l = {0, NULL};
+    char *t = capture(print_empty_list, &l, 1);
+    assert_string_equal(t, "no HID devices\n");
+    free(t);
+    t = capture(print_empty_list, &l, 0);
+    assert_string_equal(t, "no HID devices: the daemon's HID subsystem is off (hid = off and no "
+                           "hid_replay)\n");
     free(t);
 }
 
@@ -131,6 +196,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_key_value_lines),
         cmocka_unit_test(test_watch_lines),
+        cmocka_unit_test(test_device_state_lines),
+        cmocka_unit_test(test_no_devices),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -190,9 +190,30 @@ static void test_cross_checks(void **state)
     assert_non_null(strstr(e.msg, "radius_min"));
 }
 
+/* The boolean words config.c shares (hid, tcp_insecure): any case; anything else is refused. */
+static void test_bool_words(void **state)
+{
+    (void)state;
+    const char *yes[] = {"yes", "TRUE", "On", "1"}, *no[] = {"no", "False", "OFF", "0"};
+    for (int i = 0; i < 4; i++) {
+        int v = -1;
+        assert_int_equal(df_hid_config_bool(yes[i], &v), DF_OK);
+        assert_int_equal(v, 1);
+        assert_int_equal(df_hid_config_bool(no[i], &v), DF_OK);
+        assert_int_equal(v, 0);
+    }
+    const char *bad[] = {"", "y", "2", "yes ", "maybe"};
+    for (int i = 0; i < 5; i++) {
+        int v = 7;
+        assert_int_equal(df_hid_config_bool(bad[i], &v), DF_EINVAL);
+        assert_int_equal(v, 7);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bool_words),
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_override_order),

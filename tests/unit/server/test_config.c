@@ -331,10 +331,19 @@ static void test_hid_keys(void **state)
     assert_int_equal(df_config_parse(&c, cls, strlen(cls), "h.conf", &e), DF_EINVAL);
     assert_non_null(strstr(e.msg, "h.conf:1: "));
     assert_non_null(strstr(e.msg, "not a pen key"));
-    const char *cross = "hid.knob.nu_min = 0.4\nhid.knob.nu_max = 0.3\n";
+    /* a cross-key inconsistency names the line from which the file stays inconsistent */
+    const char *cross = "hid.knob.nu_min = 0.4\n# x\nhid.knob.nu_max = 0.3\n";
     assert_int_equal(df_config_parse(&c, cross, strlen(cross), "h.conf", &e), DF_EINVAL);
-    assert_non_null(strstr(e.msg, "h.conf: hid.knob: nu_min 0.4 above nu_max 0.3"));
+    assert_non_null(strstr(e.msg, "h.conf:3: hid.knob: nu_min 0.4 above nu_max 0.3"));
     assert_memory_equal(&before, &c, sizeof c);
+    const char *cross2 = "hid.knob.nu_max = 0.3\nlog_level = info\nhid.knob.nu_min = 0.4\n"
+                         "hid.knob.radius_step = 1.2\n";
+    assert_int_equal(df_config_parse(&c, cross2, strlen(cross2), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:3: hid.knob: nu_min 0.4 above nu_max 0.3"));
+    /* inconsistent only half-way (led_min above the default led_max until the next line): fine */
+    const char *mid = "hid.knob.led_min_radius = 2\nhid.knob.led_max_radius = 5\n";
+    assert_int_equal(df_config_parse(&c, mid, strlen(mid), "h.conf", &e), DF_OK);
+    c = before;
     /* the plain df_config_set path too */
     assert_int_equal(df_config_set(&c, "hid.knob.falloff_max", "5", &e), DF_OK);
     assert_int_equal(df_config_set(&c, "hid.knob.falloff_max", "0", &e), DF_EINVAL);
@@ -398,6 +407,24 @@ static void test_hid_daemon_keys(void **state)
     assert_int_equal(c.n_hid_replay, 1);
     assert_string_equal(c.hid_replay[0], f2);
     assert_non_null(strstr(df_config_usage(), "--hid-replay"));
+    /* --hid-replay overrides the file's hid_replay (as every option overrides the file); two
+     * --hid-replay options add up */
+    char conf[] = "/tmp/df-cfg-hid-conf-XXXXXX";
+    int fdc = mkstemp(conf);
+    assert_true(fdc >= 0);
+    snprintf(text, sizeof text, "hid_replay = %s\n", f1);
+    assert_int_equal(write(fdc, text, strlen(text)), (ssize_t)strlen(text));
+    close(fdc);
+    char *argv2[] = {"deformd", "--config", conf, "--hid-replay", f2, "--hid-replay", f2, NULL};
+    assert_int_equal(df_config_from_args(&c, 7, argv2, NULL, &act, &e), DF_OK);
+    assert_int_equal(c.n_hid_replay, 2);
+    assert_string_equal(c.hid_replay[0], f2);
+    assert_string_equal(c.hid_replay[1], f2);
+    char *argv3[] = {"deformd", "--config", conf, NULL};
+    assert_int_equal(df_config_from_args(&c, 3, argv3, NULL, &act, &e), DF_OK);
+    assert_int_equal(c.n_hid_replay, 1);
+    assert_string_equal(c.hid_replay[0], f1);
+    unlink(conf);
     unlink(f1);
     unlink(f2);
 }

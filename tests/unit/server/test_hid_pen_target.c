@@ -260,6 +260,30 @@ static void test_refusals(void **state)
     df_mesh_free(&m);
 }
 
+/* DEVICE_VIEW's check: an invertible view passes; a singular one, a non-finite entry, an empty
+ * viewport or NULL are DF_EINVAL with a reason. */
+static void test_view_check(void **state)
+{
+    (void)state;
+    double vp[16] = {0}, port[4] = {0, 0, 960, 720};
+    for (int i = 0; i < 4; i++) vp[5 * i] = 1;
+    df_error e;
+    assert_int_equal(df_pen_view_check(vp, port, &e), DF_OK);
+    double sing[16];
+    memcpy(sing, vp, sizeof sing);
+    sing[10] = 0; /* z row zero: no inverse */
+    assert_int_equal(df_pen_view_check(sing, port, &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "singular"));
+    double nan_vp[16];
+    memcpy(nan_vp, vp, sizeof nan_vp);
+    nan_vp[3] = NAN;
+    assert_int_equal(df_pen_view_check(nan_vp, port, &e), DF_EINVAL);
+    double empty[4] = {0, 0, 0, 720};
+    assert_int_equal(df_pen_view_check(vp, empty, &e), DF_EINVAL);
+    assert_int_equal(df_pen_view_check(NULL, port, &e), DF_EINVAL);
+    assert_int_equal(df_pen_view_check(vp, NULL, &e), DF_EINVAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -268,6 +292,7 @@ int main(void)
         cmocka_unit_test(test_version_cache_and_refit),
         cmocka_unit_test(test_tet_boundary),
         cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_view_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
