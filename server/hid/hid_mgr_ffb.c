@@ -275,3 +275,8 @@ uint64_t df_hid_ffb_reports(const df_hid_device *d)
 {
     return d->ffb ? d->ffb->reports : 0;
 }
+
+int df_hid_ffb_pending(const df_hid_device *d)
+{
+    return d->ffb ? d->ffb->pending : 0;
+}

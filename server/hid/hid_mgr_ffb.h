@@ -68,4 +68,7 @@ void df_hid_ffb_free(struct df_hid_device *d);
 /* Reports sent by d's force feedback so far (0 without it). */
 uint64_t df_hid_ffb_reports(const struct df_hid_device *d);
 
+/* 1 while the latest force waits for the end of the rate-limit interval. */
+int df_hid_ffb_pending(const struct df_hid_device *d);
+
 #endif

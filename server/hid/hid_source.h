@@ -8,7 +8,8 @@
  *   df_hid_backend_libusb()  the Griffin PowerMate 077d:0410 through libusb-1.0 (Linux gives it
  *                            no hidraw node), with USB hotplug,
  *   df_hid_backend_replay()  hid-recorder files and the PowerMate raw file, delivered at their
- *                            recorded timestamps; every output/control call is captured.
+ *                            recorded timestamps; every output/control/feature report sent
+ *                            is captured.
  *
  * Threads: a backend's enumerate/open/watch/destroy are called from one thread at a time (the
  * manager's loop thread). Each open device is used by one reader thread (read) while the loop
