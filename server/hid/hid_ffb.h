@@ -1,7 +1,7 @@
 /* hid_ffb.h — Physical Interface Device (PID, page 0x0F) force-feedback output reports laid out
  * from the descriptor (issue 11, optional part: "a constant force proportional to the live
- * grab's force"). Off by default: nothing in the daemon sends these yet; this is the pure layout
- * layer, checked against the SideWinder Force Feedback 2 file's constructed examples.
+ * grab's force"). The pure layout layer, checked against the SideWinder Force Feedback 2 file's
+ * constructed examples; hid_mgr_ffb.h sends them (off by default).
  *
  * Reports (found by the usages of their collections, whatever their ids and field order):
  *   Device Control  (0x0F:0x96) array of 0x97 Enable Actuators .. 0x9C Device Continue

@@ -6,12 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "core/kelvinlet/kelvinlet.h"
 #include "server/hid/hid_config.h"
 #include "server/hid/hid_ffb.h"
 #include "server/hid/hid_mgr_internal.h"
 #include "server/log.h"
 #include "server/session/session.h"
+#include "server/session/stroke_force.h"
 
 #define FFB_MAX_REPORT 64 /* bytes of the PID reports kept for comparison (SideWinder: <= 16) */
 
@@ -215,25 +215,6 @@ void df_hid_ffb_stop(df_hid_device *d, uint64_t session_id, int close)
     }
 }
 
-/* The summed grab force of s's open grab strokes into f; returns how many there are. */
-static int grab_force(df_session *s, double f[3])
-{
-    int n = 0;
-    f[0] = f[1] = f[2] = 0;
-    for (df_stroke *st = s->strokes; st; st = st->next) {
-        if (st->brush.type != DF_KELVINLET_GRAB) continue;
-        n++;
-        df_kelvinlet_brush b = st->brush;
-        memcpy(b.tip, st->tip, sizeof b.tip);
-        df_kelvinlet_prepared prep;
-        df_error err;
-        if (df_kelvinlet_prepare(&b, &prep, &err) != DF_OK) continue; /* checked at begin */
-        for (int k = 0; k < 3; k++) f[k] += prep.src[0].f[k];
-        df_kelvinlet_prepared_free(&prep);
-    }
-    return n;
-}
-
 void df_hid_ffb_strokes_changed(df_server *srv, df_session *s)
 {
     df_hid_manager *m = srv->hid;
@@ -245,7 +226,7 @@ void df_hid_ffb_strokes_changed(df_server *srv, df_session *s)
         if (x->playing && (!t || x->session_id != t->id)) df_hid_ffb_stop(d, 0, 0);
         if (t != s) continue;
         double f[3];
-        if (!grab_force(s, f)) {
+        if (!df_session_grab_force(s, f)) {
             df_hid_ffb_stop(d, 0, 0);
             continue;
         }

@@ -12,10 +12,8 @@
  * recently active one: df_hid_drive_session). While at least one grab stroke (of any client or
  * device) is open on that session, the joystick plays one constant-force effect whose vector
  * is the sum over those strokes of the Kelvinlet grab force f of the stroke's brush at its
- * current tip (df_kelvinlet_prepare's load, src[0].f: f = tip / (sum_i w_i kappa(eps_i)) with
- * the shear modulus normalized away, a = 1, b = 1 / (4 (1 - nu)) — so the physical force is
- * 4 pi mu f; ffb_gain absorbs the 4 pi mu). Pinned points are not taken into account (the
- * unconstrained brush's force). Projection onto the joystick's two axes: the force's mesh x and
+ * current tip (server/session/stroke_force.h: the shear modulus is normalized away, so the
+ * physical force is 4 pi mu f; ffb_gain absorbs the 4 pi mu). Projection onto the joystick's two axes: the force's mesh x and
  * y components (df_hid_ffb_from_force: magnitude = min(1, ffb_gain |(fx, fy)|), polar
  * direction 0 = +y, clockwise towards +x; the z component is dropped).
  *
