@@ -259,6 +259,13 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         return DF_OK;
     }
     if (strcmp(key, "hid_replay") == 0) return add_hid_replay(cfg, value, err);
+    if (strcmp(key, "hid_replay_end") == 0) {
+        static const char *const names[] = {"unplug", "loop", "hold"}; /* DF_HID_REPLAY_END_* */
+        for (int i = 0; i < 3; i++)
+            if (strcmp(value, names[i]) == 0) return cfg->hid_replay_end = i, DF_OK;
+        return df_error_set(err, DF_EINVAL, "hid_replay_end: '%s' is not unplug|hold|loop",
+                            value);
+    }
     if (strcmp(key, "hid_replay_speed") == 0) {
         char *end = NULL;
         errno = 0;
@@ -456,6 +463,7 @@ static const char k_usage[] =
     "                      start when a client first subscribes to a session\n"
     "                      (config hid_replay; also: hid = on|off for the real devices\n"
     "                      (hidapi, libusb; replay files run either way), hid_replay_speed,\n"
+    "                      hid_replay_end = unplug|hold|loop,\n"
     "                      hid_enumerate_s, hid.<class>.<key>: see server/hid/hid_config.h)\n"
     "  -h, --help          print this help and exit\n"
     "\n"

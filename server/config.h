@@ -60,6 +60,8 @@
  *   hid_replay_speed   replay speed factor: recorded gaps are divided by it (default 1); 0 =
  *                      deliver every report at once (tests: the recorded timestamps still drive
  *                      the mappers)
+ *   hid_replay_end     unplug | hold | loop (default unplug): what a replay device does after its
+ *                      last report (unplug; stay open and silent; start again)
  *   hid_enumerate_s    seconds between device enumerations (hotplug without libusb hotplug;
  *                      0 = only at start; default 2, at most 3600)
  *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
@@ -152,6 +154,9 @@ typedef struct df_server_config {
     int n_hid_replay;
     char hid_replay[DF_CONFIG_MAX_HID_REPLAY][DF_CONFIG_PATH_MAX]; /* replay files */
     double hid_replay_speed;     /* > 0, or 0 = at once */
+    int hid_replay_end;          /* DF_HID_REPLAY_END_* (hid_source.h): unplug (default), loop,
+                                    hold (the device stays open and silent: force-feedback demos
+                                    and tests that send it output after its last report) */
     int hid_enumerate_s;         /* 0 = at start only */
     int foreground;              /* 1: do not daemonize */
     df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */

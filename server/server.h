@@ -39,6 +39,7 @@ typedef struct df_hid_ops {
                    uint64_t *events);
     void (*session_active)(struct df_server *srv, struct df_session *s);
     void (*session_gone)(struct df_server *srv, struct df_session *s);
+    void (*strokes_changed)(struct df_server *srv, struct df_session *s);
 } df_hid_ops;
 
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */

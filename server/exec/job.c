@@ -304,6 +304,8 @@ static void end_stroke(df_session *s, uint64_t conn_id)
         df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo",
                (unsigned long long)s->id);
     df_session_drop_stroke(s, conn_id);
+    if (s->srv->hid_ops && s->srv->hid_ops->strokes_changed) /* force feedback stops */
+        s->srv->hid_ops->strokes_changed(s->srv, s);
 }
 
 static void drop_stroke_done(df_job *j)

@@ -92,6 +92,8 @@ static int stroke_field(const df_session *s, const df_stroke *st, const double *
         rc = df_kelvinlet_prepare(&b, &prep, err);
     }
     if (rc != DF_OK) return rc;
+    memcpy(ch->tip, b.tip, sizeof ch->tip); /* the stroke's grab tip (force feedback) */
+    ch->set_tip = 1;
     prep.threads = threads;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);

@@ -62,6 +62,9 @@ static const key_def k_keys[] = {
     {"twist_angle", C_PEN, T_DBL, F(twist_angle), 0, 6.3, 0},
     {"barrel", C_PEN, T_PRESS, F(barrel), 0, 0, 0},
     {"type_cycle", C_PEN | C_KNOB, T_TYPES, F(type_cycle), 0, 0, 0},
+    {"force_feedback", 0, T_BOOL, F(force_feedback), 0, 1, 0},   /* device sections only */
+    {"ffb_gain", 0, T_DBL, F(ffb_gain), 0, 1e12, 1},
+    {"ffb_hz", 0, T_INT, F(ffb_hz), 0, 1000, 0},
 };
 #define N_KEYS (sizeof k_keys / sizeof k_keys[0])
 
@@ -96,6 +99,9 @@ void df_hid_params_defaults(df_hid_params *p)
     p->type_cycle[0] = DF_HID_BRUSH_GRAB;
     p->type_cycle[1] = DF_HID_BRUSH_TWIST;
     p->n_type_cycle = 2;
+    p->force_feedback = 0;
+    p->ffb_gain = 1.0;
+    p->ffb_hz = 100;
 }
 
 int df_hid_config_bool(const char *s, int *out)
@@ -238,6 +244,9 @@ int df_hid_config_set(df_hid_config *c, const char *key, const char *value, df_e
         if (strcmp(k_keys[ki].name, name) == 0) { kd = &k_keys[ki]; break; }
     if (!kd)
         return df_error_set(err, DF_EINVAL, "unknown config key '%s': no hid key '%s'", key, name);
+    if (cls >= 0 && !kd->classes)
+        return df_error_set(err, DF_EINVAL, "unknown config key '%s': '%s' is a device key (set "
+                            "it in a hid.<vvvv:pppp> section)", key, name);
     if (cls >= 0 && !(kd->classes & (1u << cls)))
         return df_error_set(err, DF_EINVAL, "unknown config key '%s': '%s' is not a %s key", key,
                             name, df_hid_class_name(cls));

@@ -35,6 +35,14 @@
  *   barrel              pen        type|falloff|none (type): barrel press action
  *   type_cycle          pen/knob   comma list of grab|twist|scale|pinch|affine (grab,twist):
  *                                  the brush types "next type" walks
+ *   force_feedback      device     yes|no (no): a device with PID (0x0F) force-feedback output
+ *                                  reports plays a constant force following the live grab's
+ *                                  Kelvinlet force (hid_mgr_ffb.h); set in a hid.<vvvv:pppp>
+ *                                  section only (such a joystick has no class)
+ *   ffb_gain            device     > 0, <= 1e12 (1): Set Constant Force magnitude (fraction of
+ *                                  full scale) per unit of Kelvinlet force, clamped to 1
+ *   ffb_hz              device     0..1000 (100): most force updates per second (the latest is
+ *                                  sent at the end of an interval); 0 = every stroke update
  * Errors: unknown key (or a key of another class), bad value, malformed VID:PID, more than
  * DF_HID_CONFIG_MAX_DEVICES device sections: DF_EINVAL / DF_ELIMIT with a message naming the key;
  * config.c prefixes file:line. Nothing changes on error. Pure; whoever owns the struct. */
@@ -77,6 +85,9 @@ typedef struct df_hid_params {
     int barrel;                             /* DF_HID_PRESS_* */
     uint8_t type_cycle[DF_HID_MAX_TYPE_CYCLE];
     int n_type_cycle;
+    int force_feedback;                     /* device keys: PID force feedback */
+    double ffb_gain;
+    int ffb_hz;
 } df_hid_params;
 
 /* Keys set in one section: `set` has bit k for key k of the table in hid_config.c. */

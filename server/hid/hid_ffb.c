@@ -8,18 +8,21 @@
 #define GD(id) ((uint32_t)0x01 << 16 | (uint32_t)(id))
 #define ORD(id) ((uint32_t)0x0A << 16 | (uint32_t)(id))
 
-enum { C_SET_EFFECT = 0x21, C_EFFECT_TYPE = 0x25, C_AXES = 0x55, C_DIRECTION = 0x57,
+enum { C_CREATE = 0xAB, C_BLOCK_LOAD = 0x89, C_BL_STATUS = 0x8B, C_BLOCK_FREE = 0x90,
+       C_SET_EFFECT = 0x21, C_EFFECT_TYPE = 0x25, C_AXES = 0x55, C_DIRECTION = 0x57,
        C_CONSTANT = 0x73, C_OPERATION = 0x77, C_OP_ARRAY = 0x78, C_GAIN = 0x7D,
        C_CONTROL = 0x96 };
 
-/* The output element with `usage` whose innermost collection is `coll` (0: any) in report `id`
- * (-1: any). Array fields match when usage lies in their span. */
-static int find(const df_hid_desc *d, uint32_t usage, uint32_t coll, int id, df_hid_loc *loc)
+/* The element of kind `kind` (DF_HID_OUTPUT / FEATURE) with `usage` whose innermost collection
+ * is `coll` (0: any) in report `id` (-1: any). Array fields match when usage lies in their
+ * span. */
+static int find_kind(const df_hid_desc *d, int kind, uint32_t usage, uint32_t coll, int id,
+                     df_hid_loc *loc)
 {
     memset(loc, 0, sizeof *loc);
     for (size_t i = 0; i < d->n_fields; i++) {
         const df_hid_field *f = &d->fields[i];
-        if (f->kind != DF_HID_OUTPUT || (f->flags & DF_HID_F_CONSTANT)) continue;
+        if (f->kind != kind || (f->flags & DF_HID_F_CONSTANT)) continue;
         if (coll && f->collection != coll) continue;
         if (id >= 0 && f->report_id != id) continue;
         if (usage < f->usage_min || usage > f->usage_max || f->count == 0) continue;
@@ -48,15 +51,27 @@ static int find(const df_hid_desc *d, uint32_t usage, uint32_t coll, int id, df_
     return 0;
 }
 
-static void report_of(const df_hid_desc *d, const df_hid_loc *l, df_hid_ffb_report *r)
+/* An output element (find_kind with DF_HID_OUTPUT). */
+static int find(const df_hid_desc *d, uint32_t usage, uint32_t coll, int id, df_hid_loc *loc)
+{
+    return find_kind(d, DF_HID_OUTPUT, usage, coll, id, loc);
+}
+
+static void report_kind(const df_hid_desc *d, int kind, const df_hid_loc *l,
+                        df_hid_ffb_report *r)
 {
     memset(r, 0, sizeof *r);
     if (!l->present) return;
-    const df_hid_report *rep = df_hid_desc_report(d, DF_HID_OUTPUT, l->report_id);
+    const df_hid_report *rep = df_hid_desc_report(d, kind, l->report_id);
     if (!rep || rep->bytes == 0 || rep->bytes > DF_HID_MAX_REPORT_BYTES) return;
     r->present = 1;
     r->id = l->report_id;
     r->bytes = rep->bytes;
+}
+
+static void report_of(const df_hid_desc *d, const df_hid_loc *l, df_hid_ffb_report *r)
+{
+    report_kind(d, DF_HID_OUTPUT, l, r);
 }
 
 int df_hid_ffb_init(const df_hid_desc *d, df_hid_ffb *f, df_error *err)
@@ -92,6 +107,21 @@ int df_hid_ffb_init(const df_hid_desc *d, df_hid_ffb *f, df_error *err)
     if (find(d, PID(DF_HID_PID_ENABLE_ACTUATORS), PID(C_CONTROL), -1, &f->dc))
         report_of(d, &f->dc, &f->control);
     if (find(d, PID(0x7E), PID(C_GAIN), -1, &f->dg)) report_of(d, &f->dg, &f->gain);
+    const int FT = DF_HID_FEATURE;
+    if (find_kind(d, FT, PID(DF_HID_PID_ET_CONSTANT), PID(C_EFFECT_TYPE), -1, &f->cn_type) &&
+        f->cn_type.report_id) { /* the Create New Effect collection's type array */
+        df_hid_loc bytes;
+        report_kind(d, FT, &f->cn_type, &f->create);
+        if (find_kind(d, FT, GD(0x3B), PID(C_CREATE), f->cn_type.report_id, &bytes))
+            f->cn_bytes = bytes;
+    }
+    if (find_kind(d, FT, PID(0x22), PID(C_BLOCK_LOAD), -1, &f->bl_block)) {
+        report_kind(d, FT, &f->bl_block, &f->block_load);
+        find_kind(d, FT, PID(DF_HID_PID_BLOCK_LOAD_SUCCESS), PID(C_BL_STATUS),
+                  f->bl_block.report_id, &f->bl_status);
+    }
+    if (find(d, PID(0x22), PID(C_BLOCK_FREE), -1, &f->bf_block))
+        report_of(d, &f->bf_block, &f->block_free);
     f->present = f->effect.present && f->constant.present && f->se_type.present &&
                  f->cf_magnitude.present;
     return DF_OK;
@@ -183,7 +213,11 @@ int df_hid_ffb_set_constant_effect(const df_hid_ffb *f, const df_hid_ffb_effect 
     size_t len = *n;
     put(out, len, &f->se_block, e->block);
     put(out, len, &f->se_type, array_value(&f->se_type, DF_HID_PID_ET_CONSTANT));
-    put(out, len, &f->se_duration, e->duration_ms); /* ms: unit seconds, exponent -3 */
+    if (e->duration_ms == DF_HID_FFB_INFINITE && f->se_duration.present &&
+        (uint64_t)f->se_duration.bit_offset + f->se_duration.bit_size <= (uint64_t)len * 8)
+        put_bits(out, f->se_duration.bit_offset, f->se_duration.bit_size, ~(uint64_t)0); /* null */
+    else
+        put(out, len, &f->se_duration, e->duration_ms); /* ms: unit seconds, exponent -3 */
     put(out, len, &f->se_repeat, 0);
     put(out, len, &f->se_period, 0);
     const df_hid_loc *g = &f->se_gain;
@@ -192,7 +226,7 @@ int df_hid_ffb_set_constant_effect(const df_hid_ffb *f, const df_hid_ffb_effect 
     if (e->trigger_button > 0) put(out, len, &f->se_button, e->trigger_button);
     put(out, len, &f->se_axis[0], e->axes & 1);
     put(out, len, &f->se_axis[1], (e->axes >> 1) & 1);
-    put(out, len, &f->se_dir_enable, 0);
+    put(out, len, &f->se_dir_enable, e->polar ? 1 : 0);
     for (int k = 0; k < 2; k++) { /* degrees -> physical (degrees * 10^-exponent) -> logical */
         const df_hid_loc *l = &f->se_dir[k];
         double deg = fmod(e->direction_deg[k], 360.0);
@@ -239,4 +273,75 @@ void df_hid_ffb_polar(const double force[2], double full, double *magnitude, dou
     *magnitude = m > 1 ? 1 : m;
     double a = r > 0 ? atan2(force[0], force[1]) * 180.0 / 3.14159265358979323846 : 0;
     *deg = a < 0 ? a + 360.0 : a;
+}
+
+int df_hid_ffb_create_new_effect(const df_hid_ffb *f, unsigned byte_count, uint8_t *out,
+                                 size_t cap, size_t *n, df_error *err)
+{
+    if (!f) return df_error_set(err, DF_EINVAL, "hid ffb: NULL argument");
+    int rc = begin(&f->create, "create new effect", out, cap, n, err);
+    if (rc != DF_OK) return rc;
+    put(out, *n, &f->cn_type, array_value(&f->cn_type, DF_HID_PID_ET_CONSTANT));
+    put(out, *n, &f->cn_bytes, byte_count);
+    return DF_OK;
+}
+
+int df_hid_ffb_block_load_request(const df_hid_ffb *f, uint8_t *out, size_t cap, size_t *n,
+                                  df_error *err)
+{
+    if (!f) return df_error_set(err, DF_EINVAL, "hid ffb: NULL argument");
+    return begin(&f->block_load, "block load", out, cap, n, err);
+}
+
+/* Reads the field at l from buf (n bytes); 0 when it lies outside. */
+static int64_t get(const uint8_t *buf, size_t n, const df_hid_loc *l)
+{
+    if (!l->present || (uint64_t)l->bit_offset + l->bit_size > (uint64_t)n * 8) return 0;
+    uint64_t v = 0;
+    for (unsigned b = 0; b < l->bit_size; b++) {
+        uint32_t at = l->bit_offset + b;
+        if (buf[at / 8] >> (at % 8) & 1) v |= (uint64_t)1 << b;
+    }
+    if (l->is_signed && l->bit_size < 64 && (v >> (l->bit_size - 1) & 1))
+        return (int64_t)(v | ~(((uint64_t)1 << l->bit_size) - 1));
+    return (int64_t)v;
+}
+
+int df_hid_ffb_block_load_parse(const df_hid_ffb *f, const uint8_t *buf, size_t n,
+                                unsigned *block, unsigned *status, df_error *err)
+{
+    if (!f || !buf || !block || !status) return df_error_set(err, DF_EINVAL, "hid ffb: NULL argument");
+    if (!f->block_load.present)
+        return df_error_set(err, DF_EINVAL, "hid ffb: the device has no block load report");
+    if (f->block_load.id && (n == 0 || buf[0] != f->block_load.id))
+        return df_error_set(err, DF_EINVAL, "hid ffb: block load reply has report id %d, not %u",
+                            n ? buf[0] : -1, f->block_load.id);
+    if (n < f->block_load.bytes)
+        return df_error_set(err, DF_EFORMAT, "hid ffb: block load reply of %zu bytes, the report "
+                            "has %u", n, f->block_load.bytes);
+    *block = (unsigned)get(buf, n, &f->bl_block);
+    int64_t s = get(buf, n, &f->bl_status);
+    const df_hid_loc *l = &f->bl_status;
+    *status = l->present && s >= l->logical_min && s <= l->logical_max
+                  ? (unsigned)((l->array_usage_min & 0xffffu) + (uint64_t)(s - l->logical_min))
+                  : 0;
+    return DF_OK;
+}
+
+int df_hid_ffb_block_free(const df_hid_ffb *f, unsigned block, uint8_t *out, size_t cap,
+                          size_t *n, df_error *err)
+{
+    if (!f) return df_error_set(err, DF_EINVAL, "hid ffb: NULL argument");
+    int rc = begin(&f->block_free, "block free", out, cap, n, err);
+    if (rc == DF_OK) put(out, *n, &f->bf_block, block);
+    return rc;
+}
+
+void df_hid_ffb_from_force(const double force[3], double gain, double *magnitude, double *deg)
+{
+    *magnitude = 0;
+    *deg = 0;
+    if (!(gain > 0) || !isfinite(gain) || !isfinite(force[0]) || !isfinite(force[1])) return;
+    const double xy[2] = {force[0], force[1]};
+    df_hid_ffb_polar(xy, 1.0 / gain, magnitude, deg);
 }

@@ -10,7 +10,9 @@
  * second instance may still use hidapi). hidapi handles are not thread-safe (each keeps an error
  * string that hid_read_timeout and hid_write both replace), so the reader thread alone uses the
  * hidapi handle (hid_read_timeout) and output reports go through a second descriptor of the same
- * node opened write-only: write(2) of the report is exactly what hid_write does on hidraw.
+ * node opened write-only: write(2) of the report is exactly what hid_write does on hidraw, and
+ * feature reports are the HIDIOCSFEATURE / HIDIOCGFEATURE ioctls on that descriptor, exactly
+ * what hid_send_feature_report / hid_get_feature_report do on hidraw.
  * hid_error(NULL) is process-global: enumerate/open run on one thread (the seam's rule). */
 #include "server/hid/hid_source.h"
 
@@ -20,6 +22,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <linux/hidraw.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <time.h>
@@ -247,6 +251,36 @@ static int ha_control(df_hid_dev *dd, uint8_t request_type, uint8_t request, uin
                         d ? d->path : "(null)");
 }
 
+static int ha_send_feature(df_hid_dev *dd, const uint8_t *data, size_t len, df_error *err)
+{
+    ha_dev *d = (ha_dev *)dd;
+    if (!d || !data || len == 0 || len > DF_HID_READ_MAX)
+        return df_error_set(err, DF_EINVAL, "hidapi: send_feature: NULL data or length %zu not "
+                            "in 1..%d", len, DF_HID_READ_MAX);
+    int r;
+    do r = ioctl(d->wfd, HIDIOCSFEATURE(len), data); while (r < 0 && errno == EINTR);
+    if (r < 0)
+        return df_error_set(err, errno == ENODEV || errno == ENOENT ? DF_ENOTFOUND : DF_EIO,
+                            "hidapi: feature report %u to %s: %s", data[0], d->path,
+                            strerror(errno));
+    return DF_OK;
+}
+
+static int ha_get_feature(df_hid_dev *dd, uint8_t *buf, size_t cap, df_error *err)
+{
+    ha_dev *d = (ha_dev *)dd;
+    if (!d || !buf || cap == 0 || cap > DF_HID_READ_MAX)
+        return df_error_set(err, DF_EINVAL, "hidapi: get_feature: NULL buffer or cap %zu not in "
+                            "1..%d", cap, DF_HID_READ_MAX);
+    int r;
+    do r = ioctl(d->wfd, HIDIOCGFEATURE(cap), buf); while (r < 0 && errno == EINTR);
+    if (r < 0)
+        return df_error_set(err, errno == ENODEV || errno == ENOENT ? DF_ENOTFOUND : DF_EIO,
+                            "hidapi: feature report %u from %s: %s", buf[0], d->path,
+                            strerror(errno));
+    return r;
+}
+
 static void ha_close(df_hid_dev *dd)
 {
     ha_dev *d = (ha_dev *)dd;
@@ -272,7 +306,8 @@ int df_hid_backend_hidapi(df_hid_backend **out, df_error *err)
     *b = (df_hid_backend){
         .kind = DF_HID_BACKEND_HIDAPI, .name = "hidapi", .enumerate = ha_enumerate,
         .open = ha_open, .read = ha_read, .write_output = ha_write_output, .control = ha_control,
-        .close = ha_close, .watch = NULL, .destroy = ha_destroy };
+        .close = ha_close, .watch = NULL, .destroy = ha_destroy,
+        .send_feature = ha_send_feature, .get_feature = ha_get_feature };
     *out = b;
     return DF_OK;
 }

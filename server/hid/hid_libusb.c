@@ -225,6 +225,20 @@ static int lu_write_output(df_hid_dev *dd, const uint8_t *data, size_t len, df_e
                         "(its LED is a control transfer)", d ? d->path : "(null)");
 }
 
+static int lu_send_feature(df_hid_dev *dd, const uint8_t *data, size_t len, df_error *err)
+{
+    (void)data; (void)len;
+    lu_dev *d = (lu_dev *)dd;
+    return df_error_set(err, DF_EUNSUPPORTED, "libusb: %s: a PowerMate has no feature reports",
+                        d ? d->path : "(null)");
+}
+
+static int lu_get_feature(df_hid_dev *dd, uint8_t *buf, size_t cap, df_error *err)
+{
+    (void)buf; (void)cap;
+    return lu_send_feature(dd, NULL, 0, err);
+}
+
 static int lu_control(df_hid_dev *dd, uint8_t request_type, uint8_t request, uint16_t value,
                       uint16_t index, df_error *err)
 {
@@ -350,7 +364,8 @@ int df_hid_backend_libusb(df_hid_backend **out, df_error *err)
     b->base = (df_hid_backend){
         .kind = DF_HID_BACKEND_LIBUSB, .name = "libusb", .enumerate = lu_enumerate,
         .open = lu_open, .read = lu_read, .write_output = lu_write_output, .control = lu_control,
-        .close = lu_close, .watch = lu_watch, .destroy = lu_destroy };
+        .close = lu_close, .watch = lu_watch, .destroy = lu_destroy,
+        .send_feature = lu_send_feature, .get_feature = lu_get_feature };
     *out = &b->base;
     return DF_OK;
 }

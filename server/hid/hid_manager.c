@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "server/exec/pool.h"
+#include "server/hid/hid_mgr_ffb.h"
 #include "server/hid/hid_mgr_internal.h"
 #include "server/log.h"
 #include "server/net/reply.h"
@@ -199,6 +200,7 @@ static void classify(df_hid_device *d)
         }
     }
     df_hid_classify(d->have_desc ? &d->desc : NULL, d->info.vid, d->info.pid, &d->cls);
+    df_hid_ffb_setup(d); /* a force-feedback joystick opens for its output reports */
     if (d->cls.cls == DF_HID_CLASS_NONE) return;
     if (df_hid_mapper_init(&d->map, &d->cls, d->have_desc ? &d->desc : NULL,
                            &d->mgr->srv->cfg.hid, &err) == DF_OK) {
@@ -243,10 +245,11 @@ static df_hid_device *add_device(df_hid_manager *m, int be, const df_hid_devinfo
     return d;
 }
 
-/* Opens d and starts its reader thread (classified devices only: the others are listed). */
+/* Opens d and starts its reader thread (classified and force-feedback devices only: the others
+ * are listed). */
 static void open_device(df_hid_device *d)
 {
-    if (d->state == DF_DEVSTATE_OPEN || !d->mapper_ok) return;
+    if (d->state == DF_DEVSTATE_OPEN || (!d->mapper_ok && !d->ffb)) return;
     assert(!d->th_running && !d->dev); /* close_device joined the last reader, closed the handle */
     df_hid_backend *b = d->mgr->be[d->be];
     df_error err = {0, ""};
@@ -293,6 +296,7 @@ static void close_device(df_hid_device *d, int state, const char *why)
     int was_open = d->state == DF_DEVSTATE_OPEN;
     uint64_t drove = d->active;
     if (was_open && !m->stopping) df_hid_drive_unplug(d);
+    df_hid_ffb_stop(d, 0, 1); /* its effect stops (a gone device: the reports just fail) */
     if (d->dev) m->be[d->be]->close(d->dev);
     d->dev = NULL;
     d->state = state;
@@ -381,7 +385,7 @@ static int start_backends(df_hid_manager *m, df_error *err)
         memset(&o, 0, sizeof o);
         o.speed = cfg->hid_replay_speed > 0 ? cfg->hid_replay_speed : 1;
         o.no_wait = cfg->hid_replay_speed == 0;
-        o.at_end = DF_HID_REPLAY_END_UNPLUG;
+        o.at_end = cfg->hid_replay_end;
         int rc = df_hid_backend_replay(files, (size_t)cfg->n_hid_replay, &o,
                                        &m->be[DF_HID_BE_REPLAY], err);
         if (rc != DF_OK) {
@@ -492,6 +496,7 @@ void df_hid_manager_session_gone(df_server *srv, df_session *s)
         }
         if (d->active == s->id) d->active = 0;
         if (d->cursor_session == s->id) d->cursor_session = 0;
+        df_hid_ffb_stop(d, s->id, 0);
     }
 }
 
@@ -511,9 +516,11 @@ void df_hid_manager_stop(df_server *srv)
         pthread_cond_signal(&d->cv);
         pthread_mutex_unlock(&d->mu);
     }
-    for (df_hid_device *d = m->devs; d; d = d->next) /* ... then each is joined and closed */
+    for (df_hid_device *d = m->devs; d; d = d->next) { /* ... then each is joined and closed */
         if (d->state == DF_DEVSTATE_OPEN || d->th_running)
             close_device(d, DF_DEVSTATE_CLOSED, "daemon shutting down");
+        df_hid_ffb_close(d);
+    }
     destroy_backends(m);
 }
 
@@ -532,6 +539,7 @@ void df_hid_manager_free(df_server *srv)
         df_hid_device *d = m->devs;
         m->devs = d->next;
         df_hid_desc_free(&d->desc);
+        df_hid_ffb_free(d);
         pthread_mutex_destroy(&d->mu);
         pthread_cond_destroy(&d->cv);
         free(d->info.desc);

@@ -70,6 +70,7 @@ struct df_hid_device {
     /* stats */
     uint64_t events, strokes_begun, strokes_ended, actions, requests_failed;
     double last_tip[3], last_twist[3], last_strength, strength_max;
+    struct df_hid_ffbdev *ffb;   /* force feedback (hid_mgr_ffb.h), NULL when off */
     df_hid_device *next;         /* registry, id order */
 };
 

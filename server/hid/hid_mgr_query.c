@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "server/hid/hid_manager.h"
+#include "server/hid/hid_mgr_ffb.h"
 #include "server/hid/hid_mgr_internal.h"
 #include "server/session/session.h"
 
@@ -114,6 +115,8 @@ int df_hid_manager_device_stats(df_server *srv, uint64_t device_id,
     put(ctx, "last.twist_z", d->last_twist[2]);
     put(ctx, "last.strength", d->last_strength);
     put(ctx, "strength_max", d->strength_max);
+    put(ctx, "force_feedback", d->ffb != NULL);
+    put(ctx, "ffb.reports", (double)df_hid_ffb_reports(d));
     df_hid_backend *b = srv->hid->be[d->be];
     if (d->be != DF_HID_BE_REPLAY || !b) return DF_OK;
     df_hid_replay_output *outs = NULL;
@@ -128,7 +131,7 @@ int df_hid_manager_device_stats(df_server *srv, uint64_t device_id,
             w = snprintf(key, sizeof key, "ctl.%zu.%02x_%02x_%04x_%04x", k, outs[i].request_type,
                          outs[i].request, outs[i].value, outs[i].index);
         } else {
-            w = snprintf(key, sizeof key, "out.%zu.", k);
+            w = snprintf(key, sizeof key, "%s.%zu.", outs[i].is_feature ? "feat" : "out", k);
             for (size_t j = 0; j < outs[i].len && w + 2 < (int)sizeof key; j++)
                 w += snprintf(key + w, sizeof key - (size_t)w, "%02x", outs[i].data[j]);
         }
@@ -159,4 +162,5 @@ const df_hid_ops df_hid_manager_ops = {
     .counts = df_hid_manager_counts,
     .session_active = df_hid_manager_session_active,
     .session_gone = df_hid_manager_session_gone,
+    .strokes_changed = df_hid_ffb_strokes_changed,
 };

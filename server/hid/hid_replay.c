@@ -366,6 +366,29 @@ static int rp_control(df_hid_dev *dd, uint8_t request_type, uint8_t request, uin
     return capture(d, &o, NULL, err);
 }
 
+/* Feature reports sent are captured like output reports (is_feature 1). */
+static int rp_send_feature(df_hid_dev *dd, const uint8_t *data, size_t len, df_error *err)
+{
+    rp_dev *d = (rp_dev *)dd;
+    if (!d || !data || len == 0 || len > DF_HID_READ_MAX)
+        return df_error_set(err, DF_EINVAL, "hid replay: send_feature: NULL data or length %zu "
+                            "not in 1..%d", len, DF_HID_READ_MAX);
+    if (d->s->info.raw_powermate)
+        return df_error_set(err, DF_EUNSUPPORTED, "hid replay: %s: a PowerMate has no feature "
+                            "reports", d->s->info.path);
+    df_hid_replay_output o = { .is_feature = 1, .len = len };
+    return capture(d, &o, data, err);
+}
+
+/* A recording holds no device answers: nothing to read. */
+static int rp_get_feature(df_hid_dev *dd, uint8_t *buf, size_t cap, df_error *err)
+{
+    (void)buf; (void)cap;
+    rp_dev *d = (rp_dev *)dd;
+    return df_error_set(err, DF_EUNSUPPORTED, "hid replay: %s: a recording answers no feature "
+                        "report requests", d ? d->s->info.path : "(null)");
+}
+
 static void rp_close(df_hid_dev *dd)
 {
     rp_dev *d = (rp_dev *)dd;
@@ -419,7 +442,8 @@ int df_hid_backend_replay(const char *const *files, size_t n, const df_hid_repla
     b->base = (df_hid_backend){
         .kind = DF_HID_BACKEND_REPLAY, .name = "replay", .enumerate = rp_enumerate,
         .open = rp_open, .read = rp_read, .write_output = rp_write_output, .control = rp_control,
-        .close = rp_close, .watch = NULL, .destroy = rp_destroy };
+        .close = rp_close, .watch = NULL, .destroy = rp_destroy,
+        .send_feature = rp_send_feature, .get_feature = rp_get_feature };
     b->files = calloc(n, sizeof *b->files);
     if (!b->files) {
         rp_destroy(&b->base);

@@ -36,3 +36,23 @@ void df_hid_backend_destroy(df_hid_backend *b)
     if (b && b->destroy)
         b->destroy(b);
 }
+
+int df_hid_send_feature(df_hid_backend *b, df_hid_dev *d, const uint8_t *data, size_t len,
+                        df_error *err)
+{
+    if (!b || !d) return df_error_set(err, DF_EINVAL, "hid: send_feature: NULL device");
+    if (!b->send_feature)
+        return df_error_set(err, DF_EUNSUPPORTED, "hid: the %s backend sends no feature reports",
+                            b->name ? b->name : "?");
+    return b->send_feature(d, data, len, err);
+}
+
+int df_hid_get_feature(df_hid_backend *b, df_hid_dev *d, uint8_t *buf, size_t cap,
+                       df_error *err)
+{
+    if (!b || !d) return df_error_set(err, DF_EINVAL, "hid: get_feature: NULL device");
+    if (!b->get_feature)
+        return df_error_set(err, DF_EUNSUPPORTED, "hid: the %s backend reads no feature reports",
+                            b->name ? b->name : "?");
+    return b->get_feature(d, buf, cap, err);
+}

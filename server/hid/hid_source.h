@@ -8,7 +8,8 @@
  *   df_hid_backend_libusb()  the Griffin PowerMate 077d:0410 through libusb-1.0 (Linux gives it
  *                            no hidraw node), with USB hotplug,
  *   df_hid_backend_replay()  hid-recorder files and the PowerMate raw file, delivered at their
- *                            recorded timestamps; every output/control call is captured.
+ *                            recorded timestamps; every output/control/feature report sent
+ *                            is captured.
  *
  * Threads: a backend's enumerate/open/watch/destroy are called from one thread at a time (the
  * manager's loop thread). Each open device is used by one reader thread (read) while the loop
@@ -111,7 +112,23 @@ struct df_hid_backend {
 
     /* Frees the backend (NULL-safe through df_hid_backend_destroy); every device closed. */
     void (*destroy)(df_hid_backend *b);
+
+    /* Feature reports (PID force feedback: Create New Effect, Block Load). Optional: NULL means
+     * DF_EUNSUPPORTED (df_hid_send_feature / df_hid_get_feature check it). Loop thread, like
+     * write_output. send_feature: SET_REPORT(Feature) of data[0..len) (report-id byte first,
+     * 0 when the descriptor uses no ids); DF_OK, or DF_EIO / DF_ENOTFOUND / DF_EINVAL (len 0)
+     * / DF_EUNSUPPORTED. get_feature: GET_REPORT(Feature) with buf[0] = the report id on entry;
+     * returns the byte count read into buf[0..cap) (report id first), or DF_EIO /
+     * DF_ENOTFOUND / DF_EINVAL / DF_EUNSUPPORTED (the replay backend: no device to answer). */
+    int (*send_feature)(df_hid_dev *d, const uint8_t *data, size_t len, df_error *err);
+    int (*get_feature)(df_hid_dev *d, uint8_t *buf, size_t cap, df_error *err);
 };
+
+/* b->send_feature / b->get_feature, or DF_EUNSUPPORTED when the backend has none. */
+int df_hid_send_feature(df_hid_backend *b, df_hid_dev *d, const uint8_t *data, size_t len,
+                        df_error *err);
+int df_hid_get_feature(df_hid_backend *b, df_hid_dev *d, uint8_t *buf, size_t cap,
+                       df_error *err);
 
 /* Frees a list from enumerate: each desc, then the array (NULL is fine). */
 void df_hid_devinfo_free_list(df_hid_devinfo *list, size_t n);
@@ -168,6 +185,7 @@ typedef struct df_hid_replay_output {
     uint64_t time_us;            /* the device's replay time then: recorded time of the last
                                     report delivered (0 before the first) */
     int is_control;              /* 0: output report (data/len), 1: control transfer */
+    int is_feature;              /* 1: a feature report sent (SET_REPORT Feature, data/len) */
     uint8_t request_type, request;
     uint16_t value, index;       /* control only */
     uint8_t *data;               /* output report bytes (malloc'd), NULL for control */

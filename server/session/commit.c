@@ -70,6 +70,7 @@ static void apply_state(df_session *s, df_change *c)
         c->base = NULL;
     }
     if (st && c->version) st->last_version = c->version;
+    if (st && c->set_tip) memcpy(st->tip, c->tip, sizeof st->tip);
     if (st && c->set_params) {
         st->brush = c->brush;
         st->strength = c->strength;
@@ -142,6 +143,7 @@ static void apply_caches(df_session *s, df_change *c)
 int df_session_commit(df_session *s, df_change *c)
 {
     df_server *srv = s->srv;
+    int strokes = c->link || c->stroke || c->drop_stroke || c->set_params;
     if (c->rc == DF_OK) {
         apply_state(s, c);
         c->rc = apply_history(s, c);
@@ -154,6 +156,8 @@ int df_session_commit(df_session *s, df_change *c)
     if (srv->commit_hook) srv->commit_hook(srv->commit_hook_arg, s, c);
     for (size_t i = 0; i < c->frames.n; i++) df_session_broadcast(s, c->frames.v[i]);
     if (c->frames.n) srv->stats.versions++;
+    if (strokes && srv->hid_ops && srv->hid_ops->strokes_changed)
+        srv->hid_ops->strokes_changed(srv, s);
     if (c->req && !c->answered_by_job) df_req_ack(c->req, s->id, atomic_load(&s->version));
     return DF_OK;
 }

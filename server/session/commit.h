@@ -12,7 +12,9 @@
  *                then the stroke the change ended (cancel, end) is dropped;
  *   3. accounting: timings, cache hit/miss, install / drop cached factorizations, LRU eviction;
  *   4. hook:     srv->commit_hook (the durable store's journal record, the scale-out log entry);
- *   5. broadcast the version's frames to the subscribers;
+ *   5. broadcast the version's frames to the subscribers; a change to the session's strokes
+ *      (begin, update, knob, end, cancel) then tells the HID subsystem (force feedback,
+ *      srv->hid_ops->strokes_changed);
  *   6. answer the request (ack with the new version), unless the job answers itself.
  * A change whose compute failed (rc != DF_OK) does only step 3 (what it built is still cached
  * and counted) and answers the error. Loop thread only. */
@@ -46,6 +48,8 @@ typedef struct df_change {
     double *base;                /* its rebased base (swapped in, old freed), or NULL */
     uint64_t work_ns;            /* its measured update (when set_work_ns) */
     int set_work_ns;
+    double tip[3];               /* its grab tip now (when set_tip; df_stroke.tip) */
+    int set_tip;
     int set_params;              /* the stroke's knobs become brush / strength (SET_BRUSH_PARAM) */
     df_kelvinlet_brush brush;
     double strength;

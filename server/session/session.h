@@ -42,6 +42,8 @@ typedef struct df_stroke {
     uint64_t conn_id;
     df_kelvinlet_brush brush;    /* from begin (with the client's knob overrides) */
     double strength;
+    double tip[3];               /* grab tip of its last begin/update (strength applied): the
+                                    load whose Kelvinlet force HID force feedback plays */
     uint32_t n_pins;
     int pin_flags;               /* DF_KELVINLET_PIN_* bits */
     double *pins;                /* n_pins x 3, NULL when none */

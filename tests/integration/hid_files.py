@@ -81,6 +81,7 @@ class Field:
     physical_min: int
     physical_max: int
     collections: List[int]   # usages of the enclosing collections, outermost first
+    unit_exponent: int = 0   # the Unit Exponent global item (4-bit two's complement)
 
 
 def _signed(v: int, size: int) -> int:
@@ -89,7 +90,8 @@ def _signed(v: int, size: int) -> int:
 
 def parse_descriptor(desc: bytes) -> List[Field]:
     """Every main item of a report descriptor as Fields (constants included)."""
-    g = {"page": 0, "lmin": 0, "lmax": 0, "pmin": 0, "pmax": 0, "size": 0, "count": 0, "id": 0}
+    g = {"page": 0, "lmin": 0, "lmax": 0, "pmin": 0, "pmax": 0, "size": 0, "count": 0, "id": 0,
+         "uexp": 0}
     stack, usages, umin, coll, out = [], [], None, [], []
     offsets: Dict[Tuple[str, int], int] = {}
     i = 0
@@ -103,10 +105,12 @@ def parse_descriptor(desc: bytes) -> List[Field]:
         raw = int.from_bytes(desc[i + 1:i + 1 + size], "little")
         i += 1 + size
         if typ == 1:                                    # global
-            key = {0: "page", 1: "lmin", 2: "lmax", 3: "pmin", 4: "pmax", 7: "size", 8: "id",
-                   9: "count"}.get(tag)
+            key = {0: "page", 1: "lmin", 2: "lmax", 3: "pmin", 4: "pmax", 5: "uexp", 7: "size",
+                   8: "id", 9: "count"}.get(tag)
             if tag in (1, 2, 3, 4):
                 raw = _signed(raw, size)
+            if tag == 5:   # a nibble (0x0d = -3) or, as many devices write it, a signed byte
+                raw = raw - 16 if raw < 16 and raw & 0x8 else _signed(raw, size)
             if key:
                 g[key] = raw
             elif tag == 10:
@@ -135,7 +139,7 @@ def parse_descriptor(desc: bytes) -> List[Field]:
                 if pmin == 0 and pmax == 0:
                     pmin, pmax = g["lmin"], g["lmax"]
                 out.append(Field(kind, g["id"], off, g["size"], g["count"], list(usages),
-                                 g["lmin"], g["lmax"], pmin, pmax, list(coll)))
+                                 g["lmin"], g["lmax"], pmin, pmax, list(coll), g["uexp"]))
                 offsets[k] = off + g["size"] * g["count"]
             usages, umin = [], None
     return out

@@ -118,6 +118,36 @@ static void test_errors(void **state)
     expect_error(&c, "hid.1209:ffff.haptics", "no", DF_ELIMIT, "device sections");
 }
 
+/* Force-feedback keys: device sections only, off by default, resolved for a classless device. */
+static void test_force_feedback_keys(void **state)
+{
+    (void)state;
+    df_hid_config c;
+    memset(&c, 0, sizeof c);
+    df_hid_params p;
+    assert_int_equal(df_hid_config_resolve(&c, DF_HID_CLASS_NONE, 0x045e, 0x001b, &p, NULL),
+                     DF_OK);
+    assert_int_equal(p.force_feedback, 0);
+    assert_true(p.ffb_gain == 1.0 && p.ffb_hz == 100);
+    expect_error(&c, "hid.knob.force_feedback", "yes", DF_EINVAL, "device key");
+    expect_error(&c, "hid.3d-mouse.ffb_gain", "2", DF_EINVAL, "device key");
+    expect_error(&c, "hid.045e:001b.force_feedback", "maybe", DF_EINVAL, "yes or no");
+    expect_error(&c, "hid.045e:001b.ffb_gain", "0", DF_EINVAL, "ffb_gain");
+    expect_error(&c, "hid.045e:001b.ffb_gain", "-1", DF_EINVAL, "ffb_gain");
+    expect_error(&c, "hid.045e:001b.ffb_hz", "1001", DF_EINVAL, "ffb_hz");
+    expect_error(&c, "hid.045e:001b.ffb_hz", "2.5", DF_EINVAL, "integer");
+    assert_int_equal(c.n_dev, 0); /* nothing changed by the refusals */
+    assert_int_equal(df_hid_config_set(&c, "hid.045e:001b.force_feedback", "yes", NULL), DF_OK);
+    assert_int_equal(df_hid_config_set(&c, "hid.045e:001b.ffb_gain", "40", NULL), DF_OK);
+    assert_int_equal(df_hid_config_set(&c, "hid.045e:001b.ffb_hz", "0", NULL), DF_OK);
+    assert_int_equal(df_hid_config_resolve(&c, DF_HID_CLASS_NONE, 0x045e, 0x001b, &p, NULL),
+                     DF_OK);
+    assert_true(p.force_feedback == 1 && p.ffb_gain == 40.0 && p.ffb_hz == 0);
+    assert_int_equal(df_hid_config_resolve(&c, DF_HID_CLASS_NONE, 0x045e, 0x001c, &p, NULL),
+                     DF_OK);
+    assert_int_equal(p.force_feedback, 0); /* another device */
+}
+
 static void test_override_order(void **state)
 {
     (void)state;
@@ -216,6 +246,7 @@ int main(void)
         cmocka_unit_test(test_bool_words),
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_force_feedback_keys),
         cmocka_unit_test(test_override_order),
         cmocka_unit_test(test_cross_checks),
     };

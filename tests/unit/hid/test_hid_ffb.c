@@ -32,6 +32,7 @@ static size_t example(const char *label, uint8_t *out, size_t cap)
     for (char *line = strtok(text, "\n"); line && !k; line = strtok(NULL, "\n")) {
         if (strncmp(line, "# ", 2) != 0 || !strstr(line, label)) continue;
         const char *p = line + 2;
+        if (strncmp(p, "FEATURE ", 8) == 0) p += 8; /* a feature report's example */
         unsigned v;
         int used;
         while (k < cap && sscanf(p, "%2x%n", &v, &used) == 1 && used == 2 &&
@@ -132,11 +133,86 @@ static void test_polar_and_absent(void **state)
     replay_free(&r);
 }
 
+/* The feature reports of the effect's life (Create New Effect, Block Load) and Block Free; a
+ * Set Effect that plays until stopped with a polar direction. */
+static void test_effect_lifecycle_reports(void **state)
+{
+    (void)state;
+    replay r;
+    replay_load(SW, &r);
+    df_hid_ffb f;
+    df_error e;
+    assert_int_equal(df_hid_ffb_init(&r.desc[0], &f, &e), DF_OK);
+    uint8_t want[32], got[32];
+    size_t wn, n;
+    wn = example("Create New Effect: ET Constant Force, Byte Count 10", want, sizeof want);
+    assert_int_equal(df_hid_ffb_create_new_effect(&f, 10, got, sizeof got, &n, &e), DF_OK);
+    assert_int_equal(n, wn);
+    assert_memory_equal(got, want, n);
+    /* the file's header: feature report 2 (Block Load) is 5 bytes, output report 11 (Block
+     * Free) 2; the reply layout of the file's comment: 02 <block> <status 1..3> <pool u16> */
+    assert_int_equal(df_hid_ffb_block_load_request(&f, got, sizeof got, &n, &e), DF_OK);
+    assert_int_equal(n, 5);
+    assert_int_equal(got[0], 2);
+    const uint8_t ok[5] = {0x02, 0x05, 0x01, 0x34, 0x12}, full[5] = {0x02, 0x00, 0x02, 0, 0};
+    unsigned block = 0, status = 0;
+    assert_int_equal(df_hid_ffb_block_load_parse(&f, ok, 5, &block, &status, &e), DF_OK);
+    assert_int_equal(block, 5);
+    assert_int_equal(status, DF_HID_PID_BLOCK_LOAD_SUCCESS);
+    assert_int_equal(df_hid_ffb_block_load_parse(&f, full, 5, &block, &status, &e), DF_OK);
+    assert_int_equal(status, DF_HID_PID_BLOCK_LOAD_FULL);
+    assert_int_equal(df_hid_ffb_block_load_parse(&f, ok, 4, &block, &status, &e), DF_EFORMAT);
+    const uint8_t wrong[5] = {0x03, 0x05, 0x01, 0, 0};
+    assert_int_equal(df_hid_ffb_block_load_parse(&f, wrong, 5, &block, &status, &e), DF_EINVAL);
+    assert_int_equal(df_hid_ffb_block_free(&f, 7, got, sizeof got, &n, &e), DF_OK);
+    assert_int_equal(n, 2);
+    assert_int_equal(got[0], 0x0b);
+    assert_int_equal(got[1], 7);
+    /* infinite duration: the 16-bit Duration at bytes 3..4 is its null ffff; polar: Direction
+     * Enable (bit 2 of byte 11, after the X and Y axis bits) set */
+    df_hid_ffb_effect fx = {.block = 1, .duration_ms = DF_HID_FFB_INFINITE, .gain = 1.0,
+                            .axes = 3, .polar = 1, .direction_deg = {180, 0}};
+    assert_int_equal(df_hid_ffb_set_constant_effect(&f, &fx, got, sizeof got, &n, &e), DF_OK);
+    assert_int_equal(got[3], 0xff);
+    assert_int_equal(got[4], 0xff);
+    assert_int_equal(got[11], 0x07);
+    assert_int_equal(got[12], (uint8_t)lround(18000.0 * 255 / 36000));
+    replay_free(&r);
+    /* a device without the PID page has none of them */
+    replay_load("3dconnexion-spacenavigator_046d-c626_usb.hid", &r);
+    assert_int_equal(df_hid_ffb_init(&r.desc[0], &f, &e), DF_OK);
+    assert_int_equal(df_hid_ffb_create_new_effect(&f, 0, got, sizeof got, &n, &e), DF_EINVAL);
+    assert_int_equal(df_hid_ffb_block_free(&f, 1, got, sizeof got, &n, &e), DF_EINVAL);
+    replay_free(&r);
+}
+
+/* A force vector as the joystick's constant force: its (x, y) projection times the gain,
+ * clamped to full scale; direction 0 = +y, clockwise towards +x. */
+static void test_from_force(void **state)
+{
+    (void)state;
+    double m, deg;
+    const double f[3] = {3, 4, 100}, west[3] = {-2, 0, 0}, bad[3] = {NAN, 0, 0};
+    df_hid_ffb_from_force(f, 0.1, &m, &deg); /* |(3, 4)| = 5; z is not a joystick axis */
+    assert_true(fabs(m - 0.5) < 1e-12);
+    assert_true(fabs(deg - atan2(3, 4) * 180 / 3.14159265358979323846) < 1e-9);
+    df_hid_ffb_from_force(f, 1.0, &m, &deg);
+    assert_true(m == 1.0);
+    df_hid_ffb_from_force(west, 0.25, &m, &deg);
+    assert_true(fabs(m - 0.5) < 1e-12 && fabs(deg - 270) < 1e-9);
+    df_hid_ffb_from_force(bad, 1.0, &m, &deg);
+    assert_true(m == 0 && deg == 0);
+    df_hid_ffb_from_force(f, 0, &m, &deg);
+    assert_true(m == 0 && deg == 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sidewinder_examples),
         cmocka_unit_test(test_polar_and_absent),
+        cmocka_unit_test(test_effect_lifecycle_reports),
+        cmocka_unit_test(test_from_force),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -274,6 +274,64 @@ static void test_outputs_captured(void **state)
     ex_free(&xp);
 }
 
+/* Feature reports: sent ones are captured (is_feature), none can be read back (a recording holds
+ * no answers); a PowerMate has none; a backend without the entries refuses through the
+ * df_hid_*_feature wrappers. With END_HOLD the device stays open after its last report. */
+static void test_features_captured(void **state)
+{
+    (void)state;
+    char dir[1024], sw[1280], pm[1280];
+    unit_hid_dir_or_skip(dir, sizeof dir);
+    snprintf(sw, sizeof sw, "%s/%s", dir, "microsoft-sidewinder-ff2_045e-001b_usb.hid");
+    snprintf(pm, sizeof pm, "%s/%s", dir, PM_FILE);
+    const char *files[] = { sw, pm };
+    df_hid_backend *b = NULL;
+    df_error e;
+    df_hid_replay_opts o = { .no_wait = 1, .at_end = DF_HID_REPLAY_END_HOLD };
+    assert_int_equal(df_hid_backend_replay(files, 2, &o, &b, &e), DF_OK);
+    char ps[1400], pp[1400];
+    snprintf(ps, sizeof ps, "replay:%s#0", sw);
+    snprintf(pp, sizeof pp, "replay:%s#0", pm);
+    df_hid_dev *d = NULL, *p = NULL;
+    assert_int_equal(b->open(b, ps, &d, &e), DF_OK);
+    assert_int_equal(b->open(b, pp, &p, &e), DF_OK);
+    uint8_t buf[64];
+    uint64_t t;
+    int r, reports = 0;
+    while ((r = b->read(d, buf, sizeof buf, 0, &t, &e)) > 0) reports++;
+    assert_int_equal(r, 0); /* held: silent, not unplugged */
+    assert_true(reports > 0);
+    static const uint8_t create[] = { 0x01, 0x01, 0x0a, 0x00 }; /* the file's example */
+    assert_int_equal(df_hid_send_feature(b, d, create, sizeof create, &e), DF_OK);
+    uint8_t get[5] = { 0x02 };
+    assert_int_equal(df_hid_get_feature(b, d, get, sizeof get, &e), DF_EUNSUPPORTED);
+    assert_non_null(strstr(e.msg, "answers no feature"));
+    assert_int_equal(df_hid_send_feature(b, p, create, sizeof create, &e), DF_EUNSUPPORTED);
+    assert_int_equal(df_hid_send_feature(b, d, create, 0, &e), DF_EINVAL);
+    static const uint8_t start[] = { 0x0a, 0x01, 0x01, 0x01 };
+    assert_int_equal(b->write_output(d, start, sizeof start, &e), DF_OK);
+    df_hid_replay_output *out = NULL;
+    size_t n = 0;
+    assert_int_equal(df_hid_replay_outputs(b, 0, &out, &n, &e), DF_OK);
+    assert_int_equal(n, 2);
+    assert_int_equal(out[0].is_feature, 1);
+    assert_int_equal(out[0].is_control, 0);
+    assert_int_equal(out[0].len, sizeof create);
+    assert_memory_equal(out[0].data, create, sizeof create);
+    assert_int_equal(out[1].is_feature, 0);
+    assert_memory_equal(out[1].data, start, sizeof start);
+    df_hid_replay_outputs_free(out, n);
+    df_hid_backend bare;
+    memset(&bare, 0, sizeof bare);
+    bare.name = "bare";
+    assert_int_equal(df_hid_send_feature(&bare, d, create, sizeof create, &e), DF_EUNSUPPORTED);
+    assert_int_equal(df_hid_get_feature(&bare, d, get, sizeof get, &e), DF_EUNSUPPORTED);
+    assert_int_equal(df_hid_send_feature(b, NULL, create, sizeof create, &e), DF_EINVAL);
+    b->close(d);
+    b->close(p);
+    df_hid_backend_destroy(b);
+}
+
 /* A temporary file holding text; its path in out. */
 static void temp_file(const char *text, char *out, size_t cap)
 {
@@ -348,6 +406,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_shared_file),
         cmocka_unit_test(test_outputs_captured),
+        cmocka_unit_test(test_features_captured),
         cmocka_unit_test(test_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
