@@ -465,7 +465,15 @@ static const char k_usage[] =
     "                      (hidapi, libusb; replay files run either way), hid_replay_speed,\n"
     "                      hid_replay_end = unplug|hold|loop,\n"
     "                      hid_enumerate_s, hid.<class>.<key>: see server/hid/hid_config.h)\n"
+    "  --check-config      check the settings (file and options) as start-up would, without\n"
+    "                      binding sockets or opening devices: prints 'config ok' (status 0)\n"
+    "                      or each problem with FILE:LINE (status 2)\n"
     "  -h, --help          print this help and exit\n"
+    "\n"
+    "SIGHUP re-reads the config file and the options: log_level, max_clients, max_sessions,\n"
+    "handshake_timeout_s, idle_timeout_s, cursor_hz, output_queue_limit and allow_paths change\n"
+    "live; a change of any other setting is logged as needing a restart; a file with an error\n"
+    "is logged and the current settings stay.\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
     "When ready it prints 'deformd: listening on ...' to stderr.\n"
@@ -519,6 +527,10 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         const char *v = NULL;
         int m;
         if ((m = opt_value(argc, argv, &i, "--config", &v)) != 0) continue;
+        if (strcmp(argv[i], "--check-config") == 0) {
+            *action = DF_CLI_CHECK;
+            continue;
+        }
         if (strcmp(argv[i], "--foreground") == 0 || strcmp(argv[i], "-f") == 0) {
             tmp->foreground = 1;
             continue;

@@ -69,7 +69,7 @@
  *                      checked for consistency once the whole file is read
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
  * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
- * --hid-replay FILE[,FILE...], --help. */
+ * --hid-replay FILE[,FILE...], --check-config, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -181,11 +181,16 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
 int df_config_load(df_server_config *cfg, const char *path, df_error *err);
 
 /* What the command line asks for. */
-typedef enum df_cli_action { DF_CLI_RUN = 0, DF_CLI_HELP = 1 } df_cli_action;
+typedef enum df_cli_action {
+    DF_CLI_RUN = 0,
+    DF_CLI_HELP = 1,
+    DF_CLI_CHECK = 2 /* --check-config: check (config_check.h) and exit, start nothing */
+} df_cli_action;
 
 /* Parses argv (argc entries, argv[0] is the program name) into `cfg`, starting from the defaults
  * (computed from `xdg_runtime_dir`): first loads --config FILE when given, then applies the other
- * options on top. Sets *action to DF_CLI_HELP for --help/-h (cfg then unspecified).
+ * options on top. Sets *action to DF_CLI_HELP for --help/-h (cfg then unspecified), to
+ * DF_CLI_CHECK for --check-config (cfg filled as for a run).
  * Errors: DF_EINVAL for an unknown option or a missing/bad value, DF_EIO/DF_EFORMAT from the file. */
 int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char *xdg_runtime_dir,
                         df_cli_action *action, df_error *err);

@@ -20,6 +20,7 @@
  * own completion, so versions stay in order. A newer move
  * supersedes a running one through an atomic flag read in the ADMM progress callback. Encoded
  * frames are built once and shared by reference count across subscribers' queues.
+ * SIGHUP re-reads the settings (reload.h); `--check-config` only checks them (config_check.h).
  * Shutdown (SIGINT/SIGTERM): stop listening and reading, cancel running moves, wait for running
  * jobs, answer queued ones, close connections, free sessions, unlink the socket.
  */
@@ -32,9 +33,11 @@
 #include <uv.h>
 
 #include "server/config.h"
+#include "server/config_check.h"
 #include "server/hid/hid_manager.h"
 #include "server/log.h"
 #include "server/net/sd.h"
+#include "server/reload.h"
 #include "server/server.h"
 
 #define DF_MAIN_MMAP_THRESHOLD (32 << 20) /* glibc's maximum */
@@ -74,6 +77,15 @@ int main(int argc, char **argv)
         fputs(df_config_usage(), stdout);
         return 0;
     }
+    if (action == DF_CLI_CHECK) {
+        static char report[16384];
+        if (df_config_check(&cfg, report, sizeof report) == 0) {
+            puts("config ok");
+            return 0;
+        }
+        fputs(report, stderr);
+        return 2;
+    }
     df_log_set_level(cfg.log_level);
     signal(SIGPIPE, SIG_IGN); /* a peer that hung up is an EPIPE write error, not a crash */
     /* Frames and per-session buffers are large (12 MB for a dense 1M-vertex version) and
@@ -110,6 +122,9 @@ int main(int argc, char **argv)
          * missing one (status 2); running out of memory is not */
         return hrc == DF_ENOMEM ? 1 : 2;
     }
+    static df_reload reload;
+    if (df_reload_start(&reload, &srv, argc, argv, getenv("XDG_RUNTIME_DIR"), &err) != DF_OK)
+        df_log(DF_LOG_WARN, "%s: SIGHUP will not reload the settings", err.msg);
     char where[512];
     df_server_describe(&srv, where, sizeof where);
     fprintf(stderr, "deformd: listening on %s\n", where);
@@ -121,6 +136,8 @@ int main(int argc, char **argv)
         close(ready_fd);
     }
     uv_run(loop, UV_RUN_DEFAULT);
+    df_reload_close(&reload);
+    uv_run(loop, UV_RUN_NOWAIT);
     df_server_free(&srv);
     int rc = uv_loop_close(loop);
     if (rc != 0) df_log(DF_LOG_WARN, "loop closed with handles still open: %s", uv_strerror(rc));
