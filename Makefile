@@ -95,11 +95,14 @@ BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
 
-.PHONY: all deps test unit bench asan tsan tsan-build fuzz fuzz-build run install clean
+.PHONY: all deps test unit bench asan tsan tsan-build fuzz fuzz-build run install uninstall clean
 all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need (hidapi,
-# libusb for the HID device sources; SQLite for the durable-store work, nothing links it yet).
+# libusb for the HID device sources; SQLite for the durable-store work, nothing links it yet;
+# systemd for `systemd-analyze verify/security` of the units and python3-seccomp for running
+# deformd under the unit's system-call filter in tests/integration/test_systemd.py; man-db/groff
+# render the man pages when present, not required).
 deps:
 	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
@@ -109,7 +112,7 @@ deps:
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
-            libembree-dev
+            libembree-dev systemd python3-seccomp
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -241,20 +244,29 @@ run: deps
 	$(MAKE) all
 	BUILD=$(BUILD) MESHES=$(MESHES) bash tests/demo_run.sh
 
-# Installs the daemon, deformctl, the systemd units, libdeformclient (static, with the libraries it
+# Installs the daemon, deformctl, the systemd units (deformd.service with ExecStart= and
+# Documentation= pointing into PREFIX), the sysusers.d file (user and group deformd) and the udev
+# rules (HID nodes for the group deformd), the man pages deformd(8), deformd.conf(5),
+# deformctl(1) under share/man, libdeformclient (static, with the libraries it
 # needs: client, proto, mesh, common), only the public header deformclient.h and the project headers
 # it includes (computed by the compiler: CLIENT_HEADERS) under include/deformd/, a pkg-config file,
 # and the documents the units name (Documentation=: README.md, PROTOCOL.md) under share/doc/deformd:
 #   cc app.c $$(pkg-config --cflags --libs deformclient)   with  #include <deformclient.h>
+# `make uninstall` (same PREFIX and DESTDIR) removes every file install installs and then the
+# directories it made that are left empty (never PREFIX itself).
 PREFIX  ?= /usr/local
 DESTDIR ?=
 DOCDIR  := $(PREFIX)/share/doc/deformd
+MANDIR  := $(PREFIX)/share/man
+UNITDIR := $(PREFIX)/lib/systemd/system
+MAN_PAGES := man/man1/deformctl.1 man/man5/deformd.conf.5 man/man8/deformd.8
 CLIENT_INSTALL_LIBS := $(CLIENT_LIB) $(PROTO_LIB) $(BASE_LIBS)
 CLIENT_HEADERS = $(filter-out client/deformclient.h,$(filter %.h,$(shell $(CC) $(CPPFLAGS) -MM \
                    client/deformclient.h)))
+INSTALL_DIRS := bin lib/pkgconfig lib/systemd/system lib/sysusers.d lib/udev/rules.d \
+                share/doc/deformd share/man/man1 share/man/man5 share/man/man8
 install: all
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig \
-	  $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(DOCDIR)
+	install -d $(addprefix $(DESTDIR)$(PREFIX)/,$(INSTALL_DIRS))
 	install -m 755 $(BUILD)/bin/deformd $(BUILD)/bin/deformctl $(DESTDIR)$(PREFIX)/bin/
 	install -m 644 $(CLIENT_INSTALL_LIBS) $(DESTDIR)$(PREFIX)/lib/
 	for h in $(CLIENT_HEADERS); do install -D -m 644 $$h $(DESTDIR)$(PREFIX)/include/deformd/$$h; done
@@ -262,9 +274,25 @@ install: all
 	sed 's|@PREFIX@|$(PREFIX)|' client/deformclient.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/deformclient.pc
 	sed -e 's|/usr/local/bin/|$(PREFIX)/bin/|' \
 	  -e 's|file:///usr/share/doc/deformd/|file://$(DOCDIR)/|' \
-	  systemd/deformd.service > $(DESTDIR)$(PREFIX)/lib/systemd/system/deformd.service
-	install -m 644 systemd/deformd.socket $(DESTDIR)$(PREFIX)/lib/systemd/system/
+	  systemd/deformd.service > $(DESTDIR)$(UNITDIR)/deformd.service
+	install -m 644 systemd/deformd.socket $(DESTDIR)$(UNITDIR)/
+	install -m 644 systemd/deformd.sysusers.conf $(DESTDIR)$(PREFIX)/lib/sysusers.d/deformd.conf
+	install -m 644 systemd/70-deformd.rules $(DESTDIR)$(PREFIX)/lib/udev/rules.d/
+	for m in $(MAN_PAGES); do install -m 644 $$m $(DESTDIR)$(MANDIR)/$${m#man/}; done
 	install -m 644 systemd/deformd.conf.example README.md proto/PROTOCOL.md $(DESTDIR)$(DOCDIR)/
+
+uninstall:
+	rm -f $(addprefix $(DESTDIR)$(PREFIX)/bin/,deformd deformctl) \
+	  $(addprefix $(DESTDIR)$(PREFIX)/lib/,$(notdir $(CLIENT_INSTALL_LIBS))) \
+	  $(DESTDIR)$(PREFIX)/lib/pkgconfig/deformclient.pc \
+	  $(DESTDIR)$(UNITDIR)/deformd.service $(DESTDIR)$(UNITDIR)/deformd.socket \
+	  $(DESTDIR)$(PREFIX)/lib/sysusers.d/deformd.conf \
+	  $(DESTDIR)$(PREFIX)/lib/udev/rules.d/70-deformd.rules \
+	  $(addprefix $(DESTDIR)$(MANDIR)/,$(patsubst man/%,%,$(MAN_PAGES)))
+	rm -rf $(DESTDIR)$(PREFIX)/include/deformd $(DESTDIR)$(DOCDIR)
+	for d in $(INSTALL_DIRS) include; do p=$(DESTDIR)$(PREFIX)/$$d; \
+	  while [ "$$p" != "$(DESTDIR)$(PREFIX)" ]; do \
+	    if [ -d "$$p" ]; then rmdir "$$p" 2>/dev/null || break; fi; p=$$(dirname "$$p"); done; done
 
 clean:
 	rm -rf build build-asan build-tsan

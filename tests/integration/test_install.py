@@ -54,6 +54,10 @@ def test_installed_client_library_builds_and_talks_to_the_daemon(daemon, tmp_pat
     assert docs, "no Documentation= line"
     for url in docs:
         for doc in url.split():
+            if doc.startswith("man:"):  # man:deformd.conf(5) -> share/man/man5/deformd.conf.5
+                name, sec = doc[len("man:"):].rstrip(")").split("(")
+                assert (prefix / "share/man" / ("man" + sec) / ("%s.%s" % (name, sec))).is_file(), doc
+                continue
             assert doc.startswith("file://%s/" % prefix), doc
             assert os.path.isfile(doc[len("file://"):]), doc
     assert (prefix / "share/doc/deformd/PROTOCOL.md").is_file()
@@ -83,3 +87,30 @@ def test_installed_client_library_builds_and_talks_to_the_daemon(daemon, tmp_pat
     words = out.split()
     assert words[0] == "session" and int(words[1]) > 0, out
     assert words[2:] == ["nv", "4", "ne", "2"], out
+
+
+def test_uninstall_removes_everything_install_installed(tmp_path):
+    """install then uninstall into a DESTDIR: no file is left, and no directory but the prefix
+    path itself; a file of someone else's in an installed directory survives."""
+    dest = tmp_path / "dest"
+    build = os.environ.get("BUILD", "build")
+    prefix = "/usr/local"
+    make = ["make", "-s", "-C", REPO, "-o", "all", "BUILD=" + build, "DESTDIR=%s" % dest,
+            "PREFIX=%s" % prefix]
+    subprocess.run(make + ["install"], check=True, stdout=subprocess.DEVNULL)
+    installed = [p for p in dest.rglob("*") if not p.is_dir()]
+    for rel in ["bin/deformd", "share/man/man8/deformd.8", "share/man/man5/deformd.conf.5",
+                "share/man/man1/deformctl.1", "lib/udev/rules.d/70-deformd.rules",
+                "lib/sysusers.d/deformd.conf", "lib/systemd/system/deformd.service"]:
+        assert (dest / prefix.lstrip("/") / rel) in installed, rel
+    subprocess.run(make + ["uninstall"], check=True, stdout=subprocess.DEVNULL)
+    left = sorted(str(p.relative_to(dest)) for p in dest.rglob("*"))
+    assert left == ["usr", "usr/local"], left
+
+    keep = dest / "usr/local/bin/someone-elses-tool"
+    keep.parent.mkdir(parents=True)
+    keep.write_text("x")
+    subprocess.run(make + ["install"], check=True, stdout=subprocess.DEVNULL)
+    subprocess.run(make + ["uninstall"], check=True, stdout=subprocess.DEVNULL)
+    left = sorted(str(p.relative_to(dest)) for p in dest.rglob("*"))
+    assert left == ["usr", "usr/local", "usr/local/bin", "usr/local/bin/someone-elses-tool"], left
