@@ -434,3 +434,44 @@ def test_every_path_the_daemon_touches_is_allowed_by_the_unit(tmp_path):
             problems.append("read-only under ProtectSystem=strict: " + line)
     assert calls > 50, trace.read_text()[:3000]
     assert not problems, "\n".join(problems)
+
+
+def test_socket_activation_with_systemd_socket_activate(tmp_path):
+    """deformd.socket's job done by systemd-socket-activate: it listens, starts deformd (the
+    unit's ExecStart options) on the first connection and passes the socket in LISTEN_FDS;
+    deformd serves on it, reports READY=1 / STOPPING=1 on $NOTIFY_SOCKET, and leaves the
+    socket file (systemd's) in place when it stops."""
+    tool = need("systemd-socket-activate")
+    sock = str(tmp_path / "deformd.sock")
+    conf = tmp_path / "deformd.conf"
+    conf.write_text("log_level = info\n")
+    notify_path = str(tmp_path / "notify")
+    notify = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    notify.bind(notify_path)
+    notify.settimeout(30)
+    exec_start = unit_lines("deformd.service", "ExecStart")[0].split()
+    assert exec_start[1:3] == ["--foreground", "--config"], exec_start
+    log_path = tmp_path / "deformd.log"
+    with open(log_path, "wb") as log:
+        proc = subprocess.Popen([tool, "-l", sock, "-E", "NOTIFY_SOCKET=" + notify_path, DEFORMD,
+                                 "--foreground", "--config", str(conf), "--socket", "none"],
+                                stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 30
+        while not os.path.exists(sock):  # systemd-socket-activate listening
+            assert proc.poll() is None and time.monotonic() < deadline, log_path.read_text()
+            time.sleep(0.02)
+        with Client.connect_unix(sock, timeout=60) as c:  # starts deformd
+            assert c.ping(b"activated") == b"activated"
+        assert notify.recv(4096) == b"READY=1"
+        text = log_path.read_text()
+        assert "using socket-activated fd" in text and "listening on unix:%s" % sock in text, text
+        proc.send_signal(signal.SIGTERM)  # it exec'd deformd: this is deformd now
+        assert proc.wait(60) == 0, log_path.read_text()
+        assert notify.recv(4096) == b"STOPPING=1"
+        assert os.path.exists(sock)  # not deformd's to remove
+    finally:
+        notify.close()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
