@@ -95,6 +95,8 @@ int main(int argc, char **argv)
     char threads[16];
     snprintf(threads, sizeof threads, "%d", cfg.threads);
     setenv("UV_THREADPOOL_SIZE", threads, 0);
+    static char start_cwd[DF_CONFIG_PATH_MAX]; /* SIGHUP re-reads relative paths from here */
+    const char *cwd = getcwd(start_cwd, sizeof start_cwd);
     int ready_fd = -1;
     if (!cfg.foreground && getenv("NOTIFY_SOCKET") == NULL) {
         ready_fd = daemonize();
@@ -123,7 +125,7 @@ int main(int argc, char **argv)
         return hrc == DF_ENOMEM ? 1 : 2;
     }
     static df_reload reload;
-    if (df_reload_start(&reload, &srv, argc, argv, getenv("XDG_RUNTIME_DIR"), &err) != DF_OK)
+    if (df_reload_start(&reload, &srv, argc, argv, getenv("XDG_RUNTIME_DIR"), cwd, &err) != DF_OK)
         df_log(DF_LOG_WARN, "%s: SIGHUP will not reload the settings", err.msg);
     char where[512];
     df_server_describe(&srv, where, sizeof where);

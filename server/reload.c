@@ -1,10 +1,12 @@
 /* reload.c — SIGHUP configuration reload (see reload.h). */
 #include "server/reload.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "server/log.h"
 
@@ -108,7 +110,14 @@ static void on_hup(uv_signal_t *h, int signum)
     }
     df_cli_action action;
     df_error err = {0, ""};
-    if (df_config_from_args(n, r->argc, r->argv, r->xdg, &action, &err) != DF_OK) {
+    /* parse from the start directory (relative --config and hid_replay paths), then back */
+    int here = r->cwd ? open(".", O_RDONLY | O_DIRECTORY | O_CLOEXEC) : -1;
+    int moved = here >= 0 && chdir(r->cwd) == 0;
+    int rc = df_config_from_args(n, r->argc, r->argv, r->xdg, &action, &err);
+    if (moved && fchdir(here) != 0)
+        df_log(DF_LOG_WARN, "reload: cannot return to the working directory");
+    if (here >= 0) close(here);
+    if (rc != DF_OK) {
         df_log(DF_LOG_ERROR, "reload: %s; keeping the current settings", err.msg);
         free(n);
         return;
@@ -123,9 +132,10 @@ static void on_hup(uv_signal_t *h, int signum)
 }
 
 int df_reload_start(df_reload *r, df_server *srv, int argc, char **argv, const char *xdg,
-                    df_error *err)
+                    const char *cwd, df_error *err)
 {
     memset(r, 0, sizeof *r);
+    r->cwd = cwd;
     r->srv = srv;
     r->argc = argc;
     r->argv = argv;

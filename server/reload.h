@@ -23,17 +23,20 @@ typedef struct df_reload {
     int argc;
     char **argv;              /* the daemon's command line (borrowed, outlives the loop) */
     const char *xdg;          /* $XDG_RUNTIME_DIR at start (borrowed, may be NULL) */
+    const char *cwd;          /* working directory at start, before daemonizing (borrowed,
+                                 may be NULL): relative --config / hid_replay paths */
     df_server_config *next;   /* parsed settings waiting for no job to run, or NULL */
     int open;
 } df_reload;
 
 /* Installs the SIGHUP handler on srv->loop: each SIGHUP re-parses argv (the --config file, then
- * the options over it, as at start; df_config_from_args) and applies the live settings to
+ * the options over it, as at start; df_config_from_args; relative paths against `cwd`, the
+ * directory deformd started in, since daemonizing moves to /) and applies the live settings to
  * srv->cfg, logging "configuration reloaded: ..." (info) when done, or the error (error level)
  * when the file does not parse. `r` must stay valid until df_reload_close. Loop thread.
  * Errors: DF_EIO when the signal handler cannot be installed. */
 int df_reload_start(df_reload *r, df_server *srv, int argc, char **argv, const char *xdg,
-                    df_error *err);
+                    const char *cwd, df_error *err);
 
 /* Closes the handles (run the loop once more to finish) and drops a pending reload. Loop
  * thread; idempotent. */

@@ -165,3 +165,48 @@ def test_check_config_reports_a_parse_error_and_a_bad_replay_file(tmp_path):
     conf.write_text("hid = off\nhid_replay = %s\n" % bad)
     r = check("--config", str(conf), "--socket", str(tmp_path / "s.sock"))
     assert r.returncode == 2 and r.stderr.startswith("%s:2: hid_replay" % conf), r
+
+
+def test_sighup_of_a_daemonized_deformd_rereads_a_relative_config_path(tmp_path):
+    """Without --foreground deformd forks and moves to /; SIGHUP still finds `--config rel.conf`
+    from the directory it was started in."""
+    (tmp_path / "rel.conf").write_text("log_level = info\n")
+    sock = str(tmp_path / "d.sock")
+    log_path = tmp_path / "d.log"
+    with open(log_path, "wb") as log:
+        r = subprocess.run([DEFORMD, "--config", "rel.conf", "--socket", sock], cwd=str(tmp_path),
+                           stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                           timeout=60)
+    assert r.returncode == 0, log_path.read_text()  # the parent exits once the child is ready
+    pids = [int(p) for p in os.listdir("/proc") if p.isdigit() and
+            _cmdline(p).startswith(DEFORMD + "\0") and sock in _cmdline(p)]
+    assert len(pids) == 1, pids
+    try:
+        assert os.readlink("/proc/%d/cwd" % pids[0]) == "/"
+        at = len(log_path.read_text())
+        (tmp_path / "rel.conf").write_text("log_level = debug\n")
+        os.kill(pids[0], signal.SIGHUP)
+        deadline = time.monotonic() + WAIT_S
+        while "configuration reloaded" not in log_path.read_text()[at:]:
+            assert time.monotonic() < deadline, log_path.read_text()
+            time.sleep(0.02)
+        assert "keeping the current settings" not in log_path.read_text()[at:]
+        assert os.readlink("/proc/%d/cwd" % pids[0]) == "/"
+        with Client.connect_unix(sock, hello=False) as c:
+            c.hello("daemonized-debug")
+        at2 = log_path.read_text()
+        assert "'daemonized-debug'" in at2[at:], at2
+    finally:
+        os.kill(pids[0], signal.SIGTERM)
+        deadline = time.monotonic() + WAIT_S
+        while os.path.exists("/proc/%d" % pids[0]) and _cmdline(str(pids[0])):
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+
+
+def _cmdline(pid: str) -> str:
+    try:
+        with open("/proc/%s/cmdline" % pid) as f:
+            return f.read()
+    except OSError:
+        return ""
