@@ -100,9 +100,10 @@ all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need (hidapi,
 # libusb for the HID device sources; SQLite for the durable-store work, nothing links it yet;
-# systemd for `systemd-analyze verify/security` of the units and python3-seccomp for running
-# deformd under the unit's system-call filter in tests/integration/test_systemd.py; man-db/groff
-# render the man pages when present, not required).
+# systemd for `systemd-analyze verify/security` of the units and systemd-socket-activate,
+# python3-seccomp and strace for running deformd under the unit's system-call filter and
+# auditing the paths it opens (tests/integration/test_systemd.py), man-db (with groff-base)
+# for rendering the man pages in tests/integration/test_man.py).
 deps:
 	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
@@ -112,7 +113,7 @@ deps:
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
-            libembree-dev systemd python3-seccomp
+            libembree-dev systemd python3-seccomp strace man-db
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
