@@ -125,6 +125,7 @@ typedef struct df_server {
     df_stats stats;
     uint64_t last_change_session; /* session of a client's last change request or subscribe
                                    * (df_job_is_change): unbound HID devices drive it */
+    struct df_auth_server *auth;  /* TCP key authentication (net/auth.h), NULL without a key */
     struct df_hid_manager *hid;   /* HID devices (server/hid/hid_manager.h), NULL when off */
     const df_hid_ops *hid_ops;    /* its entry points (set by df_server_start) */
     /* Upward calls of the network layer (net never includes what is above it), set by

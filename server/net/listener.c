@@ -171,10 +171,17 @@ static int open_tcp(df_server *srv, df_error *err)
                                 "and close every session; listen on 127.0.0.1 or ::1 instead",
                                 host, port);
         }
-        df_log(DF_LOG_WARN,
-               "tcp:%s:%s: listening on a non-loopback address without authentication "
-               "(tcp_insecure): anyone who can reach it controls every session",
-               host, port);
+        if (srv->cfg.access.key_file[0]) /* net/auth.h; TLS does not exist yet */
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address (tcp_insecure) with key "
+                   "authentication but no encryption: the stream can be read and altered on the "
+                   "network",
+                   host, port);
+        else
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address without authentication "
+                   "(tcp_insecure): anyone who can reach it controls every session",
+                   host, port);
     }
     int rc = uv_tcp_init(srv->loop, &srv->tcp_srv);
     if (rc < 0) {

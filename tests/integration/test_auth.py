@@ -1,0 +1,194 @@
+"""TCP key authentication (issue 12, access control item 2; PROTOCOL.md 4.3): with key_file every
+TCP connection completes the HMAC-SHA256 challenge-response before anything but HELLO / PING /
+AUTH runs; a wrong key is refused (EPROTO_AUTH, closed) and changes nothing; failures are
+rate-limited per peer address (count-based: auth_fail_burst with a refill of an hour, so no
+timing is involved); Unix-socket clients need no key; bad key files refuse start-up. The
+worked example of PROTOCOL.md 4.3 is recomputed by the Python client and by proto/auth_mac.c."""
+import hashlib
+import hmac
+import os
+import re
+import secrets
+import socket
+import subprocess
+
+import pytest
+
+from conftest import BUILD, DEFORMD, ROOT
+from deformd_client import AuthError, Client, DeformdError, auth, errors as E, messages as m
+from deformd_client import frame as fr, schema
+from helpers import grid_obj
+from rawwire import wait_closed
+
+START_TIMEOUT_S = 15.0
+
+
+def write_key(path, text=None, mode=0o600) -> bytes:
+    text = secrets.token_hex(32) if text is None else text
+    with open(path, "w") as f:
+        f.write(text + "\n")
+    os.chmod(path, mode)
+    return text.encode()
+
+
+@pytest.fixture
+def keyed(make_daemon, tmp_path):
+    """A daemon with a key (TCP on loopback): (daemon, key file path, key bytes)."""
+    kf = str(tmp_path / "deformd.key")
+    key = write_key(kf)
+    d = make_daemon("key_file = %s\n" % kf, tcp=True)
+    return d, kf, key
+
+
+def tcp(d, **kw) -> Client:
+    return Client.connect_tcp("127.0.0.1", d.tcp_port, timeout=30.0, **kw)
+
+
+def test_hello_announces_auth_and_requires_it_on_tcp_only(keyed):
+    d, kf, key = keyed
+    with tcp(d) as c:
+        assert c.server.auth_required == 1 and c.server.features & schema.Feature.AUTH
+    with d.unix_client() as c:
+        assert c.server.auth_required == 0 and c.server.features & schema.Feature.AUTH
+        assert c.list_sessions() == []       # the Unix socket needs no key
+
+
+def test_unauthenticated_requests_are_refused_and_not_executed(keyed):
+    d, kf, key = keyed
+    with tcp(d) as c:
+        assert c.ping(b"alive") == b"alive"  # PING works before AUTH
+        for call in (lambda: c.list_sessions(),
+                     lambda: c.load_mesh(grid_obj(4, 4), name="sneaky"),
+                     lambda: c.stats()):
+            with pytest.raises(DeformdError) as ei:
+                call()
+            assert ei.value.code == E.ErrorCode.EPROTO_AUTH, ei.value
+            assert "authentication required" in str(ei.value)
+    with d.unix_client() as c:
+        assert c.list_sessions() == []        # the load did not happen
+        assert c.stats()["auth_ok"] == 0
+
+
+def test_right_key_works_from_python(keyed):
+    d, kf, key = keyed
+    with tcp(d, key_file=kf) as c:
+        assert c.authenticated
+        info = c.load_mesh(grid_obj(5, 4), name="mine")
+        assert [s.name for s in c.list_sessions()] == ["mine"]
+        assert c.stats()["auth_ok"] == 1
+        c.close_session(info.session_id)
+    with tcp(d, key=key) as c:              # the key itself works too
+        assert c.authenticated and c.list_sessions() == []
+
+
+def test_wrong_key_is_refused_closed_and_changes_nothing(keyed):
+    d, kf, key = keyed
+    with d.unix_client() as u:
+        u.load_mesh(grid_obj(4, 4), name="keep")
+        before = [(s.session_id, s.name, s.version) for s in u.list_sessions()]
+    c = tcp(d, hello=True)
+    with pytest.raises(DeformdError) as ei:
+        c.authenticate(secrets.token_hex(32).encode())
+    assert ei.value.code == E.ErrorCode.EPROTO_AUTH and "does not match" in str(ei.value)
+    assert wait_closed(c.sock, 10.0), "the server kept a connection with a wrong key open"
+    c.close()
+    with d.unix_client() as u:
+        assert [(s.session_id, s.name, s.version) for s in u.list_sessions()] == before
+        st = u.stats()
+        assert (st["auth_failed"], st["auth_ok"]) == (1, 0)
+    log = d.log()
+    assert "authentication failed" in log and "127.0.0.1" in log
+    assert key.decode() not in log
+
+
+def test_protocol_misuse_gets_clear_errors(keyed):
+    d, kf, key = keyed
+    with tcp(d) as c:
+        for method, token, code in ((schema.AuthMethod.HMAC_PROOF, bytes(32), E.ErrorCode.ESTATE),
+                                    (schema.AuthMethod.HMAC_CHALLENGE, b"short", E.ErrorCode.EINVAL),
+                                    (9, bytes(32), E.ErrorCode.EINVAL)):
+            with pytest.raises(DeformdError) as ei:
+                c.auth(method, token)
+            assert ei.value.code == code, ei.value
+        c.authenticate(key)                  # still usable: none of those was a failed proof
+        with pytest.raises(DeformdError) as ei:
+            c.auth(schema.AuthMethod.HMAC_CHALLENGE, bytes(32))
+        assert ei.value.code == E.ErrorCode.ESTATE
+        assert c.list_sessions() == []
+
+
+def test_server_proof_is_the_server_mac(keyed):
+    """The exchange step by step: the server's MAC is HMAC(K, Ns || Nc || server context),
+    computed here with hmac/hashlib directly."""
+    d, kf, key = keyed
+    with tcp(d) as c:
+        nc = secrets.token_bytes(32)
+        method, ns = c.auth(schema.AuthMethod.HMAC_CHALLENGE, nc)
+        assert method == schema.AuthMethod.HMAC_CHALLENGE and len(ns) == 32 and ns != nc
+        mc = hmac.new(key, ns + nc + b"deformd-auth-v1 client", hashlib.sha256).digest()
+        method, ms = c.auth(schema.AuthMethod.HMAC_PROOF, mc)
+        assert method == schema.AuthMethod.HMAC_PROOF
+        assert ms == hmac.new(key, ns + nc + b"deformd-auth-v1 server", hashlib.sha256).digest()
+        assert c.list_sessions() == []
+
+
+def test_failures_are_rate_limited_per_address(make_daemon, tmp_path):
+    kf = str(tmp_path / "k")
+    key = write_key(kf)
+    d = make_daemon("key_file = %s\nauth_fail_burst = 3\nauth_fail_refill_s = 3600\n" % kf,
+                    tcp=True)
+    wrong = secrets.token_hex(32).encode()
+    for _ in range(3):
+        c = tcp(d)
+        with pytest.raises(DeformdError) as ei:
+            c.authenticate(wrong)
+        assert ei.value.code == E.ErrorCode.EPROTO_AUTH
+        c.close()
+    c = tcp(d)                               # the fourth try: refused even with the right key
+    with pytest.raises(DeformdError) as ei:
+        c.authenticate(key)
+    assert ei.value.code == E.ErrorCode.ELIMIT
+    assert "too many failed authentications from 127.0.0.1" in str(ei.value)
+    assert re.search(r"retry in \d+ s", str(ei.value))
+    assert wait_closed(c.sock, 10.0)
+    c.close()
+    with d.unix_client() as u:
+        st = u.stats()
+        assert (st["auth_failed"], st["auth_limited"], st["auth_ok"]) == (3, 1, 0)
+        assert u.list_sessions() == []
+    assert "too many failed authentications from 127.0.0.1" in d.log()
+
+
+def start_fails(tmp_path, *args):
+    r = subprocess.run([DEFORMD, "--foreground", "--socket", str(tmp_path / "d.sock")] +
+                       list(args), stdin=subprocess.DEVNULL, capture_output=True,
+                       timeout=START_TIMEOUT_S, env=dict(os.environ, XDG_RUNTIME_DIR=str(tmp_path)))
+    assert r.returncode != 0
+    assert not os.path.exists(tmp_path / "d.sock")
+    return r.stderr.decode("utf-8", "replace")
+
+
+@pytest.mark.parametrize("case", ["world_readable", "too_short", "missing", "directory"])
+def test_bad_key_files_refuse_start(tmp_path, case):
+    kf = str(tmp_path / "k")
+    if case == "world_readable":
+        write_key(kf, mode=0o644)
+        needle = "readable or writable by others (mode 0644)"
+    elif case == "too_short":
+        write_key(kf, text="x" * 31)
+        needle = "key of 31 bytes is too short"
+    elif case == "missing":
+        needle = "No such file"
+    else:
+        os.mkdir(kf)
+        needle = "not a regular file"
+    err = start_fails(tmp_path, "--key-file", kf)
+    assert ("key file %s" % kf) in err and needle in err, err
+
+
+def test_python_refuses_a_world_readable_key_file(tmp_path):
+    kf = str(tmp_path / "k")
+    write_key(kf, mode=0o604)
+    with pytest.raises(AuthError) as ei:
+        auth.load_key(kf)
+    assert "readable or writable by others" in str(ei.value)
