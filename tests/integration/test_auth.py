@@ -10,11 +10,12 @@ import os
 import re
 import secrets
 import socket
+import struct
 import subprocess
 
 import pytest
 
-from conftest import BUILD, DEFORMD, ROOT
+from conftest import BUILD, DEFORMCTL, DEFORMD, ROOT
 from deformd_client import AuthError, Client, DeformdError, auth, errors as E, messages as m
 from deformd_client import frame as fr, schema
 from helpers import grid_obj
@@ -192,3 +193,150 @@ def test_python_refuses_a_world_readable_key_file(tmp_path):
     with pytest.raises(AuthError) as ei:
         auth.load_key(kf)
     assert "readable or writable by others" in str(ei.value)
+
+
+# ------------------------------------------------------------------ PROTOCOL.md worked example
+def _doc_example():
+    doc = open(os.path.join(ROOT, "proto", "PROTOCOL.md"), encoding="utf-8").read()
+    sec = doc[doc.index("### 4.3 auth"):doc.index("### 4.4 ping")]
+    key = re.search(r"K is the 64 ASCII bytes `([0-9a-f]{64})`", sec).group(1).encode()
+    mc = bytes.fromhex(re.search(r"^Mc = ([0-9a-f]{64})$", sec, re.M).group(1))
+    ms = bytes.fromhex(re.search(r"^Ms = ([0-9a-f]{64})$", sec, re.M).group(1))
+    frame_hex = re.findall(r"^```\n(44 46 4d 44.*?)```", sec, re.M | re.S)[0]
+    hexes = []
+    for ln in frame_hex.splitlines():        # each line: hex byte pairs, then a label
+        for tok in ln.split():
+            if not re.fullmatch(r"[0-9a-f]{2}", tok):
+                break
+            hexes.append(tok)
+    frame = bytes.fromhex(" ".join(hexes))
+    return key, mc, ms, frame
+
+
+def test_worked_example_matches_python_and_c(tmp_path):
+    key, mc, ms, frame = _doc_example()
+    assert key == bytes(range(32)).hex().encode()
+    nc, ns = bytes(range(0x20, 0x40)), bytes(range(0x40, 0x60))
+    # Python: the client's helper and hmac/hashlib spelled out
+    assert auth.mac(key, ns, nc, "client") == mc
+    assert auth.mac(key, ns, nc, "server") == ms
+    assert hmac.new(key, ns + nc + b"deformd-auth-v1 client", hashlib.sha256).digest() == mc
+    # the frame is the proof request with request id 3
+    assert frame == fr.encode_frame(m.AUTH, m.encode_auth(2, mc), 3)
+    assert len(frame) == 64
+    # C: proto/auth_mac.c through a small program linked with the proto layer
+    exe = str(tmp_path / "auth_mac_cli")
+    subprocess.run([os.environ.get("CC", "cc"), "-std=c11", "-Wall", "-Wextra", "-Werror",
+                    "-I", ROOT, "-o", exe,
+                    os.path.join(ROOT, "tests", "integration", "auth_mac_cli.c"),
+                    os.path.join(BUILD, "lib", "libdf_proto.a"),
+                    os.path.join(BUILD, "lib", "libdf_common.a"), "-lcrypto"],
+                   check=True, stdin=subprocess.DEVNULL)
+    for role, want in (("client", mc), ("server", ms)):
+        out = subprocess.run([exe, key.decode(), ns.hex(), nc.hex(), role], check=True,
+                             capture_output=True, text=True).stdout.strip()
+        assert bytes.fromhex(out) == want, role
+
+
+# ------------------------------------------------------------------ deformctl / C client
+def ctl(d, *args, env_key=None):
+    env = dict(os.environ)
+    env.pop("DEFORMD_KEY_FILE", None)
+    if env_key:
+        env["DEFORMD_KEY_FILE"] = env_key
+    return subprocess.run([DEFORMCTL] + list(args), capture_output=True, text=True, env=env,
+                          stdin=subprocess.DEVNULL, timeout=60)
+
+
+def test_deformctl_key_file_option_env_and_errors(keyed, tmp_path):
+    d, kf, key = keyed
+    hp = "127.0.0.1:%d" % d.tcp_port
+    obj = tmp_path / "g.obj"
+    obj.write_bytes(grid_obj(4, 3))
+    r = ctl(d, "--tcp", hp, "--key-file", kf, "load", str(obj), "--name", "viactl")
+    assert r.returncode == 0, r.stderr
+    r = ctl(d, "--tcp", hp, "list", env_key=kf)                   # $DEFORMD_KEY_FILE
+    assert r.returncode == 0 and "viactl" in r.stdout, r.stderr
+    r = ctl(d, "list", "--tcp", hp, "--key-file", kf, "--json")    # after the command
+    assert r.returncode == 0 and "viactl" in r.stdout, r.stderr
+    r = ctl(d, "--tcp", hp, "list")                                 # no key
+    assert r.returncode == 1 and "--key-file" in r.stderr and "requires authentication" in r.stderr
+    wrong = str(tmp_path / "wrong.key")
+    write_key(wrong)
+    r = ctl(d, "--tcp", hp, "--key-file", wrong, "close", "viactl")
+    assert r.returncode == 1 and "EPROTO_AUTH" in r.stderr + r.stdout, (r.stdout, r.stderr)
+    loose = str(tmp_path / "loose.key")
+    write_key(loose, text=key.decode(), mode=0o644)
+    r = ctl(d, "--tcp", hp, "--key-file", loose, "close", "viactl")
+    assert r.returncode == 2 and "readable or writable by others" in r.stderr, r.stderr
+    with d.unix_client() as c:                                       # nothing was closed
+        assert [s.name for s in c.list_sessions()] == ["viactl"]
+        st = c.stats()
+        assert (st["auth_ok"], st["auth_failed"]) == (3, 1)
+    r = ctl(d, "--socket", d.socket_path, "list")                   # Unix: no key needed
+    assert r.returncode == 0 and "viactl" in r.stdout, r.stderr
+
+
+# ------------------------------------------------------------------ mutual: an impostor server
+class Impostor:
+    """A TCP server that speaks HELLO and AUTH but does not know the key: it accepts any client
+    proof and answers with a MAC made from another key. Serves one connection in a thread and
+    records whether a request other than HELLO/AUTH arrived after its proof."""
+
+    def __init__(self):
+        import threading
+        self.lsock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.lsock.bind(("127.0.0.1", 0))
+        self.lsock.listen(1)
+        self.port = self.lsock.getsockname()[1]
+        self.after_proof = []
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _reply(self, conn, f, body):
+        conn.sendall(fr.encode_frame(f.type, body, f.request_id, schema.FrameFlag.REPLY))
+
+    def _serve(self):
+        conn, _ = self.lsock.accept()
+        conn.settimeout(30)
+        dec = fr.FrameDecoder()
+        proved = False
+        try:
+            while True:
+                data = conn.recv(65536)
+                if not data:
+                    return
+                for f in dec.feed(data):
+                    if f.type == m.HELLO:
+                        body = struct.pack("<HHIIIIIIQQBB", 1, 1, int(schema.Feature.AUTH |
+                                           schema.Feature.TCP), 1 << 20, 1000, 1000, 64, 64,
+                                           1 << 20, 1 << 20, 1, 0) + m.pack_str("impostor")
+                        self._reply(conn, f, body)
+                    elif f.type == m.AUTH:
+                        method, token = m.decode_auth(f.payload)
+                        self._reply(conn, f, m.encode_auth(method, secrets.token_bytes(32)))
+                        proved = proved or method == schema.AuthMethod.HMAC_PROOF
+                    elif proved:
+                        self.after_proof.append(f.type)
+                        return
+        finally:
+            conn.close()
+            self.lsock.close()
+
+
+def test_clients_refuse_a_server_that_cannot_prove_the_key(tmp_path):
+    kf = str(tmp_path / "k")
+    key = write_key(kf)
+    imp = Impostor()
+    c = Client.connect_tcp("127.0.0.1", imp.port, timeout=30.0, hello=True)
+    with pytest.raises(AuthError) as ei:
+        c.authenticate(key)
+    assert "did not prove" in str(ei.value)
+    imp.thread.join(30)
+    assert imp.after_proof == []
+    imp = Impostor()
+    r = subprocess.run([DEFORMCTL, "--tcp", "127.0.0.1:%d" % imp.port, "--key-file", kf, "list"],
+                       capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
+    assert r.returncode == 1 and "did not prove that it knows the key" in r.stderr, r.stderr
+    imp.thread.join(30)
+    assert imp.after_proof == []        # deformctl sent no request to the impostor
