@@ -7,19 +7,15 @@
 void df_auth_limit_init(df_auth_limit *l, int burst, int refill_s)
 {
     memset(l, 0, sizeof *l);
-    l->burst_milli = (uint64_t)(burst < 1 ? 1 : burst) * 1000;
     l->refill_ms = (uint64_t)(refill_s < 1 ? 1 : refill_s) * 1000;
+    l->cap_ms = (uint64_t)(burst < 1 ? 1 : burst) * l->refill_ms;
 }
 
-/* Brings the slot's bucket to now_ms. */
-static void refill(const df_auth_limit *l, df_auth_limit_slot *s, uint64_t now_ms)
+/* The slot's credit at now_ms (a time before its last failure counts as that time). */
+static uint64_t credit(const df_auth_limit *l, const df_auth_limit_slot *s, uint64_t now_ms)
 {
-    if (now_ms > s->t_ms) {
-        uint64_t add = (now_ms - s->t_ms) * 1000 / l->refill_ms;
-        s->tokens_milli = s->tokens_milli + add > l->burst_milli ? l->burst_milli
-                                                                 : s->tokens_milli + add;
-    }
-    s->t_ms = now_ms;
+    uint64_t gained = now_ms > s->t_ms ? now_ms - s->t_ms : 0;
+    return gained >= l->cap_ms - s->credit_ms ? l->cap_ms : s->credit_ms + gained;
 }
 
 static df_auth_limit_slot *find(df_auth_limit *l, const char *host)
@@ -33,17 +29,17 @@ uint64_t df_auth_limit_wait(df_auth_limit *l, const char *host, uint64_t now_ms)
 {
     df_auth_limit_slot *s = find(l, host);
     if (!s) return 0;
-    refill(l, s, now_ms);
-    if (s->tokens_milli >= 1000) return 0;
-    uint64_t need = 1000 - s->tokens_milli; /* milli-tokens; one per refill_ms / 1000 ms */
-    uint64_t ms = (need * l->refill_ms + 999) / 1000;
-    return ms ? ms : 1;
+    uint64_t c = credit(l, s, now_ms);
+    return c >= l->refill_ms ? 0 : l->refill_ms - c;
 }
 
 void df_auth_limit_fail(df_auth_limit *l, const char *host, uint64_t now_ms)
 {
     df_auth_limit_slot *s = find(l, host);
-    if (!s) {
+    uint64_t c;
+    if (s) {
+        c = credit(l, s, now_ms);
+    } else {
         df_auth_limit_slot *oldest = &l->slots[0];
         for (int i = 0; i < DF_AUTH_LIMIT_SLOTS && !s; i++) {
             if (!l->slots[i].host[0]) s = &l->slots[i];
@@ -51,9 +47,8 @@ void df_auth_limit_fail(df_auth_limit *l, const char *host, uint64_t now_ms)
         }
         if (!s) s = oldest;
         snprintf(s->host, sizeof s->host, "%s", host);
-        s->tokens_milli = l->burst_milli;
-        s->t_ms = now_ms;
+        c = l->cap_ms;
     }
-    refill(l, s, now_ms);
-    s->tokens_milli = s->tokens_milli >= 1000 ? s->tokens_milli - 1000 : 0;
+    s->credit_ms = c >= l->refill_ms ? c - l->refill_ms : 0;
+    s->t_ms = now_ms;
 }

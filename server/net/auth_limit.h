@@ -14,14 +14,16 @@
 #define DF_AUTH_LIMIT_SLOTS 1024
 #define DF_AUTH_LIMIT_HOST 48 /* bytes of an address string, NUL included */
 
+/* A bucket counts credit in milliseconds: one token is refill_ms of credit, gained one per ms,
+ * so every computation is exact integer arithmetic. */
 typedef struct df_auth_limit_slot {
     char host[DF_AUTH_LIMIT_HOST]; /* "" = free */
-    uint64_t tokens_milli;         /* tokens x 1000 at t_ms */
-    uint64_t t_ms;                 /* last update */
+    uint64_t credit_ms;            /* credit at t_ms, <= burst x refill_ms */
+    uint64_t t_ms;                 /* time of the last failure */
 } df_auth_limit_slot;
 
 typedef struct df_auth_limit {
-    uint64_t burst_milli;          /* burst x 1000 */
+    uint64_t cap_ms;               /* burst x refill_ms: a full bucket */
     uint64_t refill_ms;            /* one token per refill_ms */
     df_auth_limit_slot slots[DF_AUTH_LIMIT_SLOTS];
 } df_auth_limit;
@@ -29,7 +31,8 @@ typedef struct df_auth_limit {
 /* Sets up an empty table: `burst` >= 1 failures in a row, one more per `refill_s` >= 1 seconds. */
 void df_auth_limit_init(df_auth_limit *l, int burst, int refill_s);
 
-/* 0 when `host` may try to authenticate at `now_ms`, else the milliseconds (>= 1) until it may. */
+/* 0 when `host` may try to authenticate at `now_ms`, else the milliseconds (>= 1) until it may.
+ * Changes nothing. */
 uint64_t df_auth_limit_wait(df_auth_limit *l, const char *host, uint64_t now_ms);
 
 /* Records a failed authentication of `host` at `now_ms` (takes one token). */
