@@ -444,7 +444,7 @@ static const char k_usage[] =
     "  --socket PATH       Unix socket to listen on (default $XDG_RUNTIME_DIR/deformd.sock,\n"
     "                      else /run/deformd/deformd.sock); 'none' disables it\n"
     "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port);\n"
-    "                      loopback addresses only: TCP has no authentication yet\n"
+    "                      loopback addresses only: TCP is not encrypted (see --key-file)\n"
     "  --tcp-insecure      allow a non-loopback --tcp address (0, *, [::], LAN): anyone\n"
     "                      who can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"

@@ -6,7 +6,8 @@
  *                      /run/deformd/deformd.sock); "none" disables the Unix listener
  *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it.
  *                      Only a loopback address (127.0.0.0/8, ::1, localhost) is accepted:
- *                      TCP has no authentication yet; see tcp_insecure
+ *                      TCP has no encryption yet (key_file authenticates, access_config.h);
+ *                      see tcp_insecure
  *   tcp_insecure       yes | no (default no): also listen on a non-loopback TCP address (0,
  *                      *, [::], a LAN address), letting anyone who reaches it in
  *   socket_mode        permission bits of the Unix socket file, octal (default 0660; not

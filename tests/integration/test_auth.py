@@ -340,3 +340,32 @@ def test_clients_refuse_a_server_that_cannot_prove_the_key(tmp_path):
     assert r.returncode == 1 and "did not prove that it knows the key" in r.stderr, r.stderr
     imp.thread.join(30)
     assert imp.after_proof == []        # deformctl sent no request to the impostor
+
+
+def test_handshake_timeout_covers_auth(make_daemon, tmp_path):
+    """An unauthenticated TCP connection cannot hold its slot (PING keeps a connection from the
+    idle timeout, so the handshake timeout also waits for AUTH)."""
+    kf = str(tmp_path / "k")
+    key = write_key(kf)
+    d = make_daemon("key_file = %s\nhandshake_timeout_s = 1\nidle_timeout_s = 0\n" % kf, tcp=True)
+    good = tcp(d, key=key)
+    lurker = tcp(d)                      # HELLO done, never authenticates
+    f = None
+    while f is None or f.type != m.ERROR:   # waits for the ERROR event (up to the client timeout)
+        f = lurker.recv_frame(timeout=15.0)
+        assert f is not None, "no ERROR event from the handshake timeout"
+    code, msg = m.decode_error(f.payload)
+    assert code == E.ErrorCode.ELIMIT and "not authenticated" in msg, msg
+    assert wait_closed(lurker.sock, 10.0)
+    lurker.close()
+    assert good.ping(b"still") == b"still"
+    assert good.list_sessions() == []
+    good.close()
+
+
+def test_non_loopback_with_a_key_still_needs_tcp_insecure(tmp_path):
+    """No TLS yet: a key alone does not open a non-loopback address (key + TLS will)."""
+    kf = str(tmp_path / "k")
+    write_key(kf)
+    err = start_fails(tmp_path, "--key-file", kf, "--tcp", "0.0.0.0:0")
+    assert "not encrypted" in err and "tcp_insecure" in err, err
