@@ -1,6 +1,7 @@
 /* auth.c — TCP key authentication: challenge, proof, rate limit (see auth.h). */
 #include "server/net/auth.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -87,8 +88,10 @@ int df_auth_request(df_req *r, const df_msg_auth *m, df_error *err)
                             m->method == DF_AUTH_HMAC_CHALLENGE ? "nonce" : "MAC", m->token_len);
     if (c->auth_ok)
         return df_error_set(err, DF_ESTATE, "auth: this connection is already authenticated");
-    const char *who = c->is_tcp ? c->peer_addr : "unix socket";
-    const char *host = c->is_tcp ? c->peer_host : "unix";
+    char unix_who[48]; /* Unix peers (AUTH is optional there) are limited per uid */
+    snprintf(unix_who, sizeof unix_who, "unix uid %u", c->peer_uid);
+    const char *who = c->is_tcp ? c->peer_addr : unix_who;
+    const char *host = c->is_tcp ? c->peer_host : unix_who;
     uint64_t wait = df_auth_limit_wait(&a->limit, host, uv_now(srv->loop));
     if (wait) {
         srv->stats.auth_limited++;
