@@ -7,8 +7,8 @@
  * authenticate too. A wrong proof is answered EPROTO_AUTH and the connection is closed; failures
  * are counted per peer address (Unix: per uid; auth_limit.h: auth_fail_burst,
  * auth_fail_refill_s), and an address without tokens gets ELIMIT ("retry in N s") for any AUTH,
- * without its MAC being checked, and is closed. Every failure and refusal is logged (warn) with the peer address, never the key or a
- * MAC. Counters: stats auth_ok, auth_failed, auth_limited. */
+ * without its MAC being checked, and is closed. Every failure and refusal is logged (warn) with
+ * the peer address, never the key or a MAC. Counters: stats auth_ok, auth_failed, auth_limited. */
 #ifndef DF_SERVER_AUTH_H
 #define DF_SERVER_AUTH_H
 
