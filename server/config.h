@@ -164,7 +164,8 @@ typedef struct df_server_config {
     int hid_enumerate_s;         /* 0 = at start only */
     int foreground;              /* 1: do not daemonize */
     df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */
-    df_access_config access;     /* allow_uids, allow_gids, key_file, auth_fail_* (access_config.h) */
+    df_access_config access;     /* allow_uids, allow_gids, key_file, auth_fail_*
+                                    (access_config.h) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;
 

@@ -352,7 +352,8 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
     long long count = 0;
     df_error e;
-    if (a->val[CTL_NGLOBAL] && dc_cli_int(a->val[CTL_NGLOBAL], "--count", 1, 1000000000, &count, &e))
+    if (a->val[CTL_NGLOBAL] &&
+        dc_cli_int(a->val[CTL_NGLOBAL], "--count", 1, 1000000000, &count, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
     if (a->val[CTL_NGLOBAL + 1] && ctx->tcp)
         return ctl_usage_error(ctx, cmd, "--shm needs the daemon's Unix socket, not --tcp");

@@ -105,8 +105,9 @@ def test_wrong_key_is_refused_closed_and_changes_nothing(keyed):
 def test_protocol_misuse_gets_clear_errors(keyed):
     d, kf, key = keyed
     with tcp(d) as c:
-        for method, token, code in ((schema.AuthMethod.HMAC_PROOF, bytes(32), E.ErrorCode.ESTATE),
-                                    (schema.AuthMethod.HMAC_CHALLENGE, b"short", E.ErrorCode.EINVAL),
+        A = schema.AuthMethod
+        for method, token, code in ((A.HMAC_PROOF, bytes(32), E.ErrorCode.ESTATE),
+                                    (A.HMAC_CHALLENGE, b"short", E.ErrorCode.EINVAL),
                                     (9, bytes(32), E.ErrorCode.EINVAL)):
             with pytest.raises(DeformdError) as ei:
                 c.auth(method, token)

@@ -93,7 +93,8 @@ def decode_auth(p: bytes) -> Tuple[int, bytes]:
     if reserved:
         raise ProtocolError("auth: reserved %d is not 0" % reserved)
     if n > schema.LIMITS["MAX_AUTH_TOKEN"]:
-        raise ProtocolError("auth: token of %d bytes exceeds %d" % (n, schema.LIMITS["MAX_AUTH_TOKEN"]))
+        raise ProtocolError("auth: token of %d bytes exceeds %d"
+                            % (n, schema.LIMITS["MAX_AUTH_TOKEN"]))
     token = r.raw(n)
     r.end()
     return method, token
