@@ -227,8 +227,9 @@ def test_worked_example_matches_python_and_c(tmp_path):
     assert len(frame) == 64
     # C: proto/auth_mac.c through a small program linked with the proto layer
     exe = str(tmp_path / "auth_mac_cli")
-    subprocess.run([os.environ.get("CC", "cc"), "-std=c11", "-Wall", "-Wextra", "-Werror",
-                    "-I", ROOT, "-o", exe,
+    san = os.environ.get("SAN_FLAGS", "").split()   # `make asan` / `make tsan`: instrumented libs
+    subprocess.run([os.environ.get("CC", "cc"), "-std=c11", "-Wall", "-Wextra", "-Werror"] + san +
+                   ["-I", ROOT, "-o", exe,
                     os.path.join(ROOT, "tests", "integration", "auth_mac_cli.c"),
                     os.path.join(BUILD, "lib", "libdf_proto.a"),
                     os.path.join(BUILD, "lib", "libdf_common.a"), "-lcrypto"],
