@@ -37,7 +37,10 @@ LDFLAGS := $(OMP) $(SAN)
 KELV_SYS    := -llapacke -llapack -lopenblas -lm
 MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
 HID_SYS     := -lhidapi-hidraw -lusb-1.0
-SERVER_SYS  := -luv $(HID_SYS) -lpthread
+# CRYPTO_SYS: OpenSSL libcrypto, for proto/auth_mac.c (HMAC-SHA256 of AUTH), linked by everything
+# that links the proto layer's auth (the daemon, libdeformclient users, their unit tests).
+CRYPTO_SYS  := -lcrypto
+SERVER_SYS  := -luv $(HID_SYS) -lpthread $(CRYPTO_SYS)
 # core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers
 # (they compile every core source).
@@ -79,11 +82,11 @@ UNIT_SYS_mesh       := -lm
 UNIT_SYS_kelvinlet  := $(KELV_SYS)
 UNIT_SYS_geom       := $(GEOM_SYS) -lm
 UNIT_LINK_proto     := $(PROTO_LIB) $(BASE_LIBS)
-UNIT_SYS_proto      := -lm
+UNIT_SYS_proto      := -lm $(CRYPTO_SYS)
 UNIT_LINK_client    := $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
-UNIT_SYS_client     := $(MATH_LIBS)
+UNIT_SYS_client     := $(MATH_LIBS) $(CRYPTO_SYS)
 UNIT_LINK_deformctl := $(CTL_LINK)
-UNIT_SYS_deformctl  := $(KELV_SYS)
+UNIT_SYS_deformctl  := $(KELV_SYS) $(CRYPTO_SYS)
 UNIT_LINK_server    := $(SERVER_LINK)
 UNIT_SYS_server     := $(MATH_LIBS) $(GEOM_SYS) $(SERVER_SYS)
 # hid: server/hid/ (parsers: core/common only; device sources: hidapi, libusb, pthread), taken
@@ -113,7 +116,7 @@ deps:
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
-            libembree-dev systemd python3-seccomp strace man-db
+             libembree-dev systemd python3-seccomp strace man-db libssl-dev
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -145,7 +148,7 @@ $(BUILD)/lib/libdf_ctl.a: $(call objs,$(filter-out client/deformctl/main.c,$(CTL
 	rm -f $@ && ar rcs $@ $^
 $(BUILD)/bin/deformctl: $(BUILD)/obj/client/deformctl/main.o $(CTL_LINK)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(CTL_LINK)) $(KELV_SYS)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(CTL_LINK)) $(KELV_SYS) $(CRYPTO_SYS)
 
 define unit_area
 $(BUILD)/tests/unit/$(1)/%: tests/unit/$(1)/%.c $(call objs,$(UNIT_HELP)) $$(UNIT_LINK_$(1))

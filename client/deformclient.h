@@ -110,9 +110,26 @@ int df_client_transact(df_client *c, uint16_t type, const void *payload, size_t 
  * receives the round trip in microseconds. */
 int df_client_ping(df_client *c, const void *data, uint32_t len, double *rtt_us, df_error *err);
 
-/* Auth with `method` and a token (<= DF_MAX_AUTH_TOKEN bytes). Servers without auth answer
+/* Auth with `method` and a token (<= DF_MAX_AUTH_TOKEN bytes); the reply's token is not
+ * returned (df_client_authenticate runs the whole exchange). Servers without a key answer
  * DF_EUNSUPPORTED. */
 int df_client_auth(df_client *c, uint16_t method, const void *token, uint32_t len, df_error *err);
+
+/* Key authentication (PROTOCOL.md 4.3): the mutual HMAC-SHA256 challenge-response with the
+ * `key_len` (1..1024) bytes of `key`, usually right after connecting (a TCP connection to a
+ * daemon with a key, hello reply auth_required = 1, must do it before other requests; on the
+ * Unix socket it is optional). Errors: the server's DF_EPROTO_AUTH (wrong key: the server then
+ * closes the connection), DF_ELIMIT (too many failures from this address: retry later),
+ * DF_EUNSUPPORTED (the server has no key); DF_EPROTO_AUTH from the client itself (remote 0:
+ * the server's proof is wrong, so it does not know the key; the connection is then unusable),
+ * DF_EINVAL, DF_EIO, DF_EINTERNAL (no random numbers). */
+int df_client_authenticate(df_client *c, const void *key, size_t key_len, df_error *err);
+
+/* df_client_authenticate with the key in the file `key_file` (its bytes without trailing
+ * blanks and newlines, 32..1024 bytes; refused when others may read or write the file).
+ * Errors: as df_client_authenticate, plus DF_EIO / DF_EINVAL for the file (the message names
+ * it and says what to do). The key is wiped from memory afterwards. */
+int df_client_authenticate_file(df_client *c, const char *key_file, df_error *err);
 
 /* Sets extra load_mesh option bits (0 or DF_LOAD_OPT_2D: a 2D session even if the file gives z)
  * ORed into the options of every later load on `c` (df_client_load_mesh_bytes / _file / _path

@@ -102,6 +102,8 @@ enum { DF_WIRE_DEV_CLASSES(DF_X_DEVCLASS) };
 enum { DF_WIRE_DEV_BACKENDS(DF_X_DEVBACKEND) };
 #define DF_X_DEVSTATE(n, v) DF_X_ENUM(DF_DEVSTATE_, n, v)
 enum { DF_WIRE_DEV_STATES(DF_X_DEVSTATE) };
+#define DF_X_AUTHM(n, v) DF_X_ENUM(DF_AUTH_, n, v)
+enum { DF_WIRE_AUTH_METHODS(DF_X_AUTHM) }; /* DF_AUTH_HMAC_CHALLENGE, DF_AUTH_HMAC_PROOF */
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -165,8 +167,8 @@ typedef struct df_msg_hello_reply {
     char server_name[DF_MAX_NAME_LEN + 1]; /* e.g. "deformd 0.1" */
 } df_msg_hello_reply;
 
-typedef struct df_msg_auth {           /* placeholder: answered EUNSUPPORTED until implemented */
-    uint16_t method;                   /* 0 .. 0xFFFF, meaning defined by the auth issue */
+typedef struct df_msg_auth {           /* AUTH request and reply (PROTOCOL.md 4.3) */
+    uint16_t method;                   /* DF_AUTH_* (any u16 decodes; the server checks it) */
     uint32_t token_len;                /* <= DF_MAX_AUTH_TOKEN */
     const uint8_t *token;              /* points into the payload (decode) */
 } df_msg_auth;

@@ -66,6 +66,12 @@
     X(DF_MAX_STATS_KEY_LEN) X(DF_STREAM_CHUNK_BYTES)                                      \
     X(DF_MAX_DEVICES)
 
+/* ------------------------------------------------- AUTH HMAC-SHA256 exchange (PROTOCOL.md 4.3) */
+#define DF_AUTH_NONCE_BYTES 32u             /* client and server nonces */
+#define DF_AUTH_MAC_BYTES 32u               /* HMAC-SHA256 output */
+#define DF_AUTH_CONTEXT_CLIENT "deformd-auth-v1 client" /* ends the client's MAC input */
+#define DF_AUTH_CONTEXT_SERVER "deformd-auth-v1 server" /* ends the server's MAC input */
+
 /* ------------------------------------------- shared-memory ring file (PROTOCOL.md 6.1, shm_ring.h) */
 #define DF_SHM_MAGIC "DFSHMRG1"             /* 8 bytes at offset 0 */
 #define DF_SHM_HEADER_BYTES 4096u           /* data starts here (one page) */
@@ -77,7 +83,7 @@
  * reuses the request's type with REPLY (| ERROR with an error body). Events carry EVENT. */
 #define DF_WIRE_MSG_TYPES(X)                                                                 \
     X(HELLO, 0x0001, hello, HELLO, HELLO_REPLY, NONE)                                        \
-    X(AUTH, 0x0002, auth, AUTH, EMPTY, NONE) /* reply empty, or error EUNSUPPORTED */        \
+    X(AUTH, 0x0002, auth, AUTH, AUTH, NONE) /* reply: the next token (4.3), or an error */   \
     X(PING, 0x0003, ping, PING, PING, NONE)  /* reply: the same bytes */                     \
     X(LOAD_MESH, 0x0010, load_mesh, LOAD_MESH, LOAD_REPLY, NONE) /* chunked upload */        \
     X(LIST_SESSIONS, 0x0011, list_sessions, EMPTY, SESSION_LIST, NONE)                       \
@@ -219,6 +225,11 @@
     X(ERROR, 3)     /* a read or write failed: closed, `error` says why */                   \
     X(UNPLUGGED, 4) /* gone (or the end of a replay): closed */
 
+/* auth `method` (DF_AUTH_*; PROTOCOL.md 4.3): the two steps of the HMAC-SHA256 exchange */
+#define DF_WIRE_AUTH_METHODS(X)                                                              \
+    X(HMAC_CHALLENGE, 1) /* token: client nonce; reply token: server nonce */                \
+    X(HMAC_PROOF, 2)     /* token: client MAC; reply token: server MAC */
+
 /* Every enum list: X(list macro, C prefix, Python class, kind) for tools that walk them all. */
 #define DF_WIRE_ENUMS(X)                                                                     \
     X(DF_WIRE_FLAGS, DF_FLAG_, FrameFlag, flags)                                                \
@@ -243,7 +254,8 @@
     X(DF_WIRE_CURSOR_FLAGS, DF_CURSOR_, CursorFlag, flags)                                   \
     X(DF_WIRE_DEV_CLASSES, DF_DEVCLASS_, DevClass, enum)                                     \
     X(DF_WIRE_DEV_BACKENDS, DF_DEVBACKEND_, DevBackend, enum)                                \
-    X(DF_WIRE_DEV_STATES, DF_DEVSTATE_, DevState, enum)
+    X(DF_WIRE_DEV_STATES, DF_DEVSTATE_, DevState, enum)                                      \
+    X(DF_WIRE_AUTH_METHODS, DF_AUTH_, AuthMethod, enum)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

@@ -51,6 +51,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->hid_on = 1;
     cfg->hid_replay_speed = 1.0;
     cfg->hid_enumerate_s = DF_CONFIG_DEFAULT_HID_ENUMERATE_S;
+    df_access_config_defaults(&cfg->access);
 }
 
 /* hid_replay: a comma-separated list of files, appended (each must be readable now). */
@@ -218,6 +219,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     unsigned long long v;
     if (!cfg || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
     if (strncmp(key, "hid.", 4) == 0) return df_hid_config_set(&cfg->hid, key, value, err);
+    if (df_access_config_has(key)) return df_access_config_set(&cfg->access, key, value, err);
     for (size_t i = 0; i < sizeof k_int_keys / sizeof k_int_keys[0]; i++) {
         const int_key *ik = &k_int_keys[i];
         if (strcmp(key, ik->key) != 0) continue;
@@ -442,7 +444,7 @@ static const char k_usage[] =
     "  --socket PATH       Unix socket to listen on (default $XDG_RUNTIME_DIR/deformd.sock,\n"
     "                      else /run/deformd/deformd.sock); 'none' disables it\n"
     "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port);\n"
-    "                      loopback addresses only: TCP has no authentication yet\n"
+    "                      loopback addresses only: TCP is not encrypted (see --key-file)\n"
     "  --tcp-insecure      allow a non-loopback --tcp address (0, *, [::], LAN): anyone\n"
     "                      who can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
@@ -468,6 +470,10 @@ static const char k_usage[] =
     "  --check-config      check the settings (file and options) as start-up would, without\n"
     "                      binding sockets or opening devices: prints 'config ok' (status 0)\n"
     "                      or each problem with FILE:LINE (status 2)\n"
+    "  --key-file FILE     TCP clients must authenticate with the secret key in FILE\n"
+    "                      (HMAC-SHA256 challenge-response; config key_file; the file must\n"
+    "                      not be readable by others). Config allow_uids / allow_gids:\n"
+    "                      users / groups allowed on the Unix socket\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "SIGHUP re-reads the config file and the options: log_level, max_clients, max_sessions,\n"
@@ -542,7 +548,7 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         static const char *const map[][2] = {
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
             {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"},
-            {"--hid-replay", "hid_replay"}};
+            {"--hid-replay", "hid_replay"}, {"--key-file", "key_file"}};
         int done = 0;
         for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);

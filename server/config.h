@@ -6,7 +6,8 @@
  *                      /run/deformd/deformd.sock); "none" disables the Unix listener
  *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it.
  *                      Only a loopback address (127.0.0.0/8, ::1, localhost) is accepted:
- *                      TCP has no authentication yet; see tcp_insecure
+ *                      TCP has no encryption yet (key_file authenticates, access_config.h);
+ *                      see tcp_insecure
  *   tcp_insecure       yes | no (default no): also listen on a non-loopback TCP address (0,
  *                      *, [::], a LAN address), letting anyone who reaches it in
  *   socket_mode        permission bits of the Unix socket file, octal (default 0660; not
@@ -67,9 +68,11 @@
  *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
  *                      class knob | 3d-mouse | pen, per-device keys override class keys);
  *                      checked for consistency once the whole file is read
+ *   allow_uids, allow_gids, key_file, auth_fail_burst, auth_fail_refill_s   access control
+ *                      (server/access_config.h)
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
  * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
- * --hid-replay FILE[,FILE...], --check-config, --help. */
+ * --hid-replay FILE[,FILE...], --key-file FILE, --check-config, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -77,6 +80,7 @@
 #include <stdint.h>
 
 #include "core/common/df_error.h"
+#include "server/access_config.h"
 #include "server/hid/hid_config.h"
 
 #define DF_CONFIG_PATH_MAX 4096
@@ -160,6 +164,8 @@ typedef struct df_server_config {
     int hid_enumerate_s;         /* 0 = at start only */
     int foreground;              /* 1: do not daemonize */
     df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */
+    df_access_config access;     /* allow_uids, allow_gids, key_file, auth_fail_*
+                                    (access_config.h) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "server/session/cache.h"
+#include "server/net/auth.h"
 #include "server/net/conn.h"
 #include "server/handlers/dispatch.h"
 #include "server/net/guard.h"
@@ -83,13 +84,16 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     uv_signal_start(&srv->sig_int, on_signal, SIGINT);
     uv_signal_start(&srv->sig_term, on_signal, SIGTERM);
     /* every job's work runs on the pool: no daemon without it */
-    int rc = df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, err);
+    int rc = df_auth_start(srv, err); /* key_file (net/auth.h) */
+    if (rc == DF_OK)
+        rc = df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, err);
     if (rc == DF_OK && (rc = df_listener_open(srv, err)) == DF_OK &&
         (rc = df_guard_init(srv, err)) != DF_OK)
         df_listener_close(srv);
     if (rc != DF_OK) {
         srv->stopping = 1;
         df_pool_close(srv->pool); /* NULL-safe; freed with the server */
+        df_auth_free(srv);
         uv_close((uv_handle_t *)&srv->kick_check, NULL);
         uv_close((uv_handle_t *)&srv->cork_timer, NULL);
         uv_close((uv_handle_t *)&srv->fanout_idle, NULL);
@@ -170,4 +174,5 @@ void df_server_free(df_server *srv)
     df_pool_free(srv->pool);
     srv->pool = NULL;
     df_guard_free(srv);
+    df_auth_free(srv);
 }

@@ -73,6 +73,17 @@ typedef struct df_conn {
     uint64_t accepted_ms;    /* uv_now() at accept (handshake timeout) */
     uint64_t last_rx_ms;     /* uv_now() when bytes last arrived (idle timeout) */
     uint64_t sub_epoch;      /* == srv->sweep_epoch: subscribed somewhere at the last sweep */
+    /* Peer identity (server/net/peer.h): Unix peers' SO_PEERCRED, TCP peers' address. */
+    int peer_cred;           /* 1 when peer_uid/gid/pid were read (Unix socket) */
+    uint32_t peer_uid, peer_gid;
+    int32_t peer_pid;
+    char peer_addr[64];      /* TCP: "ADDR port P" of the peer ("" for Unix) */
+    char peer_host[48];      /* TCP: the peer's address alone (rate-limit key, auth.h) */
+    int peer_loopback;       /* TCP: 1 when the peer address is loopback */
+    /* TCP key authentication (server/net/auth.h) */
+    int auth_ok;             /* 1: authenticated (or none required) */
+    int auth_step;           /* 0 none, 1 challenge sent (nonces below are valid) */
+    uint8_t auth_nc[32], auth_ns[32]; /* client and server nonces of the exchange */
     int kick_queued;         /* on the server's deferred-write list */
     struct df_conn *kick_next;
     struct df_conn *prev, *next;
@@ -114,6 +125,7 @@ typedef struct df_server {
     df_stats stats;
     uint64_t last_change_session; /* session of a client's last change request or subscribe
                                    * (df_job_is_change): unbound HID devices drive it */
+    struct df_auth_server *auth;  /* TCP key authentication (net/auth.h), NULL without a key */
     struct df_hid_manager *hid;   /* HID devices (server/hid/hid_manager.h), NULL when off */
     const df_hid_ops *hid_ops;    /* its entry points (set by df_server_start) */
     /* Upward calls of the network layer (net never includes what is above it), set by

@@ -12,6 +12,9 @@ typedef struct df_stats {
     uint64_t clients_refused_fds; /* refused: out of file descriptors (guard.h) */
     uint64_t clients_handshake_timeout; /* closed: no HELLO within handshake_timeout_s */
     uint64_t clients_idle_timeout;/* closed: silent for idle_timeout_s (guard.h) */
+    uint64_t clients_refused_peer;/* Unix peers refused by allow_uids / allow_gids (peer.h) */
+    uint64_t auth_ok, auth_failed;/* TCP key authentications that succeeded / failed (auth.h) */
+    uint64_t auth_limited;        /* AUTH requests refused by the failure rate limit */
     uint64_t frames_in, bytes_in;
     uint64_t frames_out, bytes_out;
     uint64_t writes_blocked;      /* writes a full socket left to uv_write (a slow reader) */

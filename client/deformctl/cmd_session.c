@@ -74,7 +74,7 @@ static void load_report_text(const ctl_ctx *ctx, const char *file, const df_msg_
 
 static int run_load(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
-    const char *file = a->pos[0], *name = a->val[3];
+    const char *file = a->pos[0], *name = a->val[CTL_NGLOBAL];
     char m[700];
     if (df_mesh_format_from_path(file) == DF_FMT_AUTO) {
         snprintf(m, sizeof m, "%.400s: %s", file, DF_CLIENT_FORMATS_MSG);
@@ -89,7 +89,7 @@ static int run_load(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         return CTL_EXIT_SERVER;
     df_error e;
     df_msg_load_reply r;
-    df_client_set_load_flags(c, a->val[4] ? DF_LOAD_OPT_2D : 0);
+    df_client_set_load_flags(c, a->val[CTL_NGLOBAL + 1] ? DF_LOAD_OPT_2D : 0);
     int rc = df_client_load_mesh_file_ex(c, file, name, &r, &e);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);
@@ -206,7 +206,7 @@ static int run_stats(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         return CTL_EXIT_SERVER;
     df_error e;
     uint64_t sid = 0;
-    int rc = a->val[3] ? ctl_session_id(c, a->val[3], &sid, &e) : DF_OK;
+    int rc = a->val[CTL_NGLOBAL] ? ctl_session_id(c, a->val[CTL_NGLOBAL], &sid, &e) : DF_OK;
     df_msg_stats st;
     memset(&st, 0, sizeof st);
     if (rc == DF_OK)
@@ -352,9 +352,10 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
     long long count = 0;
     df_error e;
-    if (a->val[3] && dc_cli_int(a->val[3], "--count", 1, 1000000000, &count, &e))
+    if (a->val[CTL_NGLOBAL] &&
+        dc_cli_int(a->val[CTL_NGLOBAL], "--count", 1, 1000000000, &count, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
-    if (a->val[4] && ctx->tcp)
+    if (a->val[CTL_NGLOBAL + 1] && ctx->tcp)
         return ctl_usage_error(ctx, cmd, "--shm needs the daemon's Unix socket, not --tcp");
     df_client *c = ctl_connect(ctx, cmd);
     if (!c)
@@ -366,18 +367,18 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         df_client_set_event_callback(c, watch_event, &w);
         rc = df_client_subscribe(c, w.session, 0, &info, &e);
     }
-    if (rc == DF_OK && a->val[4]) /* --shm */
+    if (rc == DF_OK && a->val[CTL_NGLOBAL + 1]) /* --shm */
         rc = df_client_stream_shm(c, w.session, NULL, &e);
     if (rc == DF_OK && ctx->json) { /* subscribed: events from here on are printed */
         printf("{\"session\":%" PRIu64 ",\"kind\":\"watching\",\"name\":", w.session);
         ctl_json_str(stdout, info.name);
         printf(",\"version\":%" PRIu64 ",\"shm\":%s}\n", info.version,
-               a->val[4] ? "true" : "false");
+               a->val[CTL_NGLOBAL + 1] ? "true" : "false");
         fflush(stdout);
     } else if (rc == DF_OK) {
         printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "%s\n", w.session,
                info.name[0] ? info.name : "-", info.version,
-               a->val[4] ? " through shared memory" : "");
+               a->val[CTL_NGLOBAL + 1] ? " through shared memory" : "");
         fflush(stdout);
     }
     while (rc == DF_OK && !w.closed && !w.bad && (count == 0 || w.printed < count)) {

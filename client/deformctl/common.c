@@ -4,7 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <openssl/crypto.h>
+
 #include "client/deformctl/ctl.h"
+#include "proto/auth_mac.h"
 
 int ctl_error(const ctl_ctx *ctx, const ctl_cmd *cmd, const char *source, int code,
               const char *msg, int exit_code)
@@ -49,6 +52,15 @@ df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
     df_error_clear(&e);
     df_client *c = NULL;
     int rc;
+    /* --key-file, else $DEFORMD_KEY_FILE: authenticate whenever a key is given (PROTOCOL.md
+     * 4.3). A key file that cannot be used is a usage error, found before connecting. */
+    const char *kf = ctx->key_file ? ctx->key_file : getenv("DEFORMD_KEY_FILE");
+    uint8_t key[DF_AUTH_KEY_CAP_BYTES];
+    size_t key_len = 0;
+    if (kf && kf[0] && df_auth_key_load(kf, key, sizeof key, &key_len, &e) != DF_OK) {
+        ctl_error(ctx, cmd, "usage", e.code, e.msg, CTL_EXIT_USAGE);
+        return NULL;
+    }
     if (ctx->tcp) {
         rc = df_client_connect_tcp(ctx->host, ctx->port, "deformctl", &c, &e);
     } else {
@@ -63,8 +75,14 @@ df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
         }
         rc = df_client_connect_unix(p, "deformctl", &c, &e);
     }
+    if (rc == DF_OK && key_len) rc = df_client_authenticate(c, key, key_len, &e);
+    else if (rc == DF_OK && df_client_server_info(c)->auth_required)
+        rc = df_error_set(&e, DF_EPROTO_AUTH, "the daemon requires authentication on this "
+                          "connection: give --key-file FILE (or set DEFORMD_KEY_FILE)");
+    OPENSSL_cleanse(key, sizeof key);
     if (rc) {
-        ctl_fail(ctx, cmd, NULL, &e);
+        ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
         return NULL;
     }
     return c;

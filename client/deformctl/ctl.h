@@ -25,12 +25,15 @@
     {"socket", 1, "--socket PATH      daemon Unix socket (default: $DEFORMD_SOCKET, " \
                   "$XDG_RUNTIME_DIR/deformd.sock, /run/deformd/deformd.sock)"},      \
     {"tcp", 1, "--tcp HOST:PORT    connect over TCP instead"},                         \
-    {"json", 0, "--json             machine-readable JSON output on stdout"}
-#define CTL_NGLOBAL 3
+    {"json", 0, "--json             machine-readable JSON output on stdout"},          \
+    {"key-file", 1, "--key-file FILE    authenticate with the key in FILE (default: " \
+                    "$DEFORMD_KEY_FILE; PROTOCOL.md 4.3)"}
+#define CTL_NGLOBAL 4
 
 typedef struct ctl_ctx {
     const char *socket;   /* --socket, NULL for the default */
     const char *tcp;      /* --tcp HOST:PORT or NULL */
+    const char *key_file; /* --key-file FILE, else $DEFORMD_KEY_FILE, or NULL: no AUTH */
     int json;
     const char *prog;     /* "deformctl" */
     char host[256];       /* --tcp split by main before the command runs */

@@ -1,6 +1,7 @@
 /* main.c — deformctl: command-line client of the deformd daemon (built on libdeformclient).
  *
- *   deformctl [--socket PATH | --tcp HOST:PORT] [--json] COMMAND [ARGS] [--help]
+ *   deformctl [--socket PATH | --tcp HOST:PORT] [--key-file FILE] [--json] COMMAND [ARGS]
+ *             [--help]
  *
  * Exit codes (ctl.h): 0 ok; 1 an error from the daemon, the daemon could not be reached, the
  * local Kelvinlet check of `brush` refused the stroke, or a local failure (e.g. writing --out);
@@ -11,7 +12,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <openssl/crypto.h>
+
 #include "client/deformctl/ctl.h"
+#include "proto/auth_mac.h"
 
 static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
                                         ctl_cmds_mesh, ctl_cmds_brush_state, ctl_cmds_devices};
@@ -19,7 +23,8 @@ static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cm
 static void usage_top(FILE *f)
 {
     fprintf(f,
-            "usage: deformctl [--socket PATH | --tcp HOST:PORT] [--json] COMMAND [ARGS]\n"
+            "usage: deformctl [--socket PATH | --tcp HOST:PORT] [--key-file FILE] [--json]\n"
+            "                 COMMAND [ARGS]\n"
             "\nControl a running deformd daemon.\n\nCommands:\n");
     for (size_t g = 0; g < sizeof GROUPS / sizeof GROUPS[0]; g++)
         for (const ctl_cmd *c = GROUPS[g]; c->name; c++)
@@ -30,6 +35,9 @@ static void usage_top(FILE *f)
             "                     $XDG_RUNTIME_DIR/deformd.sock, else /run/deformd/deformd.sock)\n"
             "  --tcp HOST:PORT    connect over TCP instead of the Unix socket\n"
             "  --json             machine-readable JSON output on stdout\n"
+            "  --key-file FILE    authenticate with the secret key in FILE (HMAC-SHA256,\n"
+            "                     PROTOCOL.md 4.3; needed on TCP when the daemon has a key;\n"
+            "                     default: $DEFORMD_KEY_FILE)\n"
             "  --help             this text; `deformctl COMMAND --help` for a command\n"
             "\nExit status: 0 success; 1 error reported by the daemon (\"server: ...\"), the\n"
             "daemon could not be reached, a brush the Kelvinlet engine rejects locally\n"
@@ -88,10 +96,11 @@ static int parse_globals(int argc, char **argv, ctl_ctx *ctx)
             i++;
             continue;
         }
-        const char **dst = strncmp(a, "--socket", 8) == 0 ? &ctx->socket
-                           : strncmp(a, "--tcp", 5) == 0  ? &ctx->tcp
-                                                          : NULL;
-        size_t nl = dst == &ctx->socket ? 8 : 5;
+        const char **dst = strncmp(a, "--socket", 8) == 0     ? &ctx->socket
+                           : strncmp(a, "--tcp", 5) == 0      ? &ctx->tcp
+                           : strncmp(a, "--key-file", 10) == 0 ? &ctx->key_file
+                                                               : NULL;
+        size_t nl = dst == &ctx->socket ? 8 : dst == &ctx->key_file ? 10 : 5;
         if (!dst || (a[nl] != '\0' && a[nl] != '=')) {
             char m[300];
             snprintf(m, sizeof m, "unknown global option '%s'", a);
@@ -125,6 +134,16 @@ static int check_globals(ctl_ctx *ctx, const ctl_cmd *cmd)
         return ctl_usage_error(ctx, cmd, e.msg);
     if (ctx->tcp && dc_cli_hostport(ctx->tcp, ctx->host, (int)sizeof ctx->host, &ctx->port, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
+    /* a key file that cannot be used (missing, readable by others, too short) is a usage error */
+    const char *kf = ctx->key_file ? ctx->key_file : getenv("DEFORMD_KEY_FILE");
+    if (kf && kf[0]) {
+        uint8_t key[DF_AUTH_KEY_CAP_BYTES];
+        size_t len = 0;
+        int rc = df_auth_key_load(kf, key, sizeof key, &len, &e);
+        OPENSSL_cleanse(key, sizeof key);
+        if (rc != DF_OK)
+            return ctl_usage_error(ctx, cmd, e.msg);
+    }
     return CTL_EXIT_OK;
 }
 
@@ -171,6 +190,8 @@ int main(int argc, char **argv)
         ctx.tcp = a.val[1];
     if (a.val[2])
         ctx.json = 1;
+    if (a.val[3])
+        ctx.key_file = a.val[3];
     int rc = check_globals(&ctx, cmd);
     if (rc)
         return rc;

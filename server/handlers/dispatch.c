@@ -1,6 +1,7 @@
 /* dispatch.c — message type -> handler (see dispatch.h). */
 #include "server/handlers/dispatch.h"
 
+#include "server/net/auth.h"
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
 #include "server/log.h"
@@ -96,6 +97,14 @@ void df_dispatch_frame(df_conn *c, const df_frame_header *h, const uint8_t *payl
     if (!c->hello_done && h->type != DF_MSG_HELLO && h->type != DF_MSG_PING) {
         c->srv->stats.requests_failed++;
         df_reply_error(c, h->type, h->request_id, DF_ESTATE, "%s: send HELLO first",
+                       df_msg_type_name(h->type));
+        return;
+    }
+    if (df_auth_blocks(c, h->type)) { /* key_file: TCP peers authenticate first (auth.h) */
+        c->srv->stats.requests_failed++;
+        df_reply_error(c, h->type, h->request_id, DF_EPROTO_AUTH,
+                       "%s: authentication required: this server needs the key (AUTH, "
+                       "PROTOCOL.md 4.3) before other requests on TCP (not executed)",
                        df_msg_type_name(h->type));
         return;
     }

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "server/net/auth.h"
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
@@ -62,7 +63,7 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
     r.features = DF_FEAT_KELVINLET | DF_FEAT_ADMM | DF_FEAT_SPARSE_STREAM |
                  (cfg->n_allow ? DF_FEAT_PATH_LOAD : 0) | (c->srv->have_tcp ? DF_FEAT_TCP : 0) |
                  (cfg->shm_ring_bytes && !c->is_tcp ? DF_FEAT_SHM_STREAM : 0) |
-                 (c->srv->hid ? DF_FEAT_HID : 0);
+                 (c->srv->hid ? DF_FEAT_HID : 0) | (df_auth_enabled(c->srv) ? DF_FEAT_AUTH : 0);
     r.max_frame_payload = DF_MAX_FRAME_PAYLOAD;
     r.max_mesh_vertices = (uint32_t)cfg->max_mesh_vertices < DF_MAX_MESH_VERTICES
                               ? (uint32_t)cfg->max_mesh_vertices
@@ -75,7 +76,7 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
                            ? (uint64_t)cfg->max_upload_mb << 20
                            : DF_MAX_MESH_BYTES;
     r.max_client_queue_bytes = cfg->output_queue_limit;
-    r.auth_required = 0;
+    r.auth_required = (uint8_t)df_auth_required(c);
     snprintf(r.server_name, sizeof r.server_name, "%s", DF_SERVER_NAME);
     if (m.client_name[0])
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
@@ -88,10 +89,8 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
 int df_h_auth(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_auth m;
-    if (df_msg_auth_decode(p, r->len, &m, err) == DF_OK)
-        df_error_set(err, DF_EUNSUPPORTED, "auth: not required by this server (method %u)",
-                     m.method);
-    return err->code;
+    int rc = df_msg_auth_decode(p, r->len, &m, err);
+    return rc != DF_OK ? rc : df_auth_request(r, &m, err); /* net/auth.h */
 }
 
 int df_h_ping(df_req *r, const uint8_t *p, df_error *err)

@@ -43,6 +43,10 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "clients_refused_fds", (double)x->clients_refused_fds);
         put(&st, "clients_handshake_timeout", (double)x->clients_handshake_timeout);
         put(&st, "clients_idle_timeout", (double)x->clients_idle_timeout);
+        put(&st, "clients_refused_peer", (double)x->clients_refused_peer);
+        put(&st, "auth_ok", (double)x->auth_ok);
+        put(&st, "auth_failed", (double)x->auth_failed);
+        put(&st, "auth_limited", (double)x->auth_limited);
         put(&st, "frames_in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);

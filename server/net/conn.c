@@ -8,6 +8,7 @@
 #include "proto/frame_codec.h"
 #include "proto/messages.h"
 #include "server/net/guard.h"
+#include "server/net/peer.h"
 #include "server/log.h"
 #include "server/net/reply.h"
 
@@ -364,8 +365,7 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
         uv_send_buffer_size((uv_handle_t *)&c->h.stream, &sndbuf);
     }
     srv->stats.clients_total++;
-    df_log(DF_LOG_DEBUG, "client %llu connected (%s)", (unsigned long long)c->id,
-           is_tcp ? "tcp" : "unix");
+    if (df_peer_admit(c)) return; /* logs the peer; allow_uids / allow_gids: ERROR frame, close */
     rc = uv_read_start(&c->h.stream, on_alloc, on_read);
     if (rc < 0) df_conn_close(c, uv_strerror(rc), 1);
 }

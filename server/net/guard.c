@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "proto/messages.h"
+#include "server/net/auth.h"
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/net/reply.h"
@@ -149,7 +150,10 @@ static void expire(df_conn *c, uint64_t *counter, const char *why, const char *k
 {
     (*counter)++;
     df_reply_error(c, DF_MSG_ERROR, 0, DF_ELIMIT, "%s: %s after %d s (%s); closing", why,
-                   c->hello_done ? "no request and no subscription" : "no HELLO", secs, key);
+                   !c->hello_done          ? "no HELLO"
+                   : df_auth_required(c)   ? "not authenticated (AUTH, key_file)"
+                                           : "no request and no subscription",
+                   secs, key);
     df_conn_close_after_flush(c, why);
 }
 
@@ -169,7 +173,7 @@ void df_guard_sweep(df_server *srv)
     uint64_t epoch = srv->sweep_epoch; /* subscribers carry it (marked by the caller) */
     for (df_conn *c = srv->conns; c; c = c->next) {
         if (c->closing || c->flush_close) continue;
-        if (!c->hello_done) {
+        if (!c->hello_done || df_auth_required(c)) { /* TCP with a key: AUTH too (auth.h) */
             if (hs && now - c->accepted_ms >= hs)
                 expire(c, &srv->stats.clients_handshake_timeout, "handshake timeout",
                        "handshake_timeout_s", srv->cfg.handshake_timeout_s);

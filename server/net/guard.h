@@ -11,7 +11,7 @@
  *   and closing instead of leaving clients in the backlog. Should accept itself fail with
  *   EMFILE (another thread took the slot) the spare is closed for a moment to accept, refuse and
  *   close the waiting connections (the classic libuv/redis trick).
- * - Timeouts (config, seconds, 0 = off): a connection without a successful HELLO
+ * - Timeouts (config, seconds, 0 = off): a connection without a successful HELLO (and AUTH, auth.h)
  *   handshake_timeout_s after it was accepted, and a connection that for idle_timeout_s has sent
  *   nothing while it has no subscription, no unanswered request and no upload in progress, get
  *   an ERROR event (ELIMIT, naming the timeout) and are closed. Subscribers may stay silent for

@@ -162,6 +162,16 @@ static int open_tcp(df_server *srv, df_error *err)
     if (g != 0 || !res)
         return df_error_set(err, DF_EIO, "tcp:%s:%s: %s", host, port, gai_strerror(g));
     if (!df_listener_is_loopback(res->ai_addr)) {
+        if (!srv->cfg.tcp_insecure && srv->cfg.access.key_file[0]) {
+            freeaddrinfo(res);
+            return df_error_set(err, DF_EINVAL,
+                                "tcp:%s:%s: refusing a non-loopback address without "
+                                "--tcp-insecure (config tcp_insecure = yes): the key "
+                                "(key_file) authenticates clients, but the stream is not "
+                                "encrypted (no TLS yet), so meshes and edits travel in the "
+                                "clear; listen on 127.0.0.1 or ::1 instead",
+                                host, port);
+        }
         if (!srv->cfg.tcp_insecure) {
             freeaddrinfo(res);
             return df_error_set(err, DF_EINVAL,
@@ -171,10 +181,17 @@ static int open_tcp(df_server *srv, df_error *err)
                                 "and close every session; listen on 127.0.0.1 or ::1 instead",
                                 host, port);
         }
-        df_log(DF_LOG_WARN,
-               "tcp:%s:%s: listening on a non-loopback address without authentication "
-               "(tcp_insecure): anyone who can reach it controls every session",
-               host, port);
+        if (srv->cfg.access.key_file[0]) /* net/auth.h; TLS does not exist yet */
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address (tcp_insecure) with key "
+                   "authentication but no encryption: the stream can be read and altered on the "
+                   "network",
+                   host, port);
+        else
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address without authentication "
+                   "(tcp_insecure): anyone who can reach it controls every session",
+                   host, port);
     }
     int rc = uv_tcp_init(srv->loop, &srv->tcp_srv);
     if (rc < 0) {

@@ -50,6 +50,7 @@ df_sbuf *df_sbuf_from_buf(df_buf *b)
         df_sbuf_unref(s);                                                                     \
     }
 DF_OUT_DEF(hello_reply)
+DF_OUT_DEF(auth)
 DF_OUT_DEF(ping)
 DF_OUT_DEF(session_info)
 DF_OUT_DEF(load_reply)

@@ -25,6 +25,7 @@ df_sbuf *df_sbuf_from_buf(df_buf *b);
     void df_reply_##T(df_conn *c, uint16_t type, uint64_t request_id, const df_msg_##T *m,    \
                       int final);
 DF_OUT_DECL(hello_reply)
+DF_OUT_DECL(auth)
 DF_OUT_DECL(ping)
 DF_OUT_DECL(session_info)
 DF_OUT_DECL(load_reply)

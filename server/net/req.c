@@ -58,6 +58,7 @@ void df_req_ack(df_req *r, uint64_t session_id, uint64_t version)
         if (df_req_claim(r) && r->c) df_reply_##T(r->c, r->type, r->id, m, 1);                \
     }
 DF_REQ_REPLY_DEF(hello_reply)
+DF_REQ_REPLY_DEF(auth)
 DF_REQ_REPLY_DEF(ping)
 DF_REQ_REPLY_DEF(session_info)
 DF_REQ_REPLY_DEF(load_reply)

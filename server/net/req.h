@@ -64,6 +64,7 @@ void df_req_ack(df_req *r, uint64_t session_id, uint64_t version);
 /* Final replies with a message body (reply.h's df_reply_X with final = 1, checked). */
 #define DF_REQ_REPLY_DECL(T) void df_req_reply_##T(df_req *r, const df_msg_##T *m);
 DF_REQ_REPLY_DECL(hello_reply)
+DF_REQ_REPLY_DECL(auth)
 DF_REQ_REPLY_DECL(ping)
 DF_REQ_REPLY_DECL(session_info)
 DF_REQ_REPLY_DECL(load_reply)

@@ -244,6 +244,7 @@ ENUM_FIELDS = [
     ("4.30", "class", "DevClass", False, ()),
     ("4.30", "backend", "DevBackend", False, ()),
     ("4.30", "state", "DevState", False, ()),
+    ("4.3 auth", "method", "AuthMethod", False, ()),
 ]
 
 

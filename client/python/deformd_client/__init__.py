@@ -8,6 +8,7 @@
 
 Errors from the daemon raise DeformdError(code, name, message).
 """
+from .auth import AuthError
 from .brush_state import BrushCursor, BrushState, BrushValues
 from .client import Client, MeshData, SessionClosed, ShmLost
 from .devices import DeviceInfo
@@ -19,7 +20,7 @@ from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, Mo
 from .schema import (BrushParam, BrushStateField, BrushType, ChangeKind, CursorFlag,
                      DispEncoding, Energy, Feature, Format, FrameFlag, GetMeshFlag, Integrator,
                      LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType, Origin,
-                     PinFlag, SubscribeFlag, DevClass, DevBackend, DevState)
+                     PinFlag, SubscribeFlag, DevClass, DevBackend, DevState, AuthMethod)
 from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
@@ -34,6 +35,6 @@ __all__ = [
     "FrameFlag", "GetMeshFlag", "Integrator", "LoadOpt", "LoadSource", "MeshKind", "MeshSection",
     "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
     "BrushCursor", "BrushState", "BrushValues", "BrushStateField", "CursorFlag", "Origin",
-    "DeviceInfo", "DevClass", "DevBackend", "DevState",
+    "DeviceInfo", "DevClass", "DevBackend", "DevState", "AuthError", "AuthMethod",
 ]
 __version__ = "0.1.0"

@@ -17,6 +17,7 @@ them from the ring transparently, and reports frames overwritten before they wer
 events (resync with snapshot()).
 """
 import os
+import secrets
 import socket
 import time
 from array import array
@@ -24,10 +25,12 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
+from . import auth
 from . import brush_state as bs
 from . import devices as dv
 from . import frame as fr
 from . import messages as m
+from . import schema
 from . import stream as st
 from .stream import ShmRing
 from .errors import ConnectionClosed, DeformdError, error_name
@@ -88,7 +91,11 @@ class Client:
     """A connection to deformd. Not thread-safe: use one Client per thread."""
 
     def __init__(self, sock: socket.socket, timeout: float = DEFAULT_TIMEOUT_S,
-                 hello: bool = True, name: str = "deformd-python") -> None:
+                 hello: bool = True, name: str = "deformd-python", key: Optional[bytes] = None,
+                 key_file: Optional[str] = None) -> None:
+        """With `key` (bytes) or `key_file` (a path, auth.load_key) the connection authenticates
+        right after HELLO (authenticate); without, a server that requires AUTH answers other
+        requests EPROTO_AUTH."""
         self.sock = sock
         self.timeout = timeout
         self._decoder = fr.FrameDecoder()
@@ -103,13 +110,23 @@ class Client:
         self._shm_gap: Set[int] = set()             # sessions whose ring lost a chunk
         self._shm_detaching: Set[int] = set()       # attach failed: refs count as lost
         self.server: Optional[m.HelloReply] = None
-        if hello:
-            self.server = self.hello(name)
+        self.authenticated = False
+        try:
+            if key_file is not None and key is None:
+                key = auth.load_key(key_file)
+            if hello:
+                self.server = self.hello(name)
+                if key is not None:
+                    self.authenticate(key)
+        except BaseException:
+            self.sock.close()
+            raise
 
     # ------------------------------------------------------------------ connection
     @classmethod
     def connect_unix(cls, path: str, timeout: float = DEFAULT_TIMEOUT_S, hello: bool = True,
-                     name: str = "deformd-python") -> "Client":
+                     name: str = "deformd-python", key: Optional[bytes] = None,
+                     key_file: Optional[str] = None) -> "Client":
         s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         s.settimeout(timeout)
         try:
@@ -117,14 +134,15 @@ class Client:
         except OSError:
             s.close()
             raise
-        return cls(s, timeout, hello, name)
+        return cls(s, timeout, hello, name, key, key_file)
 
     @classmethod
     def connect_tcp(cls, host: str, port: int, timeout: float = DEFAULT_TIMEOUT_S,
-                    hello: bool = True, name: str = "deformd-python") -> "Client":
+                    hello: bool = True, name: str = "deformd-python",
+                    key: Optional[bytes] = None, key_file: Optional[str] = None) -> "Client":
         s = socket.create_connection((host, port), timeout=timeout)
         s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        return cls(s, timeout, hello, name)
+        return cls(s, timeout, hello, name, key, key_file)
 
     def close(self) -> None:
         """Closes the socket and every shared-memory ring mapping."""
@@ -395,8 +413,26 @@ class Client:
             self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, 0, name)))
         return self.server
 
-    def auth(self, method: int, token: bytes) -> None:
-        self._one(m.AUTH, m.encode_auth(method, token))
+    def auth(self, method: int, token: bytes) -> Tuple[int, bytes]:
+        """One AUTH request; returns the reply's (method, token)."""
+        return m.decode_auth(self._one(m.AUTH, m.encode_auth(method, token)))
+
+    def authenticate(self, key: bytes) -> None:
+        """The HMAC-SHA256 exchange (PROTOCOL.md 4.3) with `key`: raises DeformdError when the
+        server refuses it (EPROTO_AUTH: wrong key; ELIMIT: too many failures) and
+        auth.AuthError when the server fails to prove that it knows the key."""
+        nc = secrets.token_bytes(schema.AUTH_NONCE_BYTES)
+        method, ns = self.auth(schema.AuthMethod.HMAC_CHALLENGE, nc)
+        if method != schema.AuthMethod.HMAC_CHALLENGE or len(ns) != schema.AUTH_NONCE_BYTES:
+            raise auth.AuthError("auth: unexpected challenge reply (method %d, %d bytes)"
+                                 % (method, len(ns)))
+        method, proof = self.auth(schema.AuthMethod.HMAC_PROOF, auth.mac(key, ns, nc, "client"))
+        if method != schema.AuthMethod.HMAC_PROOF or \
+                not auth.verify(auth.mac(key, ns, nc, "server"), proof):
+            self.close()
+            raise auth.AuthError("auth: the server did not prove that it knows the key "
+                                 "(connection closed)")
+        self.authenticated = True
 
     def ping(self, data: bytes = b"") -> bytes:
         """Echo; returns the bytes the daemon sent back."""

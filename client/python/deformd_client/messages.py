@@ -86,6 +86,20 @@ def encode_auth(method: int, token: bytes) -> bytes:
     return struct.pack("<HHI", method, 0, len(token)) + bytes(token)
 
 
+def decode_auth(p: bytes) -> Tuple[int, bytes]:
+    """An auth body (request or reply, PROTOCOL.md 4.3): (method, token)."""
+    r = Reader(p, "auth")
+    method, reserved, n = r.take("HHI")
+    if reserved:
+        raise ProtocolError("auth: reserved %d is not 0" % reserved)
+    if n > schema.LIMITS["MAX_AUTH_TOKEN"]:
+        raise ProtocolError("auth: token of %d bytes exceeds %d"
+                            % (n, schema.LIMITS["MAX_AUTH_TOKEN"]))
+    token = r.raw(n)
+    r.end()
+    return method, token
+
+
 def decode_error(p: bytes):
     """Returns (code, message); bytes of the message that are not UTF-8 read as U+FFFD."""
     r = Reader(p, "error")

@@ -106,7 +106,7 @@ class Bodies(NamedTuple):
 
 BODIES: Dict[MsgType, Bodies] = {
     MsgType.HELLO: Bodies("hello", "hello_reply", None),
-    MsgType.AUTH: Bodies("auth", "empty", None),
+    MsgType.AUTH: Bodies("auth", "auth", None),
     MsgType.PING: Bodies("ping", "ping", None),
     MsgType.LOAD_MESH: Bodies("load_mesh", "load_reply", None),
     MsgType.LIST_SESSIONS: Bodies("empty", "session_list", None),
@@ -319,6 +319,19 @@ class DevState(IntEnum):
     CLOSED = 2
     ERROR = 3
     UNPLUGGED = 4
+
+
+class AuthMethod(IntEnum):
+    """auth `method` (PROTOCOL.md 4.3): the two steps of the HMAC-SHA256 exchange."""
+    HMAC_CHALLENGE = 1
+    HMAC_PROOF = 2
+
+
+# The AUTH exchange's sizes and MAC contexts (DF_AUTH_* of wire_schema.h; auth.py uses them).
+AUTH_NONCE_BYTES = 32
+AUTH_MAC_BYTES = 32
+AUTH_CONTEXT_CLIENT = b"deformd-auth-v1 client"
+AUTH_CONTEXT_SERVER = b"deformd-auth-v1 server"
 
 
 # ------------------------------------------------------------------ defaults

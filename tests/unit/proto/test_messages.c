@@ -386,11 +386,14 @@ static void test_body_kind_table(void **state)
     assert_int_equal(df_msg_body_kind(DF_MSG_UNDO, DF_FLAG_EVENT, &k, &e), DF_EPROTO_BADTYPE);
     assert_int_equal(df_msg_body_kind(0x0777, 0, &k, &e), DF_EPROTO_BADTYPE);
     assert_int_equal(df_msg_body_kind(DF_MSG_ERROR, 0, &k, &e), DF_EPROTO_BADTYPE);
-    /* list sessions request and auth success reply are empty bodies */
+    /* the list sessions request is an empty body; the auth reply an auth body (4.3) */
     assert_int_equal(df_msg_body_kind(DF_MSG_LIST_SESSIONS, 0, &k, &e), DF_OK);
     assert_int_equal(k, DF_BODY_EMPTY);
+    assert_int_equal(df_msg_body_kind(DF_MSG_AUTH, DF_FLAG_REPLY, &k, &e), DF_OK);
+    assert_int_equal(k, DF_BODY_AUTH);
     df_msg_any m;
-    assert_int_equal(df_msg_any_decode(DF_MSG_AUTH, DF_FLAG_REPLY, NULL, 0, &m, &e), DF_OK);
+    assert_int_equal(df_msg_any_decode(DF_MSG_AUTH, DF_FLAG_REPLY, NULL, 0, &m, &e),
+                     DF_EPROTO_TRUNCATED);
     assert_int_equal(df_msg_any_decode(DF_MSG_LIST_SESSIONS, 0, (const uint8_t *)"x", 1, &m, &e),
                      DF_EPROTO_TRAILING);
     int known = 0;
