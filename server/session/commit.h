@@ -6,6 +6,9 @@
  * the session's scratch, swapped in, never copied), the frames of the new version, the stroke
  * state it produced, the cache objects it built or used, its timings and the history step. The
  * commit then does, in this fixed order:
+ *   0. store:    srv->store_ops->change (server/store/journal.h) writes the change durably
+ *                first; when that fails the change is a failed one (below): nothing of it is
+ *                applied, broadcast or acknowledged, the error is answered;
  *   1. state:    swap positions and displacements in, publish the version number, stroke and
  *                handle-set state, rest shape;
  *   2. history:  the undo step (commit / reset / undo / redo), charged to the memory budget;
