@@ -51,6 +51,18 @@ static int finish(df_store *st, int rc, df_error *err)
     return rc;
 }
 
+/* The store's and the server's counters after a change-log write. */
+static void count(df_server *srv, int rc, uint64_t bytes)
+{
+    if (rc != DF_OK) {
+        srv->stats.store_errors++;
+        return;
+    }
+    df_store_count_change(srv->store, bytes);
+    srv->stats.store_changes++;
+    srv->stats.store_log_bytes += bytes;
+}
+
 static int session_created(df_server *srv, const df_session *s, df_error *err)
 {
     df_store *st = srv->store;
@@ -77,7 +89,9 @@ static int session_created(df_server *srv, const df_session *s, df_error *err)
         rc = run(st, "UPDATE meta SET value = max(value, ?) WHERE key = 'next_session_id'", "i",
                  NULL, id, "saving the session id", err);
     }
-    return finish(st, rc, err);
+    rc = finish(st, rc, err);
+    if (rc != DF_OK) srv->stats.store_errors++;
+    return rc;
 }
 
 static int session_closing(df_server *srv, const df_session *s, df_error *err)
@@ -129,7 +143,7 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
         }
         rc = finish(st, rc, err);
     }
-    if (rc == DF_OK) df_store_count_change(st, dlen + hlen);
+    count(srv, rc, dlen + hlen);
     free(delta);
     free(hs);
     return rc;
@@ -156,7 +170,7 @@ static int brush(df_server *srv, const df_session *s, const df_brush_state *next
                  "bi", p2, v2, "saving the brush", err);
     }
     rc = finish(st, rc, err);
-    if (rc == DF_OK) df_store_count_change(st, DF_CODEC_BRUSH_BYTES);
+    count(srv, rc, DF_CODEC_BRUSH_BYTES);
     return rc;
 }
 
