@@ -109,6 +109,7 @@ def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
         sid = c.load_file(bunny, name="b").session_id
         X = c.get_mesh(sid).positions
         nv = len(X) // 3
+        c.set_handles(sid, [0, 10, 20], max_iters=20)   # while there is room
         s0 = c.stats()
         c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.001), radius=0.05))
         s1 = c.stats()
@@ -132,6 +133,13 @@ def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
         assert err is not None, "40 dense strokes fit in 1 MiB"
         assert err.code == E.ELIMIT and "full" in str(err) and store in str(err), err
         assert state(c, sid) == acked          # nothing of the refused edit applied
+        # a handle move: its first iterate does not fit either; the move fails, nothing moves
+        with pytest.raises(DeformdError) as ei:
+            c.move_handles(sid, [X[0:3], X[30:33], (X[60], X[61] + 0.01, X[62])], max_iters=5,
+                           progress_every=1)
+        assert ei.value.code == E.ELIMIT and store in str(ei.value), ei.value
+        assert state(c, sid) == acked
+        assert c.stats()["store_errors"] >= 2
     kill9(d)
     d = start(tmp_path, store, 2)
     try:
