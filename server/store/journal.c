@@ -108,6 +108,33 @@ static int session_closing(df_server *srv, const df_session *s, df_error *err)
     return finish(st, rc, err);
 }
 
+/* In the change's transaction: once the session's log since its last snapshot exceeds
+ * max(snapshot_min, 2 x its position bytes), the positions and rest shape after this change
+ * become the session row's snapshot and the log rows before it are deleted. */
+static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c, df_error *err)
+{
+    uint64_t pos_bytes = 24 * (uint64_t)s->nv, min = df_store_snapshot_min(st);
+    uint64_t threshold = 2 * pos_bytes > min ? 2 * pos_bytes : min;
+    sqlite3_stmt *q = NULL;
+    if (sqlite3_prepare_v2(df_store_db(st), "SELECT log_bytes FROM sessions WHERE id = ?", -1,
+                           &q, NULL) != SQLITE_OK)
+        return df_store_fail(st, DF_EIO, "reading the log size", err);
+    sqlite3_bind_int64(q, 1, (sqlite3_int64)s->id);
+    int64_t logged = sqlite3_step(q) == SQLITE_ROW ? sqlite3_column_int64(q, 0) : 0;
+    sqlite3_finalize(q);
+    if ((uint64_t)logged <= threshold) return DF_OK;
+    const double *cur = c->pos ? c->pos : s->cur;
+    const double *rest = c->rest_from_cur ? cur : s->rest;
+    const void *p[3] = {cur, rest};
+    int64_t v[3] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)s->id};
+    int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, log_bytes = 0 WHERE id = ?", "bbi",
+                 p, v, "writing a snapshot", err);
+    if (rc == DF_OK)
+        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 2,
+                 "trimming the log after a snapshot", err);
+    return rc;
+}
+
 static int change(df_server *srv, const df_session *s, const df_change *c, df_error *err)
 {
     if (!c->pos && !c->version && !c->rest_from_cur && !c->hs) return DF_OK; /* nothing kept */
@@ -134,13 +161,17 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
         rc = run(st, "INSERT INTO changes(session, version, kind, who, flags, delta, aux)"
                  " VALUES(?,?,?,?,?,?,?)", types, p, v, "appending the change", err);
         if (rc == DF_OK) {
-            const void *p2[3] = {NULL, hs, NULL};
-            int64_t v2[3] = {(int64_t)version, (int64_t)hlen, (int64_t)s->id};
-            rc = hs ? run(st, "UPDATE sessions SET version = ?, handles = ? WHERE id = ?", "ibi",
-                          p2, v2, "saving the handle set", err)
-                    : run(st, "UPDATE sessions SET version = ? WHERE id = ?", "ii", NULL,
-                          (int64_t[]){v2[0], v2[2]}, "saving the version", err);
+            const void *p2[4] = {NULL, NULL, hs, NULL};
+            int64_t v2[4] = {(int64_t)version, (int64_t)(dlen + hlen), (int64_t)hlen,
+                             (int64_t)s->id};
+            rc = hs ? run(st, "UPDATE sessions SET version = ?, log_bytes = log_bytes + ?,"
+                          " handles = ? WHERE id = ?", "iibi", p2, v2, "saving the handle set",
+                          err)
+                    : run(st, "UPDATE sessions SET version = ?, log_bytes = log_bytes + ?"
+                          " WHERE id = ?", "iii", NULL, (int64_t[]){v2[0], v2[1], v2[3]},
+                          "saving the version", err);
         }
+        if (rc == DF_OK) rc = maybe_snapshot(st, s, c, err);
         rc = finish(st, rc, err);
     }
     count(srv, rc, dlen + hlen);

@@ -22,6 +22,11 @@
  * state). Writing first needs no undo of swapped buffers, history steps or caches, which a
  * rollback of the applied state would. Durability: the transaction's COMMIT returns once the
  * WAL holds it (and, with durability = full, fsynced), before the ack and the broadcast.
+ * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
+ * 2 x 24 x nv bytes), the change's transaction also writes the positions and rest shape after
+ * it into the session row (cur, rest) and deletes the session's log rows: a session holds at
+ * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
+ * at most that (restore.h). The deleted rows' kind / who are not kept.
  * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a
  * brush version's delta is dense: 24 bytes per vertex + 8. srv->store counts the bytes
  * (df_store_log_bytes); compression or request + checkpoint recording is the next step.

@@ -92,7 +92,17 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
                             (unsigned long long)id, name, e.msg);
     uint64_t n_changes = 0;
-    rc = replay(st, s, &n_changes, &e);
+    size_t pb = 24 * (size_t)s->nv;
+    for (int col = 14; col <= 15; col++) { /* the last snapshot (NULL: the base) */
+        if (sqlite3_column_type(q, col) == SQLITE_NULL) continue;
+        if ((size_t)sqlite3_column_bytes(q, col) != pb) {
+            rc = df_error_set(&e, DF_EFORMAT, "snapshot of %d bytes, %zu expected",
+                              sqlite3_column_bytes(q, col), pb);
+            break;
+        }
+        memcpy(col == 14 ? s->cur : s->rest, sqlite3_column_blob(q, col), pb);
+    }
+    if (rc == DF_OK) rc = replay(st, s, &n_changes, &e);
     const uint8_t *b = sqlite3_column_blob(q, 11);
     if (rc == DF_OK && b)
         rc = df_codec_brush_unpack(b, (size_t)sqlite3_column_bytes(q, 11), &s->brush, &e);
@@ -127,7 +137,8 @@ static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
     if (sqlite3_step(q) == SQLITE_ROW) next = (uint64_t)sqlite3_column_int64(q, 0);
     sqlite3_finalize(q);
     if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, base, elems, faces,"
-                           " version, brush, brush_seq, handles FROM sessions ORDER BY id",
+                           " version, brush, brush_seq, handles, cur, rest FROM sessions"
+                           " ORDER BY id",
                            -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the sessions", err);
     int rc = DF_OK, step;

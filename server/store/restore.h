@@ -2,7 +2,8 @@
  * session, install the journal (journal.h).
  *
  * Restore, per session row (ascending id): the mesh from its topology and exact base positions,
- * then the change log replayed onto the base in commit order (each delta sets the changed
+ * then the change log replayed onto the last snapshot (journal.h; the base when none) in commit
+ * order (each delta sets the changed
  * vertices' exact doubles, REST_FROM_CUR copies the positions into the rest shape): positions
  * and rest shape are bit-identical to those of the last acknowledged change. The session keeps
  * its id, name and version, its brush (and brush seq) and its handle set (the ADMM solver and

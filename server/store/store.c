@@ -14,6 +14,7 @@ struct df_store {
     sqlite3 *db;
     char *path;
     uint64_t log_bytes, log_changes;
+    uint64_t snapshot_min;
 };
 
 static const char k_schema[] =
@@ -21,7 +22,8 @@ static const char k_schema[] =
     "CREATE TABLE sessions(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
     " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
     " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
-    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB);"
+    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
+    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0);"
     "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL,"
     " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
     " flags INTEGER NOT NULL, delta BLOB, aux BLOB);"
@@ -218,6 +220,7 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
         return df_error_set(err, DF_EIO, "store %s: %s", path, strerror(errno));
     }
     df_store *st = calloc(1, sizeof *st);
+    if (st) st->snapshot_min = DF_STORE_SNAPSHOT_MIN;
     if (!st || !(st->path = strdup(path))) {
         free(st);
         return df_error_set(err, DF_ENOMEM, "store %s: out of memory", path);
@@ -269,6 +272,8 @@ void df_store_close(df_store *st)
 const char *df_store_path(const df_store *st) { return st->path; }
 struct sqlite3 *df_store_db(df_store *st) { return st->db; }
 uint64_t df_store_log_bytes(const df_store *st) { return st->log_bytes; }
+uint64_t df_store_snapshot_min(const df_store *st) { return st->snapshot_min; }
+void df_store_set_snapshot_min(df_store *st, uint64_t bytes) { st->snapshot_min = bytes; }
 uint64_t df_store_log_changes(const df_store *st) { return st->log_changes; }
 
 void df_store_count_change(df_store *st, uint64_t bytes)

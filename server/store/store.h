@@ -9,10 +9,13 @@
  * Schema (PRAGMA application_id DF_STORE_APP_ID, PRAGMA user_version DF_STORE_SCHEMA):
  *   meta(key TEXT PRIMARY KEY, value INTEGER)      next_session_id: ids are never reused
  *   sessions(id, name, kind, planar, nv, ne, nf, base, elems, faces, version, brush, brush_seq,
- *            handles)                              one row per live session: topology and the
+ *            handles, cur, rest, log_bytes)        one row per live session: topology and the
  *                                                   exact double BASE positions (load-time), the
  *                                                   last acknowledged version, the session brush
- *                                                   and the handle set (journal.h: blob layouts)
+ *                                                   and the handle set (codec.h: blob layouts),
+ *                                                   the last snapshot of the positions and rest
+ *                                                   shape (3 x nv doubles; NULL: the base) and
+ *                                                   the log's bytes since (journal.h)
  *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux)
  *                                                   the change log, in commit order (journal.h)
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
@@ -42,6 +45,8 @@
 #define DF_STORE_APP_ID 0x44665244            /* "DfRD" */
 #define DF_STORE_SCHEMA 1
 #define DF_STORE_FULL_CHECK_BYTES ((int64_t)256 << 20) /* integrity_check up to 256 MiB */
+#define DF_STORE_SNAPSHOT_MIN ((uint64_t)1 << 20) /* journal.h: snapshot once the log since the
+                                                   * last one exceeds max(this, 2 x 24 x nv) */
 
 enum { DF_DURABILITY_FULL = 0, DF_DURABILITY_NORMAL = 1, DF_DURABILITY_OFF = 2 };
 
@@ -88,5 +93,10 @@ int df_store_exec(df_store *st, const char *sql, const char *what, df_error *err
 uint64_t df_store_log_bytes(const df_store *st);
 uint64_t df_store_log_changes(const df_store *st);
 void df_store_count_change(df_store *st, uint64_t bytes);
+
+/* The lower bound of the snapshot threshold (journal.h; default DF_STORE_SNAPSHOT_MIN): tests
+ * lower it to snapshot small meshes. */
+uint64_t df_store_snapshot_min(const df_store *st);
+void df_store_set_snapshot_min(df_store *st, uint64_t bytes);
 
 #endif

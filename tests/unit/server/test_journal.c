@@ -216,6 +216,47 @@ static void test_journal_and_restore(void **state)
     server_close(&srv2);
 }
 
+/* Snapshots: with the threshold at its floor (2 x 24 x nv = 144 bytes for 3 vertices) the log
+ * is folded into the session row every few changes; the restore starts from the snapshot and
+ * still ends bit-identical, rest shape included. */
+static void test_snapshots(void **state)
+{
+    (void)state;
+    static df_server srv, srv2;
+    server_open(&srv, "snap.db");
+    df_store_set_snapshot_min(srv.store, 1);
+    df_mesh m = tiny_mesh();
+    df_session *s;
+    df_error e;
+    assert_int_equal(df_session_create(&srv, &m, "snap", &s, &e), DF_OK);
+    double pos[9];
+    int64_t max_rows = 0;
+    for (int k = 1; k <= 20; k++) {
+        memcpy(pos, s->cur, sizeof pos);
+        pos[k % 9] += 1.0 / (k + 2);            /* one vertex: 8 + 4 + 24 bytes */
+        if (k % 4 == 0) pos[0] -= 1.0 / 7;
+        df_req r = {.srv = &srv, .type = DF_MSG_BRUSH_UPDATE, .id = (uint64_t)k};
+        assert_int_equal(commit(s, pos, (uint64_t)k, k == 7, NULL, &r, &e), DF_OK);
+        int64_t rows = query(&srv, "SELECT count(*) FROM changes");
+        if (rows > max_rows) max_rows = rows;
+    }
+    assert_true(max_rows <= 5);                /* 144 / 36: trimmed after at most 5 rows */
+    assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), 72);
+    double cur[9], rest[9];
+    memcpy(cur, s->cur, sizeof cur);
+    memcpy(rest, s->rest, sizeof rest);
+    assert_memory_not_equal(rest, s->mesh.V, sizeof rest); /* reset at k = 7 */
+    uint64_t id = s->id;
+    server_close(&srv);
+    server_open(&srv2, "snap.db");
+    s = df_session_find(&srv2, id);
+    assert_non_null(s);
+    assert_int_equal(atomic_load(&s->version), 20);
+    assert_memory_equal(s->cur, cur, sizeof cur);
+    assert_memory_equal(s->rest, rest, sizeof rest);
+    server_close(&srv2);
+}
+
 static void test_codecs(void **state)
 {
     (void)state;
@@ -279,6 +320,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_journal_and_restore),
+        cmocka_unit_test(test_snapshots),
         cmocka_unit_test(test_codecs),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
