@@ -14,7 +14,8 @@
  *   2. history:  the undo step (commit / reset / undo / redo), charged to the memory budget;
  *                then the stroke the change ended (cancel, end) is dropped;
  *   3. accounting: timings, cache hit/miss, install / drop cached factorizations, LRU eviction;
- *   4. hook:     srv->commit_hook (the durable store's journal record, the scale-out log entry);
+ *   4. hook:     srv->commit_hook (an observer: a scale-out log entry; the durable store
+ *                writes at step 0, where it can still refuse the change);
  *   5. broadcast the version's frames to the subscribers; a change to the session's strokes
  *      (begin, update, knob, end, cancel) then tells the HID subsystem (force feedback,
  *      srv->hid_ops->strokes_changed);

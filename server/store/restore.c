@@ -67,7 +67,7 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         m.nv = (int32_t)nv;
         m.ne = (int32_t)ne;
         m.nf = (int32_t)nf;
-        void *V, *E, *F;
+        void *V = NULL, *E = NULL, *F = NULL;
         rc = column_copy(q, 7, 24 * (size_t)nv, &V);
         m.V = V;
         if (rc == DF_OK) rc = column_copy(q, 8, 4 * (size_t)es * (size_t)ne, &E);
