@@ -257,6 +257,38 @@ static void test_snapshots(void **state)
     server_close(&srv2);
 }
 
+/* A session row that cannot be restored (its base blob cut short, a delta of another mesh)
+ * refuses the start with a message naming the store and the session; nothing stays restored. */
+static void test_bad_rows_refuse_start(void **state)
+{
+    (void)state;
+    static df_server srv;
+    server_open(&srv, "bad.db");
+    df_mesh m = tiny_mesh();
+    df_session *s;
+    df_error e;
+    assert_int_equal(df_session_create(&srv, &m, "ok", &s, &e), DF_OK);
+    m = tiny_mesh();
+    assert_int_equal(df_session_create(&srv, &m, "cut", &s, &e), DF_OK);
+    uint64_t id = s->id;
+    char sql[160];
+    snprintf(sql, sizeof sql, "UPDATE sessions SET base = substr(base, 1, 40) WHERE id = %llu",
+             (unsigned long long)id);
+    assert_int_equal(df_store_exec(srv.store, sql, "test", &e), DF_OK);
+    server_close(&srv);
+    memset(&srv, 0, sizeof srv);
+    df_config_defaults(&srv.cfg, NULL);
+    snprintf(srv.cfg.store_path, sizeof srv.cfg.store_path, "%s/bad.db", g_dir);
+    assert_int_equal(df_store_start(&srv, &e), DF_EFORMAT);
+    char want[64];
+    snprintf(want, sizeof want, "session %llu 'cut'", (unsigned long long)id);
+    if (!strstr(e.msg, want) || !strstr(e.msg, srv.cfg.store_path))
+        fail_msg("message '%s' lacks '%s' or the path", e.msg, want);
+    assert_null(srv.sessions);
+    assert_null(srv.store);
+    assert_null(srv.store_ops);
+}
+
 static void test_codecs(void **state)
 {
     (void)state;
@@ -321,6 +353,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_journal_and_restore),
         cmocka_unit_test(test_snapshots),
+        cmocka_unit_test(test_bad_rows_refuse_start),
         cmocka_unit_test(test_codecs),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
