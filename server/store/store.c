@@ -163,13 +163,13 @@ static int mkdir_p(const char *path, df_error *err)
         if (*p != '/') continue;
         *p = '\0';
         if (mkdir(tmp, 0700) != 0 && errno != EEXIST)
-            return df_error_set(err, DF_EIO, "store %s: cannot create directory %s: %s", path,
-                                tmp, strerror(errno));
+            return df_error_set(err, DF_EIO, "store %s: cannot create directory %s: %s (set "
+                                "store = PATH or store = none)", path, tmp, strerror(errno));
         *p = '/';
     }
     if (mkdir(tmp, 0700) != 0 && errno != EEXIST)
-        return df_error_set(err, DF_EIO, "store %s: cannot create directory %s: %s", path, tmp,
-                            strerror(errno));
+        return df_error_set(err, DF_EIO, "store %s: cannot create directory %s: %s (set store = "
+                            "PATH or store = none)", path, tmp, strerror(errno));
     return DF_OK;
 }
 
