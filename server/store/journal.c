@@ -137,7 +137,8 @@ static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c,
 
 static int change(df_server *srv, const df_session *s, const df_change *c, df_error *err)
 {
-    if (!c->pos && !c->version && !c->rest_from_cur && !c->hs) return DF_OK; /* nothing kept */
+    if (!c->pos && !c->version && !c->rest_from_cur && !c->hs && !c->hist)
+        return DF_OK; /* nothing kept */
     df_store *st = srv->store;
     uint8_t *delta = NULL, *hs = NULL;
     size_t dlen = 0, hlen = 0;
@@ -149,7 +150,8 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
         return rc;
     }
     uint64_t version = c->version ? c->version : atomic_load(&s->version);
-    int flags = (c->rest_from_cur ? DF_JOURNAL_REST_FROM_CUR : 0) | (hs ? DF_JOURNAL_HANDLES : 0);
+    int flags = (c->rest_from_cur ? DF_JOURNAL_REST_FROM_CUR : 0) | (hs ? DF_JOURNAL_HANDLES : 0) |
+                ((c->hist & 7) << DF_JOURNAL_HIST_SHIFT);
     const void *p[8] = {NULL, NULL, NULL, NULL, NULL, delta, hs};
     int64_t v[8] = {(int64_t)s->id, (int64_t)version, c->req ? c->req->type : 0,
                     c->req ? (int64_t)df_req_origin(c->req) : 0, flags, (int64_t)dlen,

@@ -12,6 +12,8 @@
  *                    one transaction;
  *   brush            df_brush_state_apply, before the state changes: a change-log row (kind
  *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush.
+ * A change with only an undo-history step (a stroke's end, a move's final commit) is a row
+ * without delta: its DF_JOURNAL_HIST lets the restore rebuild the undo/redo history.
  * Rest shape: flag DF_JOURNAL_REST_FROM_CUR (the rest shape becomes the positions after this
  * change); a change that installs a handle set has DF_JOURNAL_HANDLES and its blob in aux.
  *
@@ -38,6 +40,9 @@
 #include "server/server.h"
 
 enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 4 };
+/* flags bits 4..6: the change's undo-history step (commit.h DF_HIST_*), replayed at restore */
+#define DF_JOURNAL_HIST_SHIFT 4
+#define DF_JOURNAL_HIST(flags) (((flags) >> DF_JOURNAL_HIST_SHIFT) & 7)
 
 extern const df_store_ops df_store_journal_ops;
 

@@ -8,12 +8,15 @@
 
 #include "core/mesh/mesh_io.h"
 #include "server/log.h"
+#include "server/session/commit.h"
 #include "server/session/session.h"
 #include "server/store/codec.h"
 #include "server/store/journal.h"
 #include "server/store/store.h"
 
-/* Replays session s's change log onto its base positions (s->cur, s->rest). */
+/* Replays session s's change log onto its positions and rest shape (the last snapshot or the
+ * base), with each row's undo-history step on s->hist, in the commit's order (state, then
+ * history). */
 static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *err)
 {
     sqlite3_stmt *q = NULL;
@@ -30,6 +33,15 @@ static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *er
         if (d) rc = df_codec_delta_apply(d, len, s->cur, s->nv, NULL, err);
         if (rc == DF_OK && (flags & DF_JOURNAL_REST_FROM_CUR))
             memcpy(s->rest, s->cur, 3 * (size_t)s->nv * sizeof(double));
+        if (rc == DF_OK) {
+            switch (DF_JOURNAL_HIST(flags)) { /* as commit.c's apply_history */
+            case DF_HIST_COMMIT: rc = df_session_history_commit(s, err); break;
+            case DF_HIST_RESET: rc = df_session_history_reset(s, err); break;
+            case DF_HIST_UNDO: df_history_undo(&s->hist, NULL); break;
+            case DF_HIST_REDO: df_history_redo(&s->hist, NULL); break;
+            default: break;
+            }
+        }
         (*n_changes)++;
     }
     if (rc == DF_OK && step != SQLITE_DONE) rc = df_store_fail(st, DF_EIO, "reading the log", err);
@@ -91,6 +103,7 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     if ((rc = df_session_create(srv, &m, name, &s, &e)) != DF_OK)
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
                             (unsigned long long)id, name, e.msg);
+    atomic_store(&s->version, (uint64_t)sqlite3_column_int64(q, 10)); /* before any write */
     uint64_t n_changes = 0;
     size_t pb = 24 * (size_t)s->nv;
     for (int col = 14; col <= 15; col++) { /* the last snapshot (NULL: the base) */
@@ -102,7 +115,21 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         }
         memcpy(col == 14 ? s->cur : s->rest, sqlite3_column_blob(q, col), pb);
     }
+    if (rc == DF_OK) rc = df_session_history_reset(s, &e); /* undo starts at the snapshot */
     if (rc == DF_OK) rc = replay(st, s, &n_changes, &e);
+    if (rc == DF_OK && memcmp(s->hist.state, s->cur, 3 * (size_t)s->nv * sizeof(double)) != 0) {
+        /* the log ends inside a stroke or move (the daemon died before its end): it ends now,
+         * as a disconnect ends a stroke: the positions become an undo step, logged first so
+         * that the next restart replays the same history */
+        df_change c;
+        df_change_init(&c, NULL, NULL);
+        c.hist = DF_HIST_COMMIT;
+        rc = df_store_journal_ops.change(srv, s, &c, &e);
+        if (rc == DF_OK) rc = df_session_history_commit(s, &e);
+        df_change_clear(srv, &c);
+        df_log(DF_LOG_INFO, "session %llu: the stroke or move open when the daemon stopped "
+               "ends here (one undo step)", (unsigned long long)id);
+    }
     const uint8_t *b = sqlite3_column_blob(q, 11);
     if (rc == DF_OK && b)
         rc = df_codec_brush_unpack(b, (size_t)sqlite3_column_bytes(q, 11), &s->brush, &e);
@@ -110,7 +137,6 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     const uint8_t *h = sqlite3_column_blob(q, 13);
     if (rc == DF_OK && h)
         rc = df_codec_handles_decode(h, (size_t)sqlite3_column_bytes(q, 13), s->nv, &s->hs, &e);
-    if (rc == DF_OK) rc = df_session_history_reset(s, &e);
     if (rc != DF_OK) {
         df_session_destroy(s);
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
@@ -118,7 +144,6 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     }
     for (size_t i = 0; i < 3 * (size_t)s->nv; i++)
         s->uf[i] = (float)(s->cur[i] - s->mesh.V[i]);
-    atomic_store(&s->version, (uint64_t)sqlite3_column_int64(q, 10));
     df_log(DF_LOG_INFO, "session %llu '%s' restored at version %llu (%llu logged changes)",
            (unsigned long long)id, s->name, (unsigned long long)atomic_load(&s->version),
            (unsigned long long)n_changes);
@@ -173,7 +198,7 @@ int df_store_start(df_server *srv, df_error *err)
                            err);
     if (rc != DF_OK) return rc;
     int count = 0;
-    srv->store = st; /* store_ops stay NULL: restoring writes nothing */
+    srv->store = st; /* store_ops stay NULL until restored (only a stroke left open writes) */
     if ((rc = restore_all(srv, st, &count, err)) != DF_OK) {
         while (srv->sessions) df_session_destroy(srv->sessions);
         df_store_stop(srv);

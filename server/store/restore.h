@@ -3,14 +3,17 @@
  *
  * Restore, per session row (ascending id): the mesh from its topology and exact base positions,
  * then the change log replayed onto the last snapshot (journal.h; the base when none) in commit
- * order (each delta sets the changed
- * vertices' exact doubles, REST_FROM_CUR copies the positions into the rest shape): positions
- * and rest shape are bit-identical to those of the last acknowledged change. The session keeps
- * its id, name and version, its brush (and brush seq) and its handle set (the ADMM solver and
- * the Kelvinlet pin factorization are rebuilt lazily on first use). Published displacements
- * are recomputed as fl32(cur - base) (stream.h). Not restored: the undo/redo history (it starts
- * empty: the restored positions are its first state), open strokes, subscribers. New sessions
- * get ids above every id the store ever gave (meta.next_session_id). Loop thread. */
+ * order (each delta sets the changed vertices' exact doubles, REST_FROM_CUR copies the
+ * positions into the rest shape): positions and rest shape are bit-identical to those of the
+ * last acknowledged change. The session keeps its id, name and version, its brush (and brush
+ * seq) and its handle set (the ADMM solver and the Kelvinlet pin factorization are rebuilt
+ * lazily on first use). Published displacements are recomputed as fl32(cur - base)
+ * (stream.h). The undo/redo history is rebuilt from the rows' history steps since the last
+ * snapshot (earlier steps are not kept: undo stops at the snapshot). A log that ends inside a
+ * stroke or handle move (the daemon died before its end) ends it at restore, as a disconnect
+ * would: the positions become one more undo step (a history-only row is appended first). Not restored: open
+ * strokes, subscribers. New sessions get ids above every id the store ever gave
+ * (meta.next_session_id). Loop thread. */
 #ifndef DF_SERVER_STORE_RESTORE_H
 #define DF_SERVER_STORE_RESTORE_H
 

@@ -57,9 +57,13 @@ def edit_two_sessions(d):
         b.brush_state_set(s2, radius=0.375)
         a.reset_rest(s2)
         b.stroke(s2, Brush(type="grab", center=X2[0:3], move=(0, 0.05, 0), radius=0.2))
-        out = {}
+        b.stroke(s2, Brush(type="grab", center=X2[3:6], move=(0, 0.05, 0), radius=0.2))
+        a.undo(s2)                          # what one more undo shows (then redone)
+        out = {"undo_pos": a.get_mesh(s2).positions.tobytes()}
+        a.redo(s2)
         for info in a.list_sessions():
             out[info.session_id] = (info.name,) + state(a, info.session_id)
+            out["depth", info.session_id] = (info.undo_depth, info.redo_depth)
         out["handles"] = b.get_handles(s1).handles
         return out, s1, s2
 
@@ -87,11 +91,19 @@ def test_kill9_restart_restores_every_session(tmp_path):
                 assert infos[sid].version == version
                 assert state(c, sid) == (version, pos, rest), "session %d differs" % sid
             assert c.get_handles(s1).handles == before["handles"]
+            # the undo history is rebuilt from the log (since the last snapshot: the grid has
+            # none, the bunny's log was folded into one)
+            assert (infos[s2].undo_depth, infos[s2].redo_depth) == before["depth", s2]
+            assert infos[s1].undo_depth <= before["depth", s1][0]
+            c.undo(s2)
+            assert c.get_mesh(s2).positions.tobytes() == before["undo_pos"]
+            c.redo(s2)
+            assert state(c, s2)[1:] == before[s2][2:]
             assert c.brush_state_get(s2).radius == 0.375
             # edits continue from the restored state; new sessions get new ids
             X = c.get_mesh(s2).positions
             ack = c.stroke(s2, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.3))
-            assert ack.version == before[s2][1] + 1
+            assert ack.version == before[s2][1] + 3      # after the undo and redo above
             s3 = c.load_mesh(data=grid_obj(3, 3), fmt=".obj").session_id
             assert s3 > max(s1, s2)
             c.close_session(s1)
@@ -122,21 +134,22 @@ def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
         s1 = c.stats()
         rows = s1["store_changes"] - s0["store_changes"]
         size = s1["store_log_bytes"] - s0["store_log_bytes"]
-        assert rows == 1                       # begin's version; end moves nothing
+        assert rows == 2                       # begin's version; end's undo step (no delta)
         dense = 8 + 24 * nv                    # codec.h: a header, then every vertex's doubles
         assert size == dense or (size < dense and (size - 8) % 28 == 0), size
         print("store: a Kelvinlet stroke on %d vertices logs %d bytes (%.1f per vertex; %s)"
               % (nv, size, size / nv, "dense" if size == dense else "sparse"))
         acked = state(c, sid)
         err = None
-        for k in range(40):
+        for k in range(40):     # begin (a dense version) and end (an undo step) may each fail
             try:
-                c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.001 * (k + 1)),
-                                    radius=0.05))
+                c.brush_begin(sid, Brush(type="grab", center=X[0:3],
+                                         move=(0, 0, 0.001 * (k + 1)), radius=0.05))
+                acked = state(c, sid)
+                c.brush_end(sid)
             except DeformdError as e:
                 err = e
                 break
-            acked = state(c, sid)
         assert err is not None, "40 dense strokes fit in 1 MiB"
         assert err.code == E.ELIMIT and "full" in str(err) and store in str(err), err
         assert state(c, sid) == acked          # nothing of the refused edit applied
@@ -234,5 +247,35 @@ def test_a_store_in_use_refuses_a_second_daemon(tmp_path):
         r = subprocess.run([DEFORMD, "--foreground", "--socket", sock, "--store", store],
                            stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=30)
         assert r.returncode == 1 and "in use" in r.stderr and store in r.stderr, r.stderr
+    finally:
+        check_stopped(d, d.stop())
+
+
+def test_a_stroke_open_at_the_kill_ends_at_restart_as_one_undo_step(tmp_path):
+    store = str(tmp_path / "open.db")
+    d = start(tmp_path, store, 1)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data=grid_obj(8, 8), fmt=".obj", name="open").session_id
+        X = c.get_mesh(sid).positions
+        c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.5))
+        before_stroke = state(c, sid)
+        depth = c.list_sessions()[0].undo_depth
+        c.brush_begin(sid, Brush(type="grab", center=X[6:9], move=(0.1, 0, 0), radius=0.5))
+        c.brush_update(sid, move=(0.2, 0, 0))
+        in_stroke = state(c, sid)            # acknowledged, the stroke still open
+    kill9(d)
+    for run in (2, 3):                       # the same history after a second restart
+        d = start(tmp_path, store, run)
+        try:
+            with d.unix_client() as c:
+                assert state(c, sid) == in_stroke
+                assert c.list_sessions()[0].undo_depth == depth + 1
+        finally:
+            check_stopped(d, d.stop())
+    d = start(tmp_path, store, 4)
+    try:
+        with d.unix_client() as c:
+            c.undo(sid)                      # back to before the stroke
+            assert state(c, sid)[1:] == before_stroke[1:]
     finally:
         check_stopped(d, d.stop())

@@ -123,6 +123,8 @@ static void test_journal_and_restore(void **state)
     assert_int_equal(query(&srv, "SELECT who FROM changes"), 42);
     assert_int_equal(query(&srv, "SELECT kind FROM changes"), DF_MSG_BRUSH_UPDATE);
     assert_int_equal(query(&srv, "SELECT version FROM sessions"), 1);
+    double cur1[9];
+    memcpy(cur1, s->cur, sizeof cur1);
 
     /* a dense change (every vertex), then the rest shape from it and a handle set */
     for (int i = 0; i < 9; i++) pos[i] = pos[i] * 1.0000001 + 1e-7;
@@ -200,7 +202,12 @@ static void test_journal_and_restore(void **state)
     assert_int_equal(s->hs->max_iters, 77);
     assert_true(s->hs->params.w == 0.123456789);
     assert_null(s->hs->solver); /* rebuilt on first use */
-    assert_int_equal(df_history_can_undo(&s->hist), 0);
+    /* the undo history, rebuilt from the rows' history steps: base -> cur1 -> cur0 */
+    assert_int_equal(df_history_can_undo(&s->hist), 2);
+    assert_int_equal(df_history_can_redo(&s->hist), 0);
+    double back[9];
+    assert_int_equal(df_history_peek(&s->hist, -1, back, &e), DF_OK);
+    assert_memory_equal(back, cur1, sizeof back);
     df_mesh m3 = tiny_mesh();
     df_session *s3;
     assert_int_equal(df_session_create(&srv2, &m3, "gamma", &s3, &e), DF_OK);
