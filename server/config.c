@@ -199,6 +199,7 @@ static const int_key k_int_keys[] = {
     {"idle_timeout_s", offsetof(df_server_config, idle_timeout_s), 0, DF_CONFIG_MAX_TIMEOUT_S},
     {"hid_enumerate_s", offsetof(df_server_config, hid_enumerate_s), 0,
      DF_CONFIG_MAX_HID_ENUMERATE_S},
+    {"store_max_mb", offsetof(df_server_config, store_max_mb), 0, 1 << 30},
 };
 
 /* socket_mode: octal permission bits, 0..0777, with or without a leading 0. */
@@ -241,6 +242,19 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         return DF_OK;
     }
     if (strcmp(key, "tcp") == 0) return set_tcp(cfg, value, err);
+    if (strcmp(key, "store") == 0) {
+        if (!value[0] || strlen(value) >= sizeof cfg->store_path)
+            return df_error_set(err, DF_EINVAL, "store: '%s' is not a path (1..%d bytes) or none",
+                                value, DF_CONFIG_PATH_MAX - 1);
+        strcpy(cfg->store_path, value);
+        return DF_OK;
+    }
+    if (strcmp(key, "durability") == 0) {
+        static const char *const names[] = {"full", "normal", "off"}; /* DF_DURABILITY_* */
+        for (int i = 0; i < 3; i++)
+            if (strcmp(value, names[i]) == 0) return cfg->durability = i, DF_OK;
+        return df_error_set(err, DF_EINVAL, "durability: '%s' is not full|normal|off", value);
+    }
     if (strcmp(key, "tcp_insecure") == 0) {
         if (df_hid_config_bool(value, &cfg->tcp_insecure) != DF_OK)
             return df_error_set(err, DF_EINVAL, "tcp_insecure: '%s' is not yes or no", value);
@@ -455,6 +469,10 @@ static const char k_usage[] =
     "                      handshake_timeout_s, idle_timeout_s, hid.<class>.<key> with\n"
     "                      class knob|3d-mouse|pen or a VID:PID like 046d:c626);\n"
     "                      command-line options override the file\n"
+    "  --store PATH        durable session store (SQLite; default $STATE_DIRECTORY/deformd.db\n"
+    "                      under systemd, else $XDG_STATE_HOME/deformd/deformd.db); 'none' =\n"
+    "                      memory only (config: store, durability = full|normal|off,\n"
+    "                      store_max_mb)\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"
     "  --spin-us N         compute workers poll N us for the next short job before sleeping\n"
@@ -548,7 +566,8 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         static const char *const map[][2] = {
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
             {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"},
-            {"--hid-replay", "hid_replay"}, {"--key-file", "key_file"}};
+            {"--hid-replay", "hid_replay"}, {"--key-file", "key_file"},
+            {"--store", "store"}};
         int done = 0;
         for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);

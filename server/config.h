@@ -70,8 +70,16 @@
  *                      checked for consistency once the whole file is read
  *   allow_uids, allow_gids, key_file, auth_fail_burst, auth_fail_refill_s   access control
  *                      (server/access_config.h)
- * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
- * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
+ *   store              the durable session store (server/store/store.h): a file PATH, or
+ *                      none (memory only); default $STATE_DIRECTORY/deformd.db under systemd,
+ *                      else $XDG_STATE_HOME/deformd/deformd.db (~/.local/state/deformd/...)
+ *   durability         full | normal | off (default full): SQLite synchronous FULL (fsync at
+ *                      every acknowledged change), NORMAL (written before the ack, fsync at
+ *                      checkpoints: survives kill -9, not a power loss), OFF
+ *   store_max_mb       cap of the store file, MiB (0 = none, default): a change beyond it
+ *                      fails like a full disk
+ * Command line (overrides the file): --socket PATH, --store PATH|none, --tcp HOST:PORT,
+ * --tcp-insecure, --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
  * --hid-replay FILE[,FILE...], --key-file FILE, --check-config, --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
@@ -167,6 +175,9 @@ typedef struct df_server_config {
     df_access_config access;     /* allow_uids, allow_gids, key_file, auth_fail_*
                                     (access_config.h) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
+    char store_path[DF_CONFIG_PATH_MAX];  /* config `store`: "" = the default, "none", a path */
+    int durability;              /* 0 full, 1 normal, 2 off (store.h DF_DURABILITY_*) */
+    int store_max_mb;            /* store file cap, MiB (0 = none) */
 } df_server_config;
 
 /* Fills `cfg` with the defaults; the socket path comes from `xdg_runtime_dir` (may be NULL or "",

@@ -19,6 +19,7 @@
 #include "server/net/sd.h"
 #include "server/session/session.h"
 #include "server/net/shm.h"
+#include "server/store/restore.h"
 
 #define DF_SERVER_SWEEP_MS 1000 /* period of the flush-close deadline sweep */
 
@@ -87,10 +88,16 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     int rc = df_auth_start(srv, err); /* key_file (net/auth.h) */
     if (rc == DF_OK)
         rc = df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, err);
+    /* the store before the listeners: its sessions are back before the first client */
+    int store_rc = rc == DF_OK ? (rc = df_store_start(srv, err)) : rc;
     if (rc == DF_OK && (rc = df_listener_open(srv, err)) == DF_OK &&
         (rc = df_guard_init(srv, err)) != DF_OK)
         df_listener_close(srv);
     if (rc != DF_OK) {
+        if (store_rc == DF_OK) { /* opened: the listeners failed */
+            while (srv->sessions) df_session_destroy(srv->sessions);
+            df_store_stop(srv);
+        }
         srv->stopping = 1;
         df_pool_close(srv->pool); /* NULL-safe; freed with the server */
         df_auth_free(srv);
@@ -170,6 +177,7 @@ void df_server_stop(df_server *srv)
 void df_server_free(df_server *srv)
 {
     while (srv->sessions) df_session_destroy(srv->sessions);
+    df_store_stop(srv);
     df_hid_manager_free(srv);
     df_pool_free(srv->pool);
     srv->pool = NULL;

@@ -42,6 +42,21 @@ typedef struct df_hid_ops {
     void (*strokes_changed)(struct df_server *srv, struct df_session *s);
 } df_hid_ops;
 
+/* The durable store's entry points for the layers below it (server/store/ builds on session;
+ * journal.h documents each; srv->store_ops is set by df_server_start once the store is open and
+ * its sessions restored, NULL with store = none). Each returns DF_OK or an error (DF_EIO,
+ * DF_ELIMIT for a full disk / store_max_mb) after which the caller changes nothing and fails
+ * its request. Loop thread. */
+struct df_brush_state;
+typedef struct df_store_ops {
+    int (*session_created)(struct df_server *srv, const struct df_session *s, df_error *err);
+    int (*session_closing)(struct df_server *srv, const struct df_session *s, df_error *err);
+    int (*change)(struct df_server *srv, const struct df_session *s, const struct df_change *c,
+                  df_error *err);
+    int (*brush)(struct df_server *srv, const struct df_session *s,
+                 const struct df_brush_state *next, uint64_t who, df_error *err);
+} df_store_ops;
+
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
 
 typedef struct df_conn {
@@ -138,6 +153,8 @@ typedef struct df_server {
      * its record. NULL: none. Loop thread. */
     void (*commit_hook)(void *arg, const struct df_session *s, const struct df_change *c);
     void *commit_hook_arg;
+    struct df_store *store;       /* the durable store (server/store/store.h), NULL: none */
+    const df_store_ops *store_ops;/* its entry points (journal.h), NULL: none */
 } df_server;
 
 /* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,

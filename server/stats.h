@@ -34,6 +34,9 @@ typedef struct df_stats {
     uint64_t admm_hits, admm_misses;
     uint64_t lru_evictions;
     uint64_t brush_state_changes; /* session brush changes, all sessions (brush_state.h) */
+    uint64_t store_changes;      /* change-log rows written to the durable store (journal.h) */
+    uint64_t store_log_bytes;    /* their blob bytes (position deltas, handle sets, brushes) */
+    uint64_t store_errors;       /* store writes that failed (the request failed with them) */
     uint64_t brush_cursor_events; /* BRUSH_CURSOR events broadcast (after rate limiting) */
 } df_stats;
 

@@ -43,7 +43,7 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
-"$DEFORMD" --foreground --socket "$sock" --log-level warn </dev/null >"$tmp/deformd.log" 2>&1 &
+"$DEFORMD" --foreground --socket "$sock" --store none --log-level warn </dev/null >"$tmp/deformd.log" 2>&1 &
 pid=$!
 ctl() { "$CTL" --socket "$sock" "$@" </dev/null; }
 for i in $(seq 1 "$READY_TRIES"); do

@@ -145,6 +145,11 @@ int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
 static void close_done(df_job *j)
 {
     if (df_job_failed(j)) return;
+    df_server *srv = j->srv;
+    if (srv->store_ops && (j->rc = srv->store_ops->session_closing(srv, j->s, &j->err)) != DF_OK) {
+        df_job_failed(j); /* still in the store: the session stays open */
+        return;
+    }
     uint64_t v = atomic_load(&j->s->version);
     df_job_drop_queued(j->s, df_job_pred_all, NULL, "session closed");
     df_session_close(j->s);

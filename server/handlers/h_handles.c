@@ -40,6 +40,13 @@ typedef struct hs_req {
     int yield;                 /* move: on_progress asked to yield */
     int iters_done;            /* move: iterations of the earlier slices */
     uint64_t slice_t0;         /* move: start of the current slice (uv_hrtime) */
+    /* Loop thread only: an iterate the durable store refused (commit.h step 0). That iterate
+     * and every later one are not applied (they were encoded from it); the move fails with
+     * store_err. store_uf: the last skipped iterate's displacements, which the worker may still
+     * encode the next iterate from (freed at the next skip or when the move is done). */
+    int store_failed;
+    df_error store_err;
+    float *store_uf;
 } hs_req;
 
 static void req_free(df_server *srv, void *body)
@@ -48,6 +55,7 @@ static void req_free(df_server *srv, void *body)
     df_msg_handles_free(&r->m);
     df_msg_handle_move_free(&r->mv);
     if (r->hs) df_handleset_free(srv, r->hs);
+    free(r->store_uf);
 }
 
 /* Builds a solver for handle set `hs` against the session's rest shape into *out. */
@@ -223,12 +231,25 @@ typedef struct move_iter {
     df_task t;                 /* posted through the pool's completion channel */
     df_session *s;
     df_change ch;
+    hs_req *r;                 /* its move (alive until the move's done, which runs after) */
 } move_iter;
 
 static void iter_commit(df_task *t)
 {
     move_iter *m = (move_iter *)t; /* t is the first member */
-    df_session_commit(m->s, &m->ch); /* no request: the move answers once it ends */
+    hs_req *r = m->r;
+    if (!r->store_failed) { /* no request: the move answers once it ends */
+        m->ch.err = &r->store_err;
+        if (df_session_commit(m->s, &m->ch) != DF_OK) r->store_failed = 1;
+        else m->ch.err = NULL;
+    } else {
+        m->ch.rc = DF_ESTATE; /* after a refused iterate: skipped, not applied */
+    }
+    if (r->store_failed && m->ch.uf) { /* the worker may encode from it: keep it for now */
+        free(r->store_uf);
+        r->store_uf = m->ch.uf;
+        m->ch.uf = NULL;
+    }
     df_change_clear(m->s->srv, &m->ch);
     free(m);
 }
@@ -277,6 +298,7 @@ static int publish_iterate(df_job *j, const double *V, int iteration, double obj
     m->ch.own_buffers = 1;
     m->ch.version = ++r->version;
     m->s = j->s;
+    m->r = r;
     m->t.after = iter_commit;
     r->uf_prev = uf;
     r->published = 1;
@@ -431,6 +453,13 @@ static void move_done(df_job *j)
     if (df_session_commit(s, ch) != DF_OK)
         df_log(DF_LOG_WARN, "session %llu: could not record the move for undo",
                (unsigned long long)s->id);
+    free(r->store_uf); /* the worker is done */
+    r->store_uf = NULL;
+    if (r->store_failed) { /* an iterate was not stored: the move fails with the store's error */
+        j->rc = r->store_err.code;
+        j->err = r->store_err;
+        r->superseded = 0;
+    }
     /* the final frames were posted by the worker and broadcast before this `done` (job.c) */
     df_msg_move_result res;
     memset(&res, 0, sizeof res);

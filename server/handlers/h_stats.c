@@ -70,6 +70,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
         put(&st, "brush_state_changes", (double)x->brush_state_changes);
+        put(&st, "store_changes", (double)x->store_changes);
+        put(&st, "store_log_bytes", (double)x->store_log_bytes);
+        put(&st, "store_errors", (double)x->store_errors);
         put(&st, "brush_cursor_events", (double)x->brush_cursor_events);
         put(&st, "cursor_hz", srv->cfg.cursor_hz);
         put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);

@@ -151,6 +151,13 @@ int df_brush_state_apply(df_session *s, unsigned mask, const df_brush_state *v,
                             who->kind, DF_ORIGIN_MAX);
     int rc = df_brush_state_check(&s->brush, mask, v, "brush_state_set", err);
     if (rc != DF_OK) return rc;
+    df_server *srv = s->srv;
+    if (srv->store_ops) { /* durable first (server/store/journal.h) */
+        df_brush_state next = s->brush;
+        df_brush_state_merge(&next, mask, v);
+        if ((rc = srv->store_ops->brush(srv, s, &next, who ? who->id : 0, err)) != DF_OK)
+            return rc;
+    }
     df_brush_state_merge(&s->brush, mask, v);
     s->brush_seq++;
     s->brush_by.kind = who ? who->kind : DF_ORIGIN_NONE;

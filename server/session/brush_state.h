@@ -82,7 +82,9 @@ int df_brush_state_check(const df_brush_state *cur, unsigned mask, const df_brus
  * session's brush seq by 1, records `who` as the last changer and broadcasts a BRUSH_STATE
  * event (changed = mask, origin = who) to every subscriber of s. The session version is not
  * changed and no undo step is made. `who` may be NULL (origin NONE). mask 0 is refused.
- * Returns DF_OK or DF_EINVAL (err names the field). Loop thread. */
+ * With a durable store the new state is written first (srv->store_ops->brush): its error
+ * (DF_EIO, DF_ELIMIT) changes nothing. Returns DF_OK, DF_EINVAL (err names the field) or the
+ * store's error. Loop thread. */
 int df_brush_state_apply(df_session *s, unsigned mask, const df_brush_state *v,
                          const df_origin *who, df_error *err);
 

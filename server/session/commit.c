@@ -144,6 +144,14 @@ int df_session_commit(df_session *s, df_change *c)
 {
     df_server *srv = s->srv;
     int strokes = c->link || c->stroke || c->drop_stroke || c->set_params;
+    if (c->rc == DF_OK && srv->store_ops) { /* step 0: durable first (server/store/journal.h) */
+        df_error e;
+        if ((c->rc = srv->store_ops->change(srv, s, c, &e)) != DF_OK) {
+            df_log(DF_LOG_ERROR, "session %llu: change not applied: %s", (unsigned long long)s->id,
+                   e.msg);
+            if (c->err) *c->err = e;
+        }
+    }
     if (c->rc == DF_OK) {
         apply_state(s, c);
         c->rc = apply_history(s, c);

@@ -6,12 +6,16 @@
  * the session's scratch, swapped in, never copied), the frames of the new version, the stroke
  * state it produced, the cache objects it built or used, its timings and the history step. The
  * commit then does, in this fixed order:
+ *   0. store:    srv->store_ops->change (server/store/journal.h) writes the change durably
+ *                first; when that fails the change is a failed one (below): nothing of it is
+ *                applied, broadcast or acknowledged, the error is answered;
  *   1. state:    swap positions and displacements in, publish the version number, stroke and
  *                handle-set state, rest shape;
  *   2. history:  the undo step (commit / reset / undo / redo), charged to the memory budget;
  *                then the stroke the change ended (cancel, end) is dropped;
  *   3. accounting: timings, cache hit/miss, install / drop cached factorizations, LRU eviction;
- *   4. hook:     srv->commit_hook (the durable store's journal record, the scale-out log entry);
+ *   4. hook:     srv->commit_hook (an observer: a scale-out log entry; the durable store
+ *                writes at step 0, where it can still refuse the change);
  *   5. broadcast the version's frames to the subscribers; a change to the session's strokes
  *      (begin, update, knob, end, cancel) then tells the HID subsystem (force feedback,
  *      srv->hid_ops->strokes_changed);

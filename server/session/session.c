@@ -141,6 +141,11 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     s->next = srv->sessions;
     srv->sessions = s;
     srv->n_sessions++;
+    if (srv->store_ops && srv->store_ops->session_created(srv, s, err) != DF_OK) {
+        int rc = err ? err->code : DF_EIO;
+        df_session_destroy(s); /* not durable: not created */
+        return rc;
+    }
     *out = s;
     return DF_OK;
 }

@@ -131,7 +131,8 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh);
  * ("" -> "session-<id>") and links it into srv. Names are unique among live sessions. The
  * estimate and the history's first state are charged to srv->mem first. Errors: DF_EEXIST (a
  * live session already has `name`), DF_ELIMIT (max_sessions, or memory_max_mb: the message
- * names it), DF_ENOMEM. On error the mesh is freed. */
+ * names it), DF_ENOMEM, or the durable store's error (srv->store_ops->session_created: DF_EIO,
+ * DF_ELIMIT when full; the session is not created). On error the mesh is freed. */
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err);
 

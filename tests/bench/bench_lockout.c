@@ -169,7 +169,7 @@ static int run(const char *exe, const char *inline_opt)
     pid_t pid = fork();
     if (pid == 0) {
         prctl(PR_SET_PDEATHSIG, SIGTERM);
-        execl(exe, exe, "--foreground", "--socket", sock, "--log-level", "warn",
+        execl(exe, exe, "--foreground", "--socket", sock, "--log-level", "warn", "--store", "none",
               inline_opt ? "--inline-us" : (char *)NULL, inline_opt, (char *)NULL);
         _exit(127);
     }

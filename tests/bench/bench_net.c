@@ -227,12 +227,13 @@ static int daemon_start(daemon_proc *d, const char *exe)
         prctl(PR_SET_PDEATHSIG, SIGTERM); /* never outlive the bench */
         FILE *f = freopen(log, "w", stderr);
         (void)f;
-        char *argv[8 + MAX_EXTRA_ARGS + 1] = {(char *)exe, "--foreground", "--socket", d->sock,
-                                               "--tcp", tcp, "--log-level", "warn"};
-        int argc = 8;
+        char *argv[10 + MAX_EXTRA_ARGS + 1] = {(char *)exe, "--foreground", "--socket", d->sock,
+                                                "--tcp", tcp, "--log-level", "warn", "--store",
+                                                "none"}; /* DEFORMD_ARGS may set --store */
+        int argc = 10;
         static char extra[256]; /* DEFORMD_ARGS: extra daemon options, space separated */
         snprintf(extra, sizeof extra, "%s", getenv("DEFORMD_ARGS") ? getenv("DEFORMD_ARGS") : "");
-        for (char *t = strtok(extra, " "); t && argc < 8 + MAX_EXTRA_ARGS; t = strtok(NULL, " "))
+        for (char *t = strtok(extra, " "); t && argc < 10 + MAX_EXTRA_ARGS; t = strtok(NULL, " "))
             argv[argc++] = t;
         argv[argc] = NULL;
         execv(exe, argv);

@@ -52,6 +52,7 @@ class Daemon:
         with open(self.config_path, "w") as f:
             f.write("# written by tests/integration/conftest.py\n")
             f.write("log_level = info\n")
+            f.write("store = none\n")   # memory only unless the test's extra_config sets a store
             if os.path.isdir(MESHES):
                 f.write("allow_paths = %s\n" % os.path.realpath(MESHES))
             f.write(extra_config)
@@ -62,6 +63,8 @@ class Daemon:
         self._log = open(self.log_path, "wb")
         env = dict(os.environ)
         env["XDG_RUNTIME_DIR"] = tmpdir
+        env["XDG_STATE_HOME"] = tmpdir      # a default store (store = "") stays in the tmp dir
+        env.pop("STATE_DIRECTORY", None)
         self.proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=self._log,
                                      stderr=subprocess.STDOUT, env=env, cwd=tmpdir)
         self._wait_ready()
@@ -146,6 +149,15 @@ def check_stopped(d: "Daemon", rc: int) -> None:
     at = log.find(TSAN_MARK)
     assert at < 0, "ThreadSanitizer report in deformd's log:\n%s" % log[max(0, at - 200):at + 6000]
     assert rc == 0, "deformd exited with status %d on SIGTERM:\n%s" % (rc, log[-4000:])
+
+
+@pytest.fixture(autouse=True)
+def _private_state_home(tmp_path_factory, monkeypatch):
+    """Every daemon a test starts itself (not through Daemon, which writes store = none) keeps
+    its default store (XDG_STATE_HOME/deformd/deformd.db) in a directory of its own test, never
+    in the user's home nor shared between tests."""
+    monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("state")))
+    monkeypatch.delenv("STATE_DIRECTORY", raising=False)
 
 
 def _require_binary() -> None:

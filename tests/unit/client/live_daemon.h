@@ -61,12 +61,13 @@ static inline int live_daemon_start_config(live_daemon *d, const char *exe, cons
         snprintf(log, sizeof log, "%s/deformd.log", d->dir);
         FILE *f = freopen(log, "w", stderr); /* keep cmocka's output lines clean */
         (void)f;
+        /* --store none: sessions in memory only (no store shared between tests or runs) */
         if (conf[0])
             execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error",
-                  "--config", conf, (char *)NULL);
+                  "--store", "none", "--config", conf, (char *)NULL);
         else
             execl(exe, exe, "--foreground", "--socket", d->sock, "--log-level", "error",
-                  (char *)NULL);
+                  "--store", "none", (char *)NULL);
         _exit(127);
     }
     for (int i = 0; i < 100; i++) {

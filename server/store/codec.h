@@ -1,0 +1,51 @@
+/* codec.h — the store's blob layouts (store.h schema): position deltas, the session brush, the
+ * handle set. Native-endian, packed field by field (no struct padding on disk). Pure: any
+ * thread.
+ *
+ * delta (changes.delta): u32 count, u32 nv, then either (count == nv, dense) 3 * nv doubles,
+ *   or count u32 vertex indices (ascending) followed by 3 * count doubles: the NEW exact double
+ *   positions of the vertices whose position differs bit-wise from the previous state.
+ * brush (sessions.brush, changes.aux of a brush change): u8 type, falloff, integrator,
+ *   has_mirror, u16 steps, then f64 radius, nu, strength, ratio, mirror_point[3],
+ *   mirror_normal[3] (86 bytes).
+ * handles (sessions.handles, changes.aux of a handle-set change): i32 energy, f64 w, s, rho,
+ *   tol, i32 max_iters, f64 youngs, poisson, i32 area_weighting, accelerate, anderson_m,
+ *   f64 strain_min, strain_max, bending, i32 threads (the df_admm_params), i32 nh, n_affine,
+ *   max_iters (the set's), nh x i32 handles, then per affine set: i32 n, m, f64 A[9], b[3],
+ *   n x i32 verts. */
+#ifndef DF_SERVER_STORE_CODEC_H
+#define DF_SERVER_STORE_CODEC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "server/session/brush_state.h"
+#include "server/session/session.h"
+
+/* Encodes the delta from `old` to `now` (3 * nv doubles each, bit-wise compare) into a new
+ * malloc'd blob *out of *len bytes (count 0: a header only). Errors: DF_ENOMEM. */
+int df_codec_delta_encode(const double *old, const double *now, int32_t nv, uint8_t **out,
+                          size_t *len, df_error *err);
+
+/* Applies a delta blob to `pos` (3 * nv doubles). *changed (may be NULL) = its count.
+ * Errors: DF_EFORMAT (wrong nv, truncated, index out of range or not ascending). */
+int df_codec_delta_apply(const uint8_t *b, size_t len, double *pos, int32_t nv,
+                         uint32_t *changed, df_error *err);
+
+#define DF_CODEC_BRUSH_BYTES 86
+/* Packs / unpacks the session brush (unpack: DF_EFORMAT when len is wrong). */
+void df_codec_brush_pack(const df_brush_state *b, uint8_t out[DF_CODEC_BRUSH_BYTES]);
+int df_codec_brush_unpack(const uint8_t *p, size_t len, df_brush_state *out, df_error *err);
+
+/* Encodes a handle set (params, handles, affine sets; not its solver) into a new malloc'd blob.
+ * Errors: DF_ENOMEM. */
+int df_codec_handles_encode(const df_handleset *hs, uint8_t **out, size_t *len, df_error *err);
+
+/* Decodes a handle-set blob into a new df_handleset (solver NULL: rebuilt on first use),
+ * checking every index against nv. Errors: DF_EFORMAT, DF_ENOMEM. Free with
+ * df_handleset_free. */
+int df_codec_handles_decode(const uint8_t *p, size_t len, int32_t nv, df_handleset **out,
+                            df_error *err);
+
+#endif

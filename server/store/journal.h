@@ -1,0 +1,49 @@
+/* journal.h — what the daemon writes to the durable store (store.h), and when.
+ *
+ * df_store_journal_ops are the srv->store_ops (server.h) the session layer calls:
+ *   session_created  df_session_create, before the load is acknowledged: the session row
+ *                    (id, name, mesh topology, exact double base positions, version 0, brush)
+ *                    and meta.next_session_id, in one transaction;
+ *   session_closing  the close request, before the session is closed: its row and its log;
+ *   change           df_session_commit, BEFORE step 1 (commit.h): one change-log row (version,
+ *                    kind = the request's message type, who = the request's origin: connection
+ *                    or device id, flags, the position delta from s->cur to c->pos (codec.h),
+ *                    the handle set it installs) and the session row's version / handles, in
+ *                    one transaction;
+ *   brush            df_brush_state_apply, before the state changes: a change-log row (kind
+ *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush.
+ * A change with only an undo-history step (a stroke's end, a move's final commit) is a row
+ * without delta: its DF_JOURNAL_HIST lets the restore rebuild the undo/redo history.
+ * Rest shape: flag DF_JOURNAL_REST_FROM_CUR (the rest shape becomes the positions after this
+ * change); a change that installs a handle set has DF_JOURNAL_HANDLES and its blob in aux.
+ *
+ * Write first, then apply: the in-memory state never moves ahead of the store. A failed write
+ * is rolled back in SQLite (nothing of it stays on disk) and returns the error: the commit then
+ * applies nothing, broadcasts nothing and answers the error, so the session stays at its last
+ * acknowledged state in memory and on disk (the next change's delta is taken from that same
+ * state). Writing first needs no undo of swapped buffers, history steps or caches, which a
+ * rollback of the applied state would. Durability: the transaction's COMMIT returns once the
+ * WAL holds it (and, with durability = full, fsynced), before the ack and the broadcast.
+ * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
+ * 2 x 24 x nv bytes), the change's transaction also writes the positions and rest shape after
+ * it into the session row (cur, rest) and deletes the session's log rows: a session holds at
+ * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
+ * at most that (restore.h). The deleted rows' kind / who are not kept.
+ * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a
+ * brush version's delta is dense: 24 bytes per vertex + 8. srv->store counts the bytes
+ * (df_store_log_bytes); compression or request + checkpoint recording is the next step.
+ *
+ * Loop thread. */
+#ifndef DF_SERVER_STORE_JOURNAL_H
+#define DF_SERVER_STORE_JOURNAL_H
+
+#include "server/server.h"
+
+enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 4 };
+/* flags bits 4..6: the change's undo-history step (commit.h DF_HIST_*), replayed at restore */
+#define DF_JOURNAL_HIST_SHIFT 4
+#define DF_JOURNAL_HIST(flags) (((flags) >> DF_JOURNAL_HIST_SHIFT) & 7)
+
+extern const df_store_ops df_store_journal_ops;
+
+#endif

@@ -1,0 +1,33 @@
+/* restore.h — the store's place in the daemon's start and stop: open (store.h), restore every
+ * session, install the journal (journal.h).
+ *
+ * Restore, per session row (ascending id): the mesh from its topology and exact base positions,
+ * then the change log replayed onto the last snapshot (journal.h; the base when none) in commit
+ * order (each delta sets the changed vertices' exact doubles, REST_FROM_CUR copies the
+ * positions into the rest shape): positions and rest shape are bit-identical to those of the
+ * last acknowledged change. The session keeps its id, name and version, its brush (and brush
+ * seq) and its handle set (the ADMM solver and the Kelvinlet pin factorization are rebuilt
+ * lazily on first use). Published displacements are recomputed as fl32(cur - base)
+ * (stream.h). The undo/redo history is rebuilt from the rows' history steps since the last
+ * snapshot (earlier steps are not kept: undo stops at the snapshot). A log that ends inside a
+ * stroke or handle move (the daemon died before its end) ends it at restore, as a disconnect
+ * would: the positions become one more undo step (a history-only row is appended first). Not restored: open
+ * strokes, subscribers. New sessions get ids above every id the store ever gave
+ * (meta.next_session_id). Loop thread. */
+#ifndef DF_SERVER_STORE_RESTORE_H
+#define DF_SERVER_STORE_RESTORE_H
+
+#include "core/common/df_error.h"
+#include "server/server.h"
+
+/* Opens srv->cfg's store (store = none: does nothing), restores its sessions into srv, then
+ * sets srv->store and srv->store_ops. Call before the listeners open. Errors: df_store_open's
+ * (the store file refused: message names it), DF_EFORMAT (a row that cannot be restored:
+ * names the session), DF_ELIMIT / DF_ENOMEM (df_session_create's); on error every restored
+ * session is destroyed and the store closed. */
+int df_store_start(df_server *srv, df_error *err);
+
+/* Closes the store (after the sessions are freed). NULL-safe on srv->store. */
+void df_store_stop(df_server *srv);
+
+#endif
