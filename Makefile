@@ -31,7 +31,8 @@ WARN    := -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes
 CPPFLAGS := -I. -I/usr/include/suitesparse -D_GNU_SOURCE $(DEFS)
 CFLAGS  := -std=c11 $(OPT) $(SAN) $(WARN) $(OMP) -g -MMD -MP
 LDFLAGS := $(OMP) $(SAN)
-# System libraries per layer (SQLite: server/store/, in SERVER_SYS). HID_SYS: the
+# System libraries per layer (SQLite and zstd (libzstd-dev, the packed change deltas of
+# server/store/codec.c): server/store/, in SERVER_SYS). HID_SYS: the
 # device sources of server/hid/ (hid_hidapi.c: hidapi-hidraw, hid_libusb.c: libusb-1.0; headers
 # included as <hidapi/hidapi.h>, <libusb-1.0/libusb.h>, so no -I is needed).
 KELV_SYS    := -llapacke -llapack -lopenblas -lm
@@ -40,7 +41,7 @@ HID_SYS     := -lhidapi-hidraw -lusb-1.0
 # CRYPTO_SYS: OpenSSL libcrypto, for proto/auth_mac.c (HMAC-SHA256 of AUTH), linked by everything
 # that links the proto layer's auth (the daemon, libdeformclient users, their unit tests).
 CRYPTO_SYS  := -lcrypto
-SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lpthread $(CRYPTO_SYS)
+SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lzstd -lpthread $(CRYPTO_SYS)
 # core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers
 # (they compile every core source).
@@ -92,7 +93,7 @@ UNIT_SYS_server     := $(MATH_LIBS) $(GEOM_SYS) $(SERVER_SYS)
 # hid: server/hid/ (parsers: core/common only; device sources: hidapi, libusb, pthread), taken
 # from the server archive.
 UNIT_LINK_hid       := $(SERVER_LIB) $(call lib,common)
-UNIT_SYS_hid        := -lm $(HID_SYS) -lsqlite3 -lpthread
+UNIT_SYS_hid        := -lm $(HID_SYS) -lsqlite3 -lzstd -lpthread
 BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
@@ -116,7 +117,7 @@ deps:
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
-             libembree-dev systemd python3-seccomp strace man-db libssl-dev
+             libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
