@@ -35,6 +35,9 @@ def state(c, sid):
     return m.version, m.positions.tobytes(), m.rest.tobytes()
 
 
+BUNNY_STROKES = 60  # each a bunny-wide version: 84 kB raw, ~4x less packed (codec.h)
+
+
 def edit_two_sessions(d):
     """Two clients edit two sessions: strokes, a handle set and move, undo, redo, a brush
     change. Returns {sid: (name, version, positions, rest)} as of the last acknowledgement."""
@@ -43,7 +46,7 @@ def edit_two_sessions(d):
         s2 = b.load_mesh(data=grid_obj(12, 12), fmt=".obj", name="grid").session_id
         X1 = a.get_mesh(s1).positions
         X2 = b.get_mesh(s2).positions
-        for k in range(14):     # 14 dense bunny versions: 1.2 MB of log, past a snapshot
+        for k in range(BUNNY_STROKES):  # past a snapshot (1 MB of log; packed deltas, codec.h)
             a.stroke(s1, Brush(type="grab", center=X1[3 * k:3 * k + 3], move=(0, 0, 0.01 * (k + 1)),
                                radius=0.05))
             if k < 3:
@@ -78,10 +81,10 @@ def test_kill9_restart_restores_every_session(tmp_path):
         log = d.log()
         assert "2 session(s) restored" in log
         # the bunny's log was folded into a snapshot on the way (journal.h): fewer rows replayed
-        # than its 14 strokes, handle set, move, undo and redo
+        # than its strokes, handle set, move, undo and redo
         assert "session %d 'bunny' restored at version %d (" % (s1, before[s1][1]) in log
         replayed = int(log.split("session %d 'bunny' restored" % s1)[1].split("(")[1].split()[0])
-        assert replayed < 14, log
+        assert replayed < BUNNY_STROKES, log
         with d.unix_client() as c:
             infos = {i.session_id: i for i in c.list_sessions()}
             assert sorted(infos) == sorted([s1, s2])
@@ -279,3 +282,56 @@ def test_a_stroke_open_at_the_kill_ends_at_restart_as_one_undo_step(tmp_path):
             assert state(c, sid)[1:] == before_stroke[1:]
     finally:
         check_stopped(d, d.stop())
+
+
+def _packed_rows(store):
+    """The change rows whose delta has the packed layout (codec.h: u32 0xFFFFFFFF, i32 nv,
+    u32 count, a zstd frame), as (row id, blob)."""
+    db = sqlite3.connect(store)
+    try:
+        rows = db.execute("SELECT id, delta FROM changes WHERE delta IS NOT NULL").fetchall()
+    finally:
+        db.close()
+    return [(i, bytes(b)) for i, b in rows if bytes(b[:4]) == b"\xff\xff\xff\xff"]
+
+
+def test_strokes_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tmp_path):
+    store = str(tmp_path / "packed.db")
+    d = start(tmp_path, store, 1)
+    try:
+        with d.unix_client() as c:
+            sid = c.load_mesh(data=grid_obj(40, 40), fmt=".obj", name="packed").session_id
+            X = c.get_mesh(sid).positions
+            for k in range(3):
+                c.stroke(sid, Brush(type="grab", center=X[123 * k:123 * k + 3],
+                                    move=(0, 0, 0.02), radius=0.1))
+            acked = state(c, sid)
+    finally:
+        check_stopped(d, d.stop())
+    packed = _packed_rows(store)
+    assert packed, "no stroke was logged packed"
+    for _, blob in packed:              # smaller than the raw layout of the same change
+        nv = int.from_bytes(blob[4:8], "little", signed=True)
+        count = int.from_bytes(blob[8:12], "little")
+        assert nv == 1600 and 1 <= count <= nv
+        raw = 8 + (0 if count == nv else 4 * count) + 24 * count
+        assert len(blob) < raw, (len(blob), raw)
+    d = start(tmp_path, store, 2)       # restored bit for bit from the packed log
+    try:
+        with d.unix_client() as c:
+            assert state(c, sid) == acked
+    finally:
+        check_stopped(d, d.stop())
+    row, blob = packed[-1]
+    bad = bytearray(blob)
+    bad[len(bad) // 2 + 6] ^= 0xFF      # inside the zstd frame
+    db = sqlite3.connect(store)
+    db.execute("UPDATE changes SET delta = ? WHERE id = ?", (bytes(bad), row))
+    db.commit()
+    db.close()
+    sock = str(tmp_path / "d.sock")
+    r = subprocess.run([DEFORMD, "--foreground", "--socket", sock, "--store", store],
+                       stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=30)
+    assert r.returncode == 1, r.stderr
+    assert store in r.stderr and "compressed change delta is corrupt" in r.stderr, r.stderr
+    assert not os.path.exists(sock)
