@@ -15,7 +15,7 @@ int df_access_needed(uint16_t type)
     case DF_MSG_BRUSH_BEGIN: case DF_MSG_BRUSH_UPDATE: case DF_MSG_BRUSH_END:
     case DF_MSG_BRUSH_CANCEL: case DF_MSG_SET_BRUSH_PARAM: case DF_MSG_BRUSH_STATE_SET:
     case DF_MSG_HANDLES_SET: case DF_MSG_HANDLES_MOVE: case DF_MSG_UNDO: case DF_MSG_REDO:
-    case DF_MSG_DEVICE_BIND:
+    case DF_MSG_DEVICE_BIND: case DF_MSG_DEVICE_VIEW:
         return DF_RIGHT_EDIT;
     case DF_MSG_CLOSE_SESSION: case DF_MSG_RESET_REST:
         return DF_RIGHT_OWN;

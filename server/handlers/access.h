@@ -6,7 +6,7 @@
  *   DF_RIGHT_OBSERVE  subscribe, unsubscribe, shared-memory stream, get mesh, snapshot,
  *                     handles get, brush state get
  *   DF_RIGHT_EDIT     brush strokes and parameters, brush state set, handles set / move,
- *                     undo / redo, device bind
+ *                     undo / redo, device bind and device view
  *   DF_RIGHT_OWN      close session, reset rest
  * The owner and admins (key_file, the daemon's own uid or root on the Unix socket, and
  * internal requests of HID devices) hold every right; other principals hold observe and edit

@@ -70,6 +70,8 @@ int df_h_device_view(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_device_view m;
     int rc = df_msg_device_view_decode(p, r->len, &m, err);
+    df_session *s = rc == DF_OK && m.session_id ? df_session_find(r->srv, m.session_id) : NULL;
+    if (s) rc = df_access_check(r, s, err); /* the view binds the device: edit (access.h) */
     if (rc == DF_OK)
         rc = r->srv->hid_ops ? r->srv->hid_ops->view(r->srv, &m, err)
                              : no_device(m.device_id, "device_view", err);

@@ -5,13 +5,15 @@ reset its rest shape; with session_access = owner the others may only observe. A
 EPERM naming the missing right and changes nothing. Quotas (quota_sessions, quota_upload_mb,
 quota_memory_mb) refuse a load with ELIMIT naming the quota and the principal, and closing a
 session releases its share."""
+import json
 import os
 import secrets
+import subprocess
 
 import pytest
 
-from deformd_client import Client, DeformdError, errors as E
-from deformd_client import Brush
+from conftest import DEFORMCTL
+from deformd_client import Brush, Client, DeformdError, errors as E
 from helpers import grid_obj
 
 
@@ -165,3 +167,21 @@ def test_bad_access_settings_refuse_start(make_daemon, keys, extra, needle):
     with pytest.raises(RuntimeError) as ei:
         start(make_daemon, keys, extra)
     assert needle in str(ei.value)
+
+
+def test_deformctl_with_a_named_key_gets_eperm(make_daemon, keys):
+    d = start(make_daemon, keys)
+    with tcp(d, keys["alice"]) as a, d.unix_client() as u:
+        a.load_mesh(grid_obj(4, 4), name="spot")
+        base = [DEFORMCTL, "--tcp", "127.0.0.1:%d" % d.tcp_port, "--json"]
+        r = subprocess.run(base + ["--key-file", keys["bob"], "close", "spot"],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 1, (r.stdout, r.stderr)
+        out = json.loads(r.stdout)
+        assert out["name"] == "EPERM" and out["code"] == E.ErrorCode.EPERM
+        assert "needs the own right" in out["message"] and "key:bob" in out["message"]
+        assert [s.name for s in u.list_sessions()] == ["spot"]
+        r = subprocess.run(base + ["--key-file", keys["alice"], "close", "spot"],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, (r.stdout, r.stderr)
+        assert u.list_sessions() == []
