@@ -15,6 +15,7 @@ import pytest
 from conftest import DEFORMCTL
 from deformd_client import Brush, Client, DeformdError, errors as E
 from helpers import grid_obj
+from test_reload import rewrite_and_hup
 
 
 def write_key(path) -> None:
@@ -185,3 +186,18 @@ def test_deformctl_with_a_named_key_gets_eperm(make_daemon, keys):
                            capture_output=True, text=True, timeout=60)
         assert r.returncode == 0, (r.stdout, r.stderr)
         assert u.list_sessions() == []
+
+
+def test_sighup_switches_session_access_and_quotas_live(make_daemon, keys):
+    d = start(make_daemon, keys)
+    with tcp(d, keys["alice"]) as a, tcp(d, keys["bob"]) as b:
+        sid = a.load_mesh(grid_obj(5, 5), name="spot").session_id
+        stroke(b, sid)                                      # open: bob edits
+        keys_cfg = ("key_file = %s\npeer_key = alice %s\npeer_key = bob %s\n"
+                    % (keys["admin"], keys["alice"], keys["bob"]))
+        rewrite_and_hup(d, keys_cfg + "session_access = owner\nquota_sessions = 1\n",
+                        "session_access owner, quota_sessions 1")
+        refused(lambda: stroke(b, sid), "edit")
+        with pytest.raises(DeformdError) as ei:
+            a.load_mesh(grid_obj(4, 4), name="two")
+        assert ei.value.code == E.ErrorCode.ELIMIT and "quota_sessions" in str(ei.value)
