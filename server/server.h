@@ -83,7 +83,7 @@ typedef struct df_conn {
     /* TCP key authentication (server/net/auth.h) */
     int auth_ok;             /* 1: authenticated (or none required) */
     int auth_step;           /* 0 none, 1 challenge sent (nonces below are valid) */
-    /* Access control (server/handlers/access.h, PROTOCOL.md 4.34): the principal this peer acts
+    /* Access control (server/session/access.h, PROTOCOL.md 4.34): the principal this peer acts
      * as: "uid:N" (Unix), "tcp" (TCP, server without keys), "key:NAME" (peer_key), "admin". */
     char principal[48];
     int admin;               /* 1: every right on every session (key_file, the daemon's uid) */

@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "proto/messages.h"
-#include "server/handlers/access.h"
+#include "server/session/access.h"
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/net/reply.h"

@@ -8,7 +8,7 @@
 #include "server/handlers/handlers.h"
 #include "server/net/conn.h"
 #include "server/net/reply.h"
-#include "server/handlers/access.h"
+#include "server/session/access.h"
 #include "server/session/brush_state.h"
 #include "server/session/session.h"
 

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "server/handlers/access.h"
+#include "server/session/access.h"
 #include "server/handlers/handlers.h"
 
 typedef struct stats_acc {

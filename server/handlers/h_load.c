@@ -22,7 +22,7 @@
 #include <string.h>
 
 #include "server/net/conn.h"
-#include "server/handlers/access.h"
+#include "server/session/access.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
 #include "server/log.h"

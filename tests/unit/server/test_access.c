@@ -1,5 +1,5 @@
 /* Unit tests for server/access_config.c (peer_key, session_access, quota_* parsing and their
- * errors) and server/handlers/access.c (the right each request needs, the rights of owners,
+ * errors) and server/session/access.c (the right each request needs, the rights of owners,
  * admins, others and devices under both session_access values, EPERM messages, quotas). */
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,7 +11,7 @@
 
 #include "proto/messages.h"
 #include "server/access_config.h"
-#include "server/handlers/access.h"
+#include "server/session/access.h"
 #include "server/session/session.h"
 
 static void test_parse_access_keys(void **state)

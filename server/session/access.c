@@ -1,5 +1,5 @@
 /* access.c — per-session rights and per-principal quotas (see access.h). */
-#include "server/handlers/access.h"
+#include "server/session/access.h"
 
 #include <string.h>
 
