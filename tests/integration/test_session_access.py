@@ -4,7 +4,8 @@ is the admin key. The creator of a session owns it: only the owner or an admin m
 reset its rest shape; with session_access = owner the others may only observe. A refusal is
 EPERM naming the missing right and changes nothing. Quotas (quota_sessions, quota_upload_mb,
 quota_memory_mb) refuse a load with ELIMIT naming the quota and the principal, and closing a
-session releases its share."""
+session releases its share. DEVICE_BIND needs the edit right; session_access and the quotas
+change on SIGHUP."""
 import json
 import os
 import secrets
@@ -15,6 +16,7 @@ import pytest
 from conftest import DEFORMCTL
 from deformd_client import Brush, Client, DeformdError, errors as E
 from helpers import grid_obj
+from test_hid import replay_config
 from test_reload import rewrite_and_hup
 
 
@@ -201,3 +203,16 @@ def test_sighup_switches_session_access_and_quotas_live(make_daemon, keys):
         with pytest.raises(DeformdError) as ei:
             a.load_mesh(grid_obj(4, 4), name="two")
         assert ei.value.code == E.ErrorCode.ELIMIT and "quota_sessions" in str(ei.value)
+
+
+def test_device_bind_needs_the_edit_right(make_daemon, keys):
+    d = start(make_daemon, keys, replay_config(["griffin-powermate_077d-0410_usb.raw.txt"],
+                                               "session_access = owner\n"))
+    with tcp(d, keys["alice"]) as a, tcp(d, keys["bob"]) as b:
+        sid = a.load_mesh(grid_obj(5, 5), name="spot").session_id
+        (knob,) = b.devices_list()
+        assert knob.class_name == "knob"
+        refused(lambda: b.device_bind(knob.device_id, sid), "edit")
+        assert b.devices_list()[0].bound_session == 0           # nothing bound
+        a.device_bind(knob.device_id, sid)                     # the owner may
+        assert b.devices_list()[0].bound_session == sid
