@@ -19,7 +19,9 @@ int df_access_config_has(const char *key)
 {
     return key && (strcmp(key, "allow_uids") == 0 || strcmp(key, "allow_gids") == 0 ||
                    strcmp(key, "key_file") == 0 || strcmp(key, "auth_fail_burst") == 0 ||
-                   strcmp(key, "auth_fail_refill_s") == 0);
+                   strcmp(key, "auth_fail_refill_s") == 0 || strcmp(key, "peer_key") == 0 ||
+                   strcmp(key, "session_access") == 0 || strcmp(key, "quota_sessions") == 0 ||
+                   strcmp(key, "quota_upload_mb") == 0 || strcmp(key, "quota_memory_mb") == 0);
 }
 
 /* A decimal id (no sign, no blanks) below 2^32 - 1 into *out: 1, else 0. */
@@ -97,6 +99,42 @@ static int set_int(const char *key, const char *value, int lo, int hi, int *out,
     return DF_OK;
 }
 
+/* "NAME FILE" of a peer_key line. */
+static int add_peer_key(df_access_config *a, const char *value, df_error *err)
+{
+    const char *sp = value;
+    while (*sp && *sp != ' ' && *sp != '\t') sp++;
+    size_t nl = (size_t)(sp - value);
+    while (*sp == ' ' || *sp == '\t') sp++;
+    if (nl == 0 || !*sp)
+        return df_error_set(err, DF_EINVAL, "peer_key: '%s': give NAME FILE", value);
+    if (nl >= DF_ACCESS_KEY_NAME_MAX)
+        return df_error_set(err, DF_EINVAL, "peer_key: name longer than %d bytes",
+                            DF_ACCESS_KEY_NAME_MAX - 1);
+    for (size_t i = 0; i < nl; i++) {
+        char ch = value[i];
+        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') ||
+              ch == '_' || ch == '.' || ch == '-'))
+            return df_error_set(err, DF_EINVAL, "peer_key: name '%.*s': use [A-Za-z0-9_.-]",
+                                (int)nl, value);
+    }
+    if (strlen(sp) >= DF_ACCESS_PATH_MAX)
+        return df_error_set(err, DF_EINVAL, "peer_key: path longer than %d bytes",
+                            DF_ACCESS_PATH_MAX - 1);
+    for (int i = 0; i < a->n_peer_keys; i++)
+        if (strlen(a->peer_keys[i].name) == nl && memcmp(a->peer_keys[i].name, value, nl) == 0)
+            return df_error_set(err, DF_EINVAL, "peer_key: name '%.*s' given twice", (int)nl,
+                                value);
+    if (a->n_peer_keys >= DF_ACCESS_MAX_PEER_KEYS)
+        return df_error_set(err, DF_EINVAL, "peer_key: more than %d keys",
+                            DF_ACCESS_MAX_PEER_KEYS);
+    df_access_peer_key *k = &a->peer_keys[a->n_peer_keys++];
+    memcpy(k->name, value, nl);
+    k->name[nl] = '\0';
+    snprintf(k->file, sizeof k->file, "%s", sp);
+    return DF_OK;
+}
+
 int df_access_config_set(df_access_config *a, const char *key, const char *value, df_error *err)
 {
     if (!a || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
@@ -108,6 +146,19 @@ int df_access_config_set(df_access_config *a, const char *key, const char *value
         return set_int(key, value, 1, DF_ACCESS_MAX_BURST, &a->fail_burst, err);
     if (strcmp(key, "auth_fail_refill_s") == 0)
         return set_int(key, value, 1, DF_ACCESS_MAX_REFILL_S, &a->fail_refill_s, err);
+    if (strcmp(key, "peer_key") == 0) return add_peer_key(a, value, err);
+    if (strcmp(key, "quota_sessions") == 0)
+        return set_int(key, value, 0, DF_ACCESS_MAX_QUOTA, &a->quota_sessions, err);
+    if (strcmp(key, "quota_upload_mb") == 0)
+        return set_int(key, value, 0, DF_ACCESS_MAX_QUOTA, &a->quota_upload_mb, err);
+    if (strcmp(key, "quota_memory_mb") == 0)
+        return set_int(key, value, 0, DF_ACCESS_MAX_QUOTA, &a->quota_memory_mb, err);
+    if (strcmp(key, "session_access") == 0) {
+        if (strcmp(value, "open") == 0) a->session_access = DF_SESSION_ACCESS_OPEN;
+        else if (strcmp(value, "owner") == 0) a->session_access = DF_SESSION_ACCESS_OWNER;
+        else return df_error_set(err, DF_EINVAL, "session_access: '%s' (open or owner)", value);
+        return DF_OK;
+    }
     if (strcmp(key, "key_file") == 0) {
         if (strcmp(value, "none") == 0 || !value[0]) {
             a->key_file[0] = '\0';

@@ -15,7 +15,16 @@
  *   auth_fail_burst     failed authentications a peer address may make before it is refused
  *                  (1 .. DF_ACCESS_MAX_BURST, default DF_ACCESS_DEFAULT_BURST)
  *   auth_fail_refill_s  seconds after which one more failure is allowed again (token bucket:
- *                  1 .. DF_ACCESS_MAX_REFILL_S, default DF_ACCESS_DEFAULT_REFILL_S) */
+ *                  1 .. DF_ACCESS_MAX_REFILL_S, default DF_ACCESS_DEFAULT_REFILL_S)
+ *   peer_key       "NAME FILE": a named TCP key (repeatable, up to DF_ACCESS_MAX_PEER_KEYS; NAME
+ *                  1..31 bytes of [A-Za-z0-9_.-], unique). A TCP peer proving this key is the
+ *                  principal "key:NAME"; one proving key_file is the admin (PROTOCOL.md 4.34)
+ *   session_access default rights of peers other than a session's owner: "open" (default:
+ *                  they may observe and edit) or "owner" (they may only observe)
+ *   quota_sessions   live sessions one principal may own (0 = unlimited, default)
+ *   quota_upload_mb  MiB of uploaded mesh files one principal's live sessions may hold (0 = off)
+ *   quota_memory_mb  MiB of session memory (the memory budget's estimate) one principal's live
+ *                  sessions may hold (0 = unlimited, default) */
 #ifndef DF_SERVER_ACCESS_CONFIG_H
 #define DF_SERVER_ACCESS_CONFIG_H
 
@@ -29,6 +38,16 @@
 #define DF_ACCESS_MAX_BURST 1000
 #define DF_ACCESS_DEFAULT_REFILL_S 60
 #define DF_ACCESS_MAX_REFILL_S 86400
+#define DF_ACCESS_MAX_PEER_KEYS 16
+#define DF_ACCESS_KEY_NAME_MAX 32        /* peer_key NAME: 1..31 bytes */
+#define DF_ACCESS_MAX_QUOTA 1000000      /* quota_* upper bound (sessions, MiB) */
+
+enum { DF_SESSION_ACCESS_OPEN = 0, DF_SESSION_ACCESS_OWNER = 1 };
+
+typedef struct df_access_peer_key {
+    char name[DF_ACCESS_KEY_NAME_MAX];
+    char file[DF_ACCESS_PATH_MAX];
+} df_access_peer_key;
 
 typedef struct df_access_config {
     int n_uids, n_gids;                      /* 0 and 0: no uid/gid restriction */
@@ -37,6 +56,11 @@ typedef struct df_access_config {
     char key_file[DF_ACCESS_PATH_MAX];       /* "" = no TCP authentication */
     int fail_burst;                          /* auth_fail_burst */
     int fail_refill_s;                       /* auth_fail_refill_s */
+    int n_peer_keys;
+    df_access_peer_key peer_keys[DF_ACCESS_MAX_PEER_KEYS];
+    int session_access;                      /* DF_SESSION_ACCESS_* */
+    int quota_sessions;                      /* 0 = unlimited */
+    int quota_upload_mb, quota_memory_mb;    /* 0 = unlimited */
 } df_access_config;
 
 /* Fills `a` with the defaults (no restriction, no key, burst and refill defaults). */

@@ -50,6 +50,11 @@ static void note_restart(const df_server_config *cur, const df_server_config *n)
     DF_RESTART_KEY(cur->hid_replay_end != n->hid_replay_end, "hid_replay_end");
     DF_RESTART_KEY(cur->hid_enumerate_s != n->hid_enumerate_s, "hid_enumerate_s");
     DF_RESTART_KEY(memcmp(&cur->hid, &n->hid, sizeof cur->hid) != 0, "hid.*");
+    DF_RESTART_KEY(cur->access.n_peer_keys != n->access.n_peer_keys ||
+                       memcmp(cur->access.peer_keys, n->access.peer_keys,
+                              sizeof cur->access.peer_keys[0] *
+                                  (size_t)cur->access.n_peer_keys) != 0,
+                   "peer_key");
 #undef DF_RESTART_KEY
     if (len)
         df_log(DF_LOG_WARN, "reload: changed settings that need a restart (running values "
@@ -70,12 +75,18 @@ static void apply(df_server *srv, const df_server_config *n)
     c->output_queue_limit = n->output_queue_limit;
     c->n_allow = n->n_allow;
     memcpy(c->allow_paths, n->allow_paths, sizeof c->allow_paths);
+    c->access.session_access = n->access.session_access; /* access.h: checked per request */
+    c->access.quota_sessions = n->access.quota_sessions;
+    c->access.quota_upload_mb = n->access.quota_upload_mb;
+    c->access.quota_memory_mb = n->access.quota_memory_mb;
     df_log_set_level(c->log_level);
     df_log(DF_LOG_INFO, "configuration reloaded: log_level %d, max_clients %d, max_sessions %d, "
            "handshake_timeout_s %d, idle_timeout_s %d, cursor_hz %d, output_queue_limit %zu, "
-           "%d allow_paths", c->log_level, c->max_clients, c->max_sessions,
+           "%d allow_paths, session_access %s, quota_sessions %d, quota_upload_mb %d, "
+           "quota_memory_mb %d", c->log_level, c->max_clients, c->max_sessions,
            c->handshake_timeout_s, c->idle_timeout_s, c->cursor_hz, c->output_queue_limit,
-           c->n_allow);
+           c->n_allow, c->access.session_access == DF_SESSION_ACCESS_OWNER ? "owner" : "open",
+           c->access.quota_sessions, c->access.quota_upload_mb, c->access.quota_memory_mb);
 }
 
 static void on_wait(uv_timer_t *t)

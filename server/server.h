@@ -98,6 +98,10 @@ typedef struct df_conn {
     /* TCP key authentication (server/net/auth.h) */
     int auth_ok;             /* 1: authenticated (or none required) */
     int auth_step;           /* 0 none, 1 challenge sent (nonces below are valid) */
+    /* Access control (server/session/access.h, PROTOCOL.md 4.34): the principal this peer acts
+     * as: "uid:N" (Unix), "tcp" (TCP, server without keys), "key:NAME" (peer_key), "admin". */
+    char principal[48];
+    int admin;               /* 1: every right on every session (key_file, the daemon's uid) */
     uint8_t auth_nc[32], auth_ns[32]; /* client and server nonces of the exchange */
     int kick_queued;         /* on the server's deferred-write list */
     struct df_conn *kick_next;

@@ -39,6 +39,7 @@ const char *df_error_name(int code)
     case DF_EUNSUPPORTED: return "EUNSUPPORTED";
     case DF_EINTERNAL: return "EINTERNAL";
     case DF_EEXIST: return "EEXIST";
+    case DF_EPERM: return "EPERM";
     default: return "EUNKNOWN";
     }
 }

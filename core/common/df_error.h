@@ -22,7 +22,8 @@ enum {
     DF_ESTATE = -8,     /* the request is valid but not in the current state (e.g. no stroke open) */
     DF_EUNSUPPORTED = -9, /* a valid request this build or mesh kind does not support */
     DF_EINTERNAL = -10, /* a library call failed unexpectedly (CHOLMOD, LAPACK) */
-    DF_EEXIST = -11     /* the name is already in use (e.g. a session name) */
+    DF_EEXIST = -11,    /* the name is already in use (e.g. a session name) */
+    DF_EPERM = -12      /* the peer lacks a right on the session (access control) */
 };
 
 #define DF_ERROR_MSG_MAX 256

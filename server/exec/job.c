@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "proto/messages.h"
+#include "server/session/access.h"
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/net/reply.h"
@@ -72,6 +73,7 @@ int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_erro
     if (rc == DF_OK && !(s = df_session_find(r->srv, sid)))
         rc = df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
                           (unsigned long long)sid);
+    if (rc == DF_OK) rc = df_access_check(r, s, err); /* per-session rights (access.h) */
     df_job *j = rc == DF_OK ? df_job_new(r->srv, s, r->c, r->type, r->id, kind->work, kind->done)
                             : NULL;
     if (!j) {

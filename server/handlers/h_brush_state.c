@@ -8,6 +8,7 @@
 #include "server/handlers/handlers.h"
 #include "server/net/conn.h"
 #include "server/net/reply.h"
+#include "server/session/access.h"
 #include "server/session/brush_state.h"
 #include "server/session/session.h"
 
@@ -17,6 +18,8 @@ static df_session *find(df_req *r, uint64_t sid, df_error *err)
     if (!s)
         df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
                      (unsigned long long)sid);
+    else if (df_access_check(r, s, err) != DF_OK) /* observe (get) / edit (set), access.h */
+        return NULL;
     return s;
 }
 

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "server/session/access.h"
 #include "server/handlers/handlers.h"
 
 typedef struct stats_acc {
@@ -56,6 +57,8 @@ int df_h_device_bind(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_device_bind m;
     int rc = df_msg_device_bind_decode(p, r->len, &m, err);
+    df_session *s = rc == DF_OK && m.session_id ? df_session_find(r->srv, m.session_id) : NULL;
+    if (s) rc = df_access_check(r, s, err); /* binding needs the edit right (access.h) */
     if (rc == DF_OK)
         rc = r->srv->hid_ops ? r->srv->hid_ops->bind(r->srv, m.device_id, m.session_id, err)
                              : no_device(m.device_id, "device_bind", err);
@@ -67,6 +70,8 @@ int df_h_device_view(df_req *r, const uint8_t *p, df_error *err)
 {
     df_msg_device_view m;
     int rc = df_msg_device_view_decode(p, r->len, &m, err);
+    df_session *s = rc == DF_OK && m.session_id ? df_session_find(r->srv, m.session_id) : NULL;
+    if (s) rc = df_access_check(r, s, err); /* the view binds the device: edit (access.h) */
     if (rc == DF_OK)
         rc = r->srv->hid_ops ? r->srv->hid_ops->view(r->srv, &m, err)
                              : no_device(m.device_id, "device_view", err);

@@ -22,6 +22,7 @@
 #include <string.h>
 
 #include "server/net/conn.h"
+#include "server/session/access.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
 #include "server/log.h"
@@ -44,6 +45,7 @@ typedef struct df_upload {
     uint8_t *data;
     uint64_t cap;           /* bytes allocated for data (charged to srv->mem until freed) */
     char *path;             /* path loads: the path as the client sent it */
+    char owner[48];         /* the requester's principal: the new session's owner (access.h) */
     df_mesh mesh;           /* parsed by the worker */
     df_mesh_report rep;     /* the reader's report */
 } df_upload;
@@ -139,11 +141,16 @@ static void load_done(df_job *j)
     int32_t nv = u->mesh.nv, ne = u->mesh.ne;
     if (!u->name[0])
         default_name(j->srv, u->path ? u->path : u->file_name, u->name, sizeof u->name);
-    if (df_session_create(j->srv, &u->mesh, u->name, &s, &j->err) != DF_OK) {
+    uint64_t up = u->path ? 0 : u->total; /* quotas again: other loads may have finished */
+    if (df_access_quota_check(j->srv, u->owner, up, df_session_estimate_bytes(&u->mesh),
+                              &j->err) != DF_OK ||
+        df_session_create(j->srv, &u->mesh, u->name, &s, &j->err) != DF_OK) {
         j->rc = j->err.code;
         df_job_failed(j);
         return;
     }
+    snprintf(s->owner, sizeof s->owner, "%s", u->owner);
+    s->upload_bytes = up;
     df_log(DF_LOG_INFO, "session %llu '%s': %d vertices, %d elements%s%s",
            (unsigned long long)s->id, s->name, nv, ne, u->path ? " from " : "",
            u->path ? u->path : "");
@@ -217,6 +224,11 @@ static int load_path(df_req *r, const df_msg_load_mesh *m, df_error *err)
     u->options = m->options;
     u->path = path; /* resolved and checked on the worker (pathload.h) */
     snprintf(u->name, sizeof u->name, "%s", m->name);
+    snprintf(u->owner, sizeof u->owner, "%s", c->principal);
+    if (df_access_quota_check(c->srv, u->owner, 0, 0, err) != DF_OK) {
+        df_upload_free(u);
+        return fail(c, err);
+    }
     return submit_load(r, u, err);
 }
 
@@ -282,7 +294,8 @@ int df_h_load_mesh(df_req *r, const uint8_t *p, df_error *err)
     }
     df_upload *u = c->upload;
     if (m.offset == 0 && !u) {
-        if (upload_size_ok(&c->srv->cfg, m.total_size, err) != DF_OK) {
+        if (upload_size_ok(&c->srv->cfg, m.total_size, err) != DF_OK ||
+            df_access_quota_check(c->srv, c->principal, m.total_size, 0, err) != DF_OK) {
             df_msg_load_mesh_free(&m);
             return fail(c, err);
         }
@@ -300,6 +313,7 @@ int df_h_load_mesh(df_req *r, const uint8_t *p, df_error *err)
         u->options = m.options;
         snprintf(u->name, sizeof u->name, "%s", m.name);
         snprintf(u->file_name, sizeof u->file_name, "%s", m.file_name);
+        snprintf(u->owner, sizeof u->owner, "%s", c->principal);
         c->upload = u;
     } else if (!u || u->req_id != r->id || m.offset != u->received ||
                m.total_size != u->total || m.format != u->format ||

@@ -13,34 +13,51 @@
 #include "server/net/conn.h"
 #include "server/net/reply.h"
 
+/* Key 0 is key_file (the admin; key_len 0 when only peer keys are set), keys 1.. the
+ * peer_key entries in config order. */
 typedef struct df_auth_server {
-    uint8_t key[DF_AUTH_KEY_CAP_BYTES];
-    size_t key_len;
+    int nkeys;
+    uint8_t key[1 + DF_ACCESS_MAX_PEER_KEYS][DF_AUTH_KEY_CAP_BYTES];
+    size_t key_len[1 + DF_ACCESS_MAX_PEER_KEYS];
     df_auth_limit limit;
 } df_auth_server;
 
 int df_auth_start(df_server *srv, df_error *err)
 {
     const df_access_config *a = &srv->cfg.access;
-    if (!a->key_file[0]) return DF_OK;
+    if (!a->key_file[0] && a->n_peer_keys == 0) return DF_OK;
     df_auth_server *s = calloc(1, sizeof *s);
     if (!s) return df_error_set(err, DF_ENOMEM, "key_file: out of memory");
-    int rc = df_auth_key_load(a->key_file, s->key, sizeof s->key, &s->key_len, err);
+    int rc = DF_OK;
+    if (a->key_file[0])
+        rc = df_auth_key_load(a->key_file, s->key[0], sizeof s->key[0], &s->key_len[0], err);
+    s->nkeys = 1;
+    for (int i = 0; rc == DF_OK && i < a->n_peer_keys; i++, s->nkeys++) {
+        rc = df_auth_key_load(a->peer_keys[i].file, s->key[i + 1], sizeof s->key[i + 1],
+                              &s->key_len[i + 1], err);
+        for (int k = 0; rc == DF_OK && k <= i; k++) /* a key must name one principal */
+            if (s->key_len[k] == s->key_len[i + 1] &&
+                CRYPTO_memcmp(s->key[k], s->key[i + 1], s->key_len[k]) == 0)
+                rc = df_error_set(err, DF_EINVAL, "peer_key %s: the same key as %s%s",
+                                  a->peer_keys[i].name, k ? "peer_key " : "key_file",
+                                  k ? a->peer_keys[k - 1].name : "");
+    }
     if (rc != DF_OK) {
+        OPENSSL_cleanse(s, sizeof *s);
         free(s);
         return rc;
     }
     df_auth_limit_init(&s->limit, a->fail_burst, a->fail_refill_s);
     srv->auth = s;
-    df_log(DF_LOG_INFO, "TCP clients must authenticate (key_file %s, %zu-byte key)", a->key_file,
-           s->key_len);
+    df_log(DF_LOG_INFO, "TCP clients must authenticate (key_file %s, %d peer_key)",
+           a->key_file[0] ? a->key_file : "none", a->n_peer_keys);
     return DF_OK;
 }
 
 void df_auth_free(df_server *srv)
 {
     if (!srv->auth) return;
-    OPENSSL_cleanse(srv->auth->key, sizeof srv->auth->key);
+    OPENSSL_cleanse(srv->auth, sizeof *srv->auth);
     free(srv->auth);
     srv->auth = NULL;
 }
@@ -113,14 +130,19 @@ int df_auth_request(df_req *r, const df_msg_auth *m, df_error *err)
         return df_error_set(err, DF_ESTATE, "auth: HMAC_PROOF before HMAC_CHALLENGE: send the "
                             "challenge (your nonce) first");
     uint8_t want[32], mine[32];
-    int rc = df_auth_mac(a->key, a->key_len, c->auth_ns, c->auth_nc, DF_AUTH_ROLE_CLIENT, want,
-                         err);
-    if (rc == DF_OK)
-        rc = df_auth_mac(a->key, a->key_len, c->auth_ns, c->auth_nc, DF_AUTH_ROLE_SERVER, mine,
-                         err);
+    int rc = DF_OK, match = -1;
+    for (int k = 0; rc == DF_OK && k < a->nkeys; k++) { /* every key: which principal is it? */
+        if (!a->key_len[k]) continue;
+        rc = df_auth_mac(a->key[k], a->key_len[k], c->auth_ns, c->auth_nc, DF_AUTH_ROLE_CLIENT,
+                         want, err);
+        if (rc == DF_OK && match < 0 && df_auth_equal(want, m->token, 32)) match = k;
+    }
+    if (rc == DF_OK && match >= 0)
+        rc = df_auth_mac(a->key[match], a->key_len[match], c->auth_ns, c->auth_nc,
+                         DF_AUTH_ROLE_SERVER, mine, err);
     c->auth_step = 0; /* one proof per challenge */
     if (rc != DF_OK) return rc;
-    if (!df_auth_equal(want, m->token, 32)) {
+    if (match < 0) {
         OPENSSL_cleanse(want, sizeof want);
         OPENSSL_cleanse(mine, sizeof mine);
         srv->stats.auth_failed++;
@@ -131,8 +153,17 @@ int df_auth_request(df_req *r, const df_msg_auth *m, df_error *err)
                       "this server's key", "authentication failed");
     }
     c->auth_ok = 1;
+    if (match == 0) {
+        snprintf(c->principal, sizeof c->principal, "admin");
+        c->admin = 1;
+    } else {
+        snprintf(c->principal, sizeof c->principal, "key:%s",
+                 srv->cfg.access.peer_keys[match - 1].name);
+        c->admin = 0;
+    }
     srv->stats.auth_ok++;
-    df_log(DF_LOG_INFO, "client %llu (%s) authenticated", (unsigned long long)c->id, who);
+    df_log(DF_LOG_INFO, "client %llu (%s) authenticated as %s", (unsigned long long)c->id, who,
+           c->principal);
     reply_token(r, DF_AUTH_HMAC_PROOF, mine);
     OPENSSL_cleanse(want, sizeof want);
     OPENSSL_cleanse(mine, sizeof mine);

@@ -8,7 +8,10 @@
  * are counted per peer address (Unix: per uid; auth_limit.h: auth_fail_burst,
  * auth_fail_refill_s), and an address without tokens gets ELIMIT ("retry in N s") for any AUTH,
  * without its MAC being checked, and is closed. Every failure and refusal is logged (warn) with
- * the peer address, never the key or a MAC. Counters: stats auth_ok, auth_failed, auth_limited. */
+ * the peer address, never the key or a MAC. Counters: stats auth_ok, auth_failed, auth_limited.
+ * Named keys (peer_key NAME FILE): the proof is checked against key_file and every peer key; the
+ * one that matches names the connection's principal ("admin" for key_file, "key:NAME"). Any
+ * key (key_file or a peer_key) turns authentication on. */
 #ifndef DF_SERVER_AUTH_H
 #define DF_SERVER_AUTH_H
 

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include "proto/messages.h"
 #include "proto/wire_error.h"
@@ -48,6 +49,7 @@ static void tcp_identity(df_conn *c)
 int df_peer_admit(df_conn *c)
 {
     if (c->is_tcp) {
+        snprintf(c->principal, sizeof c->principal, "tcp"); /* AUTH may name it (auth.h) */
         tcp_identity(c);
         df_log(DF_LOG_DEBUG, "client %llu connected (tcp, %s)", (unsigned long long)c->id,
                c->peer_addr);
@@ -71,6 +73,12 @@ int df_peer_admit(df_conn *c)
             ngroups = (int)(gl / sizeof g[0]);
             for (int i = 0; i < ngroups; i++) groups[i] = (uint32_t)g[i];
         }
+    }
+    if (c->peer_cred) {
+        snprintf(c->principal, sizeof c->principal, "uid:%u", c->peer_uid);
+        c->admin = c->peer_uid == 0 || c->peer_uid == (uint32_t)geteuid();
+    } else {
+        snprintf(c->principal, sizeof c->principal, "unix:unknown");
     }
     if (c->peer_cred)
         df_log(DF_LOG_DEBUG, "client %llu connected (unix, uid %u gid %u pid %d)",

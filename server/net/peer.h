@@ -8,6 +8,8 @@
  * uid, gid and pid and the settings) and is closed; the refusal is logged (warn) with uid and pid
  * and counted in stats (clients_refused_peer). A peer whose credentials cannot be read is
  * refused the same way when the socket is restricted.
+ * The principal (df_conn.principal, access control, PROTOCOL.md 4.34): Unix "uid:N", an admin
+ * when N is 0 or the daemon's own uid; TCP "tcp" until AUTH names it (auth.h).
  * TCP: the peer's address is recorded (peer_addr "ADDR port P", peer_host "ADDR", peer_loopback)
  * for the key authentication's log lines and rate limit (auth.h). */
 #ifndef DF_SERVER_PEER_H

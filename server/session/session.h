@@ -114,6 +114,8 @@ typedef struct df_session {
     uint64_t mem_bytes;          /* charged to srv->mem: DF_MEM_SESSIONS (the estimate) */
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
+    char owner[48];              /* principal of the creator (df_conn.principal), access.h */
+    uint64_t upload_bytes;       /* bytes of its uploaded file (quota_upload_mb), 0 for paths */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
     /* The session brush (brush_state.h), loop thread only: workers never read it. */
     df_brush_state brush;        /* current values (the one struct a durable store persists) */

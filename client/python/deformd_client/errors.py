@@ -18,6 +18,7 @@ class ErrorCode(IntEnum):
     EUNSUPPORTED = -9
     EINTERNAL = -10
     EEXIST = -11
+    EPERM = -12
     EPROTO_BADMAGIC = -100
     EPROTO_BADVERSION = -101
     EPROTO_BADTYPE = -102

@@ -38,6 +38,7 @@ static void test_long_message_is_truncated(void **state)
     assert_int_equal(strlen(e.msg), DF_ERROR_MSG_MAX - 1);
     assert_string_equal(df_error_name(12345), "EUNKNOWN");
     assert_string_equal(df_error_name(DF_EEXIST), "EEXIST");
+    assert_string_equal(df_error_name(DF_EPERM), "EPERM");
 }
 
 int main(void)
