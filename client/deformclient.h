@@ -201,6 +201,26 @@ int df_client_brush_cancel(df_client *c, uint64_t session_id, df_msg_ack *ack, d
 int df_client_set_brush_param(df_client *c, uint64_t session_id, uint8_t param, double value,
                               df_error *err);
 
+/* The session brush (PROTOCOL.md 4.14a): get fills *out (may be NULL) with the current state,
+ * its seq and last changer (changed 0). set applies the fields m->mask selects (m->session_id,
+ * values in m->v; start from df_msg_brush_values_defaults or a get) and fills *out with the new
+ * state; subscribers receive it as a DF_MSG_BRUSH_STATE event naming this client. A bad value
+ * is refused locally by the encoder (DF_EINVAL / DF_EPROTO_RESERVED) or by the daemon
+ * (DF_EINVAL, nothing changed). BRUSH_STATE and BRUSH_CURSOR events (df_msg_brush_state /
+ * df_msg_brush_cursor bodies) reach the event callback of a subscribed connection. */
+int df_client_brush_state_get(df_client *c, uint64_t session_id, df_msg_brush_state *out,
+                              df_error *err);
+int df_client_brush_state_set(df_client *c, const df_msg_brush_state_set *m,
+                              df_msg_brush_state *out, df_error *err);
+
+/* The daemon's HID devices (PROTOCOL.md 4.30..4.33). list: every device in id order into *out
+ * (items malloc'd: df_msg_device_list_free); none is not an error. bind: device_id drives
+ * session_id (0: unbind, it follows the most recently active session). view: a pen's view of a
+ * session (also binds it). Remote errors: DF_ENOTFOUND (unknown device or session). */
+int df_client_devices_list(df_client *c, df_msg_device_list *out, df_error *err);
+int df_client_device_bind(df_client *c, uint64_t device_id, uint64_t session_id, df_error *err);
+int df_client_device_view(df_client *c, const df_msg_device_view *m, df_error *err);
+
 /* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets). */
 int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);
 

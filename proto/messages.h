@@ -90,6 +90,18 @@ enum { DF_WIRE_PIN_FLAGS(DF_X_PIN) };
 enum { DF_WIRE_GET_MESH_FLAGS(DF_X_GM) };
 #define DF_X_SUB(n, v) DF_X_ENUM(DF_SUBSCRIBE_, n, v)
 enum { DF_WIRE_SUBSCRIBE_FLAGS(DF_X_SUB) };
+#define DF_X_BS(n, v) DF_X_ENUM(DF_BS_, n, v)
+enum { DF_WIRE_BRUSH_STATE_FIELDS(DF_X_BS) };
+#define DF_X_ORIGIN(n, v) DF_X_ENUM(DF_ORIGIN_, n, v)
+typedef enum df_origin_kind { DF_WIRE_ORIGINS(DF_X_ORIGIN) } df_origin_kind;
+#define DF_X_CURSOR(n, v) DF_X_ENUM(DF_CURSOR_, n, v)
+enum { DF_WIRE_CURSOR_FLAGS(DF_X_CURSOR) };
+#define DF_X_DEVCLASS(n, v) DF_X_ENUM(DF_DEVCLASS_, n, v)
+enum { DF_WIRE_DEV_CLASSES(DF_X_DEVCLASS) };
+#define DF_X_DEVBACKEND(n, v) DF_X_ENUM(DF_DEVBACKEND_, n, v)
+enum { DF_WIRE_DEV_BACKENDS(DF_X_DEVBACKEND) };
+#define DF_X_DEVSTATE(n, v) DF_X_ENUM(DF_DEVSTATE_, n, v)
+enum { DF_WIRE_DEV_STATES(DF_X_DEVSTATE) };
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -102,8 +114,11 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_X_OR(n, v) | (v)
 #define DF_X_COUNT(n, v) +1
 #define DF_FEAT_ALL (0u DF_WIRE_FEATURES(DF_X_OR)) /* what this build implements */
-#define DF_FEAT_DECODE_MASK (DF_FEAT_ALL | DF_FEAT_RESERVED) /* accepted in hello / hello_reply */
+#define DF_FEAT_DECODE_MASK DF_FEAT_ALL /* accepted in hello / hello_reply */
 #define DF_LOAD_OPTS_ALL (0u DF_WIRE_LOAD_OPTS(DF_X_OR))
+#define DF_BS_ALL (0u DF_WIRE_BRUSH_STATE_FIELDS(DF_X_OR))  /* every brush state field */
+#define DF_CURSOR_FLAGS_ALL (0u DF_WIRE_CURSOR_FLAGS(DF_X_OR))
+#define DF_ORIGIN_MAX (0 DF_WIRE_ORIGINS(DF_X_COUNT) - 1)    /* origins are 0..DF_ORIGIN_MAX */
 #define DF_FMT_MAX (0 DF_WIRE_FORMATS(DF_X_COUNT) - 1)        /* formats are 0..DF_FMT_MAX */
 #define DF_BRUSH_TYPE_MAX (0 DF_WIRE_BRUSH_TYPES(DF_X_COUNT)) /* the 1..MAX enums: */
 #define DF_BP_MAX (0 DF_WIRE_BRUSH_PARAMS(DF_X_COUNT))
@@ -111,10 +126,16 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_CHANGE_MAX (0 DF_WIRE_CHANGE_KINDS(DF_X_COUNT))
 #define DF_MOVE_STATUS_MAX (0 DF_WIRE_MOVE_STATUSES(DF_X_COUNT) - 1) /* 0..MAX */
 #define DF_SECTION_MAX (0 DF_WIRE_MESH_SECTIONS(DF_X_COUNT))
+#define DF_DEVCLASS_MAX (0 DF_WIRE_DEV_CLASSES(DF_X_COUNT) - 1)   /* 0..MAX */
+#define DF_DEVBACKEND_MAX (0 DF_WIRE_DEV_BACKENDS(DF_X_COUNT))    /* 1..MAX */
+#define DF_DEVSTATE_MAX (0 DF_WIRE_DEV_STATES(DF_X_COUNT))        /* 1..MAX */
+_Static_assert(DF_DEVCLASS_PEN == DF_DEVCLASS_MAX && DF_DEVBACKEND_REPLAY == DF_DEVBACKEND_MAX &&
+               DF_DEVSTATE_UNPLUGGED == DF_DEVSTATE_MAX, "the device enums stay contiguous");
 _Static_assert(DF_WFMT_TETGEN == DF_FMT_MAX && DF_BRUSH_AFFINE == DF_BRUSH_TYPE_MAX &&
                DF_BP_RATIO == DF_BP_MAX && DF_ENERGY_POLYLINE == DF_ENERGY_MAX &&
                DF_CHANGE_SNAPSHOT == DF_CHANGE_MAX && DF_MOVE_FAILED == DF_MOVE_STATUS_MAX &&
-               DF_SECTION_FACES == DF_SECTION_MAX, "the range-checked enums stay contiguous");
+               DF_SECTION_FACES == DF_SECTION_MAX && DF_ORIGIN_DEVICE == DF_ORIGIN_MAX,
+               "the range-checked enums stay contiguous");
 /* load_mesh `format` on the wire is 0..DF_FMT_MAX (core's DF_FMT_PLY_BINARY is write-only, not a
  * wire value). load_mesh `options`: unknown bits are refused with EPROTO_RESERVED (a server
  * without a bit answers that way too, so a client can tell and load without it); the same in
@@ -269,6 +290,12 @@ typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet pa
     uint32_t n_pinned;                 /* 0..DF_MAX_PINNED_POINTS */
     uint8_t pin_flags;                 /* n_pinned == 0: 0; else DF_PIN_* bits, 1..3 */
     double *pinned;                    /* n_pinned x 3 pinned positions, malloc'd on decode */
+    uint16_t use_session;              /* DF_BS_* bits: fields the server takes from the session
+                                        * brush (brush_state) instead of this message; optional
+                                        * trailing u16 on the wire, absent = 0 */
+    uint8_t use_session_field;         /* decode: 1 when the body carried the u16 (even 0);
+                                        * encode: write it when use_session != 0 or this is 1.
+                                        * 0 with use_session 0 is the original 253 + 24n layout */
 } df_msg_brush;
 
 typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */
@@ -284,6 +311,43 @@ typedef struct df_msg_brush_param {    /* HID knobs: change one parameter of thi
     uint8_t param;                     /* df_brush_param_id */
     double value;                      /* range per df_brush_param_id */
 } df_msg_brush_param;
+
+/* The session brush (PROTOCOL.md 4.14a), as in brush_state / brush_state_set. Ranges (checked
+ * for the fields a mask selects): type df_brush_type, falloff 1..DF_MAX_FALLOFF, integrator
+ * df_integrator, steps 1..DF_MAX_BRUSH_STEPS, has_mirror 0/1, radius finite > 0, nu not NaN,
+ * strength finite, ratio finite > 1, mirror point/normal finite (normal non-zero if has_mirror). */
+typedef struct df_msg_brush_values {
+    uint8_t type, falloff, integrator, has_mirror;
+    uint16_t steps;
+    double radius, nu, strength, ratio;
+    double mirror_point[3], mirror_normal[3];
+} df_msg_brush_values;
+
+typedef struct df_msg_brush_state_set { /* set some fields of the session brush */
+    uint64_t session_id;               /* != 0 */
+    uint16_t mask;                     /* DF_BS_* bits, != 0: the fields of `v` to set (the others
+                                        * are carried but ignored, any value) */
+    df_msg_brush_values v;
+} df_msg_brush_state_set;
+
+typedef struct df_msg_brush_state {    /* the session brush: reply to get/set, and the event */
+    uint64_t session_id;               /* != 0 */
+    uint64_t seq;                      /* changes of this session's brush so far (0: defaults) */
+    uint16_t changed;                  /* DF_BS_* bits the change set (get reply: 0) */
+    uint8_t origin_kind;               /* df_origin_kind of who made the last change */
+    uint64_t origin_id;                /* connection id / device id (NONE: 0) */
+    char origin_name[DF_MAX_NAME_LEN + 1]; /* client HELLO name / device name, may be "" */
+    df_msg_brush_values v;             /* every field, all valid */
+} df_msg_brush_state;
+
+typedef struct df_msg_brush_cursor {   /* where an origin's brush points (rate-limited event) */
+    uint64_t session_id;               /* != 0 */
+    uint8_t origin_kind;               /* df_origin_kind */
+    uint64_t origin_id;
+    uint8_t flags;                     /* DF_CURSOR_* bits: in range, stroke active */
+    double center[3];                  /* brush centre in mesh coordinates, finite */
+    double radius;                     /* finite, > 0, mesh units */
+} df_msg_brush_cursor;
 
 typedef struct df_msg_affine_set {     /* A V_t = b for every vertex t of the set (paper eq. 2c) */
     uint8_t rows;                      /* 1..3 constraint rows */
@@ -402,6 +466,40 @@ typedef struct df_msg_stats {
     df_msg_stat *items;                /* malloc'd on decode */
 } df_msg_stats;
 
+/* ---------------------------------------------------------------- devices (HID, issue 11) */
+typedef struct df_msg_device_info {    /* one device (DEVICES_LIST item, DEVICE_STATE event) */
+    uint64_t device_id;                /* != 0 (the daemon uses (1 << 63) | n) */
+    uint8_t dev_class;                 /* DF_DEVCLASS_* 0..3 */
+    uint8_t backend;                   /* DF_DEVBACKEND_* 1..3 */
+    uint8_t state;                     /* DF_DEVSTATE_* 1..4 */
+    uint8_t bus;                       /* linux/input.h bus: 3 USB, 5 BT, 0x18 I2C (any value) */
+    uint16_t vid, pid;
+    uint64_t bound_session;            /* 0: follows the most recently active session */
+    uint64_t active_session;           /* the session it drives now, 0 none */
+    uint8_t haptics;                   /* 0/1: haptic output enabled */
+    char name[DF_MAX_NAME_LEN + 1];    /* product name, may be "" */
+    char path[DF_MAX_PATH_LEN + 1];    /* backend path, may be "" */
+    char error[DF_MAX_ERROR_MSG_LEN + 1]; /* why it is in state ERROR/UNPLUGGED, else "" */
+} df_msg_device_info;
+
+typedef struct df_msg_device_list {
+    uint32_t count;                    /* 0..DF_MAX_DEVICES */
+    df_msg_device_info *items;         /* malloc'd on decode */
+} df_msg_device_list;
+
+typedef struct df_msg_device_bind {
+    uint64_t device_id;                /* != 0 */
+    uint64_t session_id;               /* 0 = unbind: follow the most recently active session */
+} df_msg_device_bind;
+
+typedef struct df_msg_device_view {    /* the view a pen's 2D position is cast through */
+    uint64_t device_id;                /* != 0 */
+    uint64_t session_id;               /* != 0 */
+    double view_proj[16];              /* row-major 4x4, mesh space -> clip (OpenGL), finite */
+    double viewport[4];                /* x, y, width, height in pixels (y down), finite,
+                                        * width and height > 0 */
+} df_msg_device_view;
+
 /* ------------------------------------------------------------------------------ functions */
 #define DF_MSG_CODEC(T)                                                                \
     int df_msg_##T##_encode(const df_msg_##T *m, df_buf *out, df_error *err);          \
@@ -434,7 +532,23 @@ DF_MSG_CODEC(stats_req)
 DF_MSG_CODEC(stats)
 DF_MSG_CODEC(shm_info)
 DF_MSG_CODEC(shm_ref)
+DF_MSG_CODEC(brush_state_set)
+DF_MSG_CODEC(brush_state)
+DF_MSG_CODEC(brush_cursor)
+DF_MSG_CODEC(device_info)
+DF_MSG_CODEC(device_list)
+DF_MSG_CODEC(device_bind)
+DF_MSG_CODEC(device_view)
 #undef DF_MSG_CODEC
+
+/* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
+ * df_msg_brush_values; `msg` names the message in errors. DF_OK, DF_EINVAL naming the field, or
+ * DF_EPROTO_RESERVED for a bit outside DF_BS_ALL. Pure. */
+int df_msg_brush_values_check(const df_msg_brush_values *v, unsigned mask, const char *msg,
+                              df_error *err);
+
+/* Fills `v` with the brush defaults (DF_WIRE_BRUSH_DEFAULTS; mirror off, normal (1,0,0)). */
+void df_msg_brush_values_defaults(df_msg_brush_values *v);
 
 /* Fills `m` with the defaults clients should start from (DF_WIRE_BRUSH_DEFAULTS of
  * proto/wire_schema.h): GRAB, dim 3, falloff 1, ratio 1.1, radius 1, nu 0.5, strength 1, Euler
@@ -458,6 +572,7 @@ void df_msg_mesh_chunk_free(df_msg_mesh_chunk *m);
 void df_msg_disp_free(df_msg_disp *m);
 void df_msg_progress_free(df_msg_progress *m);
 void df_msg_stats_free(df_msg_stats *m);
+void df_msg_device_list_free(df_msg_device_list *m);
 
 /* Empty bodies (list sessions request, auth success reply): DF_OK for n == 0, else
  * DF_EPROTO_TRAILING. */
@@ -493,7 +608,10 @@ typedef enum df_body_kind {
     DF_BODY_BRUSH_UPDATE, DF_BODY_BRUSH_PARAM, DF_BODY_HANDLES, DF_BODY_HANDLE_MOVE,
     DF_BODY_MOVE_RESULT, DF_BODY_GET_MESH, DF_BODY_MESH_CHUNK, DF_BODY_SNAPSHOT_REQ,
     DF_BODY_DISP, DF_BODY_PROGRESS, DF_BODY_STATS_REQ, DF_BODY_STATS, DF_BODY_SHM_INFO,
-    DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY
+    DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY, DF_BODY_BRUSH_STATE_SET, DF_BODY_BRUSH_STATE,
+    DF_BODY_BRUSH_CURSOR,
+    /* devices (HID) */
+    DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -527,6 +645,13 @@ typedef struct df_msg_any {
         df_msg_shm_info shm_info;
         df_msg_shm_ref shm_ref;
         df_msg_load_reply load_reply;
+        df_msg_brush_state_set brush_state_set;
+        df_msg_brush_state brush_state;
+        df_msg_brush_cursor brush_cursor;
+        df_msg_device_info device_info;
+        df_msg_device_list device_list;
+        df_msg_device_bind device_bind;
+        df_msg_device_view device_view;
     } u;
 } df_msg_any;
 

@@ -53,6 +53,18 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
     case DF_BODY_STATS: rc = df_msg_stats_decode(p, n, &t.u.stats, err); break;
     case DF_BODY_SHM_INFO: rc = df_msg_shm_info_decode(p, n, &t.u.shm_info, err); break;
     case DF_BODY_SHM_REF: rc = df_msg_shm_ref_decode(p, n, &t.u.shm_ref, err); break;
+    case DF_BODY_BRUSH_STATE_SET:
+        rc = df_msg_brush_state_set_decode(p, n, &t.u.brush_state_set, err);
+        break;
+    case DF_BODY_BRUSH_STATE: rc = df_msg_brush_state_decode(p, n, &t.u.brush_state, err); break;
+    case DF_BODY_BRUSH_CURSOR:
+        rc = df_msg_brush_cursor_decode(p, n, &t.u.brush_cursor, err);
+        break;
+    /* devices (HID) */
+    case DF_BODY_DEVICE_INFO: rc = df_msg_device_info_decode(p, n, &t.u.device_info, err); break;
+    case DF_BODY_DEVICE_LIST: rc = df_msg_device_list_decode(p, n, &t.u.device_list, err); break;
+    case DF_BODY_DEVICE_BIND: rc = df_msg_device_bind_decode(p, n, &t.u.device_bind, err); break;
+    case DF_BODY_DEVICE_VIEW: rc = df_msg_device_view_decode(p, n, &t.u.device_view, err); break;
     default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
     }
     if (rc)
@@ -75,6 +87,7 @@ void df_msg_any_free(df_msg_any *m)
     case DF_BODY_DISP: df_msg_disp_free(&m->u.disp); break;
     case DF_BODY_PROGRESS: df_msg_progress_free(&m->u.progress); break;
     case DF_BODY_STATS: df_msg_stats_free(&m->u.stats); break;
+    case DF_BODY_DEVICE_LIST: df_msg_device_list_free(&m->u.device_list); break;
     default: break;
     }
 }
@@ -111,6 +124,15 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
     case DF_BODY_STATS: return df_msg_stats_encode(&m->u.stats, out, e);
     case DF_BODY_SHM_INFO: return df_msg_shm_info_encode(&m->u.shm_info, out, e);
     case DF_BODY_SHM_REF: return df_msg_shm_ref_encode(&m->u.shm_ref, out, e);
+    case DF_BODY_BRUSH_STATE_SET:
+        return df_msg_brush_state_set_encode(&m->u.brush_state_set, out, e);
+    case DF_BODY_BRUSH_STATE: return df_msg_brush_state_encode(&m->u.brush_state, out, e);
+    case DF_BODY_BRUSH_CURSOR: return df_msg_brush_cursor_encode(&m->u.brush_cursor, out, e);
+    /* devices (HID) */
+    case DF_BODY_DEVICE_INFO: return df_msg_device_info_encode(&m->u.device_info, out, e);
+    case DF_BODY_DEVICE_LIST: return df_msg_device_list_encode(&m->u.device_list, out, e);
+    case DF_BODY_DEVICE_BIND: return df_msg_device_bind_encode(&m->u.device_bind, out, e);
+    case DF_BODY_DEVICE_VIEW: return df_msg_device_view_encode(&m->u.device_view, out, e);
     }
     return DF_EINTERNAL;
 }

@@ -3,6 +3,8 @@
  *   u8 moving, u8 has_mirror, f64 radius, ratio, nu, strength, center[3], move[3], twist[3],
  *   scale, matrix[9], mirror_point[3], mirror_normal[3], u32 n_pinned, u8 pin_flags,
  *   n_pinned x f64[3]   (253 + 24 n_pinned bytes)
+ *   [u16 use_session]   optional trailing field (DF_BS_* bits); absent = 0, so bodies of
+ *                       clients that predate it decode unchanged (+2 bytes when present)
  * brush_update: u64 session_id, f64 move[3], twist[3], scale, matrix[9]   (136 bytes)
  * brush_param: u64 session_id, u8 param, f64 value                        (17 bytes) */
 #include <math.h>
@@ -78,6 +80,12 @@ static int brush_check(const df_msg_brush *m, df_error *err)
     if (m->n_pinned && !m->pinned)
         return df_error_set(err, DF_EINVAL, "%s: pinned is NULL with n_pinned %u", M,
                             m->n_pinned);
+    if (m->use_session & ~DF_BS_ALL)
+        return df_error_set(err, DF_EPROTO_RESERVED, "%s: use_session bits 0x%x are not "
+                            "defined (known: 0x%x)", M, m->use_session & ~DF_BS_ALL, DF_BS_ALL);
+    if (m->use_session_field > 1)
+        return df_error_set(err, DF_EINVAL, "%s: use_session_field %u not 0/1", M,
+                            m->use_session_field);
     return df_check_finite(m->pinned, 3 * (size_t)m->n_pinned, M, "pinned", err);
 }
 
@@ -96,7 +104,9 @@ static void get_f64s(df_rd *r, double *v, size_t n, const char *field)
 int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
 {
     int rc = brush_check(m, err);
-    if (rc || (rc = df_enc_reserve(out, BRUSH_FIXED + 24 * (size_t)m->n_pinned, "brush", err)))
+    int trailer = m->use_session != 0 || m->use_session_field;
+    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0);
+    if (rc || (rc = df_enc_reserve(out, size, "brush", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
     df_buf_put_u8(out, m->type);
@@ -120,6 +130,8 @@ int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
     df_buf_put_u32(out, m->n_pinned);
     df_buf_put_u8(out, m->pin_flags);
     put_f64s(out, m->pinned, 3 * (size_t)m->n_pinned);
+    if (trailer)
+        df_buf_put_u16(out, m->use_session);
     return DF_OK;
 }
 
@@ -156,6 +168,10 @@ int df_msg_brush_decode(const uint8_t *p, size_t n, df_msg_brush *m, df_error *e
     t.pinned = df_rd_alloc(&r, 3 * (size_t)t.n_pinned, sizeof(double), "pinned");
     if (!r.rc)
         get_f64s(&r, t.pinned, 3 * (size_t)t.n_pinned, "pinned");
+    t.use_session = 0;
+    t.use_session_field = !r.rc && r.off < r.n; /* the optional trailer (else: old layout) */
+    if (t.use_session_field)
+        t.use_session = df_rd_u16(&r, "use_session");
     int rc = df_rd_end(&r);
     if (rc || (rc = brush_check(&t, err))) {
         free(t.pinned);

@@ -54,6 +54,8 @@
 #define DF_MAX_STATS_ENTRIES 1024u            /* key/value pairs in one stats reply */
 #define DF_MAX_STATS_KEY_LEN 63u              /* bytes of a stats key */
 #define DF_STREAM_CHUNK_BYTES (16u << 20)     /* recommended payload bound of a stream chunk */
+/* devices (HID, issue 11) */
+#define DF_MAX_DEVICES 256u                   /* devices in a device_list (and per daemon) */
 
 #define DF_WIRE_LIMITS(X)                                                                    \
     X(DF_MAX_FRAME_PAYLOAD) X(DF_MAX_MESH_VERTICES) X(DF_MAX_MESH_ELEMENTS)                  \
@@ -61,7 +63,8 @@
     X(DF_MAX_PATH_LEN) X(DF_MAX_ERROR_MSG_LEN) X(DF_MAX_AUTH_TOKEN) X(DF_MAX_PING_BYTES)     \
     X(DF_MAX_PINNED_POINTS) X(DF_MAX_BRUSH_STEPS) X(DF_MAX_FALLOFF) X(DF_MAX_HANDLES)        \
     X(DF_MAX_AFFINE_SETS) X(DF_MAX_ANDERSON) X(DF_MAX_MOVE_ITERS) X(DF_MAX_STATS_ENTRIES)    \
-    X(DF_MAX_STATS_KEY_LEN) X(DF_STREAM_CHUNK_BYTES)
+    X(DF_MAX_STATS_KEY_LEN) X(DF_STREAM_CHUNK_BYTES)                                      \
+    X(DF_MAX_DEVICES)
 
 /* ------------------------------------------- shared-memory ring file (PROTOCOL.md 6.1, shm_ring.h) */
 #define DF_SHM_MAGIC "DFSHMRG1"             /* 8 bytes at offset 0 */
@@ -88,6 +91,8 @@
     X(BRUSH_END, 0x0022, brush_end, SESSION_REF, ACK, NONE)                                  \
     X(BRUSH_CANCEL, 0x0023, brush_cancel, SESSION_REF, ACK, NONE)                            \
     X(SET_BRUSH_PARAM, 0x0024, set_brush_param, BRUSH_PARAM, ACK, NONE)                      \
+    X(BRUSH_STATE_GET, 0x0025, brush_state_get, SESSION_REF, BRUSH_STATE, NONE)              \
+    X(BRUSH_STATE_SET, 0x0026, brush_state_set, BRUSH_STATE_SET, BRUSH_STATE, NONE)          \
     X(HANDLES_SET, 0x0030, handles_set, HANDLES, ACK, NONE)                                  \
     X(HANDLES_MOVE, 0x0031, handles_move, HANDLE_MOVE, MOVE_RESULT, NONE) /* at the end */   \
     X(RESET_REST, 0x0032, reset_rest, SESSION_REF, ACK, NONE)                                \
@@ -97,19 +102,25 @@
     X(GET_MESH, 0x0040, get_mesh, GET_MESH, MESH_CHUNK, NONE)        /* chunked reply */     \
     X(SNAPSHOT, 0x0041, snapshot, SNAPSHOT_REQ, DISP, NONE)          /* chunked, dense */    \
     X(STATS, 0x0042, stats, STATS_REQ, STATS, NONE)                                          \
+    /* devices (HID): PROTOCOL.md 4.30..4.33 */                                               \
+    X(DEVICES_LIST, 0x0050, devices_list, EMPTY, DEVICE_LIST, NONE)                          \
+    X(DEVICE_BIND, 0x0051, device_bind, DEVICE_BIND, EMPTY, NONE)                            \
+    X(DEVICE_VIEW, 0x0052, device_view, DEVICE_VIEW, EMPTY, NONE)                            \
     X(DISPLACEMENT, 0x0080, displacement, NONE, NONE, DISP)     /* one session version */    \
     X(PROGRESS, 0x0081, progress, NONE, NONE, PROGRESS)         /* one ADMM iterate */       \
     X(SESSION_CLOSED, 0x0082, session_closed, NONE, NONE, SESSION_REF)                       \
     X(SHM_REF, 0x0083, shm_ref, NONE, NONE, SHM_REF) /* next event frame is in the ring */   \
+    X(BRUSH_STATE, 0x0084, brush_state, NONE, NONE, BRUSH_STATE) /* session brush changed */ \
+    X(BRUSH_CURSOR, 0x0085, brush_cursor, NONE, NONE, BRUSH_CURSOR) /* rate-limited */       \
+    X(DEVICE_STATE, 0x0086, device_state, NONE, NONE, DEVICE_INFO) /* a device changed */    \
     X(ERROR, 0x00FF, error, NONE, NONE, NONE) /* error body not tied to a request type */
 
 /* ------------------------------------------------------------------------------ feature bits
  * hello_reply `features`. Only what this build implements: a server sets a bit only when the
- * feature works on that connection. Bit 6 (DF_FEAT_RESERVED) was HID, which does not exist yet:
- * this daemon never sets it and DF_FEAT_ALL lacks it, but hello_reply decoders accept it (and
- * ignore it), so clients built now keep working with a daemon that has HID and sets it; any
- * other unknown bit is refused. The features of a client's hello are informative and never
- * checked (clients built before the change announce 0xFF). HID takes bit 6 back when it lands. */
+ * feature works on that connection; any unknown bit is refused by hello_reply decoders. The
+ * features of a client's hello are informative and never checked (clients built before HID
+ * announce 0xBF or 0xFF). Bit 6 is HID: it was reserved (withdrawn) until the HID subsystem
+ * existed, and decoders always accepted it, so older clients work with a daemon that sets it. */
 #define DF_WIRE_FEATURES(X)                                                                  \
     X(KELVINLET, 1u << 0)     /* brush messages supported */                                 \
     X(ADMM, 1u << 1)          /* handle set / move supported */                              \
@@ -117,8 +128,8 @@
     X(AUTH, 1u << 3)          /* auth is implemented (and may be required) */                \
     X(SPARSE_STREAM, 1u << 4) /* server sends sparse displacement frames */                  \
     X(TCP, 1u << 5)           /* the daemon also listens on TCP */                           \
+    X(HID, 1u << 6)           /* the HID device subsystem runs (DEVICES_LIST ...) */         \
     X(SHM_STREAM, 1u << 7)    /* STREAM_SHM available to Unix-socket clients */
-#define DF_FEAT_RESERVED (1u << 6)
 
 /* --------------------------------------------------------------------------------- enums */
 #define DF_WIRE_LOAD_SOURCES(X) X(INLINE, 0) X(PATH, 1) /* DF_LOAD_*: bytes inline / a path */
@@ -179,6 +190,35 @@
 #define DF_WIRE_GET_MESH_FLAGS(X) X(REST, 1u << 0) X(BASE, 1u << 1) /* extra sections */
 #define DF_WIRE_SUBSCRIBE_FLAGS(X) X(SNAPSHOT, 1u << 0) /* a dense snapshot right after */
 
+/* Session brush state fields (DF_BS_*): brush_state_set `mask`, brush_state `changed`,
+ * brush `use_session` (take these fields from the session brush instead of the message). */
+#define DF_WIRE_BRUSH_STATE_FIELDS(X)                                                        \
+    X(TYPE, 1u << 0) X(RADIUS, 1u << 1) X(NU, 1u << 2) X(STRENGTH, 1u << 3)                  \
+    X(FALLOFF, 1u << 4) X(RATIO, 1u << 5)                                                    \
+    X(INTEGRATOR, 1u << 6) /* integrator and steps */                                        \
+    X(MIRROR, 1u << 7)     /* has_mirror, mirror_point, mirror_normal */
+
+/* Who changed the session brush / moved a cursor (DF_ORIGIN_*; brush_state, brush_cursor). */
+#define DF_WIRE_ORIGINS(X)                                                                   \
+    X(NONE, 0)   /* nobody yet (the defaults) */                                             \
+    X(CLIENT, 1) /* a client connection: id = connection id, name = its HELLO name */       \
+    X(DEVICE, 2) /* an input device: id = device id, name = device name */
+
+#define DF_WIRE_CURSOR_FLAGS(X) X(IN_RANGE, 1u << 0) X(STROKE_ACTIVE, 1u << 1) /* DF_CURSOR_* */
+
+/* devices (HID, issue 11): device_info `class`, `backend`, `state` (PROTOCOL.md 4.30) */
+#define DF_WIRE_DEV_CLASSES(X)                                                               \
+    X(NONE, 0)    /* not classified (not driven) */                                          \
+    X(KNOB, 1)    /* dial / wheel with a button: radius, nu, falloff */                      \
+    X(MOUSE3D, 2) /* multi-axis controller: cursor, grab strokes, twist */                   \
+    X(PEN, 3)     /* digitizer pen: strokes through a bound view */
+#define DF_WIRE_DEV_BACKENDS(X) X(HIDAPI, 1) X(LIBUSB, 2) X(REPLAY, 3) /* DF_DEVBACKEND_* */
+#define DF_WIRE_DEV_STATES(X)                                                                \
+    X(OPEN, 1)      /* open, reports are read */                                             \
+    X(CLOSED, 2)    /* closed by the daemon (shutdown, disabled) */                          \
+    X(ERROR, 3)     /* a read or write failed: closed, `error` says why */                   \
+    X(UNPLUGGED, 4) /* gone (or the end of a replay): closed */
+
 /* Every enum list: X(list macro, C prefix, Python class, kind) for tools that walk them all. */
 #define DF_WIRE_ENUMS(X)                                                                     \
     X(DF_WIRE_FLAGS, DF_FLAG_, FrameFlag, flags)                                                \
@@ -197,7 +237,13 @@
     X(DF_WIRE_MESH_SECTIONS, DF_SECTION_, MeshSection, enum)                                 \
     X(DF_WIRE_PIN_FLAGS, DF_PIN_, PinFlag, flags)                                            \
     X(DF_WIRE_GET_MESH_FLAGS, DF_GET_MESH_, GetMeshFlag, flags)                              \
-    X(DF_WIRE_SUBSCRIBE_FLAGS, DF_SUBSCRIBE_, SubscribeFlag, flags)
+    X(DF_WIRE_SUBSCRIBE_FLAGS, DF_SUBSCRIBE_, SubscribeFlag, flags)                          \
+    X(DF_WIRE_BRUSH_STATE_FIELDS, DF_BS_, BrushStateField, flags)                            \
+    X(DF_WIRE_ORIGINS, DF_ORIGIN_, Origin, enum)                                             \
+    X(DF_WIRE_CURSOR_FLAGS, DF_CURSOR_, CursorFlag, flags)                                   \
+    X(DF_WIRE_DEV_CLASSES, DF_DEVCLASS_, DevClass, enum)                                     \
+    X(DF_WIRE_DEV_BACKENDS, DF_DEVBACKEND_, DevBackend, enum)                                \
+    X(DF_WIRE_DEV_STATES, DF_DEVSTATE_, DevState, enum)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "proto/shm_ring.h"
 #include "server/log.h"
@@ -31,6 +32,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->threads = DF_CONFIG_DEFAULT_THREADS;
     cfg->spin_us = DF_CONFIG_DEFAULT_SPIN_US;
     cfg->inline_us = DF_CONFIG_DEFAULT_INLINE_US;
+    cfg->cursor_hz = DF_CONFIG_DEFAULT_CURSOR_HZ;
     cfg->shm_total_bytes = DF_CONFIG_DEFAULT_SHM_TOTAL;
     cfg->max_upload_mb = DF_CONFIG_DEFAULT_MAX_UPLOAD_MB;
     cfg->uploads_max_mb = DF_CONFIG_DEFAULT_UPLOADS_MB;
@@ -46,6 +48,45 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->socket_mode = DF_CONFIG_DEFAULT_SOCKET_MODE;
     cfg->handshake_timeout_s = DF_CONFIG_DEFAULT_HANDSHAKE_TIMEOUT_S;
     cfg->idle_timeout_s = DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S;
+    cfg->hid_on = 1;
+    cfg->hid_replay_speed = 1.0;
+    cfg->hid_enumerate_s = DF_CONFIG_DEFAULT_HID_ENUMERATE_S;
+}
+
+/* hid_replay: a comma-separated list of files, appended (each must be readable now). */
+static int add_hid_replay(df_server_config *cfg, const char *value, df_error *err)
+{
+    int n = cfg->n_hid_replay;
+    char tmp[DF_CONFIG_MAX_HID_REPLAY][DF_CONFIG_PATH_MAX];
+    const char *p = value;
+    while (*p) {
+        size_t l = strcspn(p, ",");
+        while (l && isspace((unsigned char)*p)) p++, l--;
+        size_t e = l;
+        while (e && isspace((unsigned char)p[e - 1])) e--;
+        if (e) {
+            if (n >= DF_CONFIG_MAX_HID_REPLAY)
+                return df_error_set(err, DF_EINVAL, "hid_replay: more than %d files",
+                                    DF_CONFIG_MAX_HID_REPLAY);
+            if (e >= DF_CONFIG_PATH_MAX)
+                return df_error_set(err, DF_EINVAL, "hid_replay: path longer than %d bytes",
+                                    DF_CONFIG_PATH_MAX - 1);
+            memcpy(tmp[n - cfg->n_hid_replay], p, e);
+            tmp[n - cfg->n_hid_replay][e] = '\0';
+            if (access(tmp[n - cfg->n_hid_replay], R_OK) != 0)
+                return df_error_set(err, DF_EINVAL, "hid_replay: cannot read '%s': %s",
+                                    tmp[n - cfg->n_hid_replay], strerror(errno));
+            n++;
+        }
+        p += l;
+        if (*p == ',') p++;
+    }
+    if (n == cfg->n_hid_replay)
+        return df_error_set(err, DF_EINVAL, "hid_replay: no file given");
+    for (int i = cfg->n_hid_replay; i < n; i++)
+        strcpy(cfg->hid_replay[i], tmp[i - cfg->n_hid_replay]);
+    cfg->n_hid_replay = n;
+    return DF_OK;
 }
 
 /* Parses a non-negative integer with an optional k/m/g (binary) suffix, <= max. */
@@ -145,6 +186,7 @@ static const int_key k_int_keys[] = {
     {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
     {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
     {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
+    {"cursor_hz", offsetof(df_server_config, cursor_hz), 0, DF_CONFIG_MAX_CURSOR_HZ},
     {"max_upload_mb", offsetof(df_server_config, max_upload_mb), 1,
      DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},
     {"uploads_max_mb", offsetof(df_server_config, uploads_max_mb), 1, DF_CONFIG_MAX_UPLOADS_MB},
@@ -154,6 +196,8 @@ static const int_key k_int_keys[] = {
     {"handshake_timeout_s", offsetof(df_server_config, handshake_timeout_s), 0,
      DF_CONFIG_MAX_TIMEOUT_S},
     {"idle_timeout_s", offsetof(df_server_config, idle_timeout_s), 0, DF_CONFIG_MAX_TIMEOUT_S},
+    {"hid_enumerate_s", offsetof(df_server_config, hid_enumerate_s), 0,
+     DF_CONFIG_MAX_HID_ENUMERATE_S},
 };
 
 /* Parses yes/no, true/false, on/off, 1/0 (case-insensitive) into *out. */
@@ -185,6 +229,7 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
 {
     unsigned long long v;
     if (!cfg || !key || !value) return df_error_set(err, DF_EINVAL, "config: NULL argument");
+    if (strncmp(key, "hid.", 4) == 0) return df_hid_config_set(&cfg->hid, key, value, err);
     for (size_t i = 0; i < sizeof k_int_keys / sizeof k_int_keys[0]; i++) {
         const int_key *ik = &k_int_keys[i];
         if (strcmp(key, ik->key) != 0) continue;
@@ -220,6 +265,23 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         return DF_OK;
     }
     if (strcmp(key, "allow_paths") == 0) return add_allow(cfg, value, err);
+    if (strcmp(key, "hid") == 0) {
+        if (parse_bool(value, &cfg->hid_on) != DF_OK)
+            return df_error_set(err, DF_EINVAL, "hid: '%s' is not on or off", value);
+        return DF_OK;
+    }
+    if (strcmp(key, "hid_replay") == 0) return add_hid_replay(cfg, value, err);
+    if (strcmp(key, "hid_replay_speed") == 0) {
+        char *end = NULL;
+        errno = 0;
+        double speed = strtod(value, &end);
+        if (errno || !end || end == value || *end || !(speed >= 0 && speed <= 1e6))
+            return df_error_set(err, DF_EINVAL, "hid_replay_speed: '%s' is not in 0..1e6 "
+                                "(0 = at once)", value);
+        cfg->hid_replay_speed = speed;
+        return DF_OK;
+    }
+
     if (strcmp(key, "log_level") == 0) {
         int l;
         if (df_log_parse_level(value, &l) != DF_OK)
@@ -321,6 +383,11 @@ int df_config_parse(df_server_config *cfg, const char *text, size_t len, const c
         rc = df_config_set(tmp, k, val, &e2);
         if (rc != DF_OK) df_error_set(err, rc, "%s:%d: %s", name, lineno, e2.msg);
     }
+    if (rc == DF_OK) { /* hid.* cross-key checks (nu_min <= nu_max, ...) need the whole file */
+        df_error e2;
+        rc = df_hid_config_check(&tmp->hid, &e2);
+        if (rc != DF_OK) df_error_set(err, rc, "%s: %s", name, e2.msg);
+    }
     if (rc == DF_OK) *cfg = *tmp;
     free(tmp);
     free(line);
@@ -376,10 +443,11 @@ static const char k_usage[] =
     "                      who can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us, shm_ring_bytes,\n"
+    "                      max_sessions, threads, spin_us, inline_us, cursor_hz, shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
     "                      memory_max_mb, tcp_insecure, socket_mode, socket_group,\n"
-    "                      handshake_timeout_s, idle_timeout_s);\n"
+    "                      handshake_timeout_s, idle_timeout_s, hid.<class>.<key> with\n"
+    "                      class knob|3d-mouse|pen or a VID:PID like 046d:c626);\n"
     "                      command-line options override the file\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"
@@ -387,6 +455,10 @@ static const char k_usage[] =
     "                      (default 0; helps stroke latency only when cores are idle)\n"
     "  --inline-us N       run a brush update on the loop thread when its stroke's last update\n"
     "                      took <= N us (default 50; 0 = always on the compute pool)\n"
+    "  --hid-replay FILES  replay hid-recorder files (comma-separated) as HID devices; they\n"
+    "                      start when a client first subscribes to a session\n"
+    "                      (config hid_replay; also: hid = on|off, hid_replay_speed,\n"
+    "                      hid_enumerate_s, hid.<class>.<key>: see server/hid/hid_config.h)\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"
@@ -447,7 +519,8 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         }
         static const char *const map[][2] = {
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
-            {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"}};
+            {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"},
+            {"--hid-replay", "hid_replay"}};
         int done = 0;
         for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);

@@ -43,11 +43,30 @@
  *   uploads_max_mb     buffers of all uploads in flight together, MiB (default 1024)
  *   history_max_mb     undo history of one session, MiB; the oldest steps are dropped beyond it
  *                      (0 .. 1048576; default physical RAM / 32, clamped to 64 .. 1024)
+ *   cursor_hz          BRUSH_CURSOR events per second at most, per session and origin (a
+ *                      device or client moving a brush cursor; brush_state.h): a value within
+ *                      1/cursor_hz of the previous event waits for the end of that interval,
+ *                      the latest one wins, never lost (0 .. DF_CONFIG_MAX_CURSOR_HZ, default
+ *                      DF_CONFIG_DEFAULT_CURSOR_HZ; 0 = unlimited)
  *   memory_max_mb      memory budget of uploads, sessions, rings and history together, MiB
  *                      (16 .. 1073741824; default half the physical RAM, at least 256; see
  *                      membudget.h)
+ *   hid                on | off (default on): read HID devices through hidapi (hidraw) and
+ *                      libusb (PowerMate); with no device present nothing happens
+ *   hid_replay         FILE[,FILE...]: also replay these hid-recorder files (or a PowerMate raw
+ *                      file) as devices (server/hid/hid_source.h); they start when a client first
+ *                      subscribes to a session; repeated lines append. Works with hid = off (replay only)
+ *   hid_replay_speed   replay speed factor: recorded gaps are divided by it (default 1); 0 =
+ *                      deliver every report at once (tests: the recorded timestamps still drive
+ *                      the mappers)
+ *   hid_enumerate_s    seconds between device enumerations (hotplug without libusb hotplug;
+ *                      0 = only at start; default 2, at most 3600)
+ *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
+ *                      class knob | 3d-mouse | pen, per-device keys override class keys);
+ *                      checked for consistency once the whole file is read
  * Command line (overrides the file): --socket PATH, --tcp HOST:PORT, --tcp-insecure,
- * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N, --help. */
+ * --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
+ * --hid-replay FILE[,FILE...], --help. */
 #ifndef DF_SERVER_CONFIG_H
 #define DF_SERVER_CONFIG_H
 
@@ -55,6 +74,7 @@
 #include <stdint.h>
 
 #include "core/common/df_error.h"
+#include "server/hid/hid_config.h"
 
 #define DF_CONFIG_PATH_MAX 4096
 #define DF_CONFIG_SOCKET_MAX 108          /* sizeof(sockaddr_un.sun_path) */
@@ -64,6 +84,7 @@
 #define DF_CONFIG_MAX_THREADS 64
 #define DF_CONFIG_MAX_SPIN_US 1000
 #define DF_CONFIG_MAX_INLINE_US 1000
+#define DF_CONFIG_MAX_CURSOR_HZ 10000
 
 #define DF_CONFIG_DEFAULT_MAX_CLIENTS 256
 #define DF_CONFIG_DEFAULT_QUEUE_LIMIT ((size_t)256 << 20) /* 256 MiB per client */
@@ -73,6 +94,7 @@
 #define DF_CONFIG_DEFAULT_THREADS 4
 #define DF_CONFIG_DEFAULT_SPIN_US 0
 #define DF_CONFIG_DEFAULT_INLINE_US 50 /* ~ two thread hand-offs on the 2-core test machine */
+#define DF_CONFIG_DEFAULT_CURSOR_HZ 120 /* BRUSH_CURSOR events per second per (session, origin) */
 #define DF_CONFIG_DEFAULT_SHM_RING ((uint64_t)64 << 20) /* 64 MiB: ~5k 1k-vertex versions */
 #define DF_CONFIG_MIN_SHM_RING ((uint64_t)64 << 10)
 #define DF_CONFIG_DEFAULT_SHM_TOTAL ((uint64_t)256 << 20) /* all rings: 256 MiB */
@@ -94,6 +116,9 @@
 #define DF_CONFIG_DEFAULT_IDLE_TIMEOUT_S 300
 #define DF_CONFIG_MAX_TIMEOUT_S 86400    /* one day */
 #define DF_CONFIG_GROUP_MAX 64
+#define DF_CONFIG_MAX_HID_REPLAY 16       /* replay files */
+#define DF_CONFIG_DEFAULT_HID_ENUMERATE_S 2
+#define DF_CONFIG_MAX_HID_ENUMERATE_S 3600
 
 typedef struct df_server_config {
     char socket_path[DF_CONFIG_SOCKET_MAX]; /* "" = no Unix listener */
@@ -110,6 +135,7 @@ typedef struct df_server_config {
     int threads;
     int spin_us;                 /* compute worker spin after a short job, us (0 = off) */
     int inline_us;               /* loop-thread budget of a cheap brush update, us (0 = off) */
+    int cursor_hz;               /* BRUSH_CURSOR rate per (session, origin), Hz (0 = unlimited) */
     uint64_t shm_ring_bytes;     /* shared-memory stream ring per session, bytes (0 = off) */
     uint64_t shm_total_bytes;    /* all rings together, bytes */
     int max_upload_mb;           /* largest inline upload, MiB */
@@ -121,7 +147,13 @@ typedef struct df_server_config {
     char socket_group[DF_CONFIG_GROUP_MAX]; /* "" = the daemon's group */
     int handshake_timeout_s;     /* HELLO deadline after accept, s (0 = off) */
     int idle_timeout_s;          /* silent unsubscribed connection deadline, s (0 = off) */
+    int hid_on;                  /* 1: hidapi + libusb backends (config `hid`, default 1) */
+    int n_hid_replay;
+    char hid_replay[DF_CONFIG_MAX_HID_REPLAY][DF_CONFIG_PATH_MAX]; /* replay files */
+    double hid_replay_speed;     /* > 0, or 0 = at once */
+    int hid_enumerate_s;         /* 0 = at start only */
     int foreground;              /* 1: do not daemonize */
+    df_hid_config hid;           /* hid.* keys (zeroed: every device uses the defaults) */
     char config_path[DF_CONFIG_PATH_MAX]; /* "" when none */
 } df_server_config;
 

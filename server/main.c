@@ -32,6 +32,7 @@
 #include <uv.h>
 
 #include "server/config.h"
+#include "server/hid/hid_manager.h"
 #include "server/log.h"
 #include "server/net/sd.h"
 #include "server/server.h"
@@ -95,6 +96,14 @@ int main(int argc, char **argv)
     if (df_server_start(&srv, loop, &cfg, &err) != DF_OK) {
         fprintf(stderr, "deformd: %s\n", err.msg);
         uv_run(loop, UV_RUN_NOWAIT);
+        uv_loop_close(loop);
+        return 1;
+    }
+    if (df_hid_manager_start(&srv, &err) != DF_OK) { /* HID devices (hid_manager.h) */
+        fprintf(stderr, "deformd: %s\n", err.msg);
+        df_server_stop(&srv);
+        uv_run(loop, UV_RUN_DEFAULT);
+        df_server_free(&srv);
         uv_loop_close(loop);
         return 1;
     }

@@ -10,6 +10,7 @@
 #include "server/handlers/dispatch.h"
 #include "server/net/guard.h"
 #include "server/handlers/handlers.h"
+#include "server/hid/hid_manager.h"
 #include "server/exec/job.h"
 #include "server/net/listener.h"
 #include "server/log.h"
@@ -118,7 +119,7 @@ void df_server_describe(const df_server *srv, char *buf, size_t cap)
 static void on_stop_timer(uv_timer_t *h)
 {
     df_server *srv = h->data;
-    if (srv->jobs_running > 0) return;
+    if (srv->jobs_running > 0 || df_hid_manager_busy(srv)) return;
     uv_timer_stop(h);
     uv_close((uv_handle_t *)h, (uv_close_cb)free);
     /* Sessions: every FIFO is drained (queued jobs were answered or dropped). */
@@ -144,6 +145,7 @@ void df_server_stop(df_server *srv)
     srv->stopping = 1;
     df_sd_notify("STOPPING=1");
     df_listener_close(srv);
+    df_hid_manager_stop(srv); /* joins the reader threads; their last posts drain meanwhile */
     uv_signal_stop(&srv->sig_int);
     uv_signal_stop(&srv->sig_term);
     uv_close((uv_handle_t *)&srv->sig_int, NULL);
@@ -163,6 +165,7 @@ void df_server_stop(df_server *srv)
 void df_server_free(df_server *srv)
 {
     while (srv->sessions) df_session_destroy(srv->sessions);
+    df_hid_manager_free(srv);
     df_pool_free(srv->pool);
     srv->pool = NULL;
     df_guard_free(srv);

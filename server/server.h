@@ -44,6 +44,7 @@ typedef struct df_conn {
     uv_buf_t wbufs[DF_OUTQ_MAX_BATCH];
     int pending;             /* requests accepted and not yet answered */
     int hello_done;          /* a HELLO succeeded (required before most requests) */
+    char name[DF_MAX_NAME_LEN + 1]; /* the client_name of its HELLO ("" before / when none) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */
@@ -89,6 +90,9 @@ typedef struct df_server {
     uint64_t refuse_log_ms, refuse_suppressed; /* refusal log rate limit (guard.h) */
     uint64_t sweep_epoch;
     df_stats stats;
+    uint64_t last_change_session; /* session of a client's last change request or subscribe
+                                   * (df_job_is_change): unbound HID devices drive it */
+    struct df_hid_manager *hid;   /* HID devices (server/hid/hid_manager.h), NULL when off */
     /* Upward calls of the network layer (net never includes what is above it), set by
      * df_server_start: a complete request frame (dispatch), a connection that closes (its
      * sessions and jobs forget it), its last reference gone (its unfinished upload). NULL: none. */

@@ -30,6 +30,8 @@ typedef struct df_stats {
     uint64_t kelvin_lu_hits, kelvin_lu_misses;
     uint64_t admm_hits, admm_misses;
     uint64_t lru_evictions;
+    uint64_t brush_state_changes; /* session brush changes, all sessions (brush_state.h) */
+    uint64_t brush_cursor_events; /* BRUSH_CURSOR events broadcast (after rate limiting) */
 } df_stats;
 
 #endif

@@ -20,6 +20,8 @@
 # tests) may include it: never the rest of proto/ nor libdeformclient (client/ outside deformctl).
 #   server/hid/hid_pen_target.*  server/ core/common/ core/mesh/ core/geom/   (the pen's ray cast:
 #                                                           session topology + Embree scene)
+#   server/hid/hid_manager.*, server/hid/hid_mgr_*  server/ proto/ core/common/  (the daemon
+#                                                           integration: devices -> requests)
 #   server/hid/        server/ core/common/                (HID parsers: pure C, no proto, no math)
 #   server/            server/ proto/ core/                (the daemon)
 #   tests/             anything                            (tests may reach every layer)
@@ -44,6 +46,8 @@ allowed() { # $1 = file, $2 = included path -> status 0 when allowed
                  || $inc == core/common/* || $inc == core/mesh/* ]] ;;
     server/hid/hid_pen_target.*) [[ $inc == server/* || $inc == core/common/* \
                                      || $inc == core/mesh/* || $inc == core/geom/* ]] ;;
+    server/hid/hid_manager.*|server/hid/hid_mgr_*) [[ $inc == server/* || $inc == proto/* \
+                                                    || $inc == core/common/* ]] ;;
     server/hid/*) [[ $inc == server/* || $inc == core/common/* ]] ;;
     server/*) [[ $inc == server/* || $inc == proto/* || $inc == core/* ]] ;;
     *) return 1 ;;

@@ -22,6 +22,8 @@ clean_tree() { # $1 = dir: one legitimate include per layer
   put "$1/server/net/conn.c" '#include "server/exec/pool.h"' '#include "core/admm/admm.h"'
   put "$1/tests/unit/x/test_x.c" '#include "server/net/conn.h"'
   put "$1/server/hid/hid_pen_target.c" '#include "core/geom/raycast.h"' '#include "core/mesh/mesh.h"'
+  put "$1/server/hid/hid_manager.c" '#include "proto/messages.h"' '#include "server/exec/job.h"'
+  put "$1/server/hid/hid_mgr_drive.c" '#include "proto/messages.h"' '#include "core/common/df_error.h"'
 }
 
 case_ok() { # $1 = name
@@ -56,5 +58,8 @@ case_bad server/net/x.c client/dc_client.h
 case_bad hid/x.c core/common/df_error.h
 case_bad server/hid/hid_x.c core/geom/raycast.h
 case_bad server/hid/hid_pen_target.c proto/messages.h
+case_bad server/hid/hid_manager.c core/kelvinlet/kelvinlet.h
+case_bad server/hid/hid_mgr_drive.c core/geom/raycast.h
+case_bad server/hid/hid_class.c proto/messages.h
 [ "$fails" -eq 0 ] && echo "check_layers selftest: all cases pass"
 [ "$fails" -eq 0 ]

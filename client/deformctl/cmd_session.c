@@ -290,6 +290,25 @@ static void watch_event(void *user, const df_frame_header *h, const uint8_t *pay
                 printf("session %" PRIu64 " closed\n", r.session_id);
             fflush(stdout);
         }
+    } else if (h->type == DF_MSG_BRUSH_STATE || h->type == DF_MSG_BRUSH_CURSOR) {
+        df_msg_brush_state s;
+        df_msg_brush_cursor k;
+        int rc = h->type == DF_MSG_BRUSH_STATE
+                     ? df_msg_brush_state_decode(payload, h->payload_len, &s, NULL)
+                     : df_msg_brush_cursor_decode(payload, h->payload_len, &k, NULL);
+        if (rc != DF_OK)
+            w->bad = 1;
+        else if (h->type == DF_MSG_BRUSH_STATE && s.session_id == w->session)
+            ctl_brush_state_print(w->ctx, &s, 1);
+        else if (h->type == DF_MSG_BRUSH_CURSOR && k.session_id == w->session)
+            ctl_brush_cursor_print(w->ctx, &k);
+    } else if (h->type == DF_MSG_DEVICE_STATE) { /* a device that drives this session */
+        df_msg_device_info *dv = malloc(sizeof *dv);
+        if (!dv || df_msg_device_info_decode(payload, h->payload_len, dv, NULL) != DF_OK)
+            w->bad = dv != NULL;
+        else
+            ctl_device_state_print(w->ctx, dv);
+        free(dv);
     } else if (h->type == DF_MSG_SHM_REF) { /* --shm: a frame overwritten before it was read */
         w->lost++;
         w->rows = 0;
@@ -386,7 +405,8 @@ static const dc_cli_opt STATS_OPTS[] = {
 };
 static const dc_cli_opt WATCH_OPTS[] = {
     CTL_GLOBAL_OPTS,
-    {"count", 1, "--count N          exit after N versions (default: until the session closes)"},
+    {"count", 1, "--count N          exit after N versions (default: until the session closes;"
+                 " brush\n                     events print but do not count)"},
     {"shm", 0, "--shm              read the stream from the daemon's shared-memory ring (Unix "
                "socket, same host)"},
 };
@@ -409,7 +429,8 @@ const ctl_cmd ctl_cmds_session[] = {
      "Print the daemon's (or one session's) counters, one 'key value' per line.", STATS_OPTS,
      N(STATS_OPTS), 0, run_stats},
     {"watch", "watch SESSION [--count N] [--shm]",
-     "Subscribe to a session and print one line per version: version, kind, vertices changed.",
+     "Subscribe to a session and print one line per version (version, kind, vertices changed) "
+     "and per brush_state / brush_cursor event (--count counts versions only).",
      WATCH_OPTS, N(WATCH_OPTS), 1, run_watch},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},
 };

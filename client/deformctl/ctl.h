@@ -44,7 +44,7 @@ typedef struct ctl_cmd {
     const char *summary;   /* one line of what it does */
     const dc_cli_opt *opts;
     int nopts;
-    int npos;              /* positional arguments it requires */
+    int npos;              /* positional arguments it requires; -1: any, run checks them */
     int (*run)(ctl_ctx *ctx, const struct ctl_cmd *cmd, const dc_cli_args *a);
 } ctl_cmd;
 
@@ -53,6 +53,21 @@ extern const ctl_cmd ctl_cmds_session[];   /* ping load list close stats watch *
 extern const ctl_cmd ctl_cmds_brush[];     /* brush */
 extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
 extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
+extern const ctl_cmd ctl_cmds_brush_state[]; /* brush-state */
+extern const ctl_cmd ctl_cmds_devices[];   /* devices [bind DEVICE SESSION] */
+
+/* Prints a session brush (cmd_brush_state.c): event 0 as `brush-state` does ('key value' lines,
+ * or one JSON object), event 1 as one `watch` line ("brush_state seq N changed radius,nu by
+ * client ID 'NAME': type grab radius 0.25 ...", or a JSON object with "kind":"brush_state"). */
+void ctl_brush_state_print(const ctl_ctx *ctx, const df_msg_brush_state *s, int event);
+
+/* Prints a BRUSH_CURSOR event as one `watch` line ("brush_cursor device ID center X,Y,Z radius R
+ * [in_range] [stroke_active]", or a JSON object with "kind":"brush_cursor"). */
+void ctl_brush_cursor_print(const ctl_ctx *ctx, const df_msg_brush_cursor *m);
+
+/* Prints a DEVICE_STATE event as one `watch` line (cmd_devices.c): "device N knob 045e:091b
+ * open session S 'NAME'" (+ ": ERROR"), or a JSON object with "kind":"device_state". */
+void ctl_device_state_print(const ctl_ctx *ctx, const df_msg_device_info *d);
 
 /* Prints `cmd`'s usage to `f`. */
 void ctl_usage_cmd(FILE *f, const char *prog, const ctl_cmd *cmd);

@@ -14,7 +14,7 @@
 #include "client/deformctl/ctl.h"
 
 static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
-                                        ctl_cmds_mesh};
+                                        ctl_cmds_mesh, ctl_cmds_brush_state, ctl_cmds_devices};
 
 static void usage_top(FILE *f)
 {
@@ -174,9 +174,9 @@ int main(int argc, char **argv)
     int rc = check_globals(&ctx, cmd);
     if (rc)
         return rc;
-    if (a.npos < cmd->npos)
+    if (cmd->npos >= 0 && a.npos < cmd->npos) /* npos -1: the command checks its arguments */
         return ctl_usage_error(&ctx, cmd, "missing argument (see the synopsis)");
-    if (a.npos > cmd->npos) {
+    if (cmd->npos >= 0 && a.npos > cmd->npos) {
         char m[300];
         snprintf(m, sizeof m, "unexpected argument '%s'", a.pos[cmd->npos]);
         return ctl_usage_error(&ctx, cmd, m);

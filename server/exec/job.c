@@ -49,6 +49,19 @@ int df_job_decode_ref(const df_req *r, const uint8_t *p, void *body, uint64_t *s
     return rc;
 }
 
+int df_job_is_change(uint16_t type)
+{
+    switch (type) {
+    case DF_MSG_BRUSH_BEGIN: case DF_MSG_BRUSH_UPDATE: case DF_MSG_BRUSH_END:
+    case DF_MSG_BRUSH_CANCEL: case DF_MSG_SET_BRUSH_PARAM: case DF_MSG_HANDLES_SET:
+    case DF_MSG_HANDLES_MOVE: case DF_MSG_RESET_REST: case DF_MSG_UNDO: case DF_MSG_REDO:
+    case DF_MSG_SUBSCRIBE:
+        return 1;
+    default:
+        return 0;
+    }
+}
+
 int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_error *err)
 {
     void *body = kind->body_size ? calloc(1, kind->body_size) : NULL;
@@ -68,6 +81,9 @@ int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_erro
     }
     j->req.flags = r->flags;
     j->req.len = r->len;
+    j->req.origin_id = r->origin_id;
+    if (r->origin_id) j->conn_id = r->origin_id; /* a device's request: its stroke key */
+    if (r->c && df_job_is_change(r->type)) r->srv->last_change_session = s->id;
     r->answered = 1; /* the job answers it now (j->req) */
     j->kind = kind;
     j->body = body;

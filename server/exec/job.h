@@ -113,6 +113,11 @@ typedef struct df_job_kind {
  * (the dispatcher answers). Loop thread. */
 int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_error *err);
 
+/* 1 when a client's request of `type` makes its session the most recently active one
+ * (srv->last_change_session, which unbound HID devices follow): the change requests (brush,
+ * handles, reset-rest, undo/redo) and subscribe. */
+int df_job_is_change(uint16_t type);
+
 /* Decoder of the requests whose body is a session_ref (no job body). */
 int df_job_decode_ref(const df_req *r, const uint8_t *p, void *body, uint64_t *session_id,
                       df_error *err);

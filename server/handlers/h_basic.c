@@ -7,6 +7,7 @@
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
+#include "server/hid/hid_manager.h"
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/session.h"
@@ -61,7 +62,8 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
     r.server_max_version = DF_PROTO_VERSION;
     r.features = DF_FEAT_KELVINLET | DF_FEAT_ADMM | DF_FEAT_SPARSE_STREAM |
                  (cfg->n_allow ? DF_FEAT_PATH_LOAD : 0) | (c->srv->have_tcp ? DF_FEAT_TCP : 0) |
-                 (cfg->shm_ring_bytes && !c->is_tcp ? DF_FEAT_SHM_STREAM : 0);
+                 (cfg->shm_ring_bytes && !c->is_tcp ? DF_FEAT_SHM_STREAM : 0) |
+                 (c->srv->hid ? DF_FEAT_HID : 0);
     r.max_frame_payload = DF_MAX_FRAME_PAYLOAD;
     r.max_mesh_vertices = (uint32_t)cfg->max_mesh_vertices < DF_MAX_MESH_VERTICES
                               ? (uint32_t)cfg->max_mesh_vertices
@@ -79,6 +81,7 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
     if (m.client_name[0])
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
     c->hello_done = 1;
+    snprintf(c->name, sizeof c->name, "%s", m.client_name);
     df_req_reply_hello_reply(rq, &r);
     return DF_OK;
 }
@@ -209,6 +212,7 @@ static void subscribe_done(df_job *j)
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(&j->req, &info);
+    df_hid_manager_session_active(s->srv, s); /* replay devices wait for this (hid_manager.h) */
     if (*(const uint8_t *)j->body & DF_SUBSCRIBE_SNAPSHOT) {
         df_frames f = {0};
         if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)

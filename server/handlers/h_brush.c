@@ -16,7 +16,9 @@
  * nothing, e.g. after an update the engine rejected). Each begin/update is one version (kind BRUSH).
  * A begin whose loads are all zero publishes nothing (ack with the current version).
  * Knobs (set brush parameter: radius / nu / strength / falloff / ratio) change the client's open
- * stroke from its next update on (ESTATE without one). A client that disconnects with an open
+ * stroke from its next update on (ESTATE without one). A begin whose `use_session` bits name
+ * brush fields takes those from the session brush (brush_state.h) as it is when the begin
+ * arrives; the stroke keeps them (a later brush state change does not alter an open stroke). A client that disconnects with an open
  * stroke has it ended (committed as an undo step). Pinned points use the
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
  * change. */
@@ -368,6 +370,32 @@ static void load_from(brush_req *r, const double *move, const double *twist, dou
     memcpy(r->load + 7, matrix, 9 * sizeof(double));
 }
 
+/* The fields a begin's `use_session` bits name, copied from the session brush into the message
+ * (loop thread, when the request arrives: the stroke uses the brush as of its arrival, and the
+ * worker never reads the session brush). An unknown session is left to df_job_request. */
+static void take_session_brush(df_server *srv, df_msg_brush *m)
+{
+    const df_session *s = m->use_session ? df_session_find(srv, m->session_id) : NULL;
+    if (!s) return;
+    const df_brush_state *b = df_brush_state_get(s);
+    unsigned u = m->use_session;
+    if (u & DF_BS_TYPE) m->type = b->type;
+    if (u & DF_BS_RADIUS) m->radius = b->radius;
+    if (u & DF_BS_NU) m->nu = b->nu;
+    if (u & DF_BS_STRENGTH) m->strength = b->strength;
+    if (u & DF_BS_FALLOFF) m->falloff = b->falloff;
+    if (u & DF_BS_RATIO) m->ratio = b->ratio;
+    if (u & DF_BS_INTEGRATOR) {
+        m->integrator = b->integrator;
+        m->steps = b->steps;
+    }
+    if (u & DF_BS_MIRROR) {
+        m->has_mirror = b->has_mirror;
+        memcpy(m->mirror_point, b->mirror_point, sizeof m->mirror_point);
+        memcpy(m->mirror_normal, b->mirror_normal, sizeof m->mirror_normal);
+    }
+}
+
 static int begin_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t *sid,
                         df_error *err)
 {
@@ -375,6 +403,7 @@ static int begin_decode(const df_req *rq, const uint8_t *p, void *body, uint64_t
     int rc = df_msg_brush_decode(p, rq->len, &r->begin, err); /* owned by the body from here */
     if (rc != DF_OK) return rc;
     *sid = r->begin.session_id;
+    take_session_brush(rq->srv, &r->begin);
     load_from(r, r->begin.move, r->begin.twist, r->begin.scale, r->begin.matrix);
     return DF_OK;
 }

@@ -6,10 +6,11 @@
 
 #include "server/handlers/handlers.h"
 #include "server/exec/pool.h"
+#include "server/hid/hid_manager.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
 
-#define DF_STATS_MAX 96 /* entries this server reports */
+#define DF_STATS_MAX 128 /* entries this server reports (a device's: h_devices.c) */
 
 static void put(df_msg_stats *st, const char *key, double v)
 {
@@ -25,6 +26,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
     int rc = df_msg_stats_req_decode(p, r->len, &m, err);
     if (rc != DF_OK) return rc;
     df_server *srv = r->srv;
+    if (m.session_id & DF_DEVICE_ID_BIT) return df_h_device_stats(r, m.session_id, err);
     df_session *s = NULL;
     if (m.session_id && !(s = df_session_find(srv, m.session_id)))
         return df_error_set(err, DF_ENOTFOUND, "stats: no session %llu",
@@ -64,6 +66,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "moves_orphaned", (double)x->moves_orphaned);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
+        put(&st, "brush_state_changes", (double)x->brush_state_changes);
+        put(&st, "brush_cursor_events", (double)x->brush_cursor_events);
+        put(&st, "cursor_hz", srv->cfg.cursor_hz);
         put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);
         put(&st, "cache.bytes", (double)srv->cache_bytes);
         put(&st, "cache.limit_bytes", (double)(srv->cfg.cache_memory_mb << 20));
@@ -88,6 +93,12 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "shm_total_bytes", (double)srv->cfg.shm_total_bytes);
         put(&st, "history.limit_bytes", (double)((uint64_t)srv->cfg.history_max_mb << 20));
         put(&st, "history.steps_dropped", (double)srv->history_dropped);
+        uint32_t ndev, nopen;
+        uint64_t hid_events;
+        df_hid_manager_counts(srv, &ndev, &nopen, &hid_events);
+        put(&st, "hid.devices", ndev);
+        put(&st, "hid.devices_open", nopen);
+        put(&st, "hid.events", (double)hid_events);
         if (srv->pool) { /* compute pool hand-offs (pool.h) */
             df_pool_counters pc;
             df_pool_counters_get(srv->pool, &pc);
@@ -114,6 +125,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "history_steps_dropped", (double)s->hist.dropped);
         put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
         put(&st, "open_strokes", strokes);
+        put(&st, "brush.seq", (double)s->brush_seq);
         put(&st, "job_running", s->running != NULL);
         /* A worker may be writing the compute state: read the loop-owned copies (session.h). */
         if (!s->running) df_session_seen_sync(s);

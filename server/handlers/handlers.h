@@ -24,6 +24,14 @@ DF_HANDLER(load_mesh);
 DF_HANDLER(list_sessions);
 DF_HANDLER(open_session);
 DF_HANDLER(stats);
+DF_HANDLER(brush_state_get); /* h_brush_state.c: the session brush (brush_state.h) */
+DF_HANDLER(brush_state_set);
+DF_HANDLER(devices_list); /* devices (HID): h_devices.c */
+DF_HANDLER(device_bind);
+DF_HANDLER(device_view);
+/* STATS of a device (stats_req.session_id = a device id, bit 63 set): h_devices.c */
+#define DF_DEVICE_ID_BIT (1ull << 63)
+int df_h_device_stats(df_req *r, uint64_t device_id, df_error *err);
 #undef DF_HANDLER
 
 /* Session requests: each is a job kind (decode, body, work, done; job.h) queued on its

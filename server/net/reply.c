@@ -63,6 +63,10 @@ DF_OUT_DEF(progress)
 DF_OUT_DEF(stats)
 DF_OUT_DEF(shm_info)
 DF_OUT_DEF(shm_ref)
+DF_OUT_DEF(brush_state)
+DF_OUT_DEF(brush_cursor)
+DF_OUT_DEF(device_info)
+DF_OUT_DEF(device_list)
 
 void df_reply_error(df_conn *c, uint16_t type, uint64_t request_id, int code, const char *fmt, ...)
 {

@@ -38,6 +38,10 @@ DF_OUT_DECL(progress)
 DF_OUT_DECL(stats)
 DF_OUT_DECL(shm_info)
 DF_OUT_DECL(shm_ref)
+DF_OUT_DECL(brush_state)
+DF_OUT_DECL(brush_cursor)
+DF_OUT_DECL(device_info)
+DF_OUT_DECL(device_list)
 #undef DF_OUT_DECL
 
 /* Sends an error reply to request (type, request_id) with wire code `code` and a printf-style

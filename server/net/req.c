@@ -65,3 +65,27 @@ DF_REQ_REPLY_DEF(session_list)
 DF_REQ_REPLY_DEF(move_result)
 DF_REQ_REPLY_DEF(stats)
 DF_REQ_REPLY_DEF(shm_info)
+DF_REQ_REPLY_DEF(brush_state)
+DF_REQ_REPLY_DEF(device_list)
+
+void df_req_reply_empty(df_req *r)
+{
+    if (!df_req_claim(r) || !r->c) return;
+    df_buf b;
+    size_t start;
+    df_error err;
+    df_buf_init(&b);
+    df_sbuf *s = NULL;
+    if (df_frame_begin(&b, r->type, DF_FLAG_REPLY, r->id, &start, &err) == DF_OK &&
+        df_frame_end(&b, start, &err) == DF_OK)
+        s = df_sbuf_from_buf(&b);
+    if (r->c->pending > 0) r->c->pending--;
+    if (!s) {
+        df_buf_free(&b);
+        df_reply_error(r->c, r->type, r->id, DF_ENOMEM, "out of memory building a reply");
+        return;
+    }
+    r->c->srv->stats.requests_ok++;
+    df_conn_send(r->c, s);
+    df_sbuf_unref(s);
+}

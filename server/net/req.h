@@ -25,7 +25,16 @@ typedef struct df_req {
     uint16_t flags;        /* frame flags (MORE for chunked uploads) */
     uint32_t len;          /* payload length */
     unsigned answered : 1; /* a final answer was sent (or dropped for a gone requester) */
+    uint64_t origin_id;    /* requester id: 0 = c's connection id; an internal request on
+                            * behalf of a device (c NULL) carries the device id, which keys its
+                            * stroke like a connection id (device ids have bit 63 set) */
 } df_req;
+
+/* The requester id of `r`: origin_id when set, else the connection's id, else 0. */
+static inline uint64_t df_req_origin(const df_req *r)
+{
+    return r->origin_id ? r->origin_id : r->c ? r->c->id : 0;
+}
 
 /* 1: a second answer aborts (debug builds); 0: it is only counted (release). */
 extern int df_req_strict;
@@ -46,6 +55,9 @@ void df_req_reply(df_req *r, df_sbuf *f);
  * accounting, no check. */
 void df_req_reply_more(df_req *r, df_sbuf *f);
 
+/* Final reply with an empty body (DEVICE_BIND, DEVICE_VIEW). */
+void df_req_reply_empty(df_req *r);
+
 /* Acks `r` with (session, version). */
 void df_req_ack(df_req *r, uint64_t session_id, uint64_t version);
 
@@ -59,6 +71,8 @@ DF_REQ_REPLY_DECL(session_list)
 DF_REQ_REPLY_DECL(move_result)
 DF_REQ_REPLY_DECL(stats)
 DF_REQ_REPLY_DECL(shm_info)
+DF_REQ_REPLY_DECL(brush_state)
+DF_REQ_REPLY_DECL(device_list)
 #undef DF_REQ_REPLY_DECL
 
 #endif

@@ -98,7 +98,7 @@ static int apply_history(df_session *s, df_change *c)
     default: break;
     }
     if (rc == DF_OK && c->drop_stroke && c->req)
-        df_session_drop_stroke(s, c->req->c ? c->req->c->id : 0);
+        df_session_drop_stroke(s, df_req_origin(c->req));
     return rc;
 }
 

@@ -7,6 +7,7 @@
 
 #include "server/session/cache.h"
 #include "server/net/conn.h"
+#include "server/hid/hid_manager.h"
 #include "server/log.h"
 #include "server/session/meshload.h"
 #include "server/net/reply.h"
@@ -134,6 +135,7 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     memcpy(s->cur, s->mesh.V, n * sizeof(double));
     for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
     atomic_init(&s->version, 0);
+    df_brush_state_defaults(&s->brush);
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
@@ -191,6 +193,7 @@ void df_session_destroy(df_session *s)
     free(s->subs);
     free(s->sub_shm);
     df_shm_destroy(s->shm);
+    df_brush_state_release(s);
     while (s->strokes) {
         df_stroke *st = s->strokes;
         s->strokes = st->next;
@@ -221,6 +224,7 @@ void df_session_close(df_session *s)
 {
     if (s->closed) return;
     s->closed = 1;
+    df_hid_manager_session_gone(s->srv, s); /* devices bound to it follow the most recent */
     df_msg_session_ref m = {.session_id = s->id};
     df_error err;
     df_sbuf *f = df_out_session_ref(DF_MSG_SESSION_CLOSED, DF_FLAG_EVENT, 0, &m, &err);

@@ -26,6 +26,7 @@
 #include "core/admm/admm.h"
 #include "core/kelvinlet/kelvinlet.h"
 #include "core/mesh/mesh.h"
+#include "server/session/brush_state.h"
 #include "server/session/history.h"
 #include "server/server.h"
 
@@ -112,6 +113,11 @@ typedef struct df_session {
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
+    /* The session brush (brush_state.h), loop thread only: workers never read it. */
+    df_brush_state brush;        /* current values (the one struct a durable store persists) */
+    uint64_t brush_seq;          /* changes of `brush` so far (not the session version) */
+    df_brush_changer brush_by;   /* who made the last change */
+    struct df_cursor_limiter *cursor; /* BRUSH_CURSOR rate limiter, made on first use */
     struct df_session *next;
 } df_session;
 

@@ -43,6 +43,9 @@ static const uint16_t kinds[][2] = {
     {DF_MSG_SNAPSHOT, 0}, {DF_MSG_DISPLACEMENT, DF_FLAG_EVENT}, {DF_MSG_PROGRESS, DF_FLAG_EVENT},
     {DF_MSG_STATS, 0}, {DF_MSG_STATS, DF_FLAG_REPLY}, {DF_MSG_STREAM_SHM, DF_FLAG_REPLY},
     {DF_MSG_SHM_REF, DF_FLAG_EVENT},
+    /* devices (HID) */
+    {DF_MSG_DEVICE_STATE, DF_FLAG_EVENT}, {DF_MSG_DEVICES_LIST, DF_FLAG_REPLY},
+    {DF_MSG_DEVICE_BIND, 0}, {DF_MSG_DEVICE_VIEW, 0},
 };
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

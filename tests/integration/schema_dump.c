@@ -3,7 +3,7 @@
  *   type NAME value lower_name request reply event
  *   enum PyClass kind C_PREFIX NAME value
  *   limit DF_NAME value
- *   const DF_NAME value            (frame and ring constants, reserved feature bit)
+ *   const DF_NAME value            (frame and ring constants)
  *   magic DF_SHM_MAGIC text
  *   brush_default field value      admm_default field value      admm_nh_default field value
  * Header-only on purpose: it includes nothing else, so it proves the schema stands alone. */
@@ -35,7 +35,6 @@ int main(void)
     printf("const\tDF_FRAME_MAGIC\t%llu\n", (unsigned long long)DF_FRAME_MAGIC);
     printf("const\tDF_PROTO_VERSION\t%llu\n", (unsigned long long)DF_PROTO_VERSION);
     printf("const\tDF_FRAME_HEADER_SIZE\t%llu\n", (unsigned long long)DF_FRAME_HEADER_SIZE);
-    printf("const\tDF_FEAT_RESERVED\t%llu\n", (unsigned long long)DF_FEAT_RESERVED);
     printf("const\tDF_SHM_HEADER_BYTES\t%llu\n", (unsigned long long)DF_SHM_HEADER_BYTES);
     printf("const\tDF_SHM_MIN_CAPACITY\t%llu\n", (unsigned long long)DF_SHM_MIN_CAPACITY);
     printf("const\tDF_SHM_MAX_CAPACITY\t%llu\n", (unsigned long long)DF_SHM_MAX_CAPACITY);

@@ -84,11 +84,10 @@ def test_limits_and_constants_match(dump):
     c = dump["const"]
     assert (schema.FRAME_MAGIC, schema.PROTO_VERSION, schema.FRAME_HEADER_SIZE) == (
         c["DF_FRAME_MAGIC"], c["DF_PROTO_VERSION"], c["DF_FRAME_HEADER_SIZE"])
-    assert schema.FEATURE_RESERVED == c["DF_FEAT_RESERVED"]
     assert (schema.SHM_MAGIC, schema.SHM_HEADER_BYTES, schema.SHM_MIN_CAPACITY,
             schema.SHM_MAX_CAPACITY) == (c["DF_SHM_MAGIC"], c["DF_SHM_HEADER_BYTES"],
                                          c["DF_SHM_MIN_CAPACITY"], c["DF_SHM_MAX_CAPACITY"])
-    assert not schema.FEATURE_RESERVED & sum(schema.Feature)
+    assert "DF_FEAT_RESERVED" not in c     # bit 6 is HID again (schema.Feature.HID)
 
 
 def test_every_limit_define_is_listed_once():
@@ -227,6 +226,13 @@ ENUM_FIELDS = [
     ("4.12", "integrator", "Integrator", False, ()),
     ("4.12", "pin_flags", "PinFlag", True, ()),
     ("4.14", "param", "BrushParam", False, ()),
+    ("4.12", "use_session", "BrushStateField", True, ()),
+    ("4.14a", "mask", "BrushStateField", True, ()),
+    ("4.14a", "type", "BrushType", False, ()),
+    ("4.14a", "integrator", "Integrator", False, ()),
+    ("4.14b", "origin_kind", "Origin", False, ()),
+    ("4.14c", "origin_kind", "Origin", False, ()),
+    ("4.14c", "flags", "CursorFlag", True, ()),
     ("4.15", "energy", "Energy", False, ()),
     ("4.17", "status", "MoveStatus", False, ("RUNNING",)),
     ("4.18", "flags", "GetMeshFlag", True, ()),
@@ -235,6 +241,9 @@ ENUM_FIELDS = [
     ("4.21", "kind", "ChangeKind", False, ()),
     ("4.21", "encoding", "DispEncoding", False, ()),
     ("4.22", "status", "MoveStatus", False, ()),
+    ("4.30", "class", "DevClass", False, ()),
+    ("4.30", "backend", "DevBackend", False, ()),
+    ("4.30", "state", "DevState", False, ()),
 ]
 
 
@@ -293,16 +302,16 @@ def test_protocol_md_limits_table(dump):
     assert doc == dump["limit"], "PROTOCOL.md section 8 vs proto/wire_schema.h"
 
 
-def test_protocol_md_feature_bit_6_reserved():
+def test_protocol_md_feature_bit_6_is_hid():
     cell = [c for c in _rows(_section(_doc(), "4.2b")) if len(c) >= 4 and c[2] == "features"][0]
-    assert re.search(r"bit 6[^,;]*reserved", cell[3]), cell[3]
+    assert re.search(r"\b6 HID\b", cell[3]) and "reserved" not in cell[3], cell[3]
 
 
 # ------------------------------------------------------------------ the daemon
 def test_daemon_advertises_only_existing_features(daemon):
     with Client.connect_unix(daemon.socket_path) as c:
         f = c.server.features
-    assert f & ~sum(schema.Feature) == 0 and not f & schema.FEATURE_RESERVED, hex(f)
+    assert f & ~sum(schema.Feature) == 0, hex(f)
     assert schema.Feature(f) & schema.Feature.KELVINLET
 
 

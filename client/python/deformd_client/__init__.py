@@ -8,15 +8,18 @@
 
 Errors from the daemon raise DeformdError(code, name, message).
 """
+from .brush_state import BrushCursor, BrushState, BrushValues
 from .client import Client, MeshData, SessionClosed, ShmLost
+from .devices import DeviceInfo
 from .errors import ConnectionClosed, DeformdError, ErrorCode, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
 from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, MoveResult,
                        SessionInfo, ShmInfo)
-from .schema import (BrushParam, BrushType, ChangeKind, DispEncoding, Energy, Feature, Format,
-                     FrameFlag, GetMeshFlag, Integrator, LoadOpt, LoadSource, MeshKind,
-                     MeshSection, MoveStatus, MsgType, PinFlag, SubscribeFlag)
+from .schema import (BrushParam, BrushStateField, BrushType, ChangeKind, CursorFlag,
+                     DispEncoding, Energy, Feature, Format, FrameFlag, GetMeshFlag, Integrator,
+                     LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType, Origin,
+                     PinFlag, SubscribeFlag, DevClass, DevBackend, DevState)
 from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
@@ -30,5 +33,7 @@ __all__ = [
     "BrushParam", "BrushType", "ChangeKind", "DispEncoding", "Energy", "Feature", "Format",
     "FrameFlag", "GetMeshFlag", "Integrator", "LoadOpt", "LoadSource", "MeshKind", "MeshSection",
     "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
+    "BrushCursor", "BrushState", "BrushValues", "BrushStateField", "CursorFlag", "Origin",
+    "DeviceInfo", "DevClass", "DevBackend", "DevState",
 ]
 __version__ = "0.1.0"

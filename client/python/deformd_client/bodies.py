@@ -8,6 +8,8 @@ import struct
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Sequence, Tuple
 
+from . import brush_state as bs
+from . import devices as dv
 from . import messages as m
 from . import schema
 from . import stream as st
@@ -129,11 +131,14 @@ def decode_brush(p: bytes) -> BrushBegin:
     if not has_mirror and any(mirror):
         raise ProtocolError("brush: mirror plane given without has_mirror (not representable)")
     pinned = [tuple(r.take("3d")) for _ in range(n_pinned)]
+    use_session = r.take("H") if r.off < len(p) else None   # optional trailing field
+    if use_session is not None and use_session & ~sum(schema.BrushStateField):
+        raise ProtocolError("brush: use_session bits 0x%x not defined" % use_session)
     b = m.Brush(type=names[btype], center=list(center), move=list(move), twist=list(twist),
                 scale=scale, matrix=list(matrix), radius=radius, nu=nu, strength=strength,
                 falloff=falloff, ratio=ratio, dim=dim, integrator=integs[integ], steps=steps,
                 moving=bool(moving), mirror=list(mirror) if has_mirror else None,
-                pinned=pinned, pin_flags=pin_flags)
+                pinned=pinned, pin_flags=pin_flags, use_session=use_session)
     return _end(r, BrushBegin(sid, b))
 
 
@@ -256,6 +261,15 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "stats": (m.decode_stats, encode_stats),
     "shm_info": (m.decode_shm_info, m.encode_shm_info),
     "shm_ref": (m.decode_shm_ref, lambda x: m.encode_shm_ref(*x)),
+    "brush_state_set": (bs.decode_brush_state_set, lambda x: bs.encode_brush_state_set(*x)),
+    "brush_state": (bs.decode_brush_state, bs.encode_brush_state),
+    "brush_cursor": (bs.decode_brush_cursor, bs.encode_brush_cursor),
+    # devices (HID)
+    "device_info": (dv.decode_device_info, dv.encode_device_info),
+    "device_list": (dv.decode_device_list, dv.encode_device_list),
+    "device_bind": (dv.decode_device_bind, lambda x: dv.encode_device_bind(*x)),
+    "device_view": (dv.decode_device_view, lambda x: dv.encode_device_view(
+        x.device_id, x.session_id, x.view_proj, x.viewport)),
 }
 
 

@@ -24,6 +24,8 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
+from . import brush_state as bs
+from . import devices as dv
 from . import frame as fr
 from . import messages as m
 from . import stream as st
@@ -80,7 +82,7 @@ class ShmLost:
     kind_name: str = "shm_lost"
 
 
-Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost]
+Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor]
 
 class Client:
     """A connection to deformd. Not thread-safe: use one Client per thread."""
@@ -231,10 +233,17 @@ class Client:
             else:
                 self._take_event_frame(inner)
             return
+        if f.type in (m.BRUSH_STATE, m.BRUSH_CURSOR):
+            self._events.append(bs.decode_brush_state(f.payload) if f.type == m.BRUSH_STATE
+                                else bs.decode_brush_cursor(f.payload))
+            return
         if f.type == m.SESSION_CLOSED:
             sid = m.decode_session_ref(f.payload)
             self._drop_shm(sid)
             self._events.append(SessionClosed(sid))
+            return
+        if f.type == m.DEVICE_STATE:    # devices (HID): a DeviceInfo event
+            self._events.append(dv.decode_device_info(f.payload))
             return
         if f.type == m.DISPLACEMENT:
             d = st.decode_disp(f.payload)
@@ -316,7 +325,8 @@ class Client:
         return self._shm.get(session_id)
 
     def events(self, timeout: float = 1.0, max_events: Optional[int] = None) -> Iterator[Event]:
-        """Yields queued and arriving events (Disp, Progress, SessionClosed, ShmLost) until none
+        """Yields queued and arriving events (Disp, Progress, SessionClosed, ShmLost, BrushState,
+        BrushCursor: tell them apart by kind_name) until none
         arrives for `timeout` seconds (or max_events were yielded). Frames of a shared-memory
         stream (stream_shm) come as if they had arrived on the socket. Replies arriving
         meanwhile are kept for wait_reply()."""
@@ -545,6 +555,24 @@ class Client:
         return m.decode_ack(self._one(m.SET_BRUSH_PARAM,
                                       m.encode_brush_param(session_id, param, value)))
 
+    def brush_state_get(self, session_id: int) -> bs.BrushState:
+        """The session brush (PROTOCOL.md 4.14a): values, seq, last changer (changed 0)."""
+        return bs.decode_brush_state(self._one(m.BRUSH_STATE_GET,
+                                               m.encode_session_ref(session_id)))
+
+    def brush_state_set(self, session_id: int, **fields) -> bs.BrushState:
+        """Sets fields of the session brush: type, radius, nu, strength, falloff, ratio,
+        integrator, steps, mirror (None = off, or (px, py, pz, nx, ny, nz)). Giving only one of
+        integrator / steps (one wire field) reads the other from the daemon first. Returns the
+        new state; subscribers get it as a BrushState event naming this client. DeformdError
+        EINVAL (nothing changed) for a bad value."""
+        base = bs.BrushValues()
+        if ("integrator" in fields) != ("steps" in fields):
+            base = self.brush_state_get(session_id).values
+        mask, v = bs.values_with(base, **fields)
+        return bs.decode_brush_state(self._one(m.BRUSH_STATE_SET,
+                                               bs.encode_brush_state_set(session_id, mask, v)))
+
     # ------------------------------------------------------------------ handles
     def set_handles(self, session_id: int, handles: Sequence[int], energy: str = "arap",
                     affine: Sequence[m.AffineSet] = (), **params) -> m.Ack:
@@ -595,3 +623,21 @@ class Client:
     def stats(self, session_id: int = 0) -> Dict[str, float]:
         """Daemon-wide (0) or one session's counters, key -> value."""
         return m.decode_stats(self._one(m.STATS, m.encode_stats_req(session_id)))
+
+    # ------------------------------------------------------------------ devices (HID)
+    def devices_list(self) -> List[dv.DeviceInfo]:
+        """The daemon's HID devices (open or not), in id order."""
+        return dv.decode_device_list(self._one(m.DEVICES_LIST))
+
+    def device_bind(self, device_id: int, session_id: int = 0) -> None:
+        """Binds a device to a session (0: unbind, it follows the most recently active
+        session). ENOTFOUND for an unknown device or session."""
+        self._one(m.DEVICE_BIND, dv.encode_device_bind(device_id, session_id))
+
+    def device_view(self, device_id: int, session_id: int, view_proj: Sequence[float],
+                    viewport: Sequence[float]) -> None:
+        """Publishes the view a pen is cast through: view_proj 16 floats (row-major, mesh space
+        -> OpenGL clip space), viewport (x, y, width, height) in pixels, y down. Also binds the
+        device to session_id."""
+        self._one(m.DEVICE_VIEW, dv.encode_device_view(device_id, session_id, view_proj,
+                                                         viewport))

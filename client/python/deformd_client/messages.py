@@ -227,6 +227,9 @@ class Brush:
     mirror: Optional[Sequence[float]] = None   # (px, py, pz, nx, ny, nz)
     pinned: Sequence[Sequence[float]] = field(default_factory=list)
     pin_flags: int = 0   # PIN_* bits; 0 = PIN_DISPLACEMENT when points are pinned
+    # BrushStateField bits: take these fields from the session brush (brush_state_set) instead
+    # of the values above. None: the field is not sent (the original layout, old daemons).
+    use_session: Optional[int] = None
 
 
 PIN_DISPLACEMENT, PIN_GRADIENT = PinFlag.DISPLACEMENT, PinFlag.GRADIENT
@@ -247,7 +250,8 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
         float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
         *vec(b.center, 3, "center"), *vec(b.move, 3, "move"), *vec(b.twist, 3, "twist"),
         float(b.scale), *vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
-    return head + f64_rows(b.pinned, "pinned point")
+    tail = b"" if b.use_session is None else struct.pack("<H", int(b.use_session))
+    return head + f64_rows(b.pinned, "pinned point") + tail
 
 
 def encode_brush_update(session_id: int, move=None, twist=None, scale: float = 0.0,

@@ -49,6 +49,7 @@ MAX_MOVE_ITERS = 1000000
 MAX_STATS_ENTRIES = 1024
 MAX_STATS_KEY_LEN = 63
 STREAM_CHUNK_BYTES = 16 << 20
+MAX_DEVICES = 256              # devices (HID)
 
 LIMITS: Dict[str, int] = {k: v for k, v in dict(globals()).items()
                           if k.startswith("MAX_") or k == "STREAM_CHUNK_BYTES"}
@@ -71,6 +72,8 @@ class MsgType(IntEnum):
     BRUSH_END = 0x0022
     BRUSH_CANCEL = 0x0023
     SET_BRUSH_PARAM = 0x0024
+    BRUSH_STATE_GET = 0x0025
+    BRUSH_STATE_SET = 0x0026
     HANDLES_SET = 0x0030
     HANDLES_MOVE = 0x0031
     RESET_REST = 0x0032
@@ -80,10 +83,16 @@ class MsgType(IntEnum):
     GET_MESH = 0x0040
     SNAPSHOT = 0x0041
     STATS = 0x0042
+    DEVICES_LIST = 0x0050      # devices (HID)
+    DEVICE_BIND = 0x0051
+    DEVICE_VIEW = 0x0052
     DISPLACEMENT = 0x0080
     PROGRESS = 0x0081
     SESSION_CLOSED = 0x0082
     SHM_REF = 0x0083
+    BRUSH_STATE = 0x0084
+    BRUSH_CURSOR = 0x0085
+    DEVICE_STATE = 0x0086      # devices (HID)
     ERROR = 0x00FF
 
 
@@ -111,6 +120,8 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.BRUSH_END: Bodies("session_ref", "ack", None),
     MsgType.BRUSH_CANCEL: Bodies("session_ref", "ack", None),
     MsgType.SET_BRUSH_PARAM: Bodies("brush_param", "ack", None),
+    MsgType.BRUSH_STATE_GET: Bodies("session_ref", "brush_state", None),
+    MsgType.BRUSH_STATE_SET: Bodies("brush_state_set", "brush_state", None),
     MsgType.HANDLES_SET: Bodies("handles", "ack", None),
     MsgType.HANDLES_MOVE: Bodies("handle_move", "move_result", None),
     MsgType.RESET_REST: Bodies("session_ref", "ack", None),
@@ -124,6 +135,13 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.PROGRESS: Bodies(None, None, "progress"),
     MsgType.SESSION_CLOSED: Bodies(None, None, "session_ref"),
     MsgType.SHM_REF: Bodies(None, None, "shm_ref"),
+    MsgType.BRUSH_STATE: Bodies(None, None, "brush_state"),
+    MsgType.BRUSH_CURSOR: Bodies(None, None, "brush_cursor"),
+    # devices (HID)
+    MsgType.DEVICES_LIST: Bodies("empty", "device_list", None),
+    MsgType.DEVICE_BIND: Bodies("device_bind", "empty", None),
+    MsgType.DEVICE_VIEW: Bodies("device_view", "empty", None),
+    MsgType.DEVICE_STATE: Bodies(None, None, "device_info"),
     MsgType.ERROR: Bodies(None, None, None),
 }
 
@@ -146,18 +164,15 @@ def body_of(msg_type: int, flags: int) -> Optional[str]:
 
 # ------------------------------------------------------------------ feature bits
 class Feature(IntFlag):
-    """hello_reply features: only what exists. Bit 6 is reserved (it was HID, which does not
-    exist yet): never sent, accepted on receipt (FEATURE_RESERVED)."""
+    """hello_reply features: only what exists (HID: the daemon's device subsystem runs)."""
     KELVINLET = 1 << 0
     ADMM = 1 << 1
     PATH_LOAD = 1 << 2
     AUTH = 1 << 3
     SPARSE_STREAM = 1 << 4
     TCP = 1 << 5
+    HID = 1 << 6
     SHM_STREAM = 1 << 7
-
-
-FEATURE_RESERVED = 1 << 6
 
 
 # ------------------------------------------------------------------ enums
@@ -258,6 +273,52 @@ class GetMeshFlag(IntFlag):
 
 class SubscribeFlag(IntFlag):
     SNAPSHOT = 1 << 0
+
+
+class BrushStateField(IntFlag):
+    """DF_BS_*: fields of the session brush (brush_state_set mask, brush_state changed, brush
+    use_session). INTEGRATOR covers integrator and steps; MIRROR has_mirror, point and normal."""
+    TYPE = 1 << 0
+    RADIUS = 1 << 1
+    NU = 1 << 2
+    STRENGTH = 1 << 3
+    FALLOFF = 1 << 4
+    RATIO = 1 << 5
+    INTEGRATOR = 1 << 6
+    MIRROR = 1 << 7
+
+
+class Origin(IntEnum):
+    """Who changed the session brush / moved a brush cursor."""
+    NONE = 0
+    CLIENT = 1
+    DEVICE = 2
+
+
+class CursorFlag(IntFlag):
+    IN_RANGE = 1 << 0
+    STROKE_ACTIVE = 1 << 1
+
+
+# ------------------------------------------------------------------ devices (HID)
+class DevClass(IntEnum):
+    NONE = 0
+    KNOB = 1
+    MOUSE3D = 2
+    PEN = 3
+
+
+class DevBackend(IntEnum):
+    HIDAPI = 1
+    LIBUSB = 2
+    REPLAY = 3
+
+
+class DevState(IntEnum):
+    OPEN = 1
+    CLOSED = 2
+    ERROR = 3
+    UNPLUGGED = 4
 
 
 # ------------------------------------------------------------------ defaults

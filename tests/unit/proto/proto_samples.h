@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES = 35 };
+enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -206,6 +206,62 @@ static inline void build_samples(sample *s)
     df_msg_load_mesh l2 = lp;
     l2.options = DF_LOAD_OPT_2D;
     ADD("load_path_2d", DF_MSG_LOAD_MESH, 0, df_msg_load_mesh_encode(&l2, out, &e));
+    /* session brush state (issue 11): a begin taking radius and nu from the session brush
+     * (the optional trailing use_session), get / set, the reply and both events */
+    df_msg_brush bus = sample_brush();
+    bus.use_session = DF_BS_RADIUS | DF_BS_NU;
+    ADD("brush_use_session", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bus, out, &e));
+    df_msg_session_ref bg = {42};
+    ADD("brush_state_get", DF_MSG_BRUSH_STATE_GET, 0, df_msg_session_ref_encode(&bg, out, &e));
+    df_msg_brush_state_set bss = {42, DF_BS_RADIUS | DF_BS_INTEGRATOR | DF_BS_MIRROR,
+                                  {DF_BRUSH_GRAB, 1, DF_INTEG_RK4, 1, 4, 0.125, 0.5, 1, 1.1,
+                                   {0.5, 0, 0}, {1, 0, 0}}};
+    ADD("brush_state_set", DF_MSG_BRUSH_STATE_SET, 0,
+        df_msg_brush_state_set_encode(&bss, out, &e));
+    df_msg_brush_state bst = {42, 0, 0, DF_ORIGIN_NONE, 0, "",
+                              {DF_BRUSH_TWIST, 3, DF_INTEG_EULER, 0, 1, 0.25, 0.45, -2, 1.5,
+                               {0, 0, 0}, {1, 0, 0}}};
+    ADD("brush_state_reply", DF_MSG_BRUSH_STATE_GET, DF_FLAG_REPLY,
+        df_msg_brush_state_encode(&bst, out, &e));
+    df_msg_brush_state bev = bst;
+    bev.seq = 7;
+    bev.changed = DF_BS_RADIUS | DF_BS_NU;
+    bev.origin_kind = DF_ORIGIN_DEVICE;
+    bev.origin_id = (1ull << 63) | 3;
+    snprintf(bev.origin_name, sizeof bev.origin_name, "Surface Dial");
+    bev.v.nu = INFINITY;
+    ADD("brush_state_event", DF_MSG_BRUSH_STATE, DF_FLAG_EVENT,
+        df_msg_brush_state_encode(&bev, out, &e));
+    df_msg_brush_cursor bc = {42, DF_ORIGIN_CLIENT, 12, DF_CURSOR_IN_RANGE,
+                              {0.5, -0.25, 1e-3}, 0.25};
+    ADD("brush_cursor", DF_MSG_BRUSH_CURSOR, DF_FLAG_EVENT,
+        df_msg_brush_cursor_encode(&bc, out, &e));
+    /* devices (HID): a knob and a pen, their list, a bind and a view */
+    static df_msg_device_info dev[2];
+    memset(dev, 0, sizeof dev);
+    dev[0] = (df_msg_device_info){.device_id = (1ull << 63) | 1, .dev_class = DF_DEVCLASS_KNOB,
+                                  .backend = DF_DEVBACKEND_REPLAY, .state = DF_DEVSTATE_OPEN,
+                                  .bus = 5, .vid = 0x045e, .pid = 0x091b, .bound_session = 0,
+                                  .active_session = 5, .haptics = 1};
+    snprintf(dev[0].name, sizeof dev[0].name, "Surface Dial System Multi Axis");
+    snprintf(dev[0].path, sizeof dev[0].path, "replay:/work/shared/hid/dial.hid#0");
+    dev[1] = (df_msg_device_info){.device_id = (1ull << 63) | 2, .dev_class = DF_DEVCLASS_PEN,
+                                  .backend = DF_DEVBACKEND_HIDAPI, .state = DF_DEVSTATE_ERROR,
+                                  .bus = 3, .vid = 0x1b96, .pid = 0x1000, .bound_session = 7};
+    snprintf(dev[1].name, sizeof dev[1].name, "N-Trig Pen");
+    snprintf(dev[1].path, sizeof dev[1].path, "/dev/hidraw3");
+    snprintf(dev[1].error, sizeof dev[1].error, "read: Input/output error");
+    ADD("device_state", DF_MSG_DEVICE_STATE, DF_FLAG_EVENT,
+        df_msg_device_info_encode(&dev[0], out, &e));
+    df_msg_device_list dl = {2, dev};
+    ADD("device_list", DF_MSG_DEVICES_LIST, DF_FLAG_REPLY, df_msg_device_list_encode(&dl, out, &e));
+    df_msg_device_bind db = {(1ull << 63) | 1, 5};
+    ADD("device_bind", DF_MSG_DEVICE_BIND, 0, df_msg_device_bind_encode(&db, out, &e));
+    df_msg_device_view dv = {(1ull << 63) | 2, 5, {0}, {0, 0, 1920, 1080}};
+    for (int i = 0; i < 16; i++) dv.view_proj[i] = i % 5 == 0 ? 1.0 : 0.0;
+    dv.view_proj[11] = -0.5;
+    ADD("device_view", DF_MSG_DEVICE_VIEW, 0, df_msg_device_view_encode(&dv, out, &e));
+    ADD("devices_list", DF_MSG_DEVICES_LIST, 0, ((void)out, DF_OK)); /* empty request */
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

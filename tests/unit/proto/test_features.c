@@ -1,7 +1,7 @@
 /* test_features.c — feature bits advertise only what exists: DF_FEAT_ALL (what this build
- * implements, what libdeformclient announces) lacks the reserved bit 6 (HID, withdrawn until it
- * lands); a hello_reply carrying bit 6 still decodes and re-encodes (compatible both ways), any
- * other unknown bit is refused. */
+ * implements, what libdeformclient announces) has bit 6 again (HID, withdrawn while it did not
+ * exist; decoders always accepted it, so older clients keep working with a daemon that sets
+ * it); a hello_reply carrying it decodes and re-encodes, any other unknown bit is refused. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -28,25 +28,25 @@ static df_msg_hello_reply reply(uint32_t features)
     return r;
 }
 
-static void test_all_lacks_the_reserved_bit(void **state)
+static void test_hid_is_bit_6_again(void **state)
 {
     (void)state;
-    assert_int_equal(DF_FEAT_ALL & DF_FEAT_RESERVED, 0);
-    assert_int_equal(DF_FEAT_RESERVED, 1u << 6);
-    assert_int_equal(DF_FEAT_ALL, 0xBFu);
+    assert_int_equal(DF_FEAT_HID, 1u << 6);
+    assert_int_equal(DF_FEAT_ALL & DF_FEAT_HID, DF_FEAT_HID);
+    assert_int_equal(DF_FEAT_ALL, 0xFFu);
     assert_int_equal(DF_FEAT_DECODE_MASK, 0xFFu);
 }
 
-static void test_reserved_bit_decodes_other_unknown_bits_do_not(void **state)
+static void test_hid_bit_decodes_other_unknown_bits_do_not(void **state)
 {
     (void)state;
     df_error e;
     df_buf b;
     df_buf_init(&b);
-    df_msg_hello_reply r = reply(DF_FEAT_ALL | DF_FEAT_RESERVED), out;
+    df_msg_hello_reply r = reply(DF_FEAT_KELVINLET | DF_FEAT_HID), out;
     assert_int_equal(df_msg_hello_reply_encode(&r, &b, &e), DF_OK);
     assert_int_equal(df_msg_hello_reply_decode(b.data, b.len, &out, &e), DF_OK);
-    assert_int_equal(out.features, DF_FEAT_ALL | DF_FEAT_RESERVED);
+    assert_int_equal(out.features, DF_FEAT_KELVINLET | DF_FEAT_HID);
     df_buf_free(&b);
     df_buf_init(&b);
     r = reply(DF_FEAT_KELVINLET | (1u << 8));
@@ -58,8 +58,8 @@ static void test_reserved_bit_decodes_other_unknown_bits_do_not(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_all_lacks_the_reserved_bit),
-        cmocka_unit_test(test_reserved_bit_decodes_other_unknown_bits_do_not),
+        cmocka_unit_test(test_hid_is_bit_6_again),
+        cmocka_unit_test(test_hid_bit_decodes_other_unknown_bits_do_not),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

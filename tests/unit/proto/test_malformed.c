@@ -450,6 +450,37 @@ static void test_stream_bodies(void **state)
     expect("mesh_chunk_elem", 16, tri_nf, 16, DF_EINVAL, "non-tet");
 }
 
+/* devices (HID): device_info at offsets 0 id, 8 class, 9 backend, 10 state, 32 haptics, 33
+ * name; device_list = u32 count + items; bind 0 device; view 0 device, 8 session, 16 matrix,
+ * 144 viewport */
+static void test_device_bodies(void **state)
+{
+    (void)state;
+    u64("device_state", 0, 0, DF_EINVAL, "device_id 0");
+    u8("device_state", 8, 4, DF_EINVAL, "class 4");
+    u8("device_state", 9, 0, DF_EINVAL, "backend 0");
+    u8("device_state", 9, 4, DF_EINVAL, "backend 4");
+    u8("device_state", 10, 0, DF_EINVAL, "state 0");
+    u8("device_state", 10, 5, DF_EINVAL, "state 5");
+    u8("device_state", 32, 2, DF_EINVAL, "haptics 2");
+    u8("device_state", 35, 0, DF_EINVAL, "NUL");               /* in the name */
+    u16("device_state", 33, DF_MAX_NAME_LEN + 1, DF_ELIMIT, "name");
+    u16("device_state", 33, 200, DF_EPROTO_TRUNCATED, NULL);
+    u8("device_state", 11, 0xff, DF_OK, NULL);                 /* any bus */
+    u32("device_list", 0, DF_MAX_DEVICES + 1, DF_ELIMIT, "limit");
+    u32("device_list", 0, 3, DF_EPROTO_TRUNCATED, NULL);
+    u32("device_list", 0, 1, DF_EPROTO_TRAILING, NULL);
+    u64("device_list", 4, 0, DF_EINVAL, "device_id 0");
+    u64("device_bind", 0, 0, DF_EINVAL, "device_id 0");
+    u64("device_bind", 8, 0, DF_OK, NULL);                     /* 0 = unbind */
+    u64("device_view", 0, 0, DF_EINVAL, "device_id 0");
+    u64("device_view", 8, 0, DF_EINVAL, "session_id 0");
+    f64("device_view", 16 + 8 * 5, NAN, DF_EINVAL, "view_proj");
+    f64("device_view", 144 + 8, INFINITY, DF_EINVAL, "viewport");
+    f64("device_view", 144 + 16, 0, DF_EINVAL, "width");
+    f64("device_view", 144 + 24, -1, DF_EINVAL, "height");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -459,6 +490,7 @@ int main(void)
         cmocka_unit_test(test_brush_bodies),
         cmocka_unit_test(test_handle_bodies),
         cmocka_unit_test(test_stream_bodies),
+        cmocka_unit_test(test_device_bodies),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

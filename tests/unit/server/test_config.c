@@ -1,6 +1,7 @@
 /* Unit tests for server/config.c and server/log.c: defaults, the key = value parser (comments,
  * whitespace, sizes with suffixes, every bad value, all-or-nothing on error), the command line
- * (--config then overrides, --opt=value, --help, unknown options) and allow_paths matching. */
+ * (--config then overrides, --opt=value, --help, unknown options), allow_paths matching and the
+ * hid.* keys handed to server/hid/hid_config.c. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -289,6 +290,51 @@ static void test_log_levels(void **state)
     df_log_set_level(DF_LOG_INFO);
 }
 
+/* hid.* keys (issue 11): routed to server/hid/hid_config.c; an unknown hid key or bad value names
+ * file:line, the cross-key check after the file names the file, nothing changes on error. */
+static void test_hid_keys(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    const char *good = "threads = 2\n"
+                       "hid.knob.radius_step = 1.25\n"
+                       "hid.046d:c626.deadzone = 0.2   # SpaceNavigator\n"
+                       "hid.3d-mouse.sensitivity = 3\n";
+    df_error e;
+    assert_int_equal(df_config_parse(&c, good, strlen(good), "h.conf", &e), DF_OK);
+    df_hid_params p;
+    assert_int_equal(df_hid_config_resolve(&c.hid, DF_HID_CLASS_KNOB, 0x045e, 0x091b, &p, &e), DF_OK);
+    assert_true(p.radius_step == 1.25);
+    assert_int_equal(df_hid_config_resolve(&c.hid, DF_HID_CLASS_MOUSE3D, 0x046d, 0xc626, &p, &e),
+                     DF_OK);
+    assert_true(p.deadzone == 0.2 && p.sensitivity == 3.0);
+
+    df_server_config before = c;
+    const char *unknown = "threads = 3\n"
+                          "\n"
+                          "hid.knob.radius_stepp = 1.1\n";
+    assert_int_equal(df_config_parse(&c, unknown, strlen(unknown), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:3: "));
+    assert_non_null(strstr(e.msg, "radius_stepp"));
+    assert_memory_equal(&before, &c, sizeof c);
+    const char *bad = "hid.pen.pressure_gamma = 0\n";
+    assert_int_equal(df_config_parse(&c, bad, strlen(bad), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:1: hid.pen.pressure_gamma"));
+    const char *cls = "hid.pen.deadzone = 0.1\n";
+    assert_int_equal(df_config_parse(&c, cls, strlen(cls), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf:1: "));
+    assert_non_null(strstr(e.msg, "not a pen key"));
+    const char *cross = "hid.knob.nu_min = 0.4\nhid.knob.nu_max = 0.3\n";
+    assert_int_equal(df_config_parse(&c, cross, strlen(cross), "h.conf", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "h.conf: hid.knob: nu_min 0.4 above nu_max 0.3"));
+    assert_memory_equal(&before, &c, sizeof c);
+    /* the plain df_config_set path too */
+    assert_int_equal(df_config_set(&c, "hid.knob.falloff_max", "5", &e), DF_OK);
+    assert_int_equal(df_config_set(&c, "hid.knob.falloff_max", "0", &e), DF_EINVAL);
+    assert_non_null(strstr(e.msg, "falloff_max"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -299,6 +345,7 @@ int main(void)
         cmocka_unit_test(test_load_file_and_cli),
         cmocka_unit_test(test_allowed_paths),
         cmocka_unit_test(test_log_levels),
+        cmocka_unit_test(test_hid_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
