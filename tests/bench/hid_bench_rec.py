@@ -129,8 +129,8 @@ def write_all(outdir):
                     "%d detents, one every %d us, runs of %d" % (KNOB_DETENTS, KNOB_PERIOD_US,
                                                                KNOB_RUN))
     write_recording(m3d, M3D_FILE, 0, mouse3d_events(),
-                    "button 1 down, %d report 1/2 pairs X=%d, a report every %d us, 3 zero pairs, button 1 up"
-                    % (M3D_UPDATES, M3D_X, M3D_PERIOD_US))
+                    "button 1 down, %d report 1/2 pairs X=%d, a report every %d us, 3 zero pairs, "
+                    "button 1 up" % (M3D_UPDATES, M3D_X, M3D_PERIOD_US))
     return knob, m3d
 
 

@@ -36,7 +36,8 @@ static int setup(void **state)
 /* Runs the generator into a new temporary folder (g_dir). */
 static void generate(void)
 {
-    if (access(GENERATOR, R_OK) != 0) unit_skip("%s not found (run from the repository root)", GENERATOR);
+    if (access(GENERATOR, R_OK) != 0)
+        unit_skip("%s not found (run from the repository root)", GENERATOR);
     const char *tmp = getenv("TMPDIR");
     snprintf(g_dir, sizeof g_dir, "%s/df-hid-bench-XXXXXX", tmp && *tmp ? tmp : "/tmp");
     assert_non_null(mkdtemp(g_dir));
@@ -137,7 +138,8 @@ static size_t check(const char *name, const char *source, uint32_t vid, uint32_t
         assert_int_equal(ev->len, len);
         if (k) assert_true(ev->time_us >= rec.events[k - 1].time_us);
         const df_hid_report *r;
-        if (df_hid_report_decode(&d, b, ev->len, &r, &e) != DF_OK) fail_msg("report %zu: %s", k, e.msg);
+        if (df_hid_report_decode(&d, b, ev->len, &r, &e) != DF_OK)
+            fail_msg("report %zu: %s", k, e.msg);
         assert_int_equal(r->bytes, ev->len);
         unsigned page, usage;
         long long want;
@@ -160,7 +162,8 @@ static void test_bench_recordings(void **state)
     unit_hid_dir_or_skip(g_hid, sizeof g_hid);
     generate();
     size_t knob = check("knob.hid", "microsoft-surface-dial_045e-091b_bt.hid", 0x045e, 0x091b);
-    size_t m3d = check("mouse3d.hid", "3dconnexion-spacenavigator_046d-c626_usb.hid", 0x046d, 0xc626);
+    size_t m3d = check("mouse3d.hid", "3dconnexion-spacenavigator_046d-c626_usb.hid", 0x046d,
+                       0xc626);
     assert_true(knob > 0 && m3d > 0);
 }
 
