@@ -65,6 +65,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     srv->on_frame = df_dispatch_frame;
     srv->on_conn_close = conn_closing;
     srv->on_conn_free = conn_free;
+    srv->hid_ops = &df_hid_manager_ops; /* started by main (df_hid_manager_start) */
     uv_check_init(loop, &srv->kick_check);
     srv->kick_check.data = srv;
     uv_check_start(&srv->kick_check, on_check);

@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <uv.h>
 
+#include "core/common/df_error.h"
 #include "proto/frame.h"
 #include "server/config.h"
 #include "server/session/membudget.h"
@@ -19,6 +20,26 @@
 struct df_session;
 struct df_job;
 struct df_change;
+struct df_req;
+struct df_msg_device_list;
+struct df_msg_device_view;
+struct df_server;
+
+/* The HID subsystem's entry points for the layers below it (server/hid/ builds on handlers,
+ * exec and session, so those reach it only through these pointers; hid_manager.h documents
+ * each; srv->hid_ops is set by df_server_start, NULL in a df_server made without it). */
+typedef struct df_hid_ops {
+    int (*list)(struct df_server *srv, struct df_msg_device_list *out, df_error *err);
+    int (*bind)(struct df_server *srv, uint64_t device_id, uint64_t session_id, df_error *err);
+    int (*view)(struct df_server *srv, const struct df_msg_device_view *v, df_error *err);
+    int (*device_stats)(struct df_server *srv, uint64_t device_id,
+                        void (*put)(void *ctx, const char *key, double v), void *ctx,
+                        df_error *err);
+    void (*counts)(const struct df_server *srv, uint32_t *devices, uint32_t *open,
+                   uint64_t *events);
+    void (*session_active)(struct df_server *srv, struct df_session *s);
+    void (*session_gone)(struct df_server *srv, struct df_session *s);
+} df_hid_ops;
 
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
 
@@ -93,6 +114,7 @@ typedef struct df_server {
     uint64_t last_change_session; /* session of a client's last change request or subscribe
                                    * (df_job_is_change): unbound HID devices drive it */
     struct df_hid_manager *hid;   /* HID devices (server/hid/hid_manager.h), NULL when off */
+    const df_hid_ops *hid_ops;    /* its entry points (set by df_server_start) */
     /* Upward calls of the network layer (net never includes what is above it), set by
      * df_server_start: a complete request frame (dispatch), a connection that closes (its
      * sessions and jobs forget it), its last reference gone (its unfinished upload). NULL: none. */

@@ -19,7 +19,7 @@
 enum {
     O_TYPE = CTL_NGLOBAL, O_CENTER, O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_RADIUS, O_NU,
     O_FALLOFF, O_RATIO, O_DIM, O_INTEGRATOR, O_STEPS, O_MIRROR, O_PIN, O_PIN_MODE, O_STRENGTH,
-    O_MOVING, O_COUNT
+    O_MOVING, O_USE_SESSION, O_COUNT
 };
 
 static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
@@ -50,6 +50,10 @@ static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
                     "displacement: u = 0)"},
     {"strength", 1, "--strength S       load multiplier (default 1)"},
     {"moving", 0, "--moving           moving brush: the centre follows the load"},
+    {"use-session", 1, "--use-session F,F  take these from the session brush (brush-state) instead:"
+                       "\n                     radius, nu, strength, falloff, ratio, integrator"
+                       " (with steps),\n                     mirror, or all (not with the "
+                       "same option given here)"},
 };
 
 /* deformctl's default Poisson ratio: below 0.5 so that every brush type works (the scale brush
@@ -66,6 +70,48 @@ static const char *const PIN_MODES[] = {"displacement", "gradient", "both", NULL
 
 /* The load option each type needs, indexed by type - 1. */
 static const int LOAD_OPT[5] = {O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_MATRIX};
+
+/* --use-session: the DF_BS_* bits of a comma-separated list of fields (or "all") into
+ * b->use_session. The type is not one of them: --type picks the load option. A field also given
+ * as its own option is a usage error (which one would apply?). */
+static int use_session(const dc_cli_args *a, df_msg_brush *b, df_error *e)
+{
+    static const struct { const char *name; unsigned bit; int opt, opt2; } F[] = {
+        {"radius", DF_BS_RADIUS, O_RADIUS, -1}, {"nu", DF_BS_NU, O_NU, -1},
+        {"strength", DF_BS_STRENGTH, O_STRENGTH, -1}, {"falloff", DF_BS_FALLOFF, O_FALLOFF, -1},
+        {"ratio", DF_BS_RATIO, O_RATIO, -1},
+        {"integrator", DF_BS_INTEGRATOR, O_INTEGRATOR, O_STEPS},
+        {"mirror", DF_BS_MIRROR, O_MIRROR, -1}};
+    const size_t nf = sizeof F / sizeof F[0];
+    char list[256];
+    if (strlen(a->val[O_USE_SESSION]) >= sizeof list)
+        return df_error_set(e, DF_EINVAL, "--use-session: list too long");
+    strcpy(list, a->val[O_USE_SESSION]);
+    unsigned mask = 0;
+    for (char *save = NULL, *tok = strtok_r(list, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        size_t i = 0;
+        while (i < nf && strcmp(tok, F[i].name) != 0)
+            i++;
+        if (!strcmp(tok, "all")) {
+            for (i = 0; i < nf; i++)
+                mask |= F[i].bit;
+            continue;
+        }
+        if (i == nf)
+            return df_error_set(e, DF_EINVAL, "--use-session: '%s' is not one of radius, nu, "
+                                "strength, falloff, ratio, integrator, mirror, all", tok);
+        mask |= F[i].bit;
+    }
+    if (!mask)
+        return df_error_set(e, DF_EINVAL, "--use-session: no field named");
+    for (size_t i = 0; i < nf; i++)
+        if ((mask & F[i].bit) && (a->val[F[i].opt] || (F[i].opt2 >= 0 && a->val[F[i].opt2])))
+            return df_error_set(e, DF_EINVAL, "--use-session %s and --%s both given", F[i].name,
+                                BRUSH_OPTS[a->val[F[i].opt] ? F[i].opt : F[i].opt2].name);
+    b->use_session = (uint16_t)mask;
+    return DF_OK;
+}
 
 /* Fills the begin message and the update from the options; DF_EINVAL with a message on bad
  * input (the caller reports a usage error). */
@@ -155,6 +201,8 @@ static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, 
         b->pin_flags = (uint8_t)(k + 1); /* 1 displacement, 2 gradient, 3 both */
     }
     b->moving = a->val[O_MOVING] ? 1 : 0;
+    if (a->val[O_USE_SESSION] && (rc = use_session(a, b, e)))
+        return rc;
     return DF_OK; /* the begin keeps zero loads: the update carries the whole load */
 }
 
@@ -230,7 +278,7 @@ const ctl_cmd ctl_cmds_brush[] = {
      "       [--twist WX,WY,WZ] [--scale S] [--matrix M00,M01,...,M22] [--radius R] [--nu NU]\n"
      "       [--falloff N] [--ratio Q] [--dim 2|3] [--integrator euler|rk4] [--steps N]\n"
      "       [--mirror PX,PY,PZ,NX,NY,NZ] [--pin FILE [--pin-mode MODE]] [--strength S]\n"
-     "       [--moving]",
+     "       [--moving] [--use-session FIELD,...|all]",
      "Apply one whole Kelvinlet brush stroke (begin, update, end) as one new version.",
      BRUSH_OPTS, O_COUNT, 1, run_brush},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},

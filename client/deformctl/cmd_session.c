@@ -368,7 +368,13 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     if (rc == DF_OK && a->val[4]) /* --shm */
         rc = df_client_stream_shm(c, w.session, NULL, &e);
-    if (rc == DF_OK && !ctx->json) {
+    if (rc == DF_OK && ctx->json) { /* subscribed: events from here on are printed */
+        printf("{\"session\":%" PRIu64 ",\"kind\":\"watching\",\"name\":", w.session);
+        ctl_json_str(stdout, info.name);
+        printf(",\"version\":%" PRIu64 ",\"shm\":%s}\n", info.version,
+               a->val[4] ? "true" : "false");
+        fflush(stdout);
+    } else if (rc == DF_OK) {
         printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "%s\n", w.session,
                info.name[0] ? info.name : "-", info.version,
                a->val[4] ? " through shared memory" : "");

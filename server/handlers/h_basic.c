@@ -7,7 +7,6 @@
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
-#include "server/hid/hid_manager.h"
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/session.h"
@@ -212,7 +211,8 @@ static void subscribe_done(df_job *j)
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(&j->req, &info);
-    df_hid_manager_session_active(s->srv, s); /* replay devices wait for this (hid_manager.h) */
+    if (s->srv->hid_ops) /* replay devices wait for a subscriber (hid_manager.h) */
+        s->srv->hid_ops->session_active(s->srv, s);
     if (*(const uint8_t *)j->body & DF_SUBSCRIBE_SNAPSHOT) {
         df_frames f = {0};
         if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)

@@ -6,7 +6,6 @@
 
 #include "server/handlers/handlers.h"
 #include "server/exec/pool.h"
-#include "server/hid/hid_manager.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
 
@@ -93,9 +92,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "shm_total_bytes", (double)srv->cfg.shm_total_bytes);
         put(&st, "history.limit_bytes", (double)((uint64_t)srv->cfg.history_max_mb << 20));
         put(&st, "history.steps_dropped", (double)srv->history_dropped);
-        uint32_t ndev, nopen;
-        uint64_t hid_events;
-        df_hid_manager_counts(srv, &ndev, &nopen, &hid_events);
+        uint32_t ndev = 0, nopen = 0;
+        uint64_t hid_events = 0;
+        if (srv->hid_ops) srv->hid_ops->counts(srv, &ndev, &nopen, &hid_events);
         put(&st, "hid.devices", ndev);
         put(&st, "hid.devices_open", nopen);
         put(&st, "hid.events", (double)hid_events);

@@ -46,8 +46,7 @@ extern const df_job_kind df_k_get_mesh, df_k_snapshot;
 /* Fills a session_info body from `s` (loop thread). */
 void df_session_info_fill(const df_session *s, df_msg_session_info *out);
 
-/* Largest |strength| of a brush stroke (BRUSH_BEGIN, SET_BRUSH_PARAM). */
-#define DF_BRUSH_MAX_STRENGTH 1e6
+/* DF_BRUSH_MAX_STRENGTH (largest |strength| of a stroke): server/session/brush_state.h. */
 
 /* Whether knob `param` (df_brush_param_id) = value may be applied to the open stroke `st`: the
  * stroke with that value must pass the Kelvinlet engine's rules (nu in [-1, 0.5] or +-inf,

@@ -85,7 +85,7 @@ void df_hid_params_defaults(df_hid_params *p)
     p->dial_units_per_detent = 0;
     p->led_min_radius = 0.01;
     p->led_max_radius = 1.0;
-    p->deadzone = 0.05;
+    p->deadzone = 0.01;
     p->sensitivity = 0.5;
     p->twist_sensitivity = 1.0;
     p->stroke_button = 1;

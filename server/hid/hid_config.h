@@ -24,7 +24,7 @@
  *   invert_dial         knob       yes|no (no): counter-clockwise grows
  *   led_min_radius      knob       > 0 (0.01); led_max_radius > 0 (1): PowerMate LED range:
  *                                  brightness 0..255 linear in log(radius) between them
- *   deadzone            3d-mouse   0..0.99 (0.05): fraction of the logical max ignored
+ *   deadzone            3d-mouse   0..0.99 (0.01): fraction of the logical max ignored
  *   sensitivity         3d-mouse   > 0 (0.5): scale units per second at full deflection
  *   twist_sensitivity   3d-mouse   > 0 (1.0): radians per second at full deflection
  *   invert_x .. invert_rz 3d-mouse yes|no (no): negate that axis

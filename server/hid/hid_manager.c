@@ -152,6 +152,7 @@ void df_hid_device_info(const df_hid_device *d, df_msg_device_info *out)
 void df_hid_device_announce(df_hid_device *d, uint64_t session_id)
 {
     df_session *s = session_id ? df_session_find(d->mgr->srv, session_id) : NULL;
+    if (!s && !session_id) s = df_hid_drive_session(d); /* the session it would drive */
     if (!s) return;
     df_msg_device_info *info = malloc(sizeof *info);
     if (!info) return;
@@ -610,3 +611,13 @@ void df_hid_manager_counts(const df_server *srv, uint32_t *devices, uint32_t *op
     *events = m->events;
     for (const df_hid_device *d = m->devs; d; d = d->next) *open += d->state == DF_DEVSTATE_OPEN;
 }
+
+const df_hid_ops df_hid_manager_ops = {
+    .list = df_hid_manager_list,
+    .bind = df_hid_manager_bind,
+    .view = df_hid_manager_view,
+    .device_stats = df_hid_manager_device_stats,
+    .counts = df_hid_manager_counts,
+    .session_active = df_hid_manager_session_active,
+    .session_gone = df_hid_manager_session_gone,
+};

@@ -85,4 +85,7 @@ int df_hid_manager_device_stats(df_server *srv, uint64_t device_id,
 void df_hid_manager_counts(const df_server *srv, uint32_t *devices, uint32_t *open,
                            uint64_t *events);
 
+/* The functions above as srv->hid_ops (server.h) for the layers that may not include this. */
+extern const df_hid_ops df_hid_manager_ops;
+
 #endif

@@ -22,20 +22,27 @@
  * change, brightness = 255 * (log r - log led_min) / (log led_max - log led_min), clamped.
  * DF_HID_QUIRK_NO_RELEASE: the press edge is the press action; press_rotate is never used.
  *
- * 3d-mouse: every report carrying axes adds, per axis a with value v (deadzone: |v| <= deadzone
- * * logical_max -> 0, else v rescaled so output starts at 0 past the deadzone), f = v_scaled /
- * logical_max * (invert ? -1 : 1), the translation d[a] = f * sensitivity * dt * scale and the
+ * 3d-mouse: every report carrying axes adds, per axis a with value v, f = v / logical_max
+ * (0 when |f| <= deadzone, clamped to [-1, 1]) * (invert ? -1 : 1), the translation
+ * d[a] = f * sensitivity * dt * scale and the
  * rotation w[a] = f * twist_sensitivity * dt, dt = time since the previous report with the same
  * report id, clamped to 50 ms (0 for the first). Translation emits CURSOR deltas; while a
  * stroke is active (stroke_button held) STROKE_UPDATE carries the cumulative tip and twist.
- * Press = STROKE_BEGIN, release = STROKE_END (Buzz when haptics).
+ * Press = STROKE_BEGIN, release = STROKE_END (Buzz when haptics). Axes are read as deflections
+ * (absolute); the SpaceNavigator's, declared Relative, are absolute by quirk, and every known
+ * 3Dconnexion device reports deflection, so a Relative flag does not change the rule.
  *
  * Pen: in range -> CURSOR (normalized x/y, tilt radians, flags) per report; out of range -> one
  * CURSOR with flags 0. Tip switch rising edge -> STROKE_BEGIN, falling edge (or leaving range)
- * -> STROKE_END; reports in between -> STROKE_UPDATE with strength = strength_max *
- * (pressure / logical_max) ^ pressure_gamma and twist = the pen axis from tilt
- * normalize(tan tx, tan ty, 1) * twist_angle * pressure. Barrel rising edge -> `barrel` action
- * (next brush type by default). */
+ * -> STROKE_END; reports in between -> STROKE_UPDATE with strength = (session strength when
+ * the stroke began) * strength_max * (pressure / logical_max) ^ pressure_gamma, and twist = the
+ * pen axis from tilt normalize(tan tx, tan ty, 1) (x right, y down, z into the surface) *
+ * twist_angle * pressure. Tilt: physical degrees with the unit exponent when the field's unit is
+ * degrees (GXTP: 0.01 degree), else the logical value read as degrees (Digitizer default,
+ * Huion s8). STROKE_END repeats the last strength and twist. A pen's grab tip is not the
+ * mapper's: move[] stays 0 and the device manager takes the tip from its ray hits. Eraser and
+ * Invert are ignored (no stroke without the Tip Switch). Barrel rising edge in range ->
+ * `barrel` action (next brush type by default; falloff; none). */
 #ifndef DF_SERVER_HID_MAPPER_H
 #define DF_SERVER_HID_MAPPER_H
 

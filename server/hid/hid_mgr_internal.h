@@ -111,7 +111,8 @@ void df_hid_drive_pen_forget(df_hid_manager *m, uint64_t session_id);
 /* Fills the wire item of d. */
 void df_hid_device_info(const df_hid_device *d, df_msg_device_info *out);
 
-/* Sends DEVICE_STATE of d to the subscribers of the session it drives (or drove). */
+/* Sends DEVICE_STATE of d to the subscribers of session_id (0: the session d would drive now,
+ * hid_mgr_drive.c's df_hid_drive_session; none: nothing is sent). */
 void df_hid_device_announce(df_hid_device *d, uint64_t session_id);
 
 #endif

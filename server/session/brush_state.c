@@ -9,7 +9,6 @@
 
 #include "core/kelvinlet/kelvinlet.h"
 #include "proto/wire_core_map.h"
-#include "server/handlers/handlers.h"
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/session.h"
@@ -174,6 +173,8 @@ int df_brush_state_apply(df_session *s, unsigned mask, const df_brush_state *v,
 }
 
 /* ------------------------------------------------------------------------- brush cursor */
+uint64_t (*df_brush_cursor_clock)(void) = uv_hrtime;
+
 int df_cursor_rate_decide(uint64_t now_ns, uint64_t last_ns, int sent_before,
                           uint64_t interval_ns, int held, uint64_t *due_ns)
 {
@@ -244,11 +245,11 @@ static void cursor_flush_due(struct df_cursor_limiter *cl, uint64_t now_ns)
 static void cursor_on_timer(uv_timer_t *t)
 {
     struct df_cursor_limiter *cl = t->data;
-    cursor_flush_due(cl, uv_hrtime());
+    cursor_flush_due(cl, df_brush_cursor_clock());
 }
 
-/* The slot of origin (kind, id), made when new; when all are taken, the one idle longest goes
- * (a held value is sent first). NULL only when out of memory making the limiter. */
+/* The slot of origin (kind, id), made when new; when all are taken, the one idle longest is
+ * reused (its held value, if any, is sent first). */
 static cursor_slot *cursor_slot_of(struct df_cursor_limiter *cl, uint8_t kind, uint64_t id)
 {
     for (int i = 0; i < cl->n; i++)
@@ -299,14 +300,13 @@ void df_brush_cursor_publish(df_session *s, const df_origin *who, const double c
             cursor_send(s, &m); /* out of memory: unlimited rather than lost */
             return;
         }
-        uv_timer_init(s->srv->loop, &cl->timer);
-        uv_unref((uv_handle_t *)&cl->timer);
+        uv_timer_init(s->srv->loop, &cl->timer); /* active only while a value is held */
         cl->timer.data = cl;
         cl->s = s;
         s->cursor = cl;
     }
     cursor_slot *sl = cursor_slot_of(cl, m.origin_kind, m.origin_id);
-    uint64_t now = uv_hrtime(), due = 0;
+    uint64_t now = df_brush_cursor_clock(), due = 0;
     if (df_cursor_rate_decide(now, sl->last_ns, sl->sent, interval, sl->held, &due)) {
         sl->sent = 1;
         sl->last_ns = now;

@@ -26,6 +26,9 @@
 #include "core/common/df_error.h"
 #include "proto/wire_schema.h"
 
+/* Largest |strength| of a brush: a stroke (BRUSH_BEGIN, SET_BRUSH_PARAM) or the session brush. */
+#define DF_BRUSH_MAX_STRENGTH 1e6
+
 typedef struct df_session df_session;
 struct df_msg_brush_state;
 struct df_cursor_limiter;
@@ -108,6 +111,10 @@ void df_brush_state_msg(const df_session *s, unsigned changed, struct df_msg_bru
 /* Frees the session's brush/cursor resources (the cursor timer is closed on the loop and freed
  * in its close callback). Called by df_session_destroy. NULL-safe on an unused state. */
 void df_brush_state_release(df_session *s);
+
+/* The limiter's clock in ns (monotonic): uv_hrtime. Unit tests replace it to drive the limiter
+ * without depending on how fast they run; set it before the first publish, loop thread. */
+extern uint64_t (*df_brush_cursor_clock)(void);
 
 /* The rate limiter's decision, a pure function of times (unit-tested without a clock).
  * now_ns: the time of the new value; last_ns: when this origin's last event was sent (ignored

@@ -7,7 +7,6 @@
 
 #include "server/session/cache.h"
 #include "server/net/conn.h"
-#include "server/hid/hid_manager.h"
 #include "server/log.h"
 #include "server/session/meshload.h"
 #include "server/net/reply.h"
@@ -224,7 +223,8 @@ void df_session_close(df_session *s)
 {
     if (s->closed) return;
     s->closed = 1;
-    df_hid_manager_session_gone(s->srv, s); /* devices bound to it follow the most recent */
+    if (s->srv->hid_ops) /* devices bound to it follow the most recent session (hid_manager.h) */
+        s->srv->hid_ops->session_gone(s->srv, s);
     df_msg_session_ref m = {.session_id = s->id};
     df_error err;
     df_sbuf *f = df_out_session_ref(DF_MSG_SESSION_CLOSED, DF_FLAG_EVENT, 0, &m, &err);

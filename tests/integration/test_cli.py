@@ -15,7 +15,7 @@ from helpers import (grab_displacement, grid_obj, read_indices, read_node_positi
                      read_obj_positions, read_off_positions, tet_grid_medit)
 
 COMMANDS = ["ping", "load", "list", "close", "brush", "handles", "move", "get", "undo", "redo",
-            "reset-rest", "watch", "stats"]
+            "reset-rest", "watch", "stats", "brush-state"]
 
 
 @pytest.fixture(scope="module")

@@ -32,25 +32,23 @@ def replay_config(files, extra=""):
 
 def run_replay(d, mesh=SPOT, before_subscribe=None):
     """Loads `mesh`, optionally calls before_subscribe(client, session_id), subscribes (which
-    starts the replay) and collects events until every opened device reported UNPLUGGED.
-    Returns (client, session id, events)."""
+    starts the replay: every classified device opens) and collects events until each of them
+    reported UNPLUGGED (the end of its recording). Returns (client, session id, events)."""
     c = d.unix_client()
     sid = c.load_file(mesh).session_id
     if before_subscribe:
         before_subscribe(c, sid)
+    driven = {x.device_id for x in c.devices_list() if x.dev_class}
+    assert driven, "no classified device to wait for"
     c.subscribe(sid)
-    events, open_ids = [], None
-    while True:
+    events, gone = [], set()
+    while not driven <= gone:
         ev = c.next_event(timeout=30.0)
         assert ev is not None, "no UNPLUGGED event within 30 s; log:\n" + d.log()
         events.append(ev)
-        if isinstance(ev, DeviceInfo) and ev.state == DevState.OPEN:
-            open_ids = (open_ids or set()) | {ev.device_id}
-        if open_ids is not None:
-            gone = {e.device_id for e in events
-                    if isinstance(e, DeviceInfo) and e.state == DevState.UNPLUGGED}
-            if open_ids <= gone:
-                return c, sid, events
+        if isinstance(ev, DeviceInfo) and ev.state == DevState.UNPLUGGED:
+            gone.add(ev.device_id)
+    return c, sid, events
 
 
 @pytest.mark.parametrize("name", ALL_FILES)
@@ -225,10 +223,11 @@ def test_bind_unbind_and_errors(make_daemon):
         assert c.devices_list()[0].bound_session == b      # nothing changed
         c.device_bind(dev.device_id, 0)
         assert c.devices_list()[0].bound_session == 0
-        # a bound device drives its session, not the one the client uses
+        # a bound device drives its session, not the most recently active one: subscribing to
+        # b starts the replay (so no event of b is missed), then a becomes the most recent
         c.device_bind(dev.device_id, b)
-        c.subscribe(a)
         c.subscribe(b)
+        c.subscribe(a)
         seen = set()
         while True:
             ev = c.next_event(timeout=30.0)

@@ -103,7 +103,8 @@ def _check(v: BrushValues, mask: int, what: str) -> None:
     elif mask & BrushStateField.RATIO and not (math.isfinite(v.ratio) and v.ratio > 1):
         bad = "ratio %r (finite, > 1)" % v.ratio
     elif mask & BrushStateField.INTEGRATOR and (
-            isinstance(v.integrator, int) or v.integrator not in _INTEGS or not 1 <= v.steps <= schema.MAX_BRUSH_STEPS):
+            isinstance(v.integrator, int) or v.integrator not in _INTEGS
+            or not 1 <= v.steps <= schema.MAX_BRUSH_STEPS):
         bad = "integrator %r / steps %r" % (v.integrator, v.steps)
     elif mask & BrushStateField.MIRROR and (
             v.has_mirror not in (0, 1)

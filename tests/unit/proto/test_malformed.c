@@ -333,6 +333,74 @@ static void test_brush_bodies(void **state)
     df_buf_free(&b);
 }
 
+/* Session brush (PROTOCOL.md 4.12 use_session, 4.14a-c), offsets per the tables there. */
+static void test_brush_state_bodies(void **state)
+{
+    (void)state;
+    const size_t trailer = 253 + 24 * 2; /* brush_use_session: 2 pinned points */
+    u16("brush_use_session", trailer, 0x100, DF_EPROTO_RESERVED, "use_session");
+    u16("brush_use_session", trailer, 0, DF_OK, NULL);       /* explicit 0 = absent */
+    u16("brush_use_session", trailer, 0xFF, DF_OK, NULL);    /* every field */
+    /* brush_state_set: mask at 8, values at 10 (sample mask RADIUS | INTEGRATOR | MIRROR) */
+    u64("brush_state_set", 0, 0, DF_EINVAL, "session_id");
+    u16("brush_state_set", 8, 0, DF_EINVAL, "mask 0");
+    u16("brush_state_set", 8, 0x102, DF_EPROTO_RESERVED, "0x100");
+    f64("brush_state_set", 16, 0, DF_EINVAL, "radius 0");
+    u8("brush_state_set", 12, 3, DF_EINVAL, "integrator 3");
+    u16("brush_state_set", 14, 0, DF_EINVAL, "steps 0");
+    u16("brush_state_set", 14, DF_MAX_BRUSH_STEPS + 1, DF_EINVAL, "steps 1025");
+    u8("brush_state_set", 13, 2, DF_EINVAL, "has_mirror 2");
+    f64("brush_state_set", 48, NAN, DF_EINVAL, "mirror_point");
+    f64("brush_state_set", 72, 0, DF_EINVAL, "zero vector");
+    /* fields the mask leaves out are carried unchecked */
+    u8("brush_state_set", 10, 0, DF_OK, NULL);               /* type */
+    u8("brush_state_set", 11, 0, DF_OK, NULL);               /* falloff */
+    f64("brush_state_set", 24, NAN, DF_OK, NULL);            /* nu */
+    f64("brush_state_set", 32, INFINITY, DF_OK, NULL);       /* strength */
+    f64("brush_state_set", 40, 0.5, DF_OK, NULL);            /* ratio */
+    u16("brush_state_set", 8, DF_BS_NU, DF_OK, NULL);        /* nu 0.5: valid */
+    u16("brush_state_set", 8, DF_BS_RATIO, DF_OK, NULL);
+    expect("brush_state_set", 95, NULL, 0, DF_EPROTO_TRUNCATED, NULL);
+    /* brush_state event: origin_name "Surface Dial" (12 bytes) at 27, values at 41 */
+    u64("brush_state_event", 0, 0, DF_EINVAL, "session_id");
+    u16("brush_state_event", 16, 0x200, DF_EPROTO_RESERVED, "changed");
+    u8("brush_state_event", 18, 3, DF_EINVAL, "origin_kind 3");
+    u16("brush_state_event", 27, 200, DF_EPROTO_TRUNCATED, NULL);
+    u8("brush_state_event", 41, 0, DF_EINVAL, "type 0");   /* every field is checked */
+    u8("brush_state_event", 42, 9, DF_EINVAL, "falloff 9");
+    f64("brush_state_event", 47, -1, DF_EINVAL, "radius -1");
+    f64("brush_state_event", 55, NAN, DF_EINVAL, "nu");
+    f64("brush_state_event", 55, -INFINITY, DF_OK, NULL);
+    f64("brush_state_event", 63, NAN, DF_EINVAL, "strength");
+    f64("brush_state_event", 71, 1, DF_EINVAL, "ratio 1");
+    expect("brush_state_event", 41, NULL, 0, DF_EPROTO_TRUNCATED, NULL);
+    /* brush_cursor: kind 8, id 9, flags 17, center 18, radius 42 */
+    u64("brush_cursor", 0, 0, DF_EINVAL, "session_id");
+    u8("brush_cursor", 8, 3, DF_EINVAL, "origin_kind 3");
+    u8("brush_cursor", 17, 4, DF_EPROTO_RESERVED, "flags");
+    u8("brush_cursor", 17, DF_CURSOR_IN_RANGE | DF_CURSOR_STROKE_ACTIVE, DF_OK, NULL);
+    f64("brush_cursor", 18 + 8, NAN, DF_EINVAL, "center");
+    f64("brush_cursor", 42, 0, DF_EINVAL, "radius 0");
+    f64("brush_cursor", 42, INFINITY, DF_EINVAL, "radius");
+    /* encoder side: same rules */
+    df_buf b;
+    df_buf_init(&b);
+    df_error e;
+    df_msg_brush br = sample_brush();
+    br.use_session = 0x8000;
+    assert_int_equal(df_msg_brush_encode(&br, &b, &e), DF_EPROTO_RESERVED);
+    df_msg_brush_state_set set = {1, 0, {0}};
+    df_msg_brush_values_defaults(&set.v);
+    assert_int_equal(df_msg_brush_state_set_encode(&set, &b, &e), DF_EINVAL);
+    set.mask = DF_BS_RADIUS;
+    set.v.radius = -1;
+    assert_int_equal(df_msg_brush_state_set_encode(&set, &b, &e), DF_EINVAL);
+    df_msg_brush_cursor cur = {1, DF_ORIGIN_DEVICE, 2, 0, {0, 0, NAN}, 1};
+    assert_int_equal(df_msg_brush_cursor_encode(&cur, &b, &e), DF_EINVAL);
+    assert_int_equal(b.len, 0);
+    df_buf_free(&b);
+}
+
 static void test_handle_bodies(void **state)
 {
     (void)state;
@@ -488,6 +556,7 @@ int main(void)
         cmocka_unit_test(test_load_mesh_bodies),
         cmocka_unit_test(test_session_bodies),
         cmocka_unit_test(test_brush_bodies),
+        cmocka_unit_test(test_brush_state_bodies),
         cmocka_unit_test(test_handle_bodies),
         cmocka_unit_test(test_stream_bodies),
         cmocka_unit_test(test_device_bodies),

@@ -97,6 +97,96 @@ static void test_trailing_byte_is_rejected(void **state)
     free_samples(s);
 }
 
+/* BRUSH_BEGIN's optional trailing use_session (PROTOCOL.md 4.12): a body in the original layout
+ * (253 + 24 n bytes, what clients before it send) decodes exactly as before with use_session 0
+ * and re-encodes to the same bytes; with the trailer the field is read; an explicit 0 trailer
+ * means the same and also re-encodes byte for byte. */
+static void test_brush_use_session(void **state)
+{
+    (void)state;
+    df_msg_brush in = sample_brush(), old, zero, with;
+    df_buf b, t, r;
+    df_buf_init(&b);
+    df_buf_init(&t);
+    df_buf_init(&r);
+    df_error e;
+    assert_int_equal(df_msg_brush_encode(&in, &b, &e), DF_OK);
+    assert_int_equal(b.len, 253 + 24 * 2); /* use_session 0: no trailer, the old layout */
+    assert_int_equal(df_msg_brush_decode(b.data, b.len, &old, &e), DF_OK);
+    assert_int_equal(old.use_session, 0);
+    assert_int_equal(old.use_session_field, 0);
+    assert_true(old.radius == in.radius && old.nu == in.nu && old.n_pinned == 2);
+    assert_int_equal(df_msg_brush_encode(&old, &r, &e), DF_OK);
+    assert_int_equal(r.len, b.len);
+    assert_memory_equal(r.data, b.data, b.len);
+    /* the same body with an explicit zero trailer */
+    assert_int_equal(df_buf_append(&t, b.data, b.len, &e), DF_OK);
+    assert_int_equal(df_buf_append(&t, "\0\0", 2, &e), DF_OK);
+    assert_int_equal(df_msg_brush_decode(t.data, t.len, &zero, &e), DF_OK);
+    assert_int_equal(zero.use_session, 0);
+    assert_int_equal(zero.use_session_field, 1);
+    assert_true(zero.radius == old.radius && zero.strength == old.strength &&
+                !memcmp(zero.pinned, old.pinned, 6 * sizeof(double)));
+    df_buf_reset(&r);
+    assert_int_equal(df_msg_brush_encode(&zero, &r, &e), DF_OK);
+    assert_int_equal(r.len, t.len);
+    assert_memory_equal(r.data, t.data, t.len);
+    /* a non-zero trailer */
+    in.use_session = DF_BS_RADIUS | DF_BS_MIRROR;
+    df_buf_reset(&r);
+    assert_int_equal(df_msg_brush_encode(&in, &r, &e), DF_OK);
+    assert_int_equal(r.len, b.len + 2);
+    assert_int_equal(df_le16_load(r.data + b.len), DF_BS_RADIUS | DF_BS_MIRROR);
+    assert_int_equal(df_msg_brush_decode(r.data, r.len, &with, &e), DF_OK);
+    assert_int_equal(with.use_session, DF_BS_RADIUS | DF_BS_MIRROR);
+    df_msg_brush_free(&old);
+    df_msg_brush_free(&zero);
+    df_msg_brush_free(&with);
+    df_buf_free(&b);
+    df_buf_free(&t);
+    df_buf_free(&r);
+}
+
+/* Session brush bodies: sizes, documented offsets, round trips. */
+static void test_brush_state_fields(void **state)
+{
+    (void)state;
+    df_buf b;
+    df_buf_init(&b);
+    df_error e;
+    df_msg_brush_state_set set = {9, DF_BS_RADIUS | DF_BS_NU, {0}}, set2;
+    df_msg_brush_values_defaults(&set.v);
+    set.v.radius = 0.25;
+    set.v.nu = 0.45;
+    assert_int_equal(df_msg_brush_state_set_encode(&set, &b, &e), DF_OK);
+    assert_int_equal(b.len, 96);
+    assert_int_equal(df_le16_load(b.data + 8), DF_BS_RADIUS | DF_BS_NU);
+    double radius, nu;
+    memcpy(&radius, b.data + 16, 8);
+    memcpy(&nu, b.data + 24, 8);
+    assert_true(radius == 0.25 && nu == 0.45);
+    assert_int_equal(df_msg_brush_state_set_decode(b.data, b.len, &set2, &e), DF_OK);
+    assert_true(set2.session_id == 9 && set2.v.radius == 0.25 && set2.v.steps == 1);
+    df_msg_brush_state st = {9, 4, DF_BS_NU, DF_ORIGIN_CLIENT, 77, "knobs", set.v}, st2;
+    df_buf_reset(&b);
+    assert_int_equal(df_msg_brush_state_encode(&st, &b, &e), DF_OK);
+    assert_int_equal(b.len, 115 + 5);
+    assert_int_equal(b.data[18], DF_ORIGIN_CLIENT);
+    assert_int_equal(df_le16_load(b.data + 27), 5);
+    assert_int_equal(df_msg_brush_state_decode(b.data, b.len, &st2, &e), DF_OK);
+    assert_string_equal(st2.origin_name, "knobs");
+    assert_true(st2.seq == 4 && st2.origin_id == 77 && st2.v.nu == 0.45);
+    df_msg_brush_cursor c = {9, DF_ORIGIN_DEVICE, 5, DF_CURSOR_STROKE_ACTIVE, {1, 2, 3}, 0.5}, c2;
+    df_buf_reset(&b);
+    assert_int_equal(df_msg_brush_cursor_encode(&c, &b, &e), DF_OK);
+    assert_int_equal(b.len, 50);
+    memcpy(&radius, b.data + 42, 8);
+    assert_true(radius == 0.5);
+    assert_int_equal(df_msg_brush_cursor_decode(b.data, b.len, &c2, &e), DF_OK);
+    assert_true(c2.center[2] == 3 && c2.flags == DF_CURSOR_STROKE_ACTIVE && c2.origin_id == 5);
+    df_buf_free(&b);
+}
+
 static void test_brush_fields(void **state)
 {
     (void)state;
@@ -414,6 +504,8 @@ int main(void)
         cmocka_unit_test(test_truncation_at_every_offset),
         cmocka_unit_test(test_trailing_byte_is_rejected),
         cmocka_unit_test(test_brush_fields),
+        cmocka_unit_test(test_brush_use_session),
+        cmocka_unit_test(test_brush_state_fields),
         cmocka_unit_test(test_handles_and_move_fields),
         cmocka_unit_test(test_session_and_load_fields),
         cmocka_unit_test(test_body_kind_table),

@@ -34,6 +34,7 @@ static void test_defaults(void **state)
     assert_int_equal(c.foreground, 0);
     assert_int_equal(c.spin_us, DF_CONFIG_DEFAULT_SPIN_US);
     assert_int_equal(c.inline_us, DF_CONFIG_DEFAULT_INLINE_US);
+    assert_int_equal(c.cursor_hz, 120);
     assert_true(c.shm_ring_bytes == (uint64_t)64 << 20);
     /* memory limits (issue 9, items 10-13): sized from the machine's RAM where it matters */
     assert_true(c.shm_total_bytes == DF_CONFIG_DEFAULT_SHM_TOTAL);
@@ -72,6 +73,7 @@ static void test_parse_file_text(void **state)
                        "threads = 2\r\n"
                        "spin_us = 30\n"
                        "inline_us = 0\n"
+                       "cursor_hz = 0\n"
                        "shm_ring_bytes = 64k\n";
     df_error e;
     assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
@@ -89,6 +91,9 @@ static void test_parse_file_text(void **state)
     assert_int_equal(c.threads, 2);
     assert_int_equal(c.spin_us, 30);
     assert_int_equal(c.inline_us, 0);
+    assert_int_equal(c.cursor_hz, 0); /* unlimited */
+    assert_int_equal(df_config_set(&c, "cursor_hz", "240", &e), DF_OK);
+    assert_int_equal(c.cursor_hz, 240);
     assert_true(c.shm_ring_bytes == 65536);
     assert_int_equal(df_config_set(&c, "shm_ring_bytes", "0", &e), DF_OK); /* disabled */
     assert_true(c.shm_ring_bytes == 0);
@@ -134,6 +139,7 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "socket_group = a b\n",      "socket_group = /etc\n",
         "handshake_timeout_s = -1\n", "handshake_timeout_s = 86401\n",
         "idle_timeout_s = soon\n",   "idle_timeout_s = 1e3\n",
+        "cursor_hz = -1\n",          "cursor_hz = 10001\n",      "cursor_hz = fast\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
@@ -335,6 +341,67 @@ static void test_hid_keys(void **state)
     assert_non_null(strstr(e.msg, "falloff_max"));
 }
 
+/* The daemon-integration keys (issue 11): hid, hid_replay (comma lists appended, each file must
+ * be readable, at most DF_CONFIG_MAX_HID_REPLAY), hid_replay_speed, hid_enumerate_s and the
+ * --hid-replay option; a bad value names the key and changes nothing. */
+static void test_hid_daemon_keys(void **state)
+{
+    (void)state;
+    char f1[] = "/tmp/df-cfg-hid-XXXXXX", f2[] = "/tmp/df-cfg-hid-XXXXXX";
+    int fd1 = mkstemp(f1), fd2 = mkstemp(f2);
+    assert_true(fd1 >= 0 && fd2 >= 0);
+    close(fd1);
+    close(fd2);
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    assert_int_equal(c.hid_on, 1);
+    assert_int_equal(c.hid_enumerate_s, DF_CONFIG_DEFAULT_HID_ENUMERATE_S);
+    assert_true(c.hid_replay_speed == 1.0 && c.n_hid_replay == 0);
+    df_error e;
+    char text[512];
+    snprintf(text, sizeof text, "hid = off\nhid_replay = %s , %s\nhid_replay = %s\n"
+             "hid_replay_speed = 0\nhid_enumerate_s = 0\n", f1, f2, f1);
+    assert_int_equal(df_config_parse(&c, text, strlen(text), "h.conf", &e), DF_OK);
+    assert_int_equal(c.hid_on, 0);
+    assert_int_equal(c.n_hid_replay, 3);
+    assert_string_equal(c.hid_replay[1], f2);
+    assert_true(c.hid_replay_speed == 0.0 && c.hid_enumerate_s == 0);
+    df_server_config before = c;
+    static const char *const bad[][2] = {
+        {"hid = maybe\n", "hid: 'maybe'"},
+        {"hid_replay = /nonexistent/x.hid\n", "cannot read '/nonexistent/x.hid'"},
+        {"hid_replay = ,\n", "no file"},
+        {"hid_replay_speed = -1\n", "hid_replay_speed"},
+        {"hid_replay_speed = fast\n", "hid_replay_speed"},
+        {"hid_enumerate_s = 3601\n", "hid_enumerate_s"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        assert_int_equal(df_config_parse(&c, bad[i][0], strlen(bad[i][0]), "h.conf", &e),
+                         DF_EINVAL);
+        assert_non_null(strstr(e.msg, "h.conf:1: "));
+        assert_non_null(strstr(e.msg, bad[i][1]));
+        assert_memory_equal(&before, &c, sizeof c);
+    }
+    char many[20 * 40] = "hid_replay = ";
+    for (int i = 0; i <= DF_CONFIG_MAX_HID_REPLAY; i++) {
+        strcat(many, f1);
+        strcat(many, ",");
+    }
+    df_config_defaults(&c, NULL);
+    assert_int_equal(df_config_set(&c, "hid_replay", many + strlen("hid_replay = "), &e),
+                     DF_EINVAL);
+    assert_non_null(strstr(e.msg, "more than"));
+    assert_int_equal(c.n_hid_replay, 0);
+    char *argv[] = {"deformd", "--hid-replay", f2, NULL};
+    df_cli_action act;
+    assert_int_equal(df_config_from_args(&c, 3, argv, NULL, &act, &e), DF_OK);
+    assert_int_equal(c.n_hid_replay, 1);
+    assert_string_equal(c.hid_replay[0], f2);
+    assert_non_null(strstr(df_config_usage(), "--hid-replay"));
+    unlink(f1);
+    unlink(f2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -346,6 +413,7 @@ int main(void)
         cmocka_unit_test(test_allowed_paths),
         cmocka_unit_test(test_log_levels),
         cmocka_unit_test(test_hid_keys),
+        cmocka_unit_test(test_hid_daemon_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
