@@ -53,11 +53,11 @@ REF_N = 100                # client requests of each reference measurement
 
 def report(what, value, unit, target, ok=None):
     """One figure: ok None prints "(info)" (no target), else the target and ok|MISS."""
+    v = "%9d" % value if isinstance(value, int) else "%9.3f" % value
     if ok is None:
-        print("  %-56s %9.3f %-2s (info%s)" % (what, value, unit, ", " + target if target else ""))
+        print("  %-56s %s %-2s (info%s)" % (what, v, unit, ", " + target if target else ""))
     else:
-        print("  %-56s %9.3f %-2s (target %s) %s" % (what, value, unit, target,
-                                                     "ok" if ok else "MISS"))
+        print("  %-56s %s %-2s (target %s) %s" % (what, v, unit, target, "ok" if ok else "MISS"))
 
 
 def percentile(xs, p):
@@ -202,9 +202,9 @@ def bench_knob(tmps, mesh):
             bad += 1
             continue
         lat.append((t_ev - (start + t_rep)) / 1000.0)
-    report("knob: device reports handled (device stats events)", dst.get("events", -1), "",
+    report("knob: device reports handled (device stats events)", int(dst.get("events", -1)), "",
            "= %d" % len(events), dst.get("events") == len(events))
-    report("knob: BRUSH_STATE events whose radius is not the detents'", bad, "", "= 0", bad == 0)
+    report("knob: events whose radius is not the detents'", bad, "", "= 0", bad == 0)
     latency_lines("knob report -> BRUSH_STATE", lat, len(events))
     # reference: the same change requested by a client (send -> the subscriber's event), at
     # the same cadence on the same session
@@ -264,12 +264,11 @@ def bench_mouse3d(tmps, mesh, centre, diag):
     brush = [(t, x) for t, _, kind, x in disp if kind == st.ChangeKind.BRUSH]
     report("3d-mouse: brush DISPLACEMENT frames", len(brush), "",
            "<= %d updates: superseded updates share one" % n)
-    cum = brush
     lat, resid = [], 0.0
-    if cum and cum[-1][1] != 0:
-        total = cum[-1][1]
+    if brush and brush[-1][1] != 0:
+        total = brush[-1][1]
         contained = []
-        for t, c in cum:
+        for t, c in brush:
             x = c / total * n
             resid = max(resid, abs(x - round(x)))
             contained.append((t, int(round(x))))
@@ -283,9 +282,10 @@ def bench_mouse3d(tmps, mesh, centre, diag):
     report("3d-mouse: frame -> update identification residual", resid, "", "< 0.05",
            resid < 0.05)
     for key in ("strokes_begun", "strokes_ended"):
-        report("3d-mouse: device stats %s" % key, dst.get(key, -1), "", "= 1", dst.get(key) == 1)
-    report("3d-mouse: jobs superseded (daemon-wide)", ctl.stats(0).get("jobs_superseded", -1), "",
-           "")
+        report("3d-mouse: device stats %s" % key, int(dst.get(key, -1)), "", "= 1",
+               dst.get(key) == 1)
+    report("3d-mouse: jobs superseded (daemon-wide)",
+           int(ctl.stats(0).get("jobs_superseded", -1)), "", "")
     latency_lines("3d-mouse report -> DISPLACEMENT", lat, n)
     # reference: a client's grab stroke of the same tip steps at the same cadence (send of each
     # BRUSH_UPDATE -> the subscriber's frame of the version its ack names)
