@@ -451,7 +451,13 @@ void df_hid_manager_stop(df_server *srv)
         uv_close((uv_handle_t *)&m->enum_timer, NULL);
         m->timer_on = 0;
     }
-    for (df_hid_device *d = m->devs; d; d = d->next)
+    for (df_hid_device *d = m->devs; d; d = d->next) { /* every reader stops at once ... */
+        pthread_mutex_lock(&d->mu);
+        atomic_store(&d->stop, 1);
+        pthread_cond_signal(&d->cv);
+        pthread_mutex_unlock(&d->mu);
+    }
+    for (df_hid_device *d = m->devs; d; d = d->next) /* ... then each is joined and closed */
         if (d->state == DF_DEVSTATE_OPEN || d->th_running)
             close_device(d, DF_DEVSTATE_CLOSED, "daemon shutting down");
     destroy_backends(m);

@@ -47,10 +47,11 @@ class MeshState:
         raises OutOfSync when versions were missed (resync: apply(client.snapshot(sid))).
         A SNAPSHOT (dense, kind 7) always applies. A Client ShmLost event (`lost` True: a
         shared-memory stream frame was overwritten unread) returns False and changes nothing;
-        the next version then raises OutOfSync unless the replica was resynced. Brush state and
-        brush cursor events move no vertex: False."""
+        the next version then raises OutOfSync unless the replica was resynced. Brush state,
+        brush cursor and device state events move no vertex: False."""
         if getattr(d, "lost", False) or getattr(d, "kind_name", "") in ("brush_state",
-                                                                       "brush_cursor"):
+                                                                       "brush_cursor",
+                                                                       "device_state"):
             return False
         if isinstance(d, st.Progress):
             d = d.disp
