@@ -240,7 +240,8 @@ def bench_mouse3d(tmps, mesh, centre, diag):
     # for the device's stroke (it queues behind its BRUSH_END), then the session's version is
     # the stroke's last; receive until its frame
     ctl.get_mesh(sid)
-    final = int(ctl.stats(sid)["version"])
+    sst = ctl.stats(sid)
+    final = int(sst["version"])
 
     def final_frame(f):
         return (f.type == m.DISPLACEMENT and not f.more
@@ -303,6 +304,8 @@ def bench_mouse3d(tmps, mesh, centre, diag):
                dst.get(key) == 1)
     report("3d-mouse: jobs superseded (daemon-wide)",
            int(ctl.stats(0).get("jobs_superseded", -1)), "", "")
+    report("3d-mouse: last update's compute (session brush.last_ms)",
+           sst.get("brush.last_ms", float("nan")), "ms", "")
     latency_lines("3d-mouse report -> DISPLACEMENT", lat, n)
     # reference: a client's grab stroke of the same tip steps at the same cadence (send of each
     # BRUSH_UPDATE -> the subscriber's frame of the version its ack names)
