@@ -56,7 +56,7 @@ extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
 extern const ctl_cmd ctl_cmds_brush_state[]; /* brush-state */
 extern const ctl_cmd ctl_cmds_devices[];   /* devices [bind DEVICE SESSION] */
 
-/* Prints a session brush (cmd_brush_state.c): event 0 as `brush-state` does ('key value' lines,
+/* Prints a session brush (brush_state_out.c): event 0 as `brush-state` does ('key value' lines,
  * or one JSON object), event 1 as one `watch` line ("brush_state seq N changed radius,nu by
  * client ID 'NAME': type grab radius 0.25 ...", or a JSON object with "kind":"brush_state"). */
 void ctl_brush_state_print(const ctl_ctx *ctx, const df_msg_brush_state *s, int event);

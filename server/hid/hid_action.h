@@ -6,7 +6,8 @@
  * Brush field bits: DF_HID_BS_* carry the same values as the wire's DF_BS_* (proto/wire_schema.h
  * of the brush-state piece: TYPE 1<<0, RADIUS 1<<1, NU 1<<2, STRENGTH 1<<3, FALLOFF 1<<4, RATIO
  * 1<<5, INTEGRATOR 1<<6, MIRROR 1<<7). They are defined here because server/hid/ may not include
- * proto/ (tests/check_layers.sh); a unit test compares them once both are merged. */
+ * proto/ (tests/check_layers.sh); tests/unit/hid/test_hid_config.c checks they equal DF_BS_*,
+ * and the cursor flags DF_CURSOR_*. */
 #ifndef DF_SERVER_HID_ACTION_H
 #define DF_SERVER_HID_ACTION_H
 

@@ -22,7 +22,8 @@
  * unavailable; 256c:8251's dial arrives on a mouse-shaped node as the wheel, its button as
  * Consumer Play/Pause). Devices whose descriptor does not describe the real layout (Wacom vendor
  * page 0xff0d, Huion vendor nodes) classify as NONE: their data cannot be read from the
- * descriptor, and this layer says so in `reason` instead of guessing. */
+ * descriptor, and this layer says so in `reason` instead of guessing. So does a wheel sent as
+ * key presses (XP-Pen ACK05: Ctrl + Keypad +/-): that node is a keyboard. */
 #ifndef DF_SERVER_HID_CLASS_H
 #define DF_SERVER_HID_CLASS_H
 

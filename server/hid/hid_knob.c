@@ -28,11 +28,19 @@ static void brush_set(df_hid_action *out, size_t *n, const df_hid_brush *cur, un
 /* PowerMate LED brightness for radius r: linear in log r over [led_min, led_max]. */
 static int led_level(const df_hid_params *p, double r)
 {
+    if (!(r > 0) || !isfinite(r)) return 0;
     double lo = log(p->led_min_radius), hi = log(p->led_max_radius);
     double t = (log(r) - lo) / (hi - lo);
     if (!(t > 0)) t = 0;
     if (t > 1) t = 1;
     return (int)lround(t * 255.0);
+}
+
+int df_hid_mapper_led_level(const df_hid_mapper *m, double radius)
+{
+    if (!m || !(m->info.quirks & DF_HID_QUIRK_RAW_POWERMATE) || !(radius > 0) || !isfinite(radius))
+        return -1;
+    return led_level(&m->p, radius);
 }
 
 static double clampd(double v, double lo, double hi, int *limited)

@@ -24,11 +24,12 @@
  *
  * 3d-mouse: every report carrying axes adds, per axis a with value v, f = v / logical_max
  * (0 when |f| <= deadzone, clamped to [-1, 1]) * (invert ? -1 : 1), the translation
- * d[a] = f * sensitivity * dt * scale and the
- * rotation w[a] = f * twist_sensitivity * dt, dt = time since the previous report with the same
- * report id, clamped to 50 ms (0 for the first). Translation emits CURSOR deltas; while a
- * stroke is active (stroke_button held) STROKE_UPDATE carries the cumulative tip and twist.
- * Press = STROKE_BEGIN, release = STROKE_END (Buzz when haptics). Axes are read as deflections
+ * d[a] = f * sensitivity * dt * scale and the rotation w[a] = f * twist_sensitivity * dt,
+ * dt = time since the previous report with the same report id, clamped to 50 ms (0 for the
+ * first). Translation emits CURSOR deltas; while a stroke is active (stroke_button held)
+ * STROKE_UPDATE carries the cumulative tip and twist. Press = STROKE_BEGIN (strength = the
+ * session's), release = STROKE_END (Buzz on both when haptics); in one report the press comes
+ * before the axes and the release after them. Axes are read as deflections
  * (absolute); the SpaceNavigator's, declared Relative, are absolute by quirk, and every known
  * 3Dconnexion device reports deflection, so a Relative flag does not change the rule.
  *
@@ -122,6 +123,12 @@ int df_hid_pen_feed(df_hid_mapper *m, const uint8_t *r, size_t len, uint64_t t,
  * the device has haptics, the config enables them and the waveform is listed; else nothing. */
 void df_hid_mapper_haptic(const df_hid_mapper *m, unsigned wave, unsigned repeat,
                           df_hid_action *out, size_t *n);
+
+/* The LED brightness (0..255) a PowerMate-style knob shows for `radius` (led_min_radius ..
+ * led_max_radius, linear in log radius), or -1 when the device has no LED (not a raw PowerMate)
+ * or radius is not finite and positive: what the device manager sends when a knob starts
+ * driving a session, before any turn. */
+int df_hid_mapper_led_level(const df_hid_mapper *m, double radius);
 
 /* The next brush type after `type` in the configured cycle (the first when type is not in it). */
 uint8_t df_hid_mapper_next_type(const df_hid_params *p, uint8_t type);

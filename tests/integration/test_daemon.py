@@ -40,6 +40,20 @@ def test_bad_config_file_names_the_line(tmp_path):
     assert p.returncode != 0 and "d.conf:3" in p.stderr, p.stderr
 
 
+@pytest.mark.parametrize("lines,where,what", [
+    ("hid.knob.radius_step = 1.2\nhid.knob.radiuss = 2\n", "d.conf:2", "radiuss"),
+    ("hid.pen.pressure_gamma = 0\n", "d.conf:1", "pressure_gamma"),
+    ("hid.3d-mouse.radius_step = 1.2\n", "d.conf:1", "not a 3d-mouse key"),
+    ("hid.046d:c62.deadzone = 0.1\n", "d.conf:1", "VID:PID"),
+    ("hid.knob.nu_min = 0.4\nhid.knob.nu_max = 0.3\n", "d.conf", "nu_min 0.4 above nu_max"),
+])
+def test_bad_hid_keys_name_the_file_and_line(tmp_path, lines, where, what):
+    conf = tmp_path / "d.conf"
+    conf.write_text(lines)
+    p = run("--foreground", "--config", str(conf), "--socket", str(tmp_path / "s"))
+    assert p.returncode != 0 and where in p.stderr and what in p.stderr, p.stderr
+
+
 def test_tcp_is_off_unless_configured_and_the_default_socket_is_under_xdg():
     with tempfile.TemporaryDirectory(prefix="deformd-xdg-") as xdg:
         env = dict(os.environ, XDG_RUNTIME_DIR=xdg)

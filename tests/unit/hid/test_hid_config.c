@@ -46,6 +46,17 @@ static void test_defaults(void **state)
     assert_int_equal(DF_HID_BRUSH_PINCH, DF_BRUSH_PINCH);
     assert_int_equal(DF_HID_BRUSH_AFFINE, DF_BRUSH_AFFINE);
     assert_int_equal(DF_HID_FALLOFF_LIMIT, DF_MAX_FALLOFF);
+    /* hid_action.h's brush-state bits and cursor flags are the wire's DF_BS_* / DF_CURSOR_* */
+    assert_int_equal(DF_HID_BS_TYPE, DF_BS_TYPE);
+    assert_int_equal(DF_HID_BS_RADIUS, DF_BS_RADIUS);
+    assert_int_equal(DF_HID_BS_NU, DF_BS_NU);
+    assert_int_equal(DF_HID_BS_STRENGTH, DF_BS_STRENGTH);
+    assert_int_equal(DF_HID_BS_FALLOFF, DF_BS_FALLOFF);
+    assert_int_equal(DF_HID_BS_RATIO, DF_BS_RATIO);
+    assert_int_equal(DF_HID_BS_INTEGRATOR, DF_BS_INTEGRATOR);
+    assert_int_equal(DF_HID_BS_MIRROR, DF_BS_MIRROR);
+    assert_int_equal(DF_HID_CUR_IN_RANGE, DF_CURSOR_IN_RANGE);
+    assert_int_equal(DF_HID_CUR_STROKE, DF_CURSOR_STROKE_ACTIVE);
 }
 
 static void expect_error(df_hid_config *c, const char *key, const char *value, int code,

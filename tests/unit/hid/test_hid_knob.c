@@ -269,6 +269,14 @@ static void test_powermate(void **state)
     }
     assert_int_equal(leds, (size_t)k.radius_changes);
     assert_true(leds > 0);
+    /* the level for a given radius (what the manager sends at attach): ends and middle */
+    assert_int_equal(df_hid_mapper_led_level(&m, 0.01), 0);
+    assert_int_equal(df_hid_mapper_led_level(&m, 1.0), 255);
+    assert_int_equal(df_hid_mapper_led_level(&m, 0.1),
+                     lround(255 * (log(0.1) - log(0.01)) / (log(1.0) - log(0.01))));
+    assert_int_equal(df_hid_mapper_led_level(&m, 1e-6), 0);
+    assert_int_equal(df_hid_mapper_led_level(&m, 50), 255);
+    assert_int_equal(df_hid_mapper_led_level(&m, -1), -1);
     free(o.v);
 }
 
@@ -385,6 +393,7 @@ static void test_errors(void **state)
     assert_int_equal(df_hid_mapper_init(&m, &ci, &d, NULL, &e), DF_OK);
     assert_int_equal(df_hid_mapper_unplug(&m, act, DF_HID_MAX_ACTIONS, &n, &e), DF_OK);
     assert_int_equal(n, 0);
+    assert_int_equal(df_hid_mapper_led_level(&m, 0.5), -1); /* no LED */
     df_hid_desc_free(&d);
 }
 

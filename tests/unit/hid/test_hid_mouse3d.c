@@ -230,12 +230,78 @@ static void test_dt_deadzone_unplug(void **state)
     replay_free(&r);
 }
 
+/* A home-made 3D mouse with a haptic motor: report 1 = 6 axes s16 (-350..350) + button 1 (+ 7
+ * pad bits); output report 2 = [02][Manual Trigger 1..7][Repeat Count]; Waveform List ordinal 3
+ * = Buzz (0x1004), ordinal 4 = Click (0x1003). Stroke begin and end buzz; haptics = no silences. */
+static const uint8_t k_haptic_3d[] = {
+    0x05, 0x01, 0x09, 0x08, 0xa1, 0x01, 0x85, 0x01,
+    0x16, 0xa2, 0xfe, 0x26, 0x5e, 0x01, 0x75, 0x10, 0x95, 0x06,
+    0x09, 0x30, 0x09, 0x31, 0x09, 0x32, 0x09, 0x33, 0x09, 0x34, 0x09, 0x35, 0x81, 0x02,
+    0x05, 0x09, 0x09, 0x01, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x01, 0x81, 0x02,
+    0x75, 0x07, 0x81, 0x03,
+    0x05, 0x0e, 0x09, 0x01, 0xa1, 0x02, 0x85, 0x02, 0x75, 0x08, 0x95, 0x01,
+    0x15, 0x01, 0x25, 0x07, 0x09, 0x21, 0x91, 0x02,
+    0x15, 0x00, 0x25, 0x0a, 0x09, 0x24, 0x91, 0x02,
+    0x09, 0x10, 0xa1, 0x02, 0x05, 0x0a, 0x85, 0x03, 0x75, 0x10,
+    0x16, 0x04, 0x10, 0x26, 0x04, 0x10, 0x09, 0x03, 0xb1, 0x03,
+    0x16, 0x03, 0x10, 0x26, 0x03, 0x10, 0x09, 0x04, 0xb1, 0x03,
+    0xc0, 0xc0, 0xc0};
+
+static void test_haptic_strokes(void **state)
+{
+    (void)state;
+    df_hid_desc d;
+    df_error e;
+    if (df_hid_desc_parse(k_haptic_3d, sizeof k_haptic_3d, &d, &e) != DF_OK) fail_msg("%s", e.msg);
+    df_hid_class_info ci;
+    assert_int_equal(df_hid_classify(&d, 0x1209, 0x3d3d, &ci), DF_OK);
+    assert_int_equal(ci.cls, DF_HID_CLASS_MOUSE3D);
+    for (int off = 0; off < 2; off++) {
+        df_hid_config cfg;
+        memset(&cfg, 0, sizeof cfg);
+        if (off) assert_int_equal(df_hid_config_set(&cfg, "hid.3d-mouse.haptics", "no", NULL), DF_OK);
+        df_hid_mapper m;
+        assert_int_equal(df_hid_mapper_init(&m, &ci, &d, &cfg, &e), DF_OK);
+        df_hid_brush b = {DF_HID_BRUSH_GRAB, 1, 0.25, 0.5, 1.0};
+        replay_out o;
+        memset(&o, 0, sizeof o);
+        uint8_t r[14] = {1};
+        r[13] = 1; /* button down, no deflection */
+        replay_feed(&m, r, 14, 0, &b, &o, 0);
+        r[1] = 0x5e; /* X = 350 */
+        r[2] = 0x01;
+        replay_feed(&m, r, 14, 10000, &b, &o, 1);
+        r[13] = 0;
+        replay_feed(&m, r, 14, 20000, &b, &o, 2);
+        assert_int_equal(replay_count(&o, DF_HID_ACT_STROKE_BEGIN), 1);
+        assert_int_equal(replay_count(&o, DF_HID_ACT_STROKE_END), 1);
+        assert_int_equal(replay_count(&o, DF_HID_ACT_HAPTIC), off ? 0 : 2);
+        for (size_t i = 0; i < o.n; i++) {
+            const df_hid_action *a = &o.v[i].a;
+            if (a->kind == DF_HID_ACT_HAPTIC) {
+                const uint8_t want[3] = {0x02, 0x03, 0x00}; /* report 2, Buzz = ordinal 3 */
+                assert_int_equal(a->waveform, DF_HID_WAVE_BUZZ);
+                assert_int_equal(a->n_bytes, 3);
+                assert_memory_equal(a->bytes, want, 3);
+                assert_true(o.v[i - 1].a.kind == DF_HID_ACT_STROKE_BEGIN ||
+                            o.v[i - 1].a.kind == DF_HID_ACT_STROKE_END);
+            }
+            /* the full deflection of the report at 10 ms and of the release report at 20 ms
+             * (axes before the release edge) add 350/350 * 0.5 * 0.01 s each */
+            if (a->kind == DF_HID_ACT_STROKE_END) assert_true(fabs(a->move[0] - 0.5 * 0.02) < 1e-15);
+        }
+        free(o.v);
+    }
+    df_hid_desc_free(&d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_recordings),
         cmocka_unit_test(test_stroke_tip_is_integral),
         cmocka_unit_test(test_dt_deadzone_unplug),
+        cmocka_unit_test(test_haptic_strokes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
