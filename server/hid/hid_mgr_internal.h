@@ -106,7 +106,10 @@ struct df_session *df_hid_drive_session(df_hid_device *d);
 /* Frees the pen cache of session_id (all of them with 0). */
 void df_hid_drive_pen_forget(df_hid_manager *m, uint64_t session_id);
 
-/* hid_manager.c --------------------------------------------------------------------------- */
+/* hid_manager.c (hid_mgr_query.c: list, bind, view, stats) ------------------------------- */
+
+/* The device with id `id`, or NULL. */
+df_hid_device *df_hid_find(df_hid_manager *m, uint64_t id);
 
 /* Fills the wire item of d. */
 void df_hid_device_info(const df_hid_device *d, df_msg_device_info *out);
