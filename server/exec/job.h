@@ -115,7 +115,8 @@ int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_erro
 
 /* 1 when a client's request of `type` makes its session the most recently active one
  * (srv->last_change_session, which unbound HID devices follow): the change requests (brush,
- * handles, reset-rest, undo/redo) and subscribe. */
+ * handles, reset-rest, undo/redo) and subscribe. (BRUSH_STATE_SET, answered without a job,
+ * sets it in its handler.) */
 int df_job_is_change(uint16_t type);
 
 /* Decoder of the requests whose body is a session_ref (no job body). */

@@ -46,6 +46,7 @@ int df_h_brush_state_set(df_req *r, const uint8_t *p, df_error *err)
                      .id = r->c ? r->c->id : 0, .name = r->c ? r->c->name : ""};
     rc = df_brush_state_apply(s, m.mask, &v, &who, err);
     if (rc != DF_OK) return rc;
+    if (r->c) r->srv->last_change_session = s->id; /* unbound devices follow it (hid_manager.h) */
     df_msg_brush_state out;
     df_brush_state_msg(s, m.mask, &out);
     df_req_reply_brush_state(r, &out);

@@ -349,11 +349,6 @@ static int start_backends(df_hid_manager *m, df_error *err)
         if (df_hid_backend_libusb(&m->be[DF_HID_BE_LIBUSB], &e) != DF_OK) {
             m->be[DF_HID_BE_LIBUSB] = NULL;
             df_log(DF_LOG_WARN, "hid: libusb backend unavailable: %s", e.msg);
-        } else if (m->be[DF_HID_BE_LIBUSB]->watch &&
-                   m->be[DF_HID_BE_LIBUSB]->watch(m->be[DF_HID_BE_LIBUSB], on_hotplug, m, &e) !=
-                       DF_OK) {
-            df_log(DF_LOG_INFO, "hid: no libusb hotplug (%s): enumerating every %d s", e.msg,
-                   cfg->hid_enumerate_s);
         }
     }
     if (cfg->n_hid_replay) {
@@ -383,6 +378,33 @@ static void destroy_backends(df_hid_manager *m)
     }
 }
 
+/* The manager m with its backends runs: hotplug watches, the first enumeration, the timer. */
+static void run(df_server *srv, df_hid_manager *m)
+{
+    srv->hid = m;
+    df_error e;
+    for (int be = 0; be < DF_HID_BE_COUNT; be++)
+        if (be != DF_HID_BE_REPLAY && m->be[be] && m->be[be]->watch &&
+            m->be[be]->watch(m->be[be], on_hotplug, m, &e) != DF_OK)
+            df_log(DF_LOG_INFO, "hid: no %s hotplug (%s): enumerating every %d s",
+                   m->be[be]->name, e.msg, srv->cfg.hid_enumerate_s);
+    for (int be = 0; be < DF_HID_BE_COUNT; be++) scan_backend(m, be);
+    uint32_t open = 0;
+    for (df_hid_device *d = m->devs; d; d = d->next) open += d->state == DF_DEVSTATE_OPEN;
+    if (m->ndev == 0)
+        df_log(DF_LOG_INFO, "hid: no HID devices%s", srv->cfg.hid_on ? " (hidapi, libusb)" : "");
+    else
+        df_log(DF_LOG_INFO, "hid: %u device(s), %u open", m->ndev, open);
+    if ((m->be[DF_HID_BE_HIDAPI] || m->be[DF_HID_BE_LIBUSB]) && srv->cfg.hid_enumerate_s > 0) {
+        uv_timer_init(srv->loop, &m->enum_timer);
+        m->enum_timer.data = m;
+        uint64_t ms = (uint64_t)srv->cfg.hid_enumerate_s * 1000;
+        uv_timer_start(&m->enum_timer, on_enum_timer, ms, ms);
+        uv_unref((uv_handle_t *)&m->enum_timer);
+        m->timer_on = 1;
+    }
+}
+
 int df_hid_manager_start(df_server *srv, df_error *err)
 {
     srv->hid = NULL;
@@ -397,22 +419,27 @@ int df_hid_manager_start(df_server *srv, df_error *err)
         free(m);
         return rc;
     }
-    srv->hid = m;
-    for (int be = 0; be < DF_HID_BE_COUNT; be++) scan_backend(m, be);
-    uint32_t open = 0;
-    for (df_hid_device *d = m->devs; d; d = d->next) open += d->state == DF_DEVSTATE_OPEN;
-    if (m->ndev == 0)
-        df_log(DF_LOG_INFO, "hid: no HID devices%s", srv->cfg.hid_on ? " (hidapi, libusb)" : "");
-    else
-        df_log(DF_LOG_INFO, "hid: %u device(s), %u open", m->ndev, open);
-    if (srv->cfg.hid_on && srv->cfg.hid_enumerate_s > 0) {
-        uv_timer_init(srv->loop, &m->enum_timer);
-        m->enum_timer.data = m;
-        uint64_t ms = (uint64_t)srv->cfg.hid_enumerate_s * 1000;
-        uv_timer_start(&m->enum_timer, on_enum_timer, ms, ms);
-        uv_unref((uv_handle_t *)&m->enum_timer);
-        m->timer_on = 1;
+    run(srv, m);
+    return DF_OK;
+}
+
+int df_hid_manager_start_with(df_server *srv, df_hid_backend *live, df_hid_backend *usb,
+                              df_hid_backend *replay, df_error *err)
+{
+    srv->hid = NULL;
+    df_hid_manager *m = calloc(1, sizeof *m);
+    if (!m) {
+        df_hid_backend_destroy(live);
+        df_hid_backend_destroy(usb);
+        df_hid_backend_destroy(replay);
+        return df_error_set(err, DF_ENOMEM, "hid: out of memory");
     }
+    m->srv = srv;
+    atomic_init(&m->posted, 0);
+    m->be[DF_HID_BE_HIDAPI] = live;
+    m->be[DF_HID_BE_LIBUSB] = usb;
+    m->be[DF_HID_BE_REPLAY] = replay;
+    run(srv, m);
     return DF_OK;
 }
 

@@ -42,6 +42,15 @@ struct df_session;
  * that cannot be read or parsed (DF_EIO / DF_EFORMAT, message names it), DF_ENOMEM. */
 int df_hid_manager_start(df_server *srv, df_error *err);
 
+/* The same with the given backends instead of those srv->cfg names (tests: a fake backend; any
+ * may be NULL): `live` is enumerated like hidapi (at start, every hid_enumerate_s, on its watch
+ * callback), `usb` like libusb, `replay` like the replay backend (devices open at the first
+ * subscribe). The manager owns them from here (also on error). DF_OK or DF_ENOMEM. */
+struct df_hid_backend;
+int df_hid_manager_start_with(df_server *srv, struct df_hid_backend *live,
+                              struct df_hid_backend *usb, struct df_hid_backend *replay,
+                              df_error *err);
+
 /* Begins shutdown (from df_server_stop): stops enumerating, tells every reader thread to stop
  * and joins it, closes every device and its backend. Posted reports still in flight are dropped
  * when they arrive. Idempotent; NULL-safe for srv->hid. */

@@ -107,12 +107,20 @@ static void bbox(const df_session *s, double centre[3], double *diag)
     *diag = sqrt(d2);
 }
 
+static void output(df_hid_device *d, const df_hid_action *a);
+
 /* d now drives s: the 3d-mouse cursor starts at the bounding-box centre and its integration
- * scale is the diagonal (0-size meshes keep scale 1). */
+ * scale is the diagonal (0-size meshes keep scale 1); a knob with an LED (PowerMate) shows the
+ * session's radius at once. */
 static void attach(df_hid_device *d, df_session *s)
 {
     uint64_t old = d->active;
     d->active = s->id;
+    int led = df_hid_mapper_led_level(&d->map, df_brush_state_get(s)->radius);
+    if (led >= 0 && old != s->id) {
+        df_hid_action a = {.kind = DF_HID_ACT_LED, .led = led};
+        output(d, &a);
+    }
     if (d->cls.cls == DF_HID_CLASS_MOUSE3D && d->cursor_session != s->id) {
         double diag;
         bbox(s, d->cursor, &diag);

@@ -132,9 +132,10 @@ def same(a, b):
 
 def test_powermate_knob_radius_nu_falloff_and_led(make_daemon):
     """PowerMate raw packets [button][s8 rotation]...: rotation scales the radius, press+rotate
-    moves nu (from 0.2, set by a client first), press alone cycles the falloff; every radius
-    change sets the LED by the vendor control transfer 0x41/0x01, wValue 1, wIndex = brightness
-    (255 * log(r / 0.01) / log(1 / 0.01), clamped to 0..255)."""
+    moves nu (from 0.2, set by a client first), press alone cycles the falloff; the LED shows the
+    session's radius when the knob starts driving it and after every radius change, by the
+    vendor control transfer 0x41/0x01, wValue 1, wIndex = brightness (255 * log(r / 0.01) /
+    log(1 / 0.01), clamped to 0..255)."""
     name = "griffin-powermate_077d-0410_usb.raw.txt"
     node = hf.read_recording(os.path.join(hf.HID_DIR, name))[0]
     d = make_daemon(replay_config([name]))
@@ -146,7 +147,7 @@ def test_powermate_knob_radius_nu_falloff_and_led(make_daemon):
     dev = c.devices_list()[0]
     st = c.stats(dev.device_id)
     leds = [k for k in st if k.startswith("ctl.")]
-    radii = [v for k, v in want if k == "radius"]
+    radii = [1.0] + [v for k, v in want if k == "radius"]    # the level at attach, then turns
     assert len(leds) == len(radii)
     for key, r in zip(sorted(leds, key=lambda k: int(k.split(".")[1])), radii):
         rt, req, value, index = (int(x, 16) for x in key.split(".")[2].split("_"))
