@@ -81,10 +81,12 @@ int df_hid_manager_bind(df_server *srv, uint64_t device_id, uint64_t session_id,
 int df_hid_manager_view(df_server *srv, const df_msg_device_view *v, df_error *err);
 
 /* Appends the stats of device `device_id` as (key, value) through put(ctx, key, value): events,
- * strokes, the last stroke's tip and strength, and the replay backend's captured output reports
- * (`out.<seq>.<hex bytes>` = replay time in us; feature reports sent `feat.<seq>.<hex bytes>`;
- * control transfers `ctl.<seq>.<reqtype>_<request>_<value>_<index>`, hex), and force feedback
- * (`force_feedback` 0/1, `ffb.reports` sent). DF_ENOTFOUND for an unknown device. */
+ * strokes, the last stroke's tip and strength, while a replay device is open `replay.start_us`
+ * (CLOCK_MONOTONIC us at its open: its report recorded at r is due at that + r / hid_replay_speed),
+ * the replay backend's captured output reports (`out.<seq>.<hex bytes>` = replay time in us;
+ * feature reports sent `feat.<seq>.<hex bytes>`; control transfers
+ * `ctl.<seq>.<reqtype>_<request>_<value>_<index>`, hex), and force feedback (`force_feedback`
+ * 0/1, `ffb.reports` sent). DF_ENOTFOUND for an unknown device. */
 int df_hid_manager_device_stats(df_server *srv, uint64_t device_id,
                                 void (*put)(void *ctx, const char *key, double v), void *ctx,
                                 df_error *err);

@@ -119,6 +119,9 @@ int df_hid_manager_device_stats(df_server *srv, uint64_t device_id,
     put(ctx, "ffb.reports", (double)df_hid_ffb_reports(d));
     df_hid_backend *b = srv->hid->be[d->be];
     if (d->be != DF_HID_BE_REPLAY || !b) return DF_OK;
+    uint64_t start;
+    if (d->dev && df_hid_replay_start_us(b, d->dev, &start, NULL) == DF_OK)
+        put(ctx, "replay.start_us", (double)start);
     df_hid_replay_output *outs = NULL;
     size_t n = 0;
     if (df_hid_replay_outputs(b, 0, &outs, &n, err) != DF_OK) return DF_OK;

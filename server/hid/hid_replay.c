@@ -490,6 +490,15 @@ int df_hid_replay_outputs(df_hid_backend *bb, size_t from, df_hid_replay_output 
     return DF_OK;
 }
 
+int df_hid_replay_start_us(const df_hid_backend *b, const df_hid_dev *d, uint64_t *t0_us,
+                           df_error *err)
+{
+    if (!b || !d || !t0_us || b->kind != DF_HID_BACKEND_REPLAY || b->destroy != rp_destroy)
+        return df_error_set(err, DF_EINVAL, "hid replay start: not a replay device or NULL");
+    *t0_us = ((const rp_dev *)d)->t0;
+    return DF_OK;
+}
+
 void df_hid_replay_outputs_free(df_hid_replay_output *list, size_t n)
 {
     if (!list) return;

@@ -200,4 +200,12 @@ int df_hid_replay_outputs(df_hid_backend *b, size_t from, df_hid_replay_output *
                           df_error *err);
 void df_hid_replay_outputs_free(df_hid_replay_output *list, size_t n);
 
+/* The start of replay device d of backend b on the backend's clock (CLOCK_MONOTONIC in us unless
+ * opts gave now_us): the clock time at open, so d's report recorded at r is due at
+ * *t0_us + r / speed (the HID latency bench compares event receipt with it). Set by open, constant
+ * until close: any thread may call this while d is open. Errors: DF_EINVAL (NULL arguments, b not
+ * a replay backend). */
+int df_hid_replay_start_us(const df_hid_backend *b, const df_hid_dev *d, uint64_t *t0_us,
+                           df_error *err);
+
 #endif

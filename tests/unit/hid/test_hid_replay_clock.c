@@ -1,8 +1,8 @@
 /* Unit tests for the timing of server/hid/hid_replay.c, on a fake clock (df_hid_replay_opts
  * now_us/sleep_us: sleeping advances it, nothing waits for real): each report is delivered exactly
- * at open + recorded time / speed, reads time out after their timeout in between, a zero timeout
- * polls without sleeping, the end of the file unplugs at its last recorded time, LOOP and HOLD;
- * and one reader thread against one writer thread. */
+ * at open (df_hid_replay_start_us) + recorded time / speed, reads time out after their timeout in
+ * between, a zero timeout polls without sleeping, the end of the file unplugs at its last
+ * recorded time, LOOP and HOLD; and one reader thread against one writer thread. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -89,6 +89,11 @@ static void check_timing(const char *dir, const char *name, unsigned node, doubl
     df_hid_backend *b = make(path, &c, speed, DF_HID_REPLAY_END_UNPLUG);
     df_hid_dev *d = open_node(b, path, node);
     const uint64_t t0 = c.now, Tus = (uint64_t)T * 1000;
+    uint64_t start = 0;
+    assert_int_equal(df_hid_replay_start_us(b, d, &start, NULL), DF_OK);
+    assert_int_equal(start, t0);
+    assert_int_equal(df_hid_replay_start_us(b, NULL, &start, NULL), DF_EINVAL);
+    assert_int_equal(df_hid_replay_start_us(NULL, d, &start, NULL), DF_EINVAL);
     uint8_t buf[DF_HID_READ_MAX];
     uint64_t t, timeouts, prev = t0;
     size_t seen = 0;
@@ -107,6 +112,8 @@ static void check_timing(const char *dir, const char *name, unsigned node, doubl
         seen++;
     }
     assert_true(seen > 0);
+    assert_int_equal(df_hid_replay_start_us(b, d, &start, NULL), DF_OK);
+    assert_int_equal(start, t0); /* constant while open */
     /* the end: unplug at the file's last recorded time (silent nodes too) */
     int r = read_until(b, d, buf, sizeof buf, T, &t, &timeouts);
     assert_int_equal(r, DF_ENOTFOUND);
