@@ -548,7 +548,8 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
         static const char *const map[][2] = {
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
             {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"},
-            {"--hid-replay", "hid_replay"}, {"--key-file", "key_file"}};
+            {"--hid-replay", "hid_replay"}, {"--key-file", "key_file"},
+            {"--tls-cert", "tls_cert"}, {"--tls-key", "tls_key"}};
         int done = 0;
         for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);
