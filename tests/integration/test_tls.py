@@ -109,15 +109,15 @@ def test_deformctl_and_c_library_over_tls(tls_daemon, pki, tmp_path):
     obj.write_bytes(grid_obj(5, 4))
     r = ctl("--tcp", hp, "--key-file", kf, "--tls-ca", pki["ca"], "load", str(obj), "--name", "c")
     assert r.returncode == 0, r.stderr
-    r = ctl("--tcp", hp, "--key-file", kf, "stroke", "c", "--type", "grab", "--center",
+    r = ctl("--tcp", hp, "--key-file", kf, "brush", "c", "--type", "grab", "--center",
             "0.5,0.5,0", "--move", "0,0,0.1", "--radius", "0.4",
             env={"DEFORMD_TLS_CA": pki["ca"]})
     assert r.returncode == 0, r.stderr
     out = tmp_path / "out.obj"
-    r = ctl("--tcp", hp, "--key-file", kf, "--tls-ca", pki["ca"], "get", "c", "-o", str(out))
+    r = ctl("--tcp", hp, "--key-file", kf, "--tls-ca", pki["ca"], "get", "c", "--out", str(out))
     assert r.returncode == 0, r.stderr
     ref = tmp_path / "ref.obj"
-    r = ctl("--socket", d.socket_path, "get", "c", "-o", str(ref))
+    r = ctl("--socket", d.socket_path, "get", "c", "--out", str(ref))
     assert r.returncode == 0, r.stderr
     assert out.read_bytes() == ref.read_bytes()
     with d.unix_client() as u:
