@@ -175,11 +175,16 @@ static int open_tcp(df_server *srv, df_error *err)
                                 : !has_key           ? "authentication (key_file)"
                                                      : "encryption (tls_cert/tls_key)");
         }
-        df_log(DF_LOG_WARN,
-               "tcp:%s:%s: listening on a non-loopback address (tcp_insecure) %s", host, port,
-               !has_key ? "without authentication: anyone who can reach it controls every session"
-                        : "without encryption: the stream can be read and altered on the "
-                          "network");
+        if (!has_key)
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address without authentication "
+                   "(tcp_insecure): anyone who can reach it controls every session",
+                   host, port);
+        else
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address without encryption "
+                   "(tcp_insecure): the stream can be read and altered on the network",
+                   host, port);
     }
     int rc = uv_tcp_init(srv->loop, &srv->tcp_srv);
     if (rc < 0) {
