@@ -87,6 +87,7 @@ static void on_written(uv_write_t *req, int status)
     c->srv->stats.frames_out += n;
     c->wcount = 0;
     c->wbusy = 0;
+    if (c->tls) df_tls_conn_trim(c->tls); /* the ciphertext is written */
     if (c->closing) {
         df_conn_unref(c);
         return;
@@ -161,6 +162,7 @@ static void kick_write(df_conn *c)
         }
         return;
     }
+    if (c->tls) df_tls_conn_trim(c->tls); /* everything sealed went out */
     if (c->flush_close && c->outq.count == 0) df_conn_close(c, c->flush_why, 1);
 }
 

@@ -250,3 +250,12 @@ int df_tls_seal(df_tls_conn *t, const uv_buf_t *plain, size_t n, uv_buf_t *out, 
     *out = uv_buf_init((char *)t->out, (unsigned)got);
     return DF_OK;
 }
+
+void df_tls_conn_trim(df_tls_conn *t)
+{
+    if (t->out_cap > DF_TLS_KEEP_BYTES) {
+        free(t->out);
+        t->out = NULL;
+        t->out_cap = 0;
+    }
+}

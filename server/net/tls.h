@@ -68,4 +68,12 @@ int df_tls_established(const df_tls_conn *t);
  * again. Errors: DF_EIO (SSL_write failed), DF_ENOMEM. */
 int df_tls_seal(df_tls_conn *t, const uv_buf_t *plain, size_t n, uv_buf_t *out, df_error *err);
 
+/* Ciphertext buffer kept between writes; a larger one (after a big frame) is freed by
+ * df_tls_conn_trim. */
+#define DF_TLS_KEEP_BYTES (1u << 20)
+
+/* Frees the ciphertext buffer of the last df_tls_seal when it is larger than DF_TLS_KEEP_BYTES.
+ * Only once that ciphertext has been written. */
+void df_tls_conn_trim(df_tls_conn *t);
+
 #endif

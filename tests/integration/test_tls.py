@@ -233,3 +233,19 @@ def test_bad_tls_files_refuse_start(tmp_path, pki, case):
         assert "set both tls_cert and tls_key" in err, err
     else:
         assert needle in err and ("tls_key %s" % key) in err, err
+
+
+def test_handshake_timeout_covers_the_tls_handshake(make_daemon, pki, tmp_path):
+    """A peer that starts a TLS record and stops is closed by handshake_timeout_s."""
+    kf = str(tmp_path / "k")
+    write_key(kf)
+    d = make_daemon("key_file = %s\ntls_cert = %s\ntls_key = %s\nhandshake_timeout_s = 1\n"
+                    % (kf, pki["cert"], pki["key"]), tcp=True, tls_ca=pki["ca"])
+    s = socket.create_connection(("127.0.0.1", d.tcp_port), timeout=30.0)
+    s.sendall(b"\x16\x03\x01\x02\x00")       # a handshake record header, no body
+    while s.recv(65536):                     # wait for the close (EOF), whatever comes first
+        pass
+    s.close()
+    assert "handshake timeout" in d.log()
+    with d.unix_client() as u:
+        assert u.stats()["clients_handshake_timeout"] == 1
