@@ -38,9 +38,10 @@ LDFLAGS := $(OMP) $(SAN)
 KELV_SYS    := -llapacke -llapack -lopenblas -lm
 MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
 HID_SYS     := -lhidapi-hidraw -lusb-1.0
-# CRYPTO_SYS: OpenSSL libcrypto, for proto/auth_mac.c (HMAC-SHA256 of AUTH), linked by everything
-# that links the proto layer's auth (the daemon, libdeformclient users, their unit tests).
-CRYPTO_SYS  := -lcrypto
+# CRYPTO_SYS: OpenSSL libssl + libcrypto, for proto/auth_mac.c (HMAC-SHA256 of AUTH) and TLS
+# (server/net/tls.c, client/dc_tls.c), linked by everything that links the proto layer's auth
+# (the daemon, libdeformclient users, their unit tests).
+CRYPTO_SYS  := -lssl -lcrypto
 SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lzstd -lpthread $(CRYPTO_SYS)
 # core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers

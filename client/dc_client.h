@@ -8,6 +8,7 @@
 
 struct df_client {
     int fd;
+    void *ssl, *ssl_ctx;         /* TLS (dc_tls.h: SSL *, SSL_CTX *), NULL on a plain socket */
     int timeout_ms;              /* per-wait timeout inside requests, < 0 forever */
     uint64_t next_id;            /* next request id (starts at 1) */
     df_client_event_fn on_event;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "client/dc_net.h"
+#include "client/dc_tls.h"
 
 double dc_now_us(void)
 {
@@ -18,7 +19,10 @@ double dc_now_us(void)
 
 static int hello(df_client *c, const char *name, df_error *err);
 
-static int wrap_fd(int fd, const char *name, df_client **out, df_error *err)
+/* A client on connected socket `fd` (closed on error): TLS first when `tls_ca` is set (the
+ * certificate must name `host`), then the hello. */
+static int wrap_fd(int fd, const char *name, const char *host, const char *tls_ca,
+                   df_client **out, df_error *err)
 {
     df_client *c = calloc(1, sizeof *c);
     uint8_t *rb = malloc(DF_CLIENT_READ_BUF);
@@ -33,7 +37,8 @@ static int wrap_fd(int fd, const char *name, df_client **out, df_error *err)
     c->next_id = 1;
     c->rbuf = rb;
     df_buf_init(&c->out);
-    int rc = hello(c, name, err);
+    int rc = tls_ca ? dc_tls_start(c, host, tls_ca, err) : DF_OK;
+    if (rc == DF_OK) rc = hello(c, name, err);
     if (rc) {
         df_client_close(c);
         return rc;
@@ -49,7 +54,7 @@ int df_client_connect_unix(const char *path, const char *name, df_client **out, 
     int fd = dc_net_connect_unix(path, err);
     if (fd < 0)
         return fd;
-    return wrap_fd(fd, name, out, err);
+    return wrap_fd(fd, name, NULL, NULL, out, err);
 }
 
 int df_client_connect_tcp(const char *host, int port, const char *name, df_client **out,
@@ -57,16 +62,25 @@ int df_client_connect_tcp(const char *host, int port, const char *name, df_clien
 {
     if (!out)
         return df_error_set(err, DF_EINVAL, "df_client_connect_tcp: NULL out");
+    return df_client_connect_tcp_tls(host, port, name, NULL, out, err);
+}
+
+int df_client_connect_tcp_tls(const char *host, int port, const char *name, const char *tls_ca,
+                              df_client **out, df_error *err)
+{
+    if (!out)
+        return df_error_set(err, DF_EINVAL, "df_client_connect_tcp: NULL out");
     int fd = dc_net_connect_tcp(host, port, err);
     if (fd < 0)
         return fd;
-    return wrap_fd(fd, name, out, err);
+    return wrap_fd(fd, name, host, tls_ca, out, err);
 }
 
 void df_client_close(df_client *c)
 {
     if (!c)
         return;
+    dc_tls_end(c);
     if (c->fd >= 0)
         close(c->fd);
     dc_shm_drop(c, 0);
@@ -139,7 +153,7 @@ int df_client_send(df_client *c, uint16_t type, uint16_t flags, uint64_t id, con
     int rc = df_frame_header_encode(&h, raw, err);
     if (rc)
         return rc;
-    rc = dc_net_write2(c->fd, raw, sizeof raw, payload, len, err);
+    rc = dc_io_write2(c, raw, sizeof raw, payload, len, err);
     if (rc) {
         int why = why_closed(c, err);
         c->broken = 1;
@@ -164,7 +178,7 @@ static int fill(df_client *c, size_t need, int first_timeout, df_error *err)
     }
     int started = c->rlen > 0;
     while (c->rlen < need) {
-        long r = dc_net_read_some(c->fd, c->rbuf + c->rlen, DF_CLIENT_READ_BUF - c->rlen,
+        long r = dc_io_read_some(c, c->rbuf + c->rlen, DF_CLIENT_READ_BUF - c->rlen,
                                   started ? c->timeout_ms : first_timeout, err);
         if (r == DF_ESTATE && !started)
             return DF_ESTATE;
@@ -215,7 +229,7 @@ int df_client_recv(df_client *c, int timeout_ms, df_frame_header *h, const uint8
         }
         memcpy(c->pbuf, c->rbuf + c->rpos, have);
         c->rpos = c->rlen = 0;
-        rc = dc_net_read_exact(c->fd, c->pbuf + have, len - have, c->timeout_ms, err);
+        rc = dc_io_read_exact(c, c->pbuf + have, len - have, c->timeout_ms, err);
         if (rc) {
             c->broken = 1;
             return rc == DF_ESTATE ? df_error_set(err, DF_EIO, "timed out in a frame payload") : rc;

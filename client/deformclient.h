@@ -53,6 +53,18 @@ int df_client_connect_unix(const char *path, const char *name, df_client **out, 
 int df_client_connect_tcp(const char *host, int port, const char *name, df_client **out,
                           df_error *err);
 
+/* Same over TCP with TLS 1.3 when `tls_ca` is a PEM file (NULL: plain TCP, as
+ * df_client_connect_tcp): the daemon's certificate (its tls_cert) must chain to a CA in `tls_ca`
+ * and name `host` (DNS name, or IP address when `host` is numeric). The handshake precedes the
+ * hello; key authentication (df_client_authenticate) then runs inside TLS. The socket becomes
+ * non-blocking; with TLS, decrypted bytes may wait inside the library, so a poll()-based loop
+ * must call df_client_pump with timeout 0 until it has nothing before polling df_client_fd again.
+ * Errors: as df_client_connect_tcp, and DF_EIO "TLS handshake with HOST failed: REASON" (a
+ * certificate from another CA or for another name: "certificate verify failed: ...", a server
+ * without TLS) or "TLS CA file F: ..." (unreadable CA file). */
+int df_client_connect_tcp_tls(const char *host, int port, const char *name, const char *tls_ca,
+                              df_client **out, df_error *err);
+
 /* Closes the connection and frees the client. NULL-safe. */
 void df_client_close(df_client *c);
 

@@ -18,7 +18,8 @@ void df_access_config_defaults(df_access_config *a)
 int df_access_config_has(const char *key)
 {
     return key && (strcmp(key, "allow_uids") == 0 || strcmp(key, "allow_gids") == 0 ||
-                   strcmp(key, "key_file") == 0 || strcmp(key, "auth_fail_burst") == 0 ||
+                   strcmp(key, "key_file") == 0 || strcmp(key, "tls_cert") == 0 ||
+                   strcmp(key, "tls_key") == 0 || strcmp(key, "auth_fail_burst") == 0 ||
                    strcmp(key, "auth_fail_refill_s") == 0 || strcmp(key, "peer_key") == 0 ||
                    strcmp(key, "session_access") == 0 || strcmp(key, "quota_sessions") == 0 ||
                    strcmp(key, "quota_upload_mb") == 0 || strcmp(key, "quota_memory_mb") == 0);
@@ -159,15 +160,19 @@ int df_access_config_set(df_access_config *a, const char *key, const char *value
         else return df_error_set(err, DF_EINVAL, "session_access: '%s' (open or owner)", value);
         return DF_OK;
     }
-    if (strcmp(key, "key_file") == 0) {
+    char *path = strcmp(key, "key_file") == 0   ? a->key_file
+                 : strcmp(key, "tls_cert") == 0 ? a->tls_cert
+                 : strcmp(key, "tls_key") == 0  ? a->tls_key
+                                                : NULL;
+    if (path) { /* each is a char[DF_ACCESS_PATH_MAX] */
         if (strcmp(value, "none") == 0 || !value[0]) {
-            a->key_file[0] = '\0';
+            path[0] = '\0';
             return DF_OK;
         }
-        if (strlen(value) >= sizeof a->key_file)
-            return df_error_set(err, DF_EINVAL, "key_file: path longer than %zu bytes",
-                                sizeof a->key_file - 1);
-        snprintf(a->key_file, sizeof a->key_file, "%s", value);
+        if (strlen(value) >= DF_ACCESS_PATH_MAX)
+            return df_error_set(err, DF_EINVAL, "%s: path longer than %d bytes", key,
+                                DF_ACCESS_PATH_MAX - 1);
+        snprintf(path, DF_ACCESS_PATH_MAX, "%s", value);
         return DF_OK;
     }
     return df_error_set(err, DF_EINVAL, "unknown access key '%s'", key);

@@ -12,6 +12,9 @@
  *                  (EPROTO_AUTH) and is closed.
  *   key_file       FILE holding the secret key of TCP authentication (server/net/auth.h,
  *                  PROTOCOL.md 4.3); "" or "none" = off (default)
+ *   tls_cert       PEM certificate (chain) of the TCP listener's TLS 1.3 (server/net/tls.h);
+ *                  "" or "none" = no TLS (default)
+ *   tls_key        PEM private key of tls_cert (mode 0600 or narrower); both or neither
  *   auth_fail_burst     failed authentications a peer address may make before it is refused
  *                  (1 .. DF_ACCESS_MAX_BURST, default DF_ACCESS_DEFAULT_BURST)
  *   auth_fail_refill_s  seconds after which one more failure is allowed again (token bucket:
@@ -54,6 +57,8 @@ typedef struct df_access_config {
     uint32_t uids[DF_ACCESS_MAX_IDS];
     uint32_t gids[DF_ACCESS_MAX_IDS];
     char key_file[DF_ACCESS_PATH_MAX];       /* "" = no TCP authentication */
+    char tls_cert[DF_ACCESS_PATH_MAX];       /* "" = TCP is not encrypted */
+    char tls_key[DF_ACCESS_PATH_MAX];
     int fail_burst;                          /* auth_fail_burst */
     int fail_refill_s;                       /* auth_fail_refill_s */
     int n_peer_keys;

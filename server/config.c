@@ -458,9 +458,10 @@ static const char k_usage[] =
     "  --socket PATH       Unix socket to listen on (default $XDG_RUNTIME_DIR/deformd.sock,\n"
     "                      else /run/deformd/deformd.sock); 'none' disables it\n"
     "  --tcp HOST:PORT     also listen on TCP (off by default; port 0 picks a free port);\n"
-    "                      loopback addresses only: TCP is not encrypted (see --key-file)\n"
-    "  --tcp-insecure      allow a non-loopback --tcp address (0, *, [::], LAN): anyone\n"
-    "                      who can reach it can load, edit and close every session\n"
+    "                      a non-loopback address needs --key-file and --tls-cert/--tls-key\n"
+    "  --tcp-insecure      allow a non-loopback --tcp address without key and TLS (0, *,\n"
+    "                      [::], LAN): the stream can be read, and without a key anyone who\n"
+    "                      can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
     "                      max_sessions, threads, spin_us, inline_us, cursor_hz, shm_ring_bytes,\n"
@@ -494,6 +495,8 @@ static const char k_usage[] =
     "                      users / groups allowed on the Unix socket. Config peer_key\n"
     "                      (NAME FILE: named TCP keys), session_access = open|owner,\n"
     "                      quota_sessions, quota_upload_mb, quota_memory_mb: PROTOCOL.md 4.34\n"
+    "  --tls-cert FILE     TLS 1.3 on the TCP listener with this PEM certificate (chain)\n"
+    "  --tls-key FILE      and its PEM private key (mode 0600; config tls_cert, tls_key)\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "SIGHUP re-reads the config file and the options: log_level, max_clients, max_sessions,\n"
@@ -569,7 +572,7 @@ int df_config_from_args(df_server_config *cfg, int argc, char **argv, const char
             {"--socket", "socket"}, {"--tcp", "tcp"}, {"--log-level", "log_level"},
             {"--spin-us", "spin_us"}, {"--inline-us", "inline_us"},
             {"--hid-replay", "hid_replay"}, {"--key-file", "key_file"},
-            {"--store", "store"}};
+            {"--store", "store"}, {"--tls-cert", "tls_cert"}, {"--tls-key", "tls_key"}};
         int done = 0;
         for (int k = 0; k < (int)(sizeof map / sizeof map[0]) && !done && rc == DF_OK; k++) {
             m = opt_value(argc, argv, &i, map[k][0], &v);

@@ -5,11 +5,10 @@
  *   socket             Unix socket path (default $XDG_RUNTIME_DIR/deformd.sock else
  *                      /run/deformd/deformd.sock); "none" disables the Unix listener
  *   tcp                HOST:PORT for a TCP listener (default: off); "none" or "" disables it.
- *                      Only a loopback address (127.0.0.0/8, ::1, localhost) is accepted:
- *                      TCP has no encryption yet (key_file authenticates, access_config.h);
- *                      see tcp_insecure
+ *                      A non-loopback address needs key_file (authentication) and
+ *                      tls_cert / tls_key (TLS 1.3), access_config.h; see tcp_insecure
  *   tcp_insecure       yes | no (default no): also listen on a non-loopback TCP address (0,
- *                      *, [::], a LAN address), letting anyone who reaches it in
+ *                      *, [::], a LAN address) without key and TLS (an explicit opt-out)
  *   socket_mode        permission bits of the Unix socket file, octal (default 0660; not
  *                      applied to a socket-activated fd: the unit's SocketMode= decides)
  *   socket_group       group (name or number) of the Unix socket file (default: the daemon's)
@@ -68,7 +67,8 @@
  *   hid.<class>.<key>, hid.<vvvv:pppp>.<key>   HID device mapping (server/hid/hid_config.h:
  *                      class knob | 3d-mouse | pen, per-device keys override class keys);
  *                      checked for consistency once the whole file is read
- *   allow_uids, allow_gids, key_file, auth_fail_burst, auth_fail_refill_s   access control
+ *   allow_uids, allow_gids, key_file, tls_cert, tls_key, auth_fail_burst,
+ *   auth_fail_refill_s   access control
  *                      (server/access_config.h)
  *   store              the durable session store (server/store/store.h): a file PATH, or
  *                      none (memory only); default $STATE_DIRECTORY/deformd.db under systemd,

@@ -15,6 +15,7 @@
 
 #include "server/hid/hid_source.h"
 #include "server/net/listener.h"
+#include "server/net/tls.h"
 
 typedef struct check_out {
     char *buf;
@@ -122,11 +123,26 @@ static void check_tcp(check_out *o, const df_server_config *cfg)
                 gai_strerror(rc));
         return;
     }
-    if (!df_listener_is_loopback(res->ai_addr) && !cfg->tcp_insecure)
+    if (!df_listener_is_loopback(res->ai_addr) && !cfg->tcp_insecure &&
+        !(cfg->access.key_file[0] && cfg->access.tls_cert[0]))
         problem(o, cfg, "tcp", cfg->tcp_host, "tcp %s:%s: a non-loopback address needs "
-                "tcp_insecure = yes (--tcp-insecure): TCP clients are not authenticated",
+                "key_file (--key-file) and tls_cert/tls_key (--tls-cert, --tls-key)",
                 cfg->tcp_host, port);
     freeaddrinfo(res);
+}
+
+/* tls_cert / tls_key load as start-up would load them (both set, readable, key private and
+ * matching the certificate). */
+static void check_tls(check_out *o, const df_server_config *cfg)
+{
+    const df_access_config *a = &cfg->access;
+    if (!a->tls_cert[0] && !a->tls_key[0]) return;
+    df_tls_server *s = NULL;
+    df_error e;
+    if (df_tls_server_new(a->tls_cert, a->tls_key, &s, &e) != DF_OK)
+        problem(o, cfg, a->tls_key[0] ? "tls_key" : "tls_cert",
+                a->tls_key[0] ? a->tls_key : a->tls_cert, "%s", e.msg);
+    df_tls_server_free(s);
 }
 
 static void check_allow(check_out *o, const df_server_config *cfg)
@@ -162,6 +178,7 @@ int df_config_check(const df_server_config *cfg, char *out, size_t cap)
     check_socket(&o, cfg);
     check_group(&o, cfg);
     check_tcp(&o, cfg);
+    check_tls(&o, cfg);
     check_allow(&o, cfg);
     check_replay(&o, cfg);
     return o.n;

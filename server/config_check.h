@@ -13,7 +13,9 @@
  *   - socket: its directory exists and is writable and searchable by this user, and an existing
  *     file there is a socket (skipped when systemd passes sockets: LISTEN_FDS set);
  *   - socket_group: names an existing group (or is a number);
- *   - tcp: the host resolves; a non-loopback address needs tcp_insecure;
+ *   - tcp: the host resolves; a non-loopback address needs key_file and tls_cert/tls_key (or
+ *     tcp_insecure);
+ *   - tls_cert / tls_key: both set, readable, the key not readable by others and matching;
  *   - allow_paths: each entry exists and is a directory (stricter than start-up, which accepts
  *     a missing one and then refuses every load from it);
  *   - hid_replay: each file parses as a replay file (read, not played).

@@ -28,6 +28,8 @@ static void note_restart(const df_server_config *cur, const df_server_config *n)
     DF_RESTART_KEY(strcmp(cur->tcp_host, n->tcp_host) != 0 || cur->tcp_port != n->tcp_port,
                    "tcp");
     DF_RESTART_KEY(cur->tcp_insecure != n->tcp_insecure, "tcp_insecure");
+    DF_RESTART_KEY(strcmp(cur->access.tls_cert, n->access.tls_cert) != 0, "tls_cert");
+    DF_RESTART_KEY(strcmp(cur->access.tls_key, n->access.tls_key) != 0, "tls_key");
     DF_RESTART_KEY(cur->socket_mode != n->socket_mode, "socket_mode");
     DF_RESTART_KEY(strcmp(cur->socket_group, n->socket_group) != 0, "socket_group");
     DF_RESTART_KEY(cur->threads != n->threads, "threads");

@@ -20,6 +20,7 @@
 #include "server/session/session.h"
 #include "server/net/shm.h"
 #include "server/store/restore.h"
+#include "server/net/tls.h"
 
 #define DF_SERVER_SWEEP_MS 1000 /* period of the flush-close deadline sweep */
 
@@ -86,6 +87,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     uv_signal_start(&srv->sig_term, on_signal, SIGTERM);
     /* every job's work runs on the pool: no daemon without it */
     int rc = df_auth_start(srv, err); /* key_file (net/auth.h) */
+    if (rc == DF_OK) rc = df_tls_start(srv, err); /* tls_cert, tls_key (net/tls.h) */
     if (rc == DF_OK)
         rc = df_pool_start(loop, cfg->threads, (uint64_t)cfg->spin_us * 1000, &srv->pool, err);
     /* the store before the listeners: its sessions are back before the first client */
@@ -101,6 +103,7 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
         srv->stopping = 1;
         df_pool_close(srv->pool); /* NULL-safe; freed with the server */
         df_auth_free(srv);
+        df_tls_free(srv);
         uv_close((uv_handle_t *)&srv->kick_check, NULL);
         uv_close((uv_handle_t *)&srv->cork_timer, NULL);
         uv_close((uv_handle_t *)&srv->fanout_idle, NULL);
@@ -183,4 +186,5 @@ void df_server_free(df_server *srv)
     srv->pool = NULL;
     df_guard_free(srv);
     df_auth_free(srv);
+    df_tls_free(srv);
 }

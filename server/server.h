@@ -103,6 +103,8 @@ typedef struct df_conn {
     char principal[48];
     int admin;               /* 1: every right on every session (key_file, the daemon's uid) */
     uint8_t auth_nc[32], auth_ns[32]; /* client and server nonces of the exchange */
+    struct df_tls_conn *tls; /* TLS state (server/net/tls.h) of a TCP connection, or NULL */
+    int wbusy;               /* a uv_write of wbufs is running */
     int kick_queued;         /* on the server's deferred-write list */
     struct df_conn *kick_next;
     struct df_conn *prev, *next;
@@ -144,6 +146,7 @@ typedef struct df_server {
     df_stats stats;
     uint64_t last_change_session; /* session of a client's last change request or subscribe
                                    * (df_job_is_change): unbound HID devices drive it */
+    struct df_tls_server *tls;    /* TLS of the TCP listener (net/tls.h), NULL without */
     struct df_auth_server *auth;  /* TCP key authentication (net/auth.h), NULL without a key */
     struct df_hid_manager *hid;   /* HID devices (server/hid/hid_manager.h), NULL when off */
     const df_hid_ops *hid_ops;    /* its entry points (set by df_server_start) */

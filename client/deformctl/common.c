@@ -62,7 +62,10 @@ df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
         return NULL;
     }
     if (ctx->tcp) {
-        rc = df_client_connect_tcp(ctx->host, ctx->port, "deformctl", &c, &e);
+        /* --tls-ca, else $DEFORMD_TLS_CA: TLS whenever a CA is given */
+        const char *ca = ctx->tls_ca ? ctx->tls_ca : getenv("DEFORMD_TLS_CA");
+        rc = df_client_connect_tcp_tls(ctx->host, ctx->port, "deformctl", ca && ca[0] ? ca : NULL,
+                                       &c, &e);
     } else {
         char path[256];
         const char *p = ctx->socket;

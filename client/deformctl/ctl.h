@@ -27,13 +27,16 @@
     {"tcp", 1, "--tcp HOST:PORT    connect over TCP instead"},                         \
     {"json", 0, "--json             machine-readable JSON output on stdout"},          \
     {"key-file", 1, "--key-file FILE    authenticate with the key in FILE (default: " \
-                    "$DEFORMD_KEY_FILE; PROTOCOL.md 4.3)"}
-#define CTL_NGLOBAL 4
+                    "$DEFORMD_KEY_FILE; PROTOCOL.md 4.3)"},                                   \
+    {"tls-ca", 1, "--tls-ca FILE      TLS on --tcp: verify the daemon's certificate against " \
+                  "the CA in FILE (default: $DEFORMD_TLS_CA)"}
+#define CTL_NGLOBAL 5
 
 typedef struct ctl_ctx {
     const char *socket;   /* --socket, NULL for the default */
     const char *tcp;      /* --tcp HOST:PORT or NULL */
     const char *key_file; /* --key-file FILE, else $DEFORMD_KEY_FILE, or NULL: no AUTH */
+    const char *tls_ca;   /* --tls-ca FILE, else $DEFORMD_TLS_CA, or NULL: TCP without TLS */
     int json;
     const char *prog;     /* "deformctl" */
     char host[256];       /* --tcp split by main before the command runs */

@@ -1,6 +1,7 @@
 /* main.c — deformctl: command-line client of the deformd daemon (built on libdeformclient).
  *
- *   deformctl [--socket PATH | --tcp HOST:PORT] [--key-file FILE] [--json] COMMAND [ARGS]
+ *   deformctl [--socket PATH | --tcp HOST:PORT] [--key-file FILE] [--tls-ca FILE] [--json]
+ *             COMMAND [ARGS]
  *             [--help]
  *
  * Exit codes (ctl.h): 0 ok; 1 an error from the daemon, the daemon could not be reached, the
@@ -23,8 +24,8 @@ static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cm
 static void usage_top(FILE *f)
 {
     fprintf(f,
-            "usage: deformctl [--socket PATH | --tcp HOST:PORT] [--key-file FILE] [--json]\n"
-            "                 COMMAND [ARGS]\n"
+            "usage: deformctl [--socket PATH | --tcp HOST:PORT] [--key-file FILE]\n"
+            "                 [--tls-ca FILE] [--json] COMMAND [ARGS]\n"
             "\nControl a running deformd daemon.\n\nCommands:\n");
     for (size_t g = 0; g < sizeof GROUPS / sizeof GROUPS[0]; g++)
         for (const ctl_cmd *c = GROUPS[g]; c->name; c++)
@@ -38,6 +39,9 @@ static void usage_top(FILE *f)
             "  --key-file FILE    authenticate with the secret key in FILE (HMAC-SHA256,\n"
             "                     PROTOCOL.md 4.3; needed on TCP when the daemon has a key;\n"
             "                     default: $DEFORMD_KEY_FILE)\n"
+            "  --tls-ca FILE      with --tcp: TLS 1.3, the daemon's certificate verified against\n"
+            "                     the CA certificate(s) in FILE and the HOST of --tcp (default:\n"
+            "                     $DEFORMD_TLS_CA)\n"
             "  --help             this text; `deformctl COMMAND --help` for a command\n"
             "\nExit status: 0 success; 1 error reported by the daemon (\"server: ...\"), the\n"
             "daemon could not be reached, a brush the Kelvinlet engine rejects locally\n"
@@ -99,8 +103,11 @@ static int parse_globals(int argc, char **argv, ctl_ctx *ctx)
         const char **dst = strncmp(a, "--socket", 8) == 0     ? &ctx->socket
                            : strncmp(a, "--tcp", 5) == 0      ? &ctx->tcp
                            : strncmp(a, "--key-file", 10) == 0 ? &ctx->key_file
+                           : strncmp(a, "--tls-ca", 8) == 0   ? &ctx->tls_ca
                                                                : NULL;
-        size_t nl = dst == &ctx->socket ? 8 : dst == &ctx->key_file ? 10 : 5;
+        size_t nl = dst == &ctx->socket || dst == &ctx->tls_ca ? 8
+                    : dst == &ctx->key_file                    ? 10
+                                                               : 5;
         if (!dst || (a[nl] != '\0' && a[nl] != '=')) {
             char m[300];
             snprintf(m, sizeof m, "unknown global option '%s'", a);
@@ -130,6 +137,8 @@ static int check_globals(ctl_ctx *ctx, const ctl_cmd *cmd)
     df_error_clear(&e);
     if (ctx->socket && ctx->tcp)
         return ctl_usage_error(ctx, cmd, "--socket and --tcp are exclusive");
+    if (ctx->tls_ca && !ctx->tcp)
+        return ctl_usage_error(ctx, cmd, "--tls-ca applies to --tcp HOST:PORT connections");
     if (ctx->socket && dc_cli_socket_path(ctx->socket, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
     if (ctx->tcp && dc_cli_hostport(ctx->tcp, ctx->host, (int)sizeof ctx->host, &ctx->port, &e))
@@ -192,6 +201,8 @@ int main(int argc, char **argv)
         ctx.json = 1;
     if (a.val[3])
         ctx.key_file = a.val[3];
+    if (a.val[4])
+        ctx.tls_ca = a.val[4];
     int rc = check_globals(&ctx, cmd);
     if (rc)
         return rc;

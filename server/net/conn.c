@@ -11,6 +11,7 @@
 #include "server/net/peer.h"
 #include "server/log.h"
 #include "server/net/reply.h"
+#include "server/net/tls.h"
 
 static void kick_write(df_conn *c);
 static void on_fanout_idle(uv_idle_t *h);
@@ -22,6 +23,7 @@ void df_conn_unref(df_conn *c)
     if (--c->refs == 0) {
         if (c->srv->on_conn_free) c->srv->on_conn_free(c); /* its unfinished upload */
         df_outq_clear(&c->outq);
+        df_tls_conn_free(c->tls);
         free(c->rbuf);
         free(c);
     }
@@ -59,7 +61,8 @@ void df_conn_close_after_flush(df_conn *c, const char *why)
     c->flush_why = why;
     c->flush_deadline = uv_now(c->srv->loop) + DF_CONN_FLUSH_TIMEOUT_MS;
     uv_read_stop(&c->h.stream);
-    if (c->wcount == 0 && c->outq.count == 0) df_conn_close(c, why, 1);
+    if (!c->wbusy && c->outq.count == 0 && !(c->tls && df_tls_has_output(c->tls)))
+        df_conn_close(c, why, 1);
 }
 
 void df_conn_sweep(df_server *srv)
@@ -83,13 +86,15 @@ static void on_written(uv_write_t *req, int status)
     c->srv->stats.bytes_out += bytes - c->outq.bytes;
     c->srv->stats.frames_out += n;
     c->wcount = 0;
+    c->wbusy = 0;
+    if (c->tls) df_tls_conn_trim(c->tls); /* the ciphertext is written */
     if (c->closing) {
         df_conn_unref(c);
         return;
     }
     if (status < 0) {
         df_conn_close(c, uv_strerror(status), 0);
-    } else if (c->outq.count > 0) {
+    } else if (c->outq.count > 0 || (c->tls && df_tls_has_output(c->tls))) {
         kick_write(c);
     } else if (c->flush_close) {
         df_conn_close(c, c->flush_why, 1);
@@ -99,19 +104,30 @@ static void on_written(uv_write_t *req, int status)
 
 /* Writes pending frames: first synchronously with uv_try_write (no request, no callback, no
  * epoll change: the common case of a small reply to a reading client), then whatever the socket
- * did not take with a queued uv_write. */
+ * did not take with a queued uv_write. On a TLS connection the frames of a batch are encrypted
+ * into one ciphertext buffer (with any handshake output) that takes their place (tls.h). */
 static void kick_write(df_conn *c)
 {
-    if (c->wcount || c->closing) return;
+    if (c->wbusy || c->closing) return;
     df_sbuf *items[DF_OUTQ_MAX_BATCH];
     size_t n;
-    while ((n = df_outq_take(&c->outq, items, DF_OUTQ_MAX_BATCH)) > 0) {
-        size_t total = 0;
-        for (size_t i = 0; i < n; i++) {
+    for (;;) {
+        n = df_outq_take(&c->outq, items, DF_OUTQ_MAX_BATCH);
+        size_t nb = n, total = 0;
+        for (size_t i = 0; i < n; i++)
             c->wbufs[i] = uv_buf_init((char *)items[i]->data, (unsigned)items[i]->len);
-            total += items[i]->len;
+        if (c->tls) { /* the seam: plaintext frames in, ciphertext out */
+            df_error e;
+            if (df_tls_seal(c->tls, c->wbufs, n, &c->wbufs[0], &e) != DF_OK) {
+                df_outq_complete(&c->outq, n);
+                df_conn_close(c, e.msg, 1);
+                return;
+            }
+            nb = c->wbufs[0].len > 0;
         }
-        int w = uv_try_write(&c->h.stream, c->wbufs, (unsigned)n);
+        if (nb == 0 && n == 0) break;
+        for (size_t i = 0; i < nb; i++) total += c->wbufs[i].len;
+        int w = nb ? uv_try_write(&c->h.stream, c->wbufs, (unsigned)nb) : 0;
         if (w < 0 && w != UV_EAGAIN && w != UV_ENOSYS) {
             df_outq_complete(&c->outq, n);
             df_conn_close(c, uv_strerror(w), 0);
@@ -131,19 +147,22 @@ static void kick_write(df_conn *c)
         c->wbufs[first].base += done;
         c->wbufs[first].len -= done;
         c->wcount = n;
+        c->wbusy = 1;
         c->srv->stats.writes_blocked++;
         c->wreq.data = c;
         df_conn_ref(c);
-        int rc = uv_write(&c->wreq, &c->h.stream, c->wbufs + first, (unsigned)(n - first),
+        int rc = uv_write(&c->wreq, &c->h.stream, c->wbufs + first, (unsigned)(nb - first),
                           on_written);
         if (rc < 0) {
             c->wcount = 0;
+            c->wbusy = 0;
             df_outq_complete(&c->outq, n);
             df_conn_unref(c);
             df_conn_close(c, uv_strerror(rc), 0);
         }
         return;
     }
+    if (c->tls) df_tls_conn_trim(c->tls); /* everything sealed went out */
     if (c->flush_close && c->outq.count == 0) df_conn_close(c, c->flush_why, 1);
 }
 
@@ -196,7 +215,7 @@ static void on_cork(uv_timer_t *t) { fanout_pass(t->data); }
 static void schedule_write(df_conn *c, int k)
 {
     df_server *srv = c->srv;
-    if (c->wcount) return; /* a running write picks the frame up */
+    if (c->wbusy) return; /* a running write picks the frame up */
     int have_ref = 0;
     if (c->kick_queued) {
         if (k == 1 || c->kick_queued == 1) return;
@@ -240,10 +259,35 @@ int df_conn_send(df_conn *c, df_sbuf *frame)
     return DF_OK;
 }
 
+/* Ciphertext of TLS connections goes here (loop thread only; on_read consumes it before the
+ * next allocation), the plaintext to rbuf (append_plain). */
+static uint8_t tls_rx[1 << 16];
+
+/* df_tls_sink: appends decrypted bytes to c->rbuf. */
+static int append_plain(void *ctx, const uint8_t *data, size_t len)
+{
+    df_conn *c = ctx;
+    if (c->rlen + len > c->rcap) {
+        size_t ncap = c->rcap ? c->rcap : DF_CONN_READ_CHUNK;
+        while (ncap < c->rlen + len) ncap *= 2;
+        uint8_t *n = realloc(c->rbuf, ncap);
+        if (!n) return -1;
+        c->rbuf = n;
+        c->rcap = ncap;
+    }
+    memcpy(c->rbuf + c->rlen, data, len);
+    c->rlen += len;
+    return 0;
+}
+
 static void on_alloc(uv_handle_t *h, size_t suggested, uv_buf_t *buf)
 {
     (void)suggested;
     df_conn *c = h->data;
+    if (c->tls) {
+        *buf = uv_buf_init((char *)tls_rx, sizeof tls_rx);
+        return;
+    }
     size_t want = c->rlen + DF_CONN_READ_CHUNK;
     /* A frame in progress: make room for all of it at once to avoid repeated growth. */
     if (c->rlen >= DF_FRAME_HEADER_SIZE) {
@@ -278,7 +322,26 @@ static void on_read(uv_stream_t *s, ssize_t nread, const uv_buf_t *buf)
         return;
     }
     if (nread == 0) return;
-    c->rlen += (size_t)nread;
+    if (c->tls) { /* the seam: ciphertext in, plaintext appended to rbuf */
+        df_error e;
+        int trc = df_tls_recv(c->tls, (const uint8_t *)buf->base, (size_t)nread, append_plain, c,
+                              &e);
+        if (df_tls_has_output(c->tls)) schedule_write(c, 0); /* handshake messages, alerts */
+        if (trc == DF_ESTATE) {
+            df_conn_close(c, e.msg, 0);
+            return;
+        }
+        if (trc != DF_OK) {
+            df_log(DF_LOG_WARN, "client %llu (%s): %s", (unsigned long long)c->id, c->peer_addr,
+                   e.msg);
+            c->srv->stats.clients_dropped++;
+            df_conn_close_after_flush(c, df_tls_established(c->tls) ? "TLS error"
+                                                                     : "TLS handshake failed");
+            return;
+        }
+    } else {
+        c->rlen += (size_t)nread;
+    }
     c->bytes_in += (size_t)nread;
     c->last_rx_ms = uv_now(c->srv->loop);
     c->srv->stats.bytes_in += (size_t)nread;
@@ -366,6 +429,13 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
     }
     srv->stats.clients_total++;
     if (df_peer_admit(c)) return; /* logs the peer; allow_uids / allow_gids: ERROR frame, close */
+    if (is_tcp && srv->tls) { /* every byte after this point is TLS (tls.h) */
+        df_error e;
+        if (!(c->tls = df_tls_conn_new(srv->tls, &e))) {
+            df_conn_close(c, e.msg, 1);
+            return;
+        }
+    }
     rc = uv_read_start(&c->h.stream, on_alloc, on_read);
     if (rc < 0) df_conn_close(c, uv_strerror(rc), 1);
 }

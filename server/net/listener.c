@@ -161,36 +161,29 @@ static int open_tcp(df_server *srv, df_error *err)
     int g = getaddrinfo(strcmp(host, "*") == 0 ? NULL : host, port, &hints, &res);
     if (g != 0 || !res)
         return df_error_set(err, DF_EIO, "tcp:%s:%s: %s", host, port, gai_strerror(g));
-    if (!df_listener_is_loopback(res->ai_addr)) {
-        if (!srv->cfg.tcp_insecure && srv->cfg.access.key_file[0]) {
-            freeaddrinfo(res);
-            return df_error_set(err, DF_EINVAL,
-                                "tcp:%s:%s: refusing a non-loopback address without "
-                                "--tcp-insecure (config tcp_insecure = yes): the key "
-                                "(key_file) authenticates clients, but the stream is not "
-                                "encrypted (no TLS yet), so meshes and edits travel in the "
-                                "clear; listen on 127.0.0.1 or ::1 instead",
-                                host, port);
-        }
+    int has_key = srv->cfg.access.key_file[0] != '\0';
+    int has_tls = srv->cfg.access.tls_cert[0] != '\0';
+    if (!df_listener_is_loopback(res->ai_addr) && !(has_key && has_tls)) {
         if (!srv->cfg.tcp_insecure) {
             freeaddrinfo(res);
             return df_error_set(err, DF_EINVAL,
-                                "tcp:%s:%s: refusing a non-loopback address without "
-                                "--tcp-insecure (config tcp_insecure = yes): TCP clients are "
-                                "not authenticated, so anyone who can reach it could load, edit "
-                                "and close every session; listen on 127.0.0.1 or ::1 instead",
-                                host, port);
+                                "tcp:%s:%s: refusing a non-loopback address without %s: set "
+                                "key_file (--key-file) and tls_cert/tls_key (--tls-cert, "
+                                "--tls-key), or listen on 127.0.0.1 or ::1",
+                                host, port,
+                                !has_key && !has_tls ? "authentication and encryption"
+                                : !has_key           ? "authentication (key_file)"
+                                                     : "encryption (tls_cert/tls_key)");
         }
-        if (srv->cfg.access.key_file[0]) /* net/auth.h; TLS does not exist yet */
-            df_log(DF_LOG_WARN,
-                   "tcp:%s:%s: listening on a non-loopback address (tcp_insecure) with key "
-                   "authentication but no encryption: the stream can be read and altered on the "
-                   "network",
-                   host, port);
-        else
+        if (!has_key)
             df_log(DF_LOG_WARN,
                    "tcp:%s:%s: listening on a non-loopback address without authentication "
                    "(tcp_insecure): anyone who can reach it controls every session",
+                   host, port);
+        else
+            df_log(DF_LOG_WARN,
+                   "tcp:%s:%s: listening on a non-loopback address without encryption "
+                   "(tcp_insecure): the stream can be read and altered on the network",
                    host, port);
     }
     int rc = uv_tcp_init(srv->loop, &srv->tcp_srv);

@@ -12,10 +12,11 @@
  * group its unit gave it). For the Unix socket: creates the parent directory when missing (0755),
  * removes a stale socket file nobody listens on, refuses to replace a live one or a non-socket
  * file, creates the socket with cfg->socket_mode (never wider, whatever the umask) and
- * cfg->socket_group. A configured TCP address must be loopback unless cfg->tcp_insecure (then a
- * warning is logged). Errors: DF_EIO naming the address and the reason; DF_EINVAL when no
- * listener at all is configured, for a non-loopback TCP address without tcp_insecure, or an
- * unknown socket_group. */
+ * cfg->socket_group. A configured TCP address must be loopback unless both key_file and
+ * tls_cert/tls_key are set (or cfg->tcp_insecure, the explicit opt-out: then a warning is logged).
+ * Errors: DF_EIO naming the address and the reason; DF_EINVAL when no listener at all is
+ * configured, for a non-loopback TCP address without key and TLS (the message says what to set),
+ * or an unknown socket_group. */
 int df_listener_open(df_server *srv, df_error *err);
 
 /* 1 when `sa` is an IPv4 127.0.0.0/8, IPv6 ::1 or IPv4-mapped 127.x address, else 0. */

@@ -15,6 +15,7 @@ import socket
 import subprocess
 import tempfile
 import time
+from typing import Optional
 
 import pytest
 
@@ -43,8 +44,10 @@ def free_tcp_port() -> int:
 class Daemon:
     """One running deformd: its socket path, TCP port, process and log file."""
 
-    def __init__(self, tmpdir: str, extra_config: str = "", tcp: bool = True) -> None:
+    def __init__(self, tmpdir: str, extra_config: str = "", tcp: bool = True,
+                 tls_ca: Optional[str] = None) -> None:
         self.dir = tmpdir
+        self.tls_ca = tls_ca   # the daemon's TCP is TLS (tls_cert): clients verify with this CA
         self.socket_path = os.path.join(tmpdir, "deformd.sock")
         self.tcp_port = free_tcp_port() if tcp else 0
         self.log_path = os.path.join(tmpdir, "deformd.log")
@@ -100,7 +103,8 @@ class Daemon:
         return Client.connect_unix(self.socket_path, timeout=timeout, hello=hello)
 
     def tcp_client(self, timeout: float = 30.0, hello: bool = True) -> Client:
-        return Client.connect_tcp("127.0.0.1", self.tcp_port, timeout=timeout, hello=hello)
+        return Client.connect_tcp("127.0.0.1", self.tcp_port, timeout=timeout, hello=hello,
+                                  tls_ca=self.tls_ca)
 
     def raw_unix(self, timeout: float = 5.0, hello: bool = False) -> socket.socket:
         """A plain socket; with hello=True the HELLO exchange is done (and checked) on it."""
@@ -181,10 +185,10 @@ def make_daemon():
     made = []
     tmps = []
 
-    def make(extra_config: str = "", tcp: bool = False) -> Daemon:
+    def make(extra_config: str = "", tcp: bool = False, tls_ca: Optional[str] = None) -> Daemon:
         tmp = tempfile.TemporaryDirectory(prefix="deformd-it-")
         tmps.append(tmp)
-        d = Daemon(tmp.name, extra_config, tcp)
+        d = Daemon(tmp.name, extra_config, tcp, tls_ca)
         made.append(d)
         return d
 

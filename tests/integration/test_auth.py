@@ -365,9 +365,9 @@ def test_handshake_timeout_covers_auth(make_daemon, tmp_path):
     good.close()
 
 
-def test_non_loopback_with_a_key_still_needs_tcp_insecure(tmp_path):
-    """No TLS yet: a key alone does not open a non-loopback address (key + TLS will)."""
+def test_non_loopback_with_a_key_alone_is_refused(tmp_path):
+    """A key alone does not open a non-loopback address: TLS is needed too (test_tls.py)."""
     kf = str(tmp_path / "k")
     write_key(kf)
     err = start_fails(tmp_path, "--key-file", kf, "--tcp", "0.0.0.0:0")
-    assert "not encrypted" in err and "tcp_insecure" in err, err
+    assert "without encryption (tls_cert/tls_key)" in err and "set key_file" in err, err

@@ -19,6 +19,7 @@ events (resync with snapshot()).
 import os
 import secrets
 import socket
+import ssl
 import time
 from array import array
 from collections import deque
@@ -139,9 +140,25 @@ class Client:
     @classmethod
     def connect_tcp(cls, host: str, port: int, timeout: float = DEFAULT_TIMEOUT_S,
                     hello: bool = True, name: str = "deformd-python",
-                    key: Optional[bytes] = None, key_file: Optional[str] = None) -> "Client":
+                    key: Optional[bytes] = None, key_file: Optional[str] = None,
+                    tls_ca: Optional[str] = None, ssl_context: Optional[ssl.SSLContext] = None,
+                    server_hostname: Optional[str] = None) -> "Client":
+        """With `tls_ca` (a PEM file of the CA that signed the daemon's tls_cert) or a ready
+        `ssl_context`, the connection is TLS (the daemon's tls_cert / tls_key): the certificate
+        is verified against the CA and must name `server_hostname` (default: `host`); failures
+        raise ssl.SSLError (ssl.SSLCertVerificationError for a certificate from another CA or
+        for another name). Key authentication then runs inside TLS."""
+        if tls_ca is not None and ssl_context is None:
+            ssl_context = ssl.create_default_context(cafile=tls_ca)
+            ssl_context.minimum_version = ssl.TLSVersion.TLSv1_3
         s = socket.create_connection((host, port), timeout=timeout)
-        s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        try:
+            s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            if ssl_context is not None:
+                s = ssl_context.wrap_socket(s, server_hostname=server_hostname or host)
+        except BaseException:
+            s.close()
+            raise
         return cls(s, timeout, hello, name, key, key_file)
 
     def close(self) -> None:
@@ -219,7 +236,7 @@ class Client:
             self.sock.settimeout(None)
         try:
             data = self.sock.recv(RECV_BYTES)
-        except (socket.timeout, BlockingIOError):
+        except (socket.timeout, BlockingIOError, ssl.SSLWantReadError):
             return False
         except ConnectionResetError as e:
             raise ConnectionClosed("connection reset by deformd") from e
