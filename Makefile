@@ -265,7 +265,9 @@ DESTDIR ?=
 DOCDIR  := $(PREFIX)/share/doc/deformd
 MANDIR  := $(PREFIX)/share/man
 UNITDIR := $(PREFIX)/lib/systemd/system
-MAN_PAGES := man/man1/deformctl.1 man/man5/deformd.conf.5 man/man8/deformd.8
+# man pages live beside their program; installed to share/man/man<section>/ by their suffix.
+MAN_PAGES := client/deformctl/deformctl.1 server/man/deformd.conf.5 server/man/deformd.8
+man_dest = $(DESTDIR)$(MANDIR)/man$(subst .,,$(suffix $(1)))/$(notdir $(1))
 CLIENT_INSTALL_LIBS := $(CLIENT_LIB) $(PROTO_LIB) $(BASE_LIBS)
 CLIENT_HEADERS = $(filter-out client/deformclient.h,$(filter %.h,$(shell $(CC) $(CPPFLAGS) -MM \
                    client/deformclient.h)))
@@ -284,7 +286,7 @@ install: all
 	install -m 644 systemd/deformd.socket $(DESTDIR)$(UNITDIR)/
 	install -m 644 systemd/deformd.sysusers.conf $(DESTDIR)$(PREFIX)/lib/sysusers.d/deformd.conf
 	install -m 644 systemd/70-deformd.rules $(DESTDIR)$(PREFIX)/lib/udev/rules.d/
-	for m in $(MAN_PAGES); do install -m 644 $$m $(DESTDIR)$(MANDIR)/$${m#man/}; done
+	$(foreach m,$(MAN_PAGES),install -m 644 $(m) $(call man_dest,$(m)) &&) true
 	install -m 644 systemd/deformd.conf.example README.md proto/PROTOCOL.md $(DESTDIR)$(DOCDIR)/
 
 uninstall:
@@ -294,7 +296,7 @@ uninstall:
 	  $(DESTDIR)$(UNITDIR)/deformd.service $(DESTDIR)$(UNITDIR)/deformd.socket \
 	  $(DESTDIR)$(PREFIX)/lib/sysusers.d/deformd.conf \
 	  $(DESTDIR)$(PREFIX)/lib/udev/rules.d/70-deformd.rules \
-	  $(addprefix $(DESTDIR)$(MANDIR)/,$(patsubst man/%,%,$(MAN_PAGES)))
+	  $(foreach m,$(MAN_PAGES),$(call man_dest,$(m)))
 	rm -rf $(DESTDIR)$(PREFIX)/include/deformd $(DESTDIR)$(DOCDIR)
 	for d in $(INSTALL_DIRS) include; do p=$(DESTDIR)$(PREFIX)/$$d; \
 	  while [ "$$p" != "$(DESTDIR)$(PREFIX)" ]; do \

@@ -9,14 +9,13 @@ import pytest
 
 from conftest import DEFORMCTL, DEFORMD, ROOT, skip_or_fail
 
-MAN = os.path.join(ROOT, "man")
-PAGES = {"deformd": "man8/deformd.8", "deformd.conf": "man5/deformd.conf.5",
-         "deformctl": "man1/deformctl.1"}
+PAGES = {"deformd": "server/man/deformd.8", "deformd.conf": "server/man/deformd.conf.5",
+         "deformctl": "client/deformctl/deformctl.1"}  # beside their program
 
 
 def page_text(name: str) -> str:
     """The page's source with roff escapes of hyphens and fonts removed."""
-    with open(os.path.join(MAN, PAGES[name])) as f:
+    with open(os.path.join(ROOT, PAGES[name])) as f:
         t = f.read()
     return re.sub(r"\\f[BIRP]", "", t).replace("\\-", "-").replace("\\&", "")
 
@@ -100,7 +99,7 @@ def test_man_page_renders_without_warnings(page):
     if not shutil.which("man"):
         skip_or_fail("man (man-db) is not installed")
     env = dict(os.environ, MANWIDTH="80", LC_ALL="C.UTF-8", MAN_KEEP_FORMATTING="")
-    r = subprocess.run(["man", "--warnings", "-l", os.path.join(MAN, PAGES[page])],
+    r = subprocess.run(["man", "--warnings", "-l", os.path.join(ROOT, PAGES[page])],
                        capture_output=True, text=True, env=env, timeout=60)
     assert r.returncode == 0, r.stderr
     assert r.stderr == "", r.stderr

@@ -35,7 +35,8 @@ from deformd_client import Brush, Client
 from hid_files import grid_obj
 
 SYSTEMD = os.path.join(ROOT, "systemd")
-MAN = os.path.join(ROOT, "man")
+# man pages beside their programs (Makefile MAN_PAGES), laid out as a MANPATH tree for verify
+MAN_PAGES = ["server/man/deformd.8", "server/man/deformd.conf.5", "client/deformctl/deformctl.1"]
 HID_DIR = os.environ.get("HID_DATA", os.path.join(ROOT, "..", "shared", "hid"))
 MAX_EXPOSURE = 2.0
 
@@ -65,8 +66,20 @@ def units_copy(tmp_path, edit=None):
     return [str(tmp_path / "deformd.service"), str(tmp_path / "deformd.socket")]
 
 
+def man_tree(root) -> str:
+    """A MANPATH directory under root with man<section>/ links to the repo's pages."""
+    for page in MAN_PAGES:
+        sec = os.path.join(root, "man" + page.rsplit(".", 1)[1])
+        os.makedirs(sec, exist_ok=True)
+        link = os.path.join(sec, os.path.basename(page))
+        if not os.path.lexists(link):
+            os.symlink(os.path.join(ROOT, page), link)
+    return str(root)
+
+
 def verify(paths):
-    env = dict(os.environ, MANPATH=MAN)  # Documentation=man:... pages are looked up
+    # Documentation=man:... pages are looked up on MANPATH
+    env = dict(os.environ, MANPATH=man_tree(os.path.join(os.path.dirname(paths[0]), "man")))
     r = subprocess.run([need("systemd-analyze"), "verify"] + paths, capture_output=True,
                        text=True, env=env, timeout=120)
     return r.returncode, (r.stdout + r.stderr).strip()
