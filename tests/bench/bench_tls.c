@@ -52,7 +52,7 @@ static int start(daemon_proc *d, const char *exe, const char *dir, const char *t
     if (d->pid == 0) {
         prctl(PR_SET_PDEATHSIG, SIGTERM);
         if (!freopen(log, "w", stderr)) _exit(127);
-        char *argv[] = {(char *)exe, "--foreground", "--socket", d->sock, "--tcp", tcp,
+        char *argv[] = {(char *)exe, "--foreground", "--store", "none", "--socket", d->sock, "--tcp", tcp,
                         "--log-level", "warn", cert ? "--tls-cert" : NULL, (char *)cert,
                         "--tls-key", (char *)key, NULL};
         execv(exe, argv);
