@@ -240,6 +240,20 @@ static void schedule_write(df_conn *c, int k)
         uv_timer_start(&srv->cork_timer, on_cork, DF_CONN_CORK_MS, 0);
 }
 
+/* 1 when `frame` may wait for the cork (DF_CONN_CORK_MS): stream events (displacement
+ * versions, move progress, shared-memory references), which batch into one writev per
+ * subscriber. Replies and the small control events (brush state, cursor, device state, session
+ * closed, errors) start writing at the end of this loop iteration: a knob turn's BRUSH_STATE
+ * must not wait a millisecond for frames that may never come. The connection's one output queue
+ * keeps every frame in order either way. */
+static int corked_frame(const df_sbuf *frame)
+{
+    if (frame->len < DF_FRAME_HEADER_SIZE) return 1;
+    if (df_le16_load(frame->data + 8) & DF_FLAG_REPLY) return 0;
+    uint16_t type = df_le16_load(frame->data + 6);
+    return type == DF_MSG_DISPLACEMENT || type == DF_MSG_PROGRESS || type == DF_MSG_SHM_REF;
+}
+
 int df_conn_send(df_conn *c, df_sbuf *frame)
 {
     if (c->closing) return DF_ESTATE;
@@ -254,8 +268,7 @@ int df_conn_send(df_conn *c, df_sbuf *frame)
         df_conn_close(c, why, 1);
         return DF_ELIMIT;
     }
-    int reply = frame->len >= DF_FRAME_HEADER_SIZE && (df_le16_load(frame->data + 8) & DF_FLAG_REPLY);
-    schedule_write(c, reply ? 0 : 1);
+    schedule_write(c, corked_frame(frame) ? 1 : 0);
     return DF_OK;
 }
 

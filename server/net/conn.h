@@ -17,8 +17,9 @@
  * or no file descriptor is left (guard.h). */
 void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
 
-/* Subscriber-only output (events, no reply) is corked for up to this long so that consecutive
- * versions go out in one writev per subscriber instead of one write per version. */
+/* Subscriber-only stream output (DISPLACEMENT, PROGRESS, SHM_REF events) is corked for up to
+ * this long so that consecutive versions go out in one writev per subscriber instead of one
+ * write per version. Replies and control events are not corked (conn.c, corked_frame). */
 #define DF_CONN_CORK_MS 1
 
 /* Loop time one pass over corked subscriber writes may take. A 1k-vertex version is 12 KB, so
