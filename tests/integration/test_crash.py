@@ -22,11 +22,15 @@ once its reply came. An operation in flight at the kill (at most one per session
 not be present: restored version = last acked version + 1 means it is (it is then replayed and
 counted as acknowledged), = the last acked version means it is not (skipped). Anything older
 than the last acked version, or positions differing from the replay, counts as acked edits lost.
+Each client also reads its session (GET_MESH, still under the lock) right after each ack: the
+replay of every acked version is compared with those positions too, so a divergence is found at
+the operation that made it (a restored undo history that differed from the live one did so).
 An UNDO / REDO refused with ESTATE (nothing to undo: the restored history starts at the last
 snapshot, journal.h) changes nothing and is not replayed.
 
 Prints `acked edits lost: N` and the restart time (process start to answering, and the
-daemon's own restore time) min/median/max; asserts only that nothing was lost."""
+daemon's own restore time) min/median/max, also under make test's captured output; asserts
+only that nothing was lost."""
 import os
 import random
 import statistics
@@ -55,6 +59,7 @@ class Ledger:
         self.pending = {s: None for s in sids}           # the op in flight (under the lock)
         self.errors = []
         self.refused = 0                                 # UNDO / REDO refused (ESTATE)
+        self.seen = {s: {} for s in sids}                # version -> positions read at the ack
 
     def ack(self, sid, op, version):
         with self.cv:
@@ -116,11 +121,14 @@ def client_loop(d, ledger, dead, rng, base):
                         def begun(v, sid=sid, op=op):
                             ledger.pending[sid] = None
                             ledger.ack(sid, op, v)
-                        apply_op(c, sid, op, begun)
+                        v = apply_op(c, sid, op, begun)
                     else:
                         v = apply_op(c, sid, op)
                         ledger.pending[sid] = None
                         ledger.ack(sid, op, v)
+                    m = c.get_mesh(sid)               # what this version is, as acknowledged
+                    assert m.version == v, (m.version, v)
+                    ledger.seen[sid][v] = m.positions.tobytes()
                 except DeformdError as e:
                     if op[0] in ("undo", "redo") and e.code == E.ESTATE:
                         ledger.pending[sid] = None       # refused: nothing changed
@@ -140,7 +148,7 @@ def kill9(d):
     d._log.close()
 
 
-def test_crash_loop_20_kills_4_clients_two_meshes(tmp_path):
+def test_crash_loop_20_kills_4_clients_two_meshes(tmp_path, capsys):
     store = str(tmp_path / "crash.db")
     runs = iter(range(1000))
 
@@ -172,7 +180,7 @@ def test_crash_loop_20_kills_4_clients_two_meshes(tmp_path):
     ledger = Ledger(sids)
     replayed = {s: 0 for s in sids}               # ledger ops already applied to the reference
     acked_version = {s: 0 for s in sids}
-    lost, checked, in_flight_kept, in_flight_dropped = 0, 0, 0, 0
+    lost, checked, in_flight_kept, in_flight_dropped, replay_differs = 0, 0, 0, 0, 0
     problems = []
     restart_ms, restore_ms = [], []
     kill_rng = random.Random(SEED)
@@ -208,10 +216,19 @@ def test_crash_loop_20_kills_4_clients_two_meshes(tmp_path):
                         if rv != v:
                             problems.append("round %d session %d: %s acked as version %d, "
                                             "the replay made %d" % (rnd, s, op[0], v, rv))
+                        elif v in ledger.seen[s] and \
+                                r.get_mesh(rsid[s]).positions.tobytes() != ledger.seen[s][v]:
+                            replay_differs += 1
+                            problems.append("round %d session %d: %s version %d as acked "
+                                            "differs from its replay" % (rnd, s, op[0], v))
                         acked_version[s] = v
                     replayed[s] = len(ops)
                     now = c.get_mesh(s)
                     a = acked_version[s]
+                    if now.version == a and a in ledger.seen[s] and \
+                            now.positions.tobytes() != ledger.seen[s][a]:
+                        problems.append("round %d session %d: version %d restored differs from "
+                                        "it as acknowledged" % (rnd, s, a))
                     if now.version == a + 1 and ledger.pending[s] is not None:
                         op = ledger.pending[s]               # in flight, and it became durable
                         rv = apply_op(r, rsid[s], op)
@@ -244,13 +261,17 @@ def test_crash_loop_20_kills_4_clients_two_meshes(tmp_path):
     kinds = {}
     for op, _ in sum(ledger.ops.values(), []):
         kinds[op[0]] = kinds.get(op[0], 0) + 1
-    print("crash test: %d kill -9 with %d clients on 2 sessions; acknowledged: %s (%d in flight "
-          "at a kill and kept, %d not; %d undo/redo refused: nothing to undo/redo); %d session "
-          "checks" % (KILLS, CLIENTS, ", ".join("%d %s" % (n, k) for k, n in sorted(kinds.items())),
-                      in_flight_kept, in_flight_dropped, ledger.refused, checked))
-    print("acked edits lost: %d" % lost)
-    print("restart time (process start to answering a ping, polled every 50 ms) ms: min %.1f "
-          "median %.1f max %.1f; store restore ms: min %.1f median %.1f max %.1f"
-          % (min(restart_ms), statistics.median(restart_ms), max(restart_ms),
-             min(restore_ms), statistics.median(restore_ms), max(restore_ms)))
+    with capsys.disabled():         # shown in make test's output too
+        print()
+        mix = ", ".join("%d %s" % (n, k) for k, n in sorted(kinds.items()))
+        print("crash test: %d kill -9 with %d clients on 2 sessions; acknowledged: %s (%d in "
+              "flight at a kill and kept, %d not; %d undo/redo refused: nothing to undo/redo); "
+              "%d session checks" % (KILLS, CLIENTS, mix, in_flight_kept, in_flight_dropped,
+                                     ledger.refused, checked))
+        print("acked edits lost: %d (versions whose acknowledged positions differ from the "
+              "replay: %d)" % (lost, replay_differs))
+        print("restart time (process start to answering a ping, polled every 50 ms) ms: min %.1f "
+              "median %.1f max %.1f; store restore ms: min %.1f median %.1f max %.1f"
+              % (min(restart_ms), statistics.median(restart_ms), max(restart_ms),
+                 min(restore_ms), statistics.median(restore_ms), max(restore_ms)))
     assert lost == 0 and not problems, "\n".join(problems)
