@@ -37,8 +37,18 @@ static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *er
             switch (DF_JOURNAL_HIST(flags)) { /* as commit.c's apply_history */
             case DF_HIST_COMMIT: rc = df_session_history_commit(s, err); break;
             case DF_HIST_RESET: rc = df_session_history_reset(s, err); break;
-            case DF_HIST_UNDO: df_history_undo(&s->hist, NULL); break;
-            case DF_HIST_REDO: df_history_redo(&s->hist, NULL); break;
+            case DF_HIST_UNDO:
+            case DF_HIST_REDO: {
+                /* The step it moved to may predate the snapshot the history starts at (an undo
+                 * of a change the snapshot folded in): the history then restarts at the
+                 * positions the row produced, so later undo steps revert to them, as live. */
+                const double *at = DF_JOURNAL_HIST(flags) == DF_HIST_UNDO
+                                       ? df_history_undo(&s->hist, NULL)
+                                       : df_history_redo(&s->hist, NULL);
+                if (!at || memcmp(at, s->cur, 3 * (size_t)s->nv * sizeof(double)))
+                    rc = df_session_history_reset(s, err);
+                break;
+            }
             default: break;
             }
         }
