@@ -100,52 +100,32 @@ int df_msg_device_info_decode(const uint8_t *p, size_t n, df_msg_device_info *m,
     return rc;
 }
 
+/* list adapters: one device_info item of df_list_codec */
+static int item_check(const void *it, uint32_t i, df_error *err)
+{
+    (void)i;
+    return info_check(it, err);
+}
+static size_t item_size(const void *it) { return info_size(it); }
+static void item_put(df_buf *out, const void *it) { info_put(out, it); }
+static void item_get(df_rd *r, void *it) { info_get(r, it); }
+
+static const df_list_codec DEVICE_LIST = {"device_list", "devices", DF_MAX_DEVICES,
+                                          sizeof(df_msg_device_info), INFO_MIN_SIZE, item_check,
+                                          item_size, item_put, item_get};
+
 int df_msg_device_list_encode(const df_msg_device_list *m, df_buf *out, df_error *err)
 {
-    if (m->count > DF_MAX_DEVICES)
-        return df_error_set(err, DF_ELIMIT, "device_list: %u devices exceed limit %u", m->count,
-                            DF_MAX_DEVICES);
-    if (m->count && !m->items)
-        return df_error_set(err, DF_EINVAL, "device_list: items is NULL with count %u",
-                            m->count);
-    size_t size = 4;
-    for (uint32_t i = 0; i < m->count; i++) {
-        int rc = info_check(&m->items[i], err);
-        if (rc)
-            return rc;
-        size += info_size(&m->items[i]);
-    }
-    int rc = df_enc_reserve(out, size, "device_list", err);
-    if (rc)
-        return rc;
-    df_buf_put_u32(out, m->count);
-    for (uint32_t i = 0; i < m->count; i++)
-        info_put(out, &m->items[i]);
-    return DF_OK;
+    return df_list_encode(&DEVICE_LIST, m->count, m->items, out, err);
 }
 
 int df_msg_device_list_decode(const uint8_t *p, size_t n, df_msg_device_list *m, df_error *err)
 {
-    df_rd r;
-    df_rd_init(&r, p, n, "device_list", err);
-    uint32_t count = df_rd_u32(&r, "count");
-    if (!r.rc && count > DF_MAX_DEVICES)
-        df_rd_fail(&r, DF_ELIMIT, "count", "%u devices exceed limit %u", count, DF_MAX_DEVICES);
-    df_rd_need_rows(&r, count, INFO_MIN_SIZE, "count");
-    df_msg_device_info *items = df_rd_alloc(&r, count, sizeof *items, "items");
-    for (uint32_t i = 0; i < count && !r.rc; i++) {
-        info_get(&r, &items[i]);
-        if (!r.rc)
-            r.rc = info_check(&items[i], err);
-    }
-    int rc = df_rd_end(&r);
-    if (rc) {
-        free(items);
-        return rc;
-    }
-    m->count = count;
-    m->items = items;
-    return DF_OK;
+    void *items = NULL;
+    int rc = df_list_decode(&DEVICE_LIST, p, n, &m->count, &items, err);
+    if (!rc)
+        m->items = items;
+    return rc;
 }
 
 void df_msg_device_list_free(df_msg_device_list *m)

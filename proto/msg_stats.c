@@ -25,55 +25,45 @@ static int stat_check(const df_msg_stat *s, uint32_t i, df_error *err)
     return DF_OK;
 }
 
+/* list adapters: one stat entry of df_list_codec */
+static int item_check(const void *it, uint32_t i, df_error *err) { return stat_check(it, i, err); }
+
+static size_t item_size(const void *it)
+{
+    return df_str_size(((const df_msg_stat *)it)->key) + 8;
+}
+
+static void item_put(df_buf *out, const void *it)
+{
+    const df_msg_stat *s = it;
+    df_put_str(out, s->key);
+    df_buf_put_f64(out, s->value);
+}
+
+static void item_get(df_rd *r, void *it)
+{
+    df_msg_stat *s = it;
+    df_rd_str(r, s->key, DF_MAX_STATS_KEY_LEN, "key");
+    s->value = df_rd_f64(r, "value");
+}
+
+/* row: u16 key length, >= 1 key byte, f64 value */
+static const df_list_codec STATS_LIST = {"stats", "entries", DF_MAX_STATS_ENTRIES,
+                                         sizeof(df_msg_stat), 2 + 1 + 8, item_check, item_size,
+                                         item_put, item_get};
+
 int df_msg_stats_encode(const df_msg_stats *m, df_buf *out, df_error *err)
 {
-    if (m->count > DF_MAX_STATS_ENTRIES)
-        return df_error_set(err, DF_ELIMIT, "stats: %u entries exceed limit %u", m->count,
-                            DF_MAX_STATS_ENTRIES);
-    if (m->count && !m->items)
-        return df_error_set(err, DF_EINVAL, "stats: items is NULL with count %u", m->count);
-    size_t size = 4;
-    for (uint32_t i = 0; i < m->count; i++) {
-        int rc = stat_check(&m->items[i], i, err);
-        if (rc)
-            return rc;
-        size += df_str_size(m->items[i].key) + 8;
-    }
-    int rc = df_enc_reserve(out, size, "stats", err);
-    if (rc)
-        return rc;
-    df_buf_put_u32(out, m->count);
-    for (uint32_t i = 0; i < m->count; i++) {
-        df_put_str(out, m->items[i].key);
-        df_buf_put_f64(out, m->items[i].value);
-    }
-    return DF_OK;
+    return df_list_encode(&STATS_LIST, m->count, m->items, out, err);
 }
 
 int df_msg_stats_decode(const uint8_t *p, size_t n, df_msg_stats *m, df_error *err)
 {
-    df_rd r;
-    df_rd_init(&r, p, n, "stats", err);
-    uint32_t count = df_rd_u32(&r, "count");
-    if (!r.rc && count > DF_MAX_STATS_ENTRIES)
-        df_rd_fail(&r, DF_ELIMIT, "count", "%u entries exceed limit %u", count,
-                   DF_MAX_STATS_ENTRIES);
-    df_rd_need_rows(&r, count, 2 + 1 + 8, "count");
-    df_msg_stat *items = df_rd_alloc(&r, count, sizeof *items, "items");
-    for (uint32_t i = 0; i < count && !r.rc; i++) {
-        df_rd_str(&r, items[i].key, DF_MAX_STATS_KEY_LEN, "key");
-        items[i].value = df_rd_f64(&r, "value");
-        if (!r.rc)
-            r.rc = stat_check(&items[i], i, err);
-    }
-    int rc = df_rd_end(&r);
-    if (rc) {
-        free(items);
-        return rc;
-    }
-    m->count = count;
-    m->items = items;
-    return DF_OK;
+    void *items = NULL;
+    int rc = df_list_decode(&STATS_LIST, p, n, &m->count, &items, err);
+    if (!rc)
+        m->items = items;
+    return rc;
 }
 
 void df_msg_stats_free(df_msg_stats *m)
