@@ -331,3 +331,39 @@ int df_hid_classify(const df_hid_desc *d, uint16_t vid, uint16_t pid, df_hid_cla
     }
     return DF_OK;
 }
+
+int df_hid_loc_element(const df_hid_desc *d, int kind, uint32_t usage, uint32_t coll, int id,
+                       int variable_only, df_hid_loc *loc)
+{
+    memset(loc, 0, sizeof *loc);
+    for (size_t i = 0; i < d->n_fields; i++) {
+        const df_hid_field *f = &d->fields[i];
+        if (f->kind != kind || (f->flags & DF_HID_F_CONSTANT)) continue;
+        if (variable_only && !(f->flags & DF_HID_F_VARIABLE)) continue;
+        if (coll && f->collection != coll) continue;
+        if (id >= 0 && f->report_id != id) continue;
+        if (usage < f->usage_min || usage > f->usage_max || f->count == 0) continue;
+        if (f->bit_size < 1 || f->bit_size > 32) continue;
+        unsigned index = 0;
+        if ((f->flags & DF_HID_F_VARIABLE) && f->usage_min != f->usage_max)
+            index = usage - f->usage_min;
+        if (index >= f->count) continue;
+        loc->present = 1;
+        loc->report_id = f->report_id;
+        loc->is_signed = f->is_signed;
+        loc->array = (f->flags & DF_HID_F_VARIABLE) ? 0 : 1;
+        loc->bit_size = f->bit_size;
+        loc->count = 1;
+        loc->bit_offset = f->bit_offset + index * f->bit_size;
+        loc->usage = usage;
+        loc->array_usage_min = f->usage_min;
+        loc->logical_min = f->logical_min;
+        loc->logical_max = f->logical_max;
+        loc->physical_min = f->physical_min;
+        loc->physical_max = f->physical_max;
+        loc->unit = f->unit;
+        loc->unit_exponent = f->unit_exponent;
+        return 1;
+    }
+    return 0;
+}
