@@ -111,4 +111,34 @@ int df_list_encode(const df_list_codec *c, uint32_t count, const void *items, df
 int df_list_decode(const df_list_codec *c, const uint8_t *p, size_t n, uint32_t *count,
                    void **items, df_error *err);
 
+/* Defines `static const df_list_codec codec` for a list of `item_t` (message `msg`, limit error
+ * noun `noun`, at most `limit` items of at least `min_row` wire bytes) from typed item
+ * functions CHECK(const item_t *, uint32_t index, df_error *) -> int, SIZE(const item_t *) ->
+ * size_t, PUT(df_buf *, const item_t *), GET(df_rd *, item_t *), and the codec functions
+ * df_msg_<name>_encode / _decode of messages.h for list type `list_t` ({count, items}). */
+#define DF_LIST_CODEC_DEFINE(name, list_t, item_t, codec, msg, noun, limit, min_row, CHECK, SIZE, \
+                             PUT, GET)                                                           \
+    static int codec##_check(const void *it, uint32_t i, df_error *err)                         \
+    {                                                                                            \
+        return CHECK((const item_t *)it, i, err);                                                \
+    }                                                                                            \
+    static size_t codec##_size(const void *it) { return SIZE((const item_t *)it); }              \
+    static void codec##_put(df_buf *out, const void *it) { PUT(out, (const item_t *)it); }       \
+    static void codec##_get(df_rd *r, void *it) { GET(r, (item_t *)it); }                        \
+    static const df_list_codec codec = {msg,          noun,          limit,        sizeof(item_t), \
+                                        min_row,      codec##_check, codec##_size, codec##_put,   \
+                                        codec##_get};                                            \
+    int df_msg_##name##_encode(const list_t *m, df_buf *out, df_error *err)                      \
+    {                                                                                            \
+        return df_list_encode(&codec, m->count, m->items, out, err);                             \
+    }                                                                                            \
+    int df_msg_##name##_decode(const uint8_t *p, size_t n, list_t *m, df_error *err)             \
+    {                                                                                            \
+        void *items = NULL;                                                                      \
+        int rc = df_list_decode(&codec, p, n, &m->count, &items, err);                           \
+        if (!rc)                                                                                 \
+            m->items = items;                                                                    \
+        return rc;                                                                               \
+    }
+
 #endif

@@ -82,33 +82,16 @@ int df_msg_session_info_decode(const uint8_t *p, size_t n, df_msg_session_info *
     return DF_OK;
 }
 
-/* list adapters: one session_info item of df_list_codec */
-static int item_check(const void *it, uint32_t i, df_error *err)
+/* A session_info in a list (the index is not part of its error text). */
+static int item_check(const df_msg_session_info *m, uint32_t i, df_error *err)
 {
     (void)i;
-    return info_check(it, err);
-}
-static size_t item_size(const void *it) { return info_size(it); }
-static void item_put(df_buf *out, const void *it) { info_put(out, it); }
-static void item_get(df_rd *r, void *it) { info_get(r, it); }
-
-static const df_list_codec SESSION_LIST = {"session_list", "sessions", DF_MAX_SESSIONS,
-                                           sizeof(df_msg_session_info), INFO_MIN_SIZE, item_check,
-                                           item_size, item_put, item_get};
-
-int df_msg_session_list_encode(const df_msg_session_list *m, df_buf *out, df_error *err)
-{
-    return df_list_encode(&SESSION_LIST, m->count, m->items, out, err);
+    return info_check(m, err);
 }
 
-int df_msg_session_list_decode(const uint8_t *p, size_t n, df_msg_session_list *m, df_error *err)
-{
-    void *items = NULL;
-    int rc = df_list_decode(&SESSION_LIST, p, n, &m->count, &items, err);
-    if (!rc)
-        m->items = items;
-    return rc;
-}
+DF_LIST_CODEC_DEFINE(session_list, df_msg_session_list, df_msg_session_info, SESSION_LIST,
+                     "session_list", "sessions", DF_MAX_SESSIONS, INFO_MIN_SIZE, item_check,
+                     info_size, info_put, info_get)
 
 void df_msg_session_list_free(df_msg_session_list *m)
 {

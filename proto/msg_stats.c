@@ -25,46 +25,26 @@ static int stat_check(const df_msg_stat *s, uint32_t i, df_error *err)
     return DF_OK;
 }
 
-/* list adapters: one stat entry of df_list_codec */
-static int item_check(const void *it, uint32_t i, df_error *err) { return stat_check(it, i, err); }
-
-static size_t item_size(const void *it)
+static size_t stat_size(const df_msg_stat *s)
 {
-    return df_str_size(((const df_msg_stat *)it)->key) + 8;
+    return df_str_size(s->key) + 8;
 }
 
-static void item_put(df_buf *out, const void *it)
+static void stat_put(df_buf *out, const df_msg_stat *s)
 {
-    const df_msg_stat *s = it;
     df_put_str(out, s->key);
     df_buf_put_f64(out, s->value);
 }
 
-static void item_get(df_rd *r, void *it)
+static void stat_get(df_rd *r, df_msg_stat *s)
 {
-    df_msg_stat *s = it;
     df_rd_str(r, s->key, DF_MAX_STATS_KEY_LEN, "key");
     s->value = df_rd_f64(r, "value");
 }
 
 /* row: u16 key length, >= 1 key byte, f64 value */
-static const df_list_codec STATS_LIST = {"stats", "entries", DF_MAX_STATS_ENTRIES,
-                                         sizeof(df_msg_stat), 2 + 1 + 8, item_check, item_size,
-                                         item_put, item_get};
-
-int df_msg_stats_encode(const df_msg_stats *m, df_buf *out, df_error *err)
-{
-    return df_list_encode(&STATS_LIST, m->count, m->items, out, err);
-}
-
-int df_msg_stats_decode(const uint8_t *p, size_t n, df_msg_stats *m, df_error *err)
-{
-    void *items = NULL;
-    int rc = df_list_decode(&STATS_LIST, p, n, &m->count, &items, err);
-    if (!rc)
-        m->items = items;
-    return rc;
-}
+DF_LIST_CODEC_DEFINE(stats, df_msg_stats, df_msg_stat, STATS_LIST, "stats", "entries",
+                     DF_MAX_STATS_ENTRIES, 2 + 1 + 8, stat_check, stat_size, stat_put, stat_get)
 
 void df_msg_stats_free(df_msg_stats *m)
 {
