@@ -348,22 +348,20 @@ int df_hid_loc_element(const df_hid_desc *d, int kind, uint32_t usage, uint32_t 
         if ((f->flags & DF_HID_F_VARIABLE) && f->usage_min != f->usage_max)
             index = usage - f->usage_min;
         if (index >= f->count) continue;
-        loc->present = 1;
-        loc->report_id = f->report_id;
-        loc->is_signed = f->is_signed;
-        loc->array = (f->flags & DF_HID_F_VARIABLE) ? 0 : 1;
-        loc->bit_size = f->bit_size;
-        loc->count = 1;
-        loc->bit_offset = f->bit_offset + index * f->bit_size;
-        loc->usage = usage;
-        loc->array_usage_min = f->usage_min;
-        loc->logical_min = f->logical_min;
-        loc->logical_max = f->logical_max;
-        loc->physical_min = f->physical_min;
-        loc->physical_max = f->physical_max;
-        loc->unit = f->unit;
-        loc->unit_exponent = f->unit_exponent;
+        loc_from_field(f, index, usage, loc);
+        loc->count = 1;                      /* an array field: its first slot */
+        loc->array_usage_min = f->usage_min; /* variable fields too (status / ordinal ranges) */
         return 1;
     }
     return 0;
+}
+
+void df_hid_put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v)
+{
+    for (unsigned b = 0; b < bits; b++) {
+        uint32_t at = off + b;
+        uint8_t mask = (uint8_t)(1u << (at % 8));
+        if ((v >> b) & 1) buf[at / 8] |= mask;
+        else buf[at / 8] &= (uint8_t)~mask;
+    }
 }

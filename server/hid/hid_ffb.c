@@ -95,16 +95,6 @@ int df_hid_ffb_init(const df_hid_desc *d, df_hid_ffb *f, df_error *err)
     return DF_OK;
 }
 
-static void put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v)
-{
-    for (unsigned b = 0; b < bits; b++) {
-        uint32_t at = off + b;
-        uint8_t mask = (uint8_t)(1u << (at % 8));
-        if ((v >> b) & 1) buf[at / 8] |= mask;
-        else buf[at / 8] &= (uint8_t)~mask;
-    }
-}
-
 /* Writes logical value v (clamped to the field's range) at l. */
 static void put(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
 {
@@ -113,7 +103,7 @@ static void put(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
         if (v < l->logical_min) v = l->logical_min;
         if (v > l->logical_max) v = l->logical_max;
     }
-    put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
+    df_hid_put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
 }
 
 /* A physical value x (in the field's physical units, after the unit exponent when `scaled`)
@@ -183,7 +173,8 @@ int df_hid_ffb_set_constant_effect(const df_hid_ffb *f, const df_hid_ffb_effect 
     put(out, len, &f->se_type, array_value(&f->se_type, DF_HID_PID_ET_CONSTANT));
     if (e->duration_ms == DF_HID_FFB_INFINITE && f->se_duration.present &&
         (uint64_t)f->se_duration.bit_offset + f->se_duration.bit_size <= (uint64_t)len * 8)
-        put_bits(out, f->se_duration.bit_offset, f->se_duration.bit_size, ~(uint64_t)0); /* null */
+        df_hid_put_bits(out, f->se_duration.bit_offset, f->se_duration.bit_size,
+                        ~(uint64_t)0); /* null */
     else
         put(out, len, &f->se_duration, e->duration_ms); /* ms: unit seconds, exponent -3 */
     put(out, len, &f->se_repeat, 0);

@@ -68,17 +68,6 @@ int df_hid_haptics_index(const df_hid_haptics *h, unsigned usage)
     return -1;
 }
 
-/* Writes the low `bits` bits of v at bit `off` of buf (little-endian, as HID lays fields). */
-static void put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v)
-{
-    for (unsigned b = 0; b < bits; b++) {
-        uint32_t at = off + b;
-        uint8_t mask = (uint8_t)(1u << (at % 8));
-        if ((v >> b) & 1) buf[at / 8] |= mask;
-        else buf[at / 8] &= (uint8_t)~mask;
-    }
-}
-
 static void put_loc(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
 {
     if (!l->present) return;
@@ -87,7 +76,7 @@ static void put_loc(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
         if (v < l->logical_min) v = l->logical_min;
         if (v > l->logical_max) v = l->logical_max;
     }
-    put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
+    df_hid_put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
 }
 
 int df_hid_haptics_report(const df_hid_haptics *h, unsigned index, unsigned repeat,
