@@ -264,3 +264,53 @@ int df_enc_reserve(df_buf *out, size_t size, const char *msg, df_error *err)
         df_error_set(err, rc, "%s: cannot reserve %zu bytes", msg, size);
     return rc;
 }
+
+int df_list_encode(const df_list_codec *c, uint32_t count, const void *items, df_buf *out,
+                   df_error *err)
+{
+    if (count > c->limit)
+        return df_error_set(err, DF_ELIMIT, "%s: %u %s exceed limit %u", c->msg, count, c->noun,
+                            c->limit);
+    if (count && !items)
+        return df_error_set(err, DF_EINVAL, "%s: items is NULL with count %u", c->msg, count);
+    const char *it = items;
+    size_t size = 4;
+    for (uint32_t i = 0; i < count; i++) {
+        int rc = c->check(it + i * c->item_size, i, err);
+        if (rc)
+            return rc;
+        size += c->size(it + i * c->item_size);
+    }
+    int rc = df_enc_reserve(out, size, c->msg, err);
+    if (rc)
+        return rc;
+    df_buf_put_u32(out, count);
+    for (uint32_t i = 0; i < count; i++)
+        c->put(out, it + i * c->item_size);
+    return DF_OK;
+}
+
+int df_list_decode(const df_list_codec *c, const uint8_t *p, size_t n, uint32_t *count,
+                   void **items, df_error *err)
+{
+    df_rd r;
+    df_rd_init(&r, p, n, c->msg, err);
+    uint32_t k = df_rd_u32(&r, "count");
+    if (!r.rc && k > c->limit)
+        df_rd_fail(&r, DF_ELIMIT, "count", "%u %s exceed limit %u", k, c->noun, c->limit);
+    df_rd_need_rows(&r, k, c->min_row, "count");
+    char *a = df_rd_alloc(&r, k, c->item_size, "items");
+    for (uint32_t i = 0; i < k && !r.rc; i++) {
+        c->get(&r, a + i * c->item_size);
+        if (!r.rc)
+            r.rc = c->check(a + i * c->item_size, i, err);
+    }
+    int rc = df_rd_end(&r);
+    if (rc) {
+        free(a);
+        return rc;
+    }
+    *count = k;
+    *items = a;
+    return DF_OK;
+}

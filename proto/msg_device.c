@@ -100,53 +100,16 @@ int df_msg_device_info_decode(const uint8_t *p, size_t n, df_msg_device_info *m,
     return rc;
 }
 
-int df_msg_device_list_encode(const df_msg_device_list *m, df_buf *out, df_error *err)
+/* A device_info in a list (the index is not part of its error text). */
+static int item_check(const df_msg_device_info *m, uint32_t i, df_error *err)
 {
-    if (m->count > DF_MAX_DEVICES)
-        return df_error_set(err, DF_ELIMIT, "device_list: %u devices exceed limit %u", m->count,
-                            DF_MAX_DEVICES);
-    if (m->count && !m->items)
-        return df_error_set(err, DF_EINVAL, "device_list: items is NULL with count %u",
-                            m->count);
-    size_t size = 4;
-    for (uint32_t i = 0; i < m->count; i++) {
-        int rc = info_check(&m->items[i], err);
-        if (rc)
-            return rc;
-        size += info_size(&m->items[i]);
-    }
-    int rc = df_enc_reserve(out, size, "device_list", err);
-    if (rc)
-        return rc;
-    df_buf_put_u32(out, m->count);
-    for (uint32_t i = 0; i < m->count; i++)
-        info_put(out, &m->items[i]);
-    return DF_OK;
+    (void)i;
+    return info_check(m, err);
 }
 
-int df_msg_device_list_decode(const uint8_t *p, size_t n, df_msg_device_list *m, df_error *err)
-{
-    df_rd r;
-    df_rd_init(&r, p, n, "device_list", err);
-    uint32_t count = df_rd_u32(&r, "count");
-    if (!r.rc && count > DF_MAX_DEVICES)
-        df_rd_fail(&r, DF_ELIMIT, "count", "%u devices exceed limit %u", count, DF_MAX_DEVICES);
-    df_rd_need_rows(&r, count, INFO_MIN_SIZE, "count");
-    df_msg_device_info *items = df_rd_alloc(&r, count, sizeof *items, "items");
-    for (uint32_t i = 0; i < count && !r.rc; i++) {
-        info_get(&r, &items[i]);
-        if (!r.rc)
-            r.rc = info_check(&items[i], err);
-    }
-    int rc = df_rd_end(&r);
-    if (rc) {
-        free(items);
-        return rc;
-    }
-    m->count = count;
-    m->items = items;
-    return DF_OK;
-}
+DF_LIST_CODEC_DEFINE(device_list, df_msg_device_list, df_msg_device_info, DEVICE_LIST,
+                     "device_list", "devices", DF_MAX_DEVICES, INFO_MIN_SIZE, item_check,
+                     info_size, info_put, info_get)
 
 void df_msg_device_list_free(df_msg_device_list *m)
 {

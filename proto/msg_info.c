@@ -27,6 +27,11 @@ static int info_check(const df_msg_session_info *m, df_error *err)
     return df_check_str(m->name, DF_MAX_NAME_LEN, "session_info", "name", err);
 }
 
+static size_t info_size(const df_msg_session_info *m)
+{
+    return 36 + df_str_size(m->name);
+}
+
 static void info_put(df_buf *out, const df_msg_session_info *m)
 {
     df_buf_put_u64(out, m->session_id);
@@ -58,7 +63,7 @@ static void info_get(df_rd *r, df_msg_session_info *t)
 int df_msg_session_info_encode(const df_msg_session_info *m, df_buf *out, df_error *err)
 {
     int rc = info_check(m, err);
-    if (rc || (rc = df_enc_reserve(out, 36 + df_str_size(m->name), "session_info", err)))
+    if (rc || (rc = df_enc_reserve(out, info_size(m), "session_info", err)))
         return rc;
     info_put(out, m);
     return DF_OK;
@@ -77,53 +82,16 @@ int df_msg_session_info_decode(const uint8_t *p, size_t n, df_msg_session_info *
     return DF_OK;
 }
 
-int df_msg_session_list_encode(const df_msg_session_list *m, df_buf *out, df_error *err)
+/* A session_info in a list (the index is not part of its error text). */
+static int item_check(const df_msg_session_info *m, uint32_t i, df_error *err)
 {
-    if (m->count > DF_MAX_SESSIONS)
-        return df_error_set(err, DF_ELIMIT, "session_list: %u sessions exceed limit %u", m->count,
-                            DF_MAX_SESSIONS);
-    if (m->count && !m->items)
-        return df_error_set(err, DF_EINVAL, "session_list: items is NULL with count %u",
-                            m->count);
-    size_t size = 4;
-    for (uint32_t i = 0; i < m->count; i++) {
-        int rc = info_check(&m->items[i], err);
-        if (rc)
-            return rc;
-        size += 36 + df_str_size(m->items[i].name);
-    }
-    int rc = df_enc_reserve(out, size, "session_list", err);
-    if (rc)
-        return rc;
-    df_buf_put_u32(out, m->count);
-    for (uint32_t i = 0; i < m->count; i++)
-        info_put(out, &m->items[i]);
-    return DF_OK;
+    (void)i;
+    return info_check(m, err);
 }
 
-int df_msg_session_list_decode(const uint8_t *p, size_t n, df_msg_session_list *m, df_error *err)
-{
-    df_rd r;
-    df_rd_init(&r, p, n, "session_list", err);
-    uint32_t count = df_rd_u32(&r, "count");
-    if (!r.rc && count > DF_MAX_SESSIONS)
-        df_rd_fail(&r, DF_ELIMIT, "count", "%u sessions exceed limit %u", count, DF_MAX_SESSIONS);
-    df_rd_need_rows(&r, count, INFO_MIN_SIZE, "count");
-    df_msg_session_info *items = df_rd_alloc(&r, count, sizeof *items, "items");
-    for (uint32_t i = 0; i < count && !r.rc; i++) {
-        info_get(&r, &items[i]);
-        if (!r.rc)
-            r.rc = info_check(&items[i], err);
-    }
-    int rc = df_rd_end(&r);
-    if (rc) {
-        free(items);
-        return rc;
-    }
-    m->count = count;
-    m->items = items;
-    return DF_OK;
-}
+DF_LIST_CODEC_DEFINE(session_list, df_msg_session_list, df_msg_session_info, SESSION_LIST,
+                     "session_list", "sessions", DF_MAX_SESSIONS, INFO_MIN_SIZE, item_check,
+                     info_size, info_put, info_get)
 
 void df_msg_session_list_free(df_msg_session_list *m)
 {

@@ -25,56 +25,26 @@ static int stat_check(const df_msg_stat *s, uint32_t i, df_error *err)
     return DF_OK;
 }
 
-int df_msg_stats_encode(const df_msg_stats *m, df_buf *out, df_error *err)
+static size_t stat_size(const df_msg_stat *s)
 {
-    if (m->count > DF_MAX_STATS_ENTRIES)
-        return df_error_set(err, DF_ELIMIT, "stats: %u entries exceed limit %u", m->count,
-                            DF_MAX_STATS_ENTRIES);
-    if (m->count && !m->items)
-        return df_error_set(err, DF_EINVAL, "stats: items is NULL with count %u", m->count);
-    size_t size = 4;
-    for (uint32_t i = 0; i < m->count; i++) {
-        int rc = stat_check(&m->items[i], i, err);
-        if (rc)
-            return rc;
-        size += df_str_size(m->items[i].key) + 8;
-    }
-    int rc = df_enc_reserve(out, size, "stats", err);
-    if (rc)
-        return rc;
-    df_buf_put_u32(out, m->count);
-    for (uint32_t i = 0; i < m->count; i++) {
-        df_put_str(out, m->items[i].key);
-        df_buf_put_f64(out, m->items[i].value);
-    }
-    return DF_OK;
+    return df_str_size(s->key) + 8;
 }
 
-int df_msg_stats_decode(const uint8_t *p, size_t n, df_msg_stats *m, df_error *err)
+static void stat_put(df_buf *out, const df_msg_stat *s)
 {
-    df_rd r;
-    df_rd_init(&r, p, n, "stats", err);
-    uint32_t count = df_rd_u32(&r, "count");
-    if (!r.rc && count > DF_MAX_STATS_ENTRIES)
-        df_rd_fail(&r, DF_ELIMIT, "count", "%u entries exceed limit %u", count,
-                   DF_MAX_STATS_ENTRIES);
-    df_rd_need_rows(&r, count, 2 + 1 + 8, "count");
-    df_msg_stat *items = df_rd_alloc(&r, count, sizeof *items, "items");
-    for (uint32_t i = 0; i < count && !r.rc; i++) {
-        df_rd_str(&r, items[i].key, DF_MAX_STATS_KEY_LEN, "key");
-        items[i].value = df_rd_f64(&r, "value");
-        if (!r.rc)
-            r.rc = stat_check(&items[i], i, err);
-    }
-    int rc = df_rd_end(&r);
-    if (rc) {
-        free(items);
-        return rc;
-    }
-    m->count = count;
-    m->items = items;
-    return DF_OK;
+    df_put_str(out, s->key);
+    df_buf_put_f64(out, s->value);
 }
+
+static void stat_get(df_rd *r, df_msg_stat *s)
+{
+    df_rd_str(r, s->key, DF_MAX_STATS_KEY_LEN, "key");
+    s->value = df_rd_f64(r, "value");
+}
+
+/* row: u16 key length, >= 1 key byte, f64 value */
+DF_LIST_CODEC_DEFINE(stats, df_msg_stats, df_msg_stat, STATS_LIST, "stats", "entries",
+                     DF_MAX_STATS_ENTRIES, 2 + 1 + 8, stat_check, stat_size, stat_put, stat_get)
 
 void df_msg_stats_free(df_msg_stats *m)
 {

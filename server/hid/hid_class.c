@@ -331,3 +331,37 @@ int df_hid_classify(const df_hid_desc *d, uint16_t vid, uint16_t pid, df_hid_cla
     }
     return DF_OK;
 }
+
+int df_hid_loc_element(const df_hid_desc *d, int kind, uint32_t usage, uint32_t coll, int id,
+                       int variable_only, df_hid_loc *loc)
+{
+    memset(loc, 0, sizeof *loc);
+    for (size_t i = 0; i < d->n_fields; i++) {
+        const df_hid_field *f = &d->fields[i];
+        if (f->kind != kind || (f->flags & DF_HID_F_CONSTANT)) continue;
+        if (variable_only && !(f->flags & DF_HID_F_VARIABLE)) continue;
+        if (coll && f->collection != coll) continue;
+        if (id >= 0 && f->report_id != id) continue;
+        if (usage < f->usage_min || usage > f->usage_max || f->count == 0) continue;
+        if (f->bit_size < 1 || f->bit_size > 32) continue;
+        unsigned index = 0;
+        if ((f->flags & DF_HID_F_VARIABLE) && f->usage_min != f->usage_max)
+            index = usage - f->usage_min;
+        if (index >= f->count) continue;
+        loc_from_field(f, index, usage, loc);
+        loc->count = 1;                      /* an array field: its first slot */
+        loc->array_usage_min = f->usage_min; /* variable fields too (status / ordinal ranges) */
+        return 1;
+    }
+    return 0;
+}
+
+void df_hid_put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v)
+{
+    for (unsigned b = 0; b < bits; b++) {
+        uint32_t at = off + b;
+        uint8_t mask = (uint8_t)(1u << (at % 8));
+        if ((v >> b) & 1) buf[at / 8] |= mask;
+        else buf[at / 8] &= (uint8_t)~mask;
+    }
+}

@@ -116,4 +116,18 @@ int df_hid_loc_read(const df_hid_loc *loc, const uint8_t *buf, size_t n, int64_t
 int df_hid_loc_find(const df_hid_desc *d, uint32_t usage, uint32_t application, int prefer_id,
                     df_hid_loc *loc);
 
+/* Builds the location of one element of kind `kind` (DF_HID_OUTPUT / DF_HID_FEATURE / input)
+ * carrying `usage` (page << 16 | id) whose innermost collection is `coll` (0: any) in report
+ * `id` (-1: any): the first non-constant field of 1..32-bit elements whose usage span holds it.
+ * Variable fields give that usage's element; array fields (skipped when variable_only) give
+ * their first slot (count 1, array = 1). array_usage_min is the field's usage_min in both cases;
+ * relative follows the field's flag.
+ * Returns 1 and fills *loc, else 0 (loc zeroed). Pure; any thread. */
+int df_hid_loc_element(const df_hid_desc *d, int kind, uint32_t usage, uint32_t coll, int id,
+                       int variable_only, df_hid_loc *loc);
+
+/* Writes the low `bits` bits of v at bit `off` of buf (little-endian, as HID lays fields); the
+ * caller has checked off + bits <= 8 x its buffer bytes. Other bits are kept. Any thread. */
+void df_hid_put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v);
+
 #endif

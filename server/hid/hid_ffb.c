@@ -13,45 +13,13 @@ enum { C_CREATE = 0xAB, C_BLOCK_LOAD = 0x89, C_BL_STATUS = 0x8B, C_BLOCK_FREE = 
        C_CONSTANT = 0x73, C_OPERATION = 0x77, C_OP_ARRAY = 0x78, C_GAIN = 0x7D,
        C_CONTROL = 0x96 };
 
-/* The element of kind `kind` (DF_HID_OUTPUT / FEATURE) with `usage` whose innermost collection
- * is `coll` (0: any) in report `id` (-1: any). Array fields match when usage lies in their
- * span. */
+/* An output / feature element, array fields included (df_hid_loc_element). */
 static int find_kind(const df_hid_desc *d, int kind, uint32_t usage, uint32_t coll, int id,
                      df_hid_loc *loc)
 {
-    memset(loc, 0, sizeof *loc);
-    for (size_t i = 0; i < d->n_fields; i++) {
-        const df_hid_field *f = &d->fields[i];
-        if (f->kind != kind || (f->flags & DF_HID_F_CONSTANT)) continue;
-        if (coll && f->collection != coll) continue;
-        if (id >= 0 && f->report_id != id) continue;
-        if (usage < f->usage_min || usage > f->usage_max || f->count == 0) continue;
-        if (f->bit_size < 1 || f->bit_size > 32) continue;
-        unsigned index = 0;
-        if ((f->flags & DF_HID_F_VARIABLE) && f->usage_min != f->usage_max)
-            index = usage - f->usage_min;
-        if (index >= f->count) continue;
-        loc->present = 1;
-        loc->report_id = f->report_id;
-        loc->is_signed = f->is_signed;
-        loc->array = (f->flags & DF_HID_F_VARIABLE) ? 0 : 1;
-        loc->bit_size = f->bit_size;
-        loc->count = 1;
-        loc->bit_offset = f->bit_offset + index * f->bit_size;
-        loc->usage = usage;
-        loc->array_usage_min = f->usage_min;
-        loc->logical_min = f->logical_min;
-        loc->logical_max = f->logical_max;
-        loc->physical_min = f->physical_min;
-        loc->physical_max = f->physical_max;
-        loc->unit = f->unit;
-        loc->unit_exponent = f->unit_exponent;
-        return 1;
-    }
-    return 0;
+    return df_hid_loc_element(d, kind, usage, coll, id, 0, loc);
 }
 
-/* An output element (find_kind with DF_HID_OUTPUT). */
 static int find(const df_hid_desc *d, uint32_t usage, uint32_t coll, int id, df_hid_loc *loc)
 {
     return find_kind(d, DF_HID_OUTPUT, usage, coll, id, loc);
@@ -127,16 +95,6 @@ int df_hid_ffb_init(const df_hid_desc *d, df_hid_ffb *f, df_error *err)
     return DF_OK;
 }
 
-static void put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v)
-{
-    for (unsigned b = 0; b < bits; b++) {
-        uint32_t at = off + b;
-        uint8_t mask = (uint8_t)(1u << (at % 8));
-        if ((v >> b) & 1) buf[at / 8] |= mask;
-        else buf[at / 8] &= (uint8_t)~mask;
-    }
-}
-
 /* Writes logical value v (clamped to the field's range) at l. */
 static void put(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
 {
@@ -145,7 +103,7 @@ static void put(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
         if (v < l->logical_min) v = l->logical_min;
         if (v > l->logical_max) v = l->logical_max;
     }
-    put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
+    df_hid_put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
 }
 
 /* A physical value x (in the field's physical units, after the unit exponent when `scaled`)
@@ -215,7 +173,8 @@ int df_hid_ffb_set_constant_effect(const df_hid_ffb *f, const df_hid_ffb_effect 
     put(out, len, &f->se_type, array_value(&f->se_type, DF_HID_PID_ET_CONSTANT));
     if (e->duration_ms == DF_HID_FFB_INFINITE && f->se_duration.present &&
         (uint64_t)f->se_duration.bit_offset + f->se_duration.bit_size <= (uint64_t)len * 8)
-        put_bits(out, f->se_duration.bit_offset, f->se_duration.bit_size, ~(uint64_t)0); /* null */
+        df_hid_put_bits(out, f->se_duration.bit_offset, f->se_duration.bit_size,
+                        ~(uint64_t)0); /* null */
     else
         put(out, len, &f->se_duration, e->duration_ms); /* ms: unit seconds, exponent -3 */
     put(out, len, &f->se_repeat, 0);

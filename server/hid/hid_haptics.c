@@ -7,34 +7,10 @@
 enum { H_WAVEFORM_LIST = 0x10, H_MANUAL_TRIGGER = 0x21, H_INTENSITY = 0x23, H_REPEAT = 0x24,
        H_RETRIGGER = 0x25, H_WAVE_NONE = 0x1001, H_WAVE_STOP = 0x1002, H_WAVE_LAST = 0x1fff };
 
-/* The output field element carrying `usage` in report `id` (-1: any report), as a location. */
+/* The output variable-field element carrying `usage` in report `id` (-1: any), as a location. */
 static int find_output(const df_hid_desc *d, uint32_t usage, int id, df_hid_loc *loc)
 {
-    memset(loc, 0, sizeof *loc);
-    for (size_t i = 0; i < d->n_fields; i++) {
-        const df_hid_field *f = &d->fields[i];
-        if (f->kind != DF_HID_OUTPUT || !(f->flags & DF_HID_F_VARIABLE) ||
-            (f->flags & DF_HID_F_CONSTANT))
-            continue;
-        if (id >= 0 && f->report_id != id) continue;
-        if (usage < f->usage_min || usage > f->usage_max) continue;
-        if (f->bit_size < 1 || f->bit_size > 32 || f->count == 0) continue;
-        unsigned index = f->usage_min == f->usage_max ? 0 : usage - f->usage_min;
-        if (index >= f->count) continue;
-        loc->present = 1;
-        loc->report_id = f->report_id;
-        loc->is_signed = f->is_signed;
-        loc->bit_size = f->bit_size;
-        loc->count = 1;
-        loc->bit_offset = f->bit_offset + index * f->bit_size;
-        loc->usage = usage;
-        loc->logical_min = f->logical_min;
-        loc->logical_max = f->logical_max;
-        loc->physical_min = f->physical_min;
-        loc->physical_max = f->physical_max;
-        return 1;
-    }
-    return 0;
+    return df_hid_loc_element(d, DF_HID_OUTPUT, usage, 0, id, 1, loc);
 }
 
 /* The Waveform List: ordinal fields (page 0x0A) of a 0x0E:0x10 collection with a constant
@@ -92,17 +68,6 @@ int df_hid_haptics_index(const df_hid_haptics *h, unsigned usage)
     return -1;
 }
 
-/* Writes the low `bits` bits of v at bit `off` of buf (little-endian, as HID lays fields). */
-static void put_bits(uint8_t *buf, uint32_t off, unsigned bits, uint64_t v)
-{
-    for (unsigned b = 0; b < bits; b++) {
-        uint32_t at = off + b;
-        uint8_t mask = (uint8_t)(1u << (at % 8));
-        if ((v >> b) & 1) buf[at / 8] |= mask;
-        else buf[at / 8] &= (uint8_t)~mask;
-    }
-}
-
 static void put_loc(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
 {
     if (!l->present) return;
@@ -111,7 +76,7 @@ static void put_loc(uint8_t *buf, size_t n, const df_hid_loc *l, int64_t v)
         if (v < l->logical_min) v = l->logical_min;
         if (v > l->logical_max) v = l->logical_max;
     }
-    put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
+    df_hid_put_bits(buf, l->bit_offset, l->bit_size, (uint64_t)v);
 }
 
 int df_hid_haptics_report(const df_hid_haptics *h, unsigned index, unsigned repeat,

@@ -27,9 +27,7 @@
 #include "server/hid/hid_mgr_internal.h"
 #include "server/hid/hid_recording.h"
 #include "server/session/session.h"
-#include "tests/unit/hid/hid_files.h"
-#include "tests/unit/server/tiny_mesh.h"
-#include "tests/unit/unit_skip.h"
+#include "tests/unit/server/hid_live_rig.h"
 
 #define MAXR 256
 
@@ -130,14 +128,6 @@ static void f_close(df_hid_dev *dd) { free(dd); }
 static void f_destroy(df_hid_backend *b) { (void)b; }
 
 /* --------------------------------------------------------------------------------- harness */
-static void on_tick(uv_timer_t *t) { (void)t; }
-
-static void run_until(uv_loop_t *loop, int (*pred)(void *), void *arg, const char *what)
-{
-    for (int i = 0; i < 1200 && !pred(arg); i++) uv_run(loop, UV_RUN_ONCE);
-    if (!pred(arg)) fail_msg("never reached: %s", what);
-}
-
 static fake *g_f;
 static df_session *g_s;
 static int g_want;
@@ -211,15 +201,10 @@ static uint8_t blk(int k) { return g_f->data[k][1]; }
 static void test_block_load_refusal_rate_limit_and_error(void **state)
 {
     (void)state;
-    char dir[2048];
-    unit_hid_dir_or_skip(dir, sizeof dir);
-    size_t n = 0;
-    char *text = hid_read_file(dir, "microsoft-sidewinder-ff2_045e-001b_usb.hid", &n);
-    assert_non_null(text);
-    df_hid_recording rec;
+    static hid_rig rig;
+    hid_rig *g = &rig;
+    hid_rig_recording(g, "microsoft-sidewinder-ff2_045e-001b_usb.hid");
     df_error e;
-    assert_int_equal(df_hid_recording_parse(text, n, &rec, &e), DF_OK);
-    free(text);
 
     fake *f = g_f = calloc(1, sizeof *f);
     pthread_mutex_init(&f->mu, NULL);
@@ -228,34 +213,15 @@ static void test_block_load_refusal_rate_limit_and_error(void **state)
                             f_enumerate, .open = f_open, .read = f_read, .write_output = f_write,
                             .control = f_control, .close = f_close, .destroy = f_destroy,
                             .send_feature = f_send_feature, .get_feature = f_get_feature};
-    snprintf(f->info.path, sizeof f->info.path, "fake:ffb");
-    snprintf(f->info.name, sizeof f->info.name, "Fake SideWinder");
-    f->info.vid = 0x045e;
-    f->info.pid = 0x001b;
-    f->info.backend = DF_HID_BACKEND_HIDAPI;
-    f->info.desc = rec.devices[0].desc;
-    f->info.desc_len = rec.devices[0].desc_len;
+    hid_rig_devinfo(g, &f->info, "fake:ffb", "Fake SideWinder", 0x045e, 0x001b);
     f->block = 3;
     f->status = 2; /* Block Load Full first */
 
-    uv_loop_t loop;
-    uv_loop_init(&loop);
-    uv_timer_t tick;
-    uv_timer_init(&loop, &tick);
-    uv_timer_start(&tick, on_tick, 50, 50);
     static df_server srv;
-    memset(&srv, 0, sizeof srv);
-    df_config_defaults(&srv.cfg, NULL);
-    srv.cfg.hid_enumerate_s = 0;
+    hid_rig_start(g, &srv, &g_s);
     assert_int_equal(df_hid_config_set(&srv.cfg.hid, "hid.045e:001b.force_feedback", "yes", &e),
                      DF_OK);
     assert_int_equal(df_hid_config_set(&srv.cfg.hid, "hid.045e:001b.ffb_hz", "1", &e), DF_OK);
-    srv.loop = &loop;
-    srv.hid_ops = &df_hid_manager_ops;
-    assert_int_equal(df_pool_start(&loop, 2, 0, &srv.pool, &e), DF_OK);
-    df_mesh m = tiny_mesh();
-    assert_int_equal(df_session_create(&srv, &m, "t", &g_s, &e), DF_OK);
-    srv.last_change_session = g_s->id;
     assert_int_equal(df_hid_manager_start_with(&srv, &f->b, NULL, NULL, &e), DF_OK);
     df_hid_device *d = srv.hid->devs;
     assert_int_equal(d->cls.cls, DF_HID_CLASS_NONE);
@@ -263,18 +229,18 @@ static void test_block_load_refusal_rate_limit_and_error(void **state)
 
     /* a twist stroke plays nothing */
     begin(&srv, DF_BRUSH_TWIST, 0, 0);
-    run_until(&loop, has_stroke, &srv, "twist stroke open");
+    hid_rig_run_until(g, has_stroke, &srv, "twist stroke open");
     end(&srv);
-    run_until(&loop, no_stroke, &srv, "twist stroke ended");
+    hid_rig_run_until(g, no_stroke, &srv, "twist stroke ended");
     assert_int_equal(f->n, 0);
 
     /* Block Load says Full: actuators enabled, effect created, nothing else */
     begin(&srv, DF_BRUSH_GRAB, 0.1, 0.05);
     g_want = 2;
-    run_until(&loop, reports_at_least, &srv, "enable + create");
+    hid_rig_run_until(g, reports_at_least, &srv, "enable + create");
     update(&srv, 0.2, 0.05);
     end(&srv);
-    run_until(&loop, no_stroke, &srv, "refused stroke ended");
+    hid_rig_run_until(g, no_stroke, &srv, "refused stroke ended");
     assert_int_equal(f->n, 2);
     assert_int_equal(f->feature[0], 0);
     assert_int_equal(rid(0), 12); /* Device Control */
@@ -285,7 +251,7 @@ static void test_block_load_refusal_rate_limit_and_error(void **state)
     f->status = 1;
     begin(&srv, DF_BRUSH_GRAB, 0.1, 0.05);
     g_want = 6;
-    run_until(&loop, reports_at_least, &srv, "the effect starts");
+    hid_rig_run_until(g, reports_at_least, &srv, "the effect starts");
     assert_int_equal(f->feature[2], 1);
     assert_int_equal(rid(3), 1);
     assert_int_equal(rid(4), 5);
@@ -298,7 +264,7 @@ static void test_block_load_refusal_rate_limit_and_error(void **state)
      * the interval); a larger tip, same direction -> a larger magnitude, last report */
     update(&srv, 0.3, 0.15);
     update(&srv, 0.4, 0.2);
-    run_until(&loop, settled, &srv, "the latest force sent");
+    hid_rig_run_until(g, settled, &srv, "the latest force sent");
     int last = f->n - 1;
     assert_int_equal(rid(last), 5);
     assert_int_equal(blk(last), 3);
@@ -313,7 +279,7 @@ static void test_block_load_refusal_rate_limit_and_error(void **state)
     f->fail = DF_EIO;
     pthread_cond_broadcast(&f->cv);
     pthread_mutex_unlock(&f->mu);
-    run_until(&loop, dev_error, &srv, "device closed on error");
+    hid_rig_run_until(g, dev_error, &srv, "device closed on error");
     assert_int_equal(f->n, before + 2);
     assert_int_equal(rid(before), 10);
     assert_int_equal(blk(before), 3);
@@ -321,23 +287,18 @@ static void test_block_load_refusal_rate_limit_and_error(void **state)
     assert_int_equal(rid(before + 1), 11);   /* Block Free */
     assert_int_equal(blk(before + 1), 3);
     end(&srv);
-    run_until(&loop, no_stroke, &srv, "stroke ended");
+    hid_rig_run_until(g, no_stroke, &srv, "stroke ended");
     assert_int_equal(f->n, before + 2);      /* nothing after the close */
 
     df_hid_manager_stop(&srv);
-    uv_run(&loop, UV_RUN_NOWAIT); /* the closed rate-limit timer's close completes */
+    uv_run(&g->loop, UV_RUN_NOWAIT); /* the closed rate-limit timer's close completes */
     df_session_close(g_s);
     df_job_pump(g_s);
     df_hid_manager_free(&srv);
-    uv_close((uv_handle_t *)&tick, NULL);
-    df_pool_close(srv.pool);
-    uv_run(&loop, UV_RUN_DEFAULT);
-    df_pool_free(srv.pool);
-    assert_int_equal(uv_loop_close(&loop), 0);
+    hid_rig_finish(g, &srv);
     pthread_mutex_destroy(&f->mu);
     pthread_cond_destroy(&f->cv);
     free(f);
-    df_hid_recording_free(&rec);
 }
 
 int main(void)

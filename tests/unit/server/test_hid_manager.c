@@ -24,9 +24,7 @@
 #include "server/hid/hid_mgr_internal.h"
 #include "server/hid/hid_recording.h"
 #include "server/session/session.h"
-#include "tests/unit/hid/hid_files.h"
-#include "tests/unit/server/tiny_mesh.h"
-#include "tests/unit/unit_skip.h"
+#include "tests/unit/server/hid_live_rig.h"
 
 /* ------------------------------------------------------------------------- the fake backend */
 typedef struct fake {
@@ -161,15 +159,6 @@ static void set_fail(fake *f, int code, int present)
 }
 
 /* --------------------------------------------------------------------------------- harness */
-static void on_tick(uv_timer_t *t) { (void)t; } /* keeps UV_RUN_ONCE blocking in poll */
-
-/* Runs the loop until pred(arg) holds; fails after ~60 s of loop iterations. */
-static void run_until(uv_loop_t *loop, int (*pred)(void *), void *arg, const char *what)
-{
-    for (int i = 0; i < 1200 && !pred(arg); i++) uv_run(loop, UV_RUN_ONCE);
-    if (!pred(arg)) fail_msg("never reached: %s", what);
-}
-
 static df_hid_device *the_dev(df_server *srv) { return srv->hid->devs; }
 static int is_open(void *a) { return the_dev(a)->state == DF_DEVSTATE_OPEN; }
 static int is_error(void *a) { return the_dev(a)->state == DF_DEVSTATE_ERROR; }
@@ -196,15 +185,10 @@ static int s2_stroke_gone(void *a)
 static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
 {
     (void)state;
-    char dir[2048];
-    unit_hid_dir_or_skip(dir, sizeof dir);
-    size_t n = 0;
-    char *text = hid_read_file(dir, "3dconnexion-spacenavigator_046d-c626_usb.hid", &n);
-    assert_non_null(text);
-    df_hid_recording rec;
+    static hid_rig rig;
+    hid_rig *g = &rig;
+    hid_rig_recording(g, "3dconnexion-spacenavigator_046d-c626_usb.hid");
     df_error e;
-    assert_int_equal(df_hid_recording_parse(text, n, &rec, &e), DF_OK);
-    free(text);
 
     fake *f = g_fake = calloc(1, sizeof *f);
     pthread_mutex_init(&f->mu, NULL);
@@ -213,32 +197,13 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
                             f_enumerate, .open = f_open, .read = f_read, .write_output = f_write,
                             .control = f_control, .close = f_close, .watch = f_watch,
                             .destroy = f_destroy};
-    snprintf(f->info.path, sizeof f->info.path, "fake:0");
-    snprintf(f->info.name, sizeof f->info.name, "Fake Navigator");
-    f->info.vid = 0x046d;
-    f->info.pid = 0xc626;
+    hid_rig_devinfo(g, &f->info, "fake:0", "Fake Navigator", 0x046d, 0xc626);
     f->info.bus = DF_HID_BUS_USB;
-    f->info.backend = DF_HID_BACKEND_HIDAPI;
-    f->info.desc = rec.devices[0].desc;
-    f->info.desc_len = rec.devices[0].desc_len;
     f->present = 1;
 
-    uv_loop_t loop;
-    uv_loop_init(&loop);
-    uv_timer_t tick;
-    uv_timer_init(&loop, &tick);
-    uv_timer_start(&tick, on_tick, 50, 50);
     static df_server srv;
-    memset(&srv, 0, sizeof srv);
-    df_config_defaults(&srv.cfg, NULL);
-    srv.cfg.hid_enumerate_s = 0;
+    hid_rig_start(g, &srv, &g_s); /* g_s: the most recently active session */
     assert_int_equal(df_hid_config_set(&srv.cfg.hid, "hid.3d-mouse.deadzone", "0", &e), DF_OK);
-    srv.loop = &loop;
-    srv.hid_ops = &df_hid_manager_ops;
-    assert_int_equal(df_pool_start(&loop, 2, 0, &srv.pool, &e), DF_OK);
-    df_mesh m = tiny_mesh();
-    assert_int_equal(df_session_create(&srv, &m, "t", &g_s, &e), DF_OK);
-    srv.last_change_session = g_s->id; /* the most recently active session */
 
     assert_int_equal(df_hid_manager_start_with(&srv, &f->b, NULL, NULL, &e), DF_OK);
     df_hid_device *d = the_dev(&srv);
@@ -259,16 +224,16 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
     push(f, 0, down, 3);
     push(f, 8000, mv, 7);
     push(f, 16000, mv, 7);
-    run_until(&loop, three_events, &srv, "three reports handled");
-    run_until(&loop, stroke_open, &srv, "the device's stroke is open");
+    hid_rig_run_until(g, three_events, &srv, "three reports handled");
+    hid_rig_run_until(g, stroke_open, &srv, "the device's stroke is open");
     assert_int_equal(d->strokes_begun, 1);
     assert_int_equal(d->active, g_s->id);
 
     /* a read error mid-stroke: ERROR, the stroke ends through BRUSH_END (an undo step) */
     set_fail(f, DF_EIO, 1);
-    run_until(&loop, is_error, &srv, "state ERROR");
+    hid_rig_run_until(g, is_error, &srv, "state ERROR");
     assert_non_null(strstr(d->error, "fake: fake:0"));
-    run_until(&loop, stroke_gone, &srv, "stroke ended");
+    hid_rig_run_until(g, stroke_gone, &srv, "stroke ended");
     assert_int_equal(d->strokes_ended, 1);
     assert_true(df_history_can_undo(&g_s->hist) >= 1);
     assert_int_equal(f->closes, 1);
@@ -276,14 +241,14 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
     /* hotplug: the backend says something changed; the device is back, same id */
     set_fail(f, 0, 1);
     f->fn(f->user);
-    run_until(&loop, is_open, &srv, "reopened after hotplug");
+    hid_rig_run_until(g, is_open, &srv, "reopened after hotplug");
     assert_true(the_dev(&srv) == d && d->id == id && srv.hid->ndev == 1);
     assert_int_equal(f->opens, 2);
 
     /* it leaves: the next enumeration closes it as UNPLUGGED */
     set_fail(f, 0, 0);
     f->fn(f->user);
-    run_until(&loop, is_gone, &srv, "unplugged");
+    hid_rig_run_until(g, is_gone, &srv, "unplugged");
     assert_string_equal(d->error, "no longer present");
     assert_int_equal(f->closes, 2);
 
@@ -297,7 +262,7 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
      * when another session becomes the most recent, that stroke ends (BRUSH_END) first */
     set_fail(f, 0, 1);
     f->fn(f->user);
-    run_until(&loop, is_open, &srv, "reopened");
+    hid_rig_run_until(g, is_open, &srv, "reopened");
     assert_int_equal(df_hid_manager_bind(&srv, id, 0, &e), DF_OK);
     df_mesh m2 = tiny_mesh();
     df_session *s2;
@@ -309,15 +274,15 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
     push(f, 108000, down, 3);
     push(f, 116000, mv, 7);
     push(f, 124000, mv, 7);     /* the first after a reopen has no dt yet */
-    run_until(&loop, n_events, &srv, "reports after the reopen handled");
+    hid_rig_run_until(g, n_events, &srv, "reports after the reopen handled");
     g_s2 = s2;
-    run_until(&loop, stroke_open_s2, &srv, "a stroke on the most recent session");
+    hid_rig_run_until(g, stroke_open_s2, &srv, "a stroke on the most recent session");
     assert_int_equal(d->active, s2->id);
     srv.last_change_session = g_s->id;
     g_want_events = d->events + 1;
     push(f, 132000, mv, 7);
-    run_until(&loop, n_events, &srv, "one more report");
-    run_until(&loop, s2_stroke_gone, &srv, "the stroke on the other session ended");
+    hid_rig_run_until(g, n_events, &srv, "one more report");
+    hid_rig_run_until(g, s2_stroke_gone, &srv, "the stroke on the other session ended");
     assert_int_equal(d->active, g_s->id);
     assert_true(df_history_can_undo(&s2->hist) >= 1);
 
@@ -326,22 +291,17 @@ static void test_live_device_stroke_error_hotplug_unplug_shutdown(void **state)
     assert_int_equal(d->th_running, 0);
     assert_int_equal(f->open_now, 0);
     assert_int_equal(f->closes, 3);
-    run_until(&loop, idle, &srv, "posted reports drained");
+    hid_rig_run_until(g, idle, &srv, "posted reports drained");
     df_session_close(g_s);
     df_job_pump(g_s);
     df_session_close(s2);
     df_job_pump(s2);
     df_hid_manager_free(&srv);
     assert_null(srv.hid);
-    uv_close((uv_handle_t *)&tick, NULL);
-    df_pool_close(srv.pool);
-    uv_run(&loop, UV_RUN_DEFAULT);
-    df_pool_free(srv.pool);
-    assert_int_equal(uv_loop_close(&loop), 0);
+    hid_rig_finish(g, &srv);
     pthread_mutex_destroy(&f->mu);
     pthread_cond_destroy(&f->cv);
     free(f);
-    df_hid_recording_free(&rec);
 }
 
 int main(void)
