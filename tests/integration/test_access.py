@@ -69,8 +69,13 @@ def test_unlisted_uid_gets_an_error_frame_and_is_closed(tcp_ready_daemon):
     d = tcp_ready_daemon("allow_uids = %d\n" % other_uid())
     s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     s.connect(d.socket_path)
-    # a request sent right away is never executed: the refusal comes first, then the close
-    s.sendall(fr.encode_frame(m.LIST_SESSIONS, b"", 7))
+    # a request sent right away is never executed: the refusal comes first, then the close.
+    # The daemon may have closed before the request is written (EPIPE): the refusal frame is
+    # still in this socket's receive queue, and the request was never executed either way.
+    try:
+        s.sendall(fr.encode_frame(m.LIST_SESSIONS, b"", 7))
+    except (BrokenPipeError, ConnectionResetError):
+        pass
     frames, closed = read_frames(s, timeout=10.0, want=2)
     assert closed or wait_closed(s, 10.0), "refused peer not closed"
     assert len(frames) == 1, frames
