@@ -44,6 +44,7 @@
 
 #include "client/dc_net.h"
 #include "client/deformclient.h"
+#include "tests/bench/bench_daemon.h"
 #include "tests/bench/bench_grid.h"
 
 #define ECHO_BYTES 16
@@ -199,64 +200,27 @@ typedef struct daemon_proc {
     int port;
 } daemon_proc;
 
-/* A free loopback TCP port (bound then released; the daemon binds it right after). */
-static int free_port(void)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in sa = {.sin_family = AF_INET};
-    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    socklen_t sl = sizeof sa;
-    int port = -1;
-    if (fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof sa) == 0 &&
-        getsockname(fd, (struct sockaddr *)&sa, &sl) == 0)
-        port = ntohs(sa.sin_port);
-    if (fd >= 0)
-        close(fd);
-    return port;
-}
-
 static int daemon_start(daemon_proc *d, const char *exe)
 {
     snprintf(d->sock, sizeof d->sock, "%s/deformd.sock", d->dir);
-    d->port = free_port();
+    d->port = bench_free_port();
     char tcp[64], log[128];
     snprintf(tcp, sizeof tcp, "127.0.0.1:%d", d->port);
     snprintf(log, sizeof log, "%s/deformd.log", d->dir);
-    d->pid = fork();
-    if (d->pid == 0) {
-        prctl(PR_SET_PDEATHSIG, SIGTERM); /* never outlive the bench */
-        FILE *f = freopen(log, "w", stderr);
-        (void)f;
-        char *argv[10 + MAX_EXTRA_ARGS + 1] = {(char *)exe, "--foreground", "--socket", d->sock,
-                                                "--tcp", tcp, "--log-level", "warn", "--store",
-                                                "none"}; /* DEFORMD_ARGS may set --store */
-        int argc = 10;
-        static char extra[256]; /* DEFORMD_ARGS: extra daemon options, space separated */
-        snprintf(extra, sizeof extra, "%s", getenv("DEFORMD_ARGS") ? getenv("DEFORMD_ARGS") : "");
-        for (char *t = strtok(extra, " "); t && argc < 10 + MAX_EXTRA_ARGS; t = strtok(NULL, " "))
-            argv[argc++] = t;
-        argv[argc] = NULL;
-        execv(exe, argv);
-        _exit(127);
-    }
-    for (int i = 0; i < 200; i++) {
-        df_client *c;
-        if (df_client_connect_unix(d->sock, "bench", &c, NULL) == DF_OK) {
-            df_client_close(c);
-            return 0;
-        }
-        usleep(50000);
-    }
-    return -1;
+    char *argv[10 + MAX_EXTRA_ARGS + 1] = {(char *)exe, "--foreground", "--socket", d->sock,
+                                            "--tcp", tcp, "--log-level", "warn", "--store",
+                                            "none"}; /* DEFORMD_ARGS may set --store */
+    int argc = 10;
+    static char extra[256]; /* DEFORMD_ARGS: extra daemon options, space separated */
+    snprintf(extra, sizeof extra, "%s", getenv("DEFORMD_ARGS") ? getenv("DEFORMD_ARGS") : "");
+    for (char *t = strtok(extra, " "); t && argc < 10 + MAX_EXTRA_ARGS; t = strtok(NULL, " "))
+        argv[argc++] = t;
+    argv[argc] = NULL;
+    d->pid = bench_daemon_spawn(argv, log);
+    return bench_daemon_wait(d->sock);
 }
 
-static void daemon_stop(daemon_proc *d)
-{
-    if (d->pid > 0) {
-        kill(d->pid, SIGTERM);
-        waitpid(d->pid, NULL, 0);
-    }
-}
+static void daemon_stop(daemon_proc *d) { bench_daemon_stop(d->pid); }
 
 static uint64_t load_grid(df_client *c, int n, const char *name)
 {

@@ -18,6 +18,7 @@
 
 #include "client/dc_net.h"
 #include "client/deformclient.h"
+#include "tests/bench/bench_daemon.h"
 
 #define PING_ROUNDS 2000
 #define CONNECT_ROUNDS 200
@@ -28,54 +29,23 @@ typedef struct daemon_proc {
     int port;
 } daemon_proc;
 
-static int free_port(void)
-{
-    for (int p = 20000 + (int)(getpid() % 20000), tries = 0; tries < 1000; tries++, p++) {
-        df_error e;
-        int fd = dc_net_connect_tcp("127.0.0.1", p, &e);
-        if (fd < 0) return p; /* nobody listens there (the daemon binds it right after) */
-        close(fd);
-    }
-    return -1;
-}
-
 /* Starts deformd on `sock` and a free loopback port, with `cert`/`key` when non-NULL. */
 static int start(daemon_proc *d, const char *exe, const char *dir, const char *tag,
                  const char *cert, const char *key)
 {
     snprintf(d->sock, sizeof d->sock, "%s/%s.sock", dir, tag);
-    d->port = free_port();
+    d->port = bench_free_port();
     char tcp[64], log[256];
     snprintf(tcp, sizeof tcp, "127.0.0.1:%d", d->port);
     snprintf(log, sizeof log, "%s/%s.log", dir, tag);
-    d->pid = fork();
-    if (d->pid == 0) {
-        prctl(PR_SET_PDEATHSIG, SIGTERM);
-        if (!freopen(log, "w", stderr)) _exit(127);
-        char *argv[] = {(char *)exe, "--foreground", "--store", "none", "--socket", d->sock, "--tcp", tcp,
-                        "--log-level", "warn", cert ? "--tls-cert" : NULL, (char *)cert,
-                        "--tls-key", (char *)key, NULL};
-        execv(exe, argv);
-        _exit(127);
-    }
-    for (int i = 0; i < 200; i++) {
-        df_client *c;
-        if (df_client_connect_unix(d->sock, "bench", &c, NULL) == DF_OK) {
-            df_client_close(c);
-            return 0;
-        }
-        usleep(50000);
-    }
-    return -1;
+    char *argv[] = {(char *)exe, "--foreground", "--store", "none", "--socket", d->sock,
+                    "--tcp", tcp, "--log-level", "warn", cert ? "--tls-cert" : NULL,
+                    (char *)cert, "--tls-key", (char *)key, NULL};
+    d->pid = bench_daemon_spawn(argv, log);
+    return bench_daemon_wait(d->sock);
 }
 
-static void stop(daemon_proc *d)
-{
-    if (d->pid > 0) {
-        kill(d->pid, SIGTERM);
-        waitpid(d->pid, NULL, 0);
-    }
-}
+static void stop(daemon_proc *d) { bench_daemon_stop(d->pid); }
 
 static int cmp(const void *a, const void *b)
 {
