@@ -16,7 +16,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "client/dc_net.h"
 #include "client/deformclient.h"
 #include "tests/bench/bench_daemon.h"
 
