@@ -33,6 +33,7 @@
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/stream.h"
+#include "server/session/stroke_recipe.h"
 
 /* Below this many vertices a brush field is evaluated by the worker thread alone: waking an
  * OpenMP team costs more than it saves. Above it, on the `threads` setting (config.h) at most:
@@ -59,14 +60,8 @@ static void req_free(df_server *srv, void *body)
 static int stroke_field(const df_session *s, const df_stroke *st, const double *load,
                         float *disp, df_change *ch, df_error *err)
 {
-    df_kelvinlet_brush b = st->brush;
-    double k = st->strength;
-    for (int i = 0; i < 3; i++) {
-        b.tip[i] = k * load[i];
-        b.omega[i] = k * load[3 + i];
-    }
-    b.s = k * load[6];
-    for (int i = 0; i < 9; i++) b.grad[i] = k * load[7 + i];
+    df_kelvinlet_brush b;
+    df_stroke_loaded_brush(&st->brush, st->strength, load, &b);
     df_kelvinlet_prepared prep;
     int rc, threads = s->nv < DF_BRUSH_PARALLEL_MIN_VERTICES ? 1 : s->srv->cfg.threads;
     if (st->n_pins) {
@@ -124,13 +119,7 @@ static int stroke_publish(const df_session *s, const df_stroke *st, uint8_t kind
         base = rebased;
     }
     double *pos = s->scratch_pos;
-    const float *x0 = st->startf;
-#pragma omp simd /* one fused pass; distinct arrays (gcc -O2 would not vectorize it) */
-    for (size_t i = 0; i < n; i++) {
-        float m = (x0[i] + disp[i]) - x0[i];
-        disp[i] = m;
-        pos[i] = base[i] + (double)m;
-    }
+    df_stroke_motion(st->startf, disp, base, pos, n); /* the arithmetic replays redo */
     int rc = df_stream_encode(s, NULL, 0, pos, kind, NULL, 0, s->scratch_u, &ch->frames, NULL,
                               err);
     if (rc != DF_OK) {

@@ -1,0 +1,73 @@
+/* stroke_recipe.h — a Kelvinlet stroke's contribution kept as its request, recomputed on demand.
+ *
+ * A stroke (server/handlers/h_brush.c) sets positions = base + m, where m is the float32 motion
+ * m = fl32(x0 + d) - x0 of the stroke-start points x0 = fl32(start positions) along the field d
+ * of the stroke's brush under its cumulative load. When `base` is the state the stroke began
+ * from (no concurrent change rebased it), the stroke's result is a pure function of that start
+ * state and of the recipe below: a few hundred bytes instead of 24 bytes per moved vertex.
+ * The undo history and the store keep a recipe plus a checksum of the state it produced; a
+ * replay that does not reproduce the checksum is an error, never a silently different mesh.
+ *
+ * The motion step (df_stroke_motion) is the one h_brush.c publishes with, so a replay runs
+ * exactly the live arithmetic. Pure: any thread, no session access. */
+#ifndef DF_SERVER_STROKE_RECIPE_H
+#define DF_SERVER_STROKE_RECIPE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/common/df_error.h"
+#include "core/kelvinlet/kelvinlet.h"
+
+#define DF_STROKE_LOAD_N 16 /* move[3] twist[3] scale matrix[9] */
+
+typedef struct df_stroke_recipe {
+    df_kelvinlet_brush brush;     /* as evaluated (knob overrides applied); its tip, omega, s and
+                                   * grad are ignored: the load sets them */
+    double strength;              /* multiplies the load */
+    double load[DF_STROKE_LOAD_N];/* the cumulative load of the stroke's last begin/update */
+    uint32_t n_pins;              /* pinned points, 0..DF_KELVINLET_MAX_PINS */
+    int pin_flags;                /* DF_KELVINLET_PIN_* (0 without pins) */
+    double *pins;                 /* n_pins x 3, owned (NULL when none) */
+} df_stroke_recipe;
+
+/* The brush `b` loaded with `strength` x `load`: tip = k move, omega = k twist, s = k scale,
+ * grad = k matrix (row-major). Writes *out (may alias b). */
+void df_stroke_loaded_brush(const df_kelvinlet_brush *b, double strength,
+                            const double load[DF_STROKE_LOAD_N], df_kelvinlet_brush *out);
+
+/* The motion step of a stroke over n floats: m = (x0 + d) - x0 in float32 (0 where d is below
+ * x0's resolution), written over d, and pos = base + (double)m. Arrays distinct. */
+void df_stroke_motion(const float *x0, float *d, const double *base, double *pos, size_t n);
+
+/* Recomputes the stroke from state `from` (3 * nv doubles) into `to` (3 * nv doubles, may not
+ * alias from): x0 = fl32(from), d = the recipe's field at x0 (a fresh pin solve when pinned),
+ * to = from + m. `threads` as df_kelvinlet_prepared.threads (results do not depend on it).
+ * `planar`: a 2D session, where a field moving any z is refused (as the live stroke is).
+ * Errors: those of the Kelvinlet engine (DF_EINVAL, DF_ESINGULAR, DF_ELIMIT), DF_ENOMEM;
+ * `to` unspecified on error. */
+int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32_t nv,
+                            int planar, int threads, double *to, df_error *err);
+
+/* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR1', i32 type,
+ * dim, order, integrator, steps, mirror, moving, f64 ratio, radius, nu, centre[3],
+ * mirror_point[3], mirror_normal[3], strength, load[16], u32 n_pins, i32 pin_flags, then
+ * 3 x n_pins f64 pins; native-endian, packed (DF_STROKE_RECIPE_FIXED + 24 n_pins bytes).
+ * Errors: DF_EINVAL (n_pins over the maximum, pins NULL with n_pins > 0), DF_ENOMEM. */
+#define DF_STROKE_RECIPE_FIXED 272
+int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *len,
+                            df_error *err);
+
+/* Parses a blob of df_stroke_recipe_encode into *r (pins malloc'd; free with
+ * df_stroke_recipe_free). Errors: DF_EFORMAT (wrong magic or length, n_pins over the maximum,
+ * a non-finite number), DF_ENOMEM; *r zeroed on error. */
+int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, df_error *err);
+
+/* Frees the recipe's pins and zeroes it. NULL-safe. */
+void df_stroke_recipe_free(df_stroke_recipe *r);
+
+/* A 64-bit checksum of n doubles' bit patterns (every bit counts: -0.0 != 0.0, NaN payloads).
+ * Not cryptographic: it detects a replay that differs, not an adversary. */
+uint64_t df_positions_checksum(const double *p, size_t n);
+
+#endif
