@@ -106,7 +106,7 @@ static int stroke_field(const df_session *s, const df_stroke *st, const double *
  * disp = s->scratch_disp, replaced by m). The commit makes the stroke contribute m. The job's
  * borrowed scratch buffers are swapped in by the commit, not copied. */
 static int stroke_publish(const df_session *s, const df_stroke *st, uint8_t kind,
-                          df_change *ch, df_error *err)
+                          const double *load, df_change *ch, df_error *err)
 {
     size_t n = 3 * (size_t)s->nv;
     float *disp = s->scratch_disp;
@@ -131,6 +131,11 @@ static int stroke_publish(const df_session *s, const df_stroke *st, uint8_t kind
     ch->version = atomic_load(&s->version) + 1;
     ch->applied = disp;
     ch->base = rebased;
+    ch->set_recipe = 1; /* what replays this publish (stroke_recipe.h), when anything can */
+    ch->recipe_brush = st->brush;
+    ch->recipe_strength = st->strength;
+    if (load) memcpy(ch->recipe_load, load, sizeof ch->recipe_load);
+    ch->recipe_replayable = load && !rebased && !st->rebased;
     return DF_OK;
 }
 
@@ -290,6 +295,7 @@ static void begin_work_inner(df_job *j)
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
     st->last_version = atomic_load(&s->version);
+    st->base_version = st->last_version;
     /* validate the brush (a zero-load begin publishes nothing; the pin LU is built and
      * checked by the first update) */
     if ((j->rc = stroke_params_check(st, "brush_begin", &j->err)) != DF_OK) return;
@@ -297,7 +303,7 @@ static void begin_work_inner(df_job *j)
         return;
     if (load_is_zero(r->load)) return;
     j->rc = stroke_field(s, st, r->load, disp, &j->change, &j->err);
-    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, &j->change, &j->err);
+    if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r->load, &j->change, &j->err);
 }
 
 static void update_work_inner(df_job *j);
@@ -343,11 +349,11 @@ static void update_work_inner(df_job *j)
     if (j->req.type == DF_MSG_BRUSH_CANCEL) {
         if (stroke_applied_nothing(st, n)) return; /* nothing to undo: no version */
         memset(disp, 0, n * sizeof *disp);
-        j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, ch, &j->err);
+        j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, NULL, ch, &j->err);
     } else {
         j->rc = planar_check(s, NULL, st, r->load, "brush_update", &j->err);
         if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, ch, &j->err);
-        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, ch, &j->err);
+        if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r->load, ch, &j->err);
     }
 }
 

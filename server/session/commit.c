@@ -65,12 +65,19 @@ static void apply_state(df_session *s, df_change *c)
         c->applied = NULL;
     }
     if (st && c->base) {
+        st->rebased = 1;
         free(st->base);
         st->base = c->base;
         c->base = NULL;
     }
     if (st && c->version) st->last_version = c->version;
     if (st && c->set_tip) memcpy(st->tip, c->tip, sizeof st->tip);
+    if (st && c->set_recipe) {
+        st->last_brush = c->recipe_brush;
+        st->last_strength = c->recipe_strength;
+        memcpy(st->last_load, c->recipe_load, sizeof st->last_load);
+        st->last_replayable = c->recipe_replayable;
+    }
     if (st && c->set_params) {
         st->brush = c->brush;
         st->strength = c->strength;

@@ -57,6 +57,12 @@ typedef struct df_change {
     int set_params;              /* the stroke's knobs become brush / strength (SET_BRUSH_PARAM) */
     df_kelvinlet_brush brush;
     double strength;
+    int set_recipe;              /* the stroke's last_brush / last_strength / last_load /
+                                  * last_replayable become the fields below (a publish) */
+    df_kelvinlet_brush recipe_brush;
+    double recipe_strength;
+    double recipe_load[16];
+    int recipe_replayable;
     df_stroke *link;             /* a new stroke to link (owned until the commit) */
     int drop_stroke;             /* drop the requester's stroke (cancel, end) */
     int rest_from_cur;           /* reset-rest: rest shape = the new current positions */

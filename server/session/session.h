@@ -53,6 +53,17 @@ typedef struct df_stroke {
     uint64_t last_version;       /* session version this stroke produced last */
     uint64_t work_ns;            /* time of its last field evaluation (begin or update), ns;
                                   * 0 = none yet. Predicts the next update (job.h, inline) */
+    /* What produced `applied` (stroke_recipe.h): the brush and strength its last publish used
+     * (knobs may change `brush` for the next one) and that publish's cumulative load. */
+    df_kelvinlet_brush last_brush;
+    double last_strength;
+    double last_load[16];
+    int last_replayable;         /* 1: applied = the recipe's motion at startf, and base is
+                                  * still the state the stroke began from (never rebased);
+                                  * 0: nothing published, a cancel, or rebased */
+    uint64_t base_version;       /* session version whose positions are `base` unless
+                                  * rebased (the version at begin) */
+    int rebased;                 /* 1: base was rebased once (another change landed) */
     struct df_stroke *next;
 } df_stroke;
 
