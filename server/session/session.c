@@ -11,6 +11,7 @@
 #include "server/session/meshload.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
+#include "server/session/stream.h"
 
 uint64_t df_session_estimate_bytes(const df_mesh *mesh)
 {
@@ -62,6 +63,23 @@ static uint64_t reclaim_history(df_server *srv, uint64_t want)
     return freed;
 }
 
+/* Empties resync rings, largest first, until `want` bytes are freed or none is left; returns
+ * the bytes freed. (A ring costs a resyncing client a snapshot at worst, an undo step is lost.) */
+static uint64_t reclaim_resync(df_server *srv, uint64_t want)
+{
+    uint64_t freed = 0;
+    while (freed < want) {
+        df_session *best = NULL;
+        for (df_session *s = srv->sessions; s; s = s->next)
+            if (s->resync.count && (!best || s->resync.bytes > best->resync.bytes)) best = s;
+        if (!best) break;
+        freed += df_resync_trim(&best->resync, 0);
+        df_mem_adjust(df_server_mem(srv), DF_MEM_RESYNC, best->resync_charged, 0);
+        best->resync_charged = 0;
+    }
+    return freed;
+}
+
 int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
                           df_error *err)
 {
@@ -69,6 +87,7 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
     if ((unsigned)kind < DF_MEM_KINDS && mb->used[kind] <= mb->kind_max[kind] &&
         bytes <= mb->kind_max[kind] - mb->used[kind]) {
         uint64_t used = df_mem_used(mb), room = used < mb->max ? mb->max - used : 0;
+        if (bytes > room) room += reclaim_resync(srv, bytes - room);
         if (bytes > room) reclaim_history(srv, bytes - room);
     }
     return df_mem_charge(mb, kind, bytes, what, err);
@@ -206,8 +225,10 @@ void df_session_destroy(df_session *s)
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
     df_history_free(&s->hist);
+    df_resync_free(&s->resync);
     df_membudget *mb = df_server_mem(srv);
     df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);
+    df_mem_release(mb, DF_MEM_RESYNC, s->resync_charged);
     df_mem_release(mb, DF_MEM_SESSIONS, s->mem_bytes);
     df_mem_release(mb, DF_MEM_SHM, s->shm_charged);
     df_meshload_free(&s->mesh);
@@ -353,6 +374,20 @@ int df_session_history_commit(df_session *s, df_error *err)
     s->srv->history_dropped += s->hist.dropped - d0;
     history_recharge(s);
     return rc;
+}
+
+void df_session_resync_record(df_session *s, uint64_t version, const df_frames *frames)
+{
+    df_membudget *mb = df_server_mem(s->srv);
+    uint64_t per = (uint64_t)s->srv->cfg.resync_ring_mb << 20;
+    uint64_t room = df_mem_room(mb, DF_MEM_RESYNC) + s->resync_charged;
+    df_error err;
+    if (df_resync_push(&s->resync, version, frames->v, frames->n, per < room ? per : room,
+                       &err) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: %s (a resync from before gets a snapshot)",
+               (unsigned long long)s->id, err.msg);
+    df_mem_adjust(mb, DF_MEM_RESYNC, s->resync_charged, s->resync.bytes);
+    s->resync_charged = s->resync.bytes;
 }
 
 int df_session_history_reset(df_session *s, df_error *err)
