@@ -368,6 +368,16 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
 
 int df_session_history_commit(df_session *s, df_error *err)
 {
+    /* undo steps come before resync rings when the memory budget is short: make room for a
+     * step (at most one full state) out of the rings first */
+    uint64_t per = (uint64_t)s->srv->cfg.history_max_mb << 20;
+    uint64_t room = df_mem_room(df_server_mem(s->srv), DF_MEM_HISTORY) + s->hist_charged;
+    uint64_t step = 3 * (uint64_t)s->nv * sizeof(double);
+    uint64_t free_room = room - s->hist_charged; /* room counts what the history holds */
+    if (room < per && free_room < step) {
+        uint64_t want = step - free_room;
+        reclaim_resync(s->srv, per - room < want ? per - room : want);
+    }
     uint64_t d0 = s->hist.dropped;
     df_history_set_max_bytes(&s->hist, history_budget(s));
     int rc = df_history_commit(&s->hist, s->cur, err);
