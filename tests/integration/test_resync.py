@@ -294,3 +294,26 @@ def test_deformctl_watch_from_version(make_daemon):
     bad = subprocess.run([DEFORMCTL, "--socket", d.socket_path, "watch", str(sid),
                           "--from-version", "-1"], capture_output=True, text=True, timeout=TIMEOUT)
     assert bad.returncode != 0 and "--from-version" in bad.stderr
+
+
+def test_undo_history_comes_before_the_ring_under_memory_pressure(make_daemon):
+    """With a small memory budget the undo history keeps as many steps as it would with no ring
+    at all (resync_ring_mb = 0, computed by a second daemon); the ring gets what is left."""
+    depth = {}
+    for ring in (32, 0):
+        d = make_daemon("memory_max_mb = 16\nresync_ring_mb = %d\n" % ring)
+        with d.unix_client() as b:
+            sid = b.load_mesh(grid_obj(150, 150), fmt=".obj", name="tight").session_id
+            X = b.get_mesh(sid).positions
+            for k in range(24):
+                b.stroke(sid, Brush(type="grab", center=X[900 * k:900 * k + 3],
+                                    move=(0, 0, 0.01), radius=0.5))
+            s, g = b.stats(sid), b.stats()
+            depth[ring] = (s["undo_depth"], s["history_steps_dropped"])
+            assert s["history_steps_dropped"] > 0, s        # the budget binds the history
+            assert g["memory_used_bytes"] <= g["memory_max_bytes"], g
+            if ring:  # what the history left (nothing once it fills the budget)
+                assert s["resync_ring_bytes"] == g["memory.resync_bytes"], (s, g)
+            else:
+                assert s["resync_ring_bytes"] == 0 and s["resync_versions"] == 0, s
+    assert depth[32] == depth[0], depth
