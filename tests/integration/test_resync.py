@@ -230,13 +230,15 @@ def test_restart_loses_the_ring_not_the_version(tmp_path, make_daemon):
     d2 = make_daemon("store = %s\n" % store)
     with d2.unix_client() as b, d2.unix_client() as a, d2.unix_client() as a2:
         assert b.stats(sid)["version"] == cur and b.stats(sid)["resync_versions"] == 0
-        rid, info = subscribe_from(a, sid, cur - 2)
-        frames = read_until(a, cur)
-        assert {(f.request_id, disp_of(f).kind) for f in frames} == {(rid, m.CHANGE_SNAPSHOT)}
+        # the client API: subscribe(from_version=), then whole events for MeshState.apply
+        info = a.subscribe(sid, from_version=cur - 2)
+        assert info.version == cur
+        ev = a.next_event(TIMEOUT)
+        assert ev.kind == m.CHANGE_SNAPSHOT and ev.version == cur and ev.count == ev.nv
         state = MeshState(base, cur - 2)
-        state.apply(st.join_disp([disp_of(f) for f in frames]))
+        assert state.apply(ev)
         assert state.tobytes() == fresh(b, sid).tobytes()
-        _, info = subscribe_from(a2, sid, cur)
+        assert a2.subscribe(sid, from_version=cur).version == cur
         nothing_queued(a2)
         b.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0.02, 0), radius=0.3))
         assert [ver for ver, _ in versions(read_until(a2, cur + 1))] == [cur + 1]
