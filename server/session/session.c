@@ -63,8 +63,9 @@ static uint64_t reclaim_history(df_server *srv, uint64_t want)
     return freed;
 }
 
-/* Empties resync rings, largest first, until `want` bytes are freed or none is left; returns
- * the bytes freed. (A ring costs a resyncing client a snapshot at worst, an undo step is lost.) */
+/* Drops the oldest versions of resync rings, largest ring first, until `want` bytes are freed
+ * or no ring is left; returns the bytes freed. Rings give way before undo steps: a version
+ * dropped from a ring costs a resyncing client a snapshot at worst, a dropped step is lost. */
 static uint64_t reclaim_resync(df_server *srv, uint64_t want)
 {
     uint64_t freed = 0;
@@ -73,9 +74,10 @@ static uint64_t reclaim_resync(df_server *srv, uint64_t want)
         for (df_session *s = srv->sessions; s; s = s->next)
             if (s->resync.count && (!best || s->resync.bytes > best->resync.bytes)) best = s;
         if (!best) break;
-        freed += df_resync_trim(&best->resync, 0);
-        df_mem_adjust(df_server_mem(srv), DF_MEM_RESYNC, best->resync_charged, 0);
-        best->resync_charged = 0;
+        uint64_t left = want - freed, have = best->resync.bytes;
+        freed += df_resync_trim(&best->resync, have > left ? have - left : 0);
+        df_mem_adjust(df_server_mem(srv), DF_MEM_RESYNC, best->resync_charged, best->resync.bytes);
+        best->resync_charged = best->resync.bytes;
     }
     return freed;
 }
