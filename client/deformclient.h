@@ -203,6 +203,19 @@ int df_client_close_session(df_client *c, uint64_t session_id, df_msg_ack *ack, 
  * snapshot event first. *info (may be NULL) receives the session state at subscription. */
 int df_client_subscribe(df_client *c, uint64_t session_id, uint32_t flags,
                         df_msg_session_info *info, df_error *err);
+
+/* Subscribes and resyncs from `from_version`, the version whose published displacements the
+ * caller holds (e.g. a df_client_replica's r->version after a reconnect; PROTOCOL.md 6.2).
+ * *info (may be NULL) receives the session state: info->version is the version the stream
+ * brings the caller to. Then, through the event callback and before any live frame, come
+ * either the frames of versions from_version+1 .. info->version exactly as they were
+ * broadcast (none when from_version == info->version), or, when the daemon no longer keeps
+ * them (too old, a restart) or from_version > info->version, one dense snapshot of
+ * info->version (DF_MSG_DISPLACEMENT events of kind DF_CHANGE_SNAPSHOT carrying this
+ * request's id). Both feed a df_client_replica unchanged (df_client_replica_feed). Errors: the
+ * server's (DF_ENOTFOUND, DF_EPERM, ...), transport errors. */
+int df_client_subscribe_from(df_client *c, uint64_t session_id, uint64_t from_version,
+                             df_msg_session_info *info, df_error *err);
 int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err);
 
 /* Switches this subscription to the shared-memory stream (PROTOCOL.md 6.1; Unix socket, same

@@ -206,7 +206,10 @@ typedef struct df_msg_open_session {   /* open: by id, or by name when session_i
 
 typedef struct df_msg_subscribe {
     uint64_t session_id;               /* != 0 */
-    uint32_t flags;                    /* DF_SUBSCRIBE_SNAPSHOT: send a dense snapshot first */
+    uint32_t flags;                    /* DF_SUBSCRIBE_SNAPSHOT: send a dense snapshot first;
+                                        * DF_SUBSCRIBE_FROM_VERSION: resync from from_version */
+    uint64_t from_version;             /* the version the client holds (with FROM_VERSION only:
+                                        * on the wire iff that flag is set; else 0) */
 } df_msg_subscribe;
 
 typedef struct df_msg_session_info {

@@ -194,7 +194,9 @@
 
 #define DF_WIRE_PIN_FLAGS(X) X(DISPLACEMENT, 1u << 0) X(GRADIENT, 1u << 1) /* u = 0, grad u = 0 */
 #define DF_WIRE_GET_MESH_FLAGS(X) X(REST, 1u << 0) X(BASE, 1u << 1) /* extra sections */
-#define DF_WIRE_SUBSCRIBE_FLAGS(X) X(SNAPSHOT, 1u << 0) /* a dense snapshot right after */
+#define DF_WIRE_SUBSCRIBE_FLAGS(X)                                                           \
+    X(SNAPSHOT, 1u << 0)     /* a dense snapshot right after */                               \
+    X(FROM_VERSION, 1u << 1) /* resync: a u64 from_version follows; the versions after it */
 
 /* Session brush state fields (DF_BS_*): brush_state_set `mask`, brush_state `changed`,
  * brush `use_session` (take these fields from the session brush instead of the message). */

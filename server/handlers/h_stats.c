@@ -69,6 +69,10 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "moves_orphaned", (double)x->moves_orphaned);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
+        put(&st, "resync_replays", (double)x->resync_replays);
+        put(&st, "resync_snapshots", (double)x->resync_snapshots);
+        put(&st, "resync_ring_bytes", (double)df_server_mem(srv)->used[DF_MEM_RESYNC]);
+        put(&st, "resync.limit_bytes", (double)((uint64_t)srv->cfg.resync_ring_mb << 20));
         put(&st, "brush_state_changes", (double)x->brush_state_changes);
         put(&st, "store_changes", (double)x->store_changes);
         put(&st, "store_log_bytes", (double)x->store_log_bytes);
@@ -93,6 +97,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "memory.sessions_bytes", (double)mb->used[DF_MEM_SESSIONS]);
         put(&st, "memory.shm_bytes", (double)mb->used[DF_MEM_SHM]);
         put(&st, "memory.history_bytes", (double)mb->used[DF_MEM_HISTORY]);
+        put(&st, "memory.resync_bytes", (double)mb->used[DF_MEM_RESYNC]);
         put(&st, "uploads_in_flight", uploads);
         put(&st, "uploads_max_bytes", (double)((uint64_t)srv->cfg.uploads_max_mb << 20));
         put(&st, "max_upload_bytes", (double)((uint64_t)srv->cfg.max_upload_mb << 20));
@@ -129,7 +134,13 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "redo_depth", df_history_can_redo(&s->hist));
         put(&st, "history_bytes", (double)df_history_bytes(&s->hist));
         put(&st, "history_steps_dropped", (double)s->hist.dropped);
-        put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
+        put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged +
+                                          s->resync_charged));
+        put(&st, "resync_ring_bytes", (double)s->resync.bytes);
+        put(&st, "resync_versions", (double)s->resync.count);
+        /* the oldest from_version a resync replays (current version when nothing is kept) */
+        put(&st, "resync_from", (double)(s->resync.count ? df_resync_first(&s->resync) - 1
+                                                          : atomic_load(&s->version)));
         put(&st, "open_strokes", strokes);
         put(&st, "brush.seq", (double)s->brush_seq);
         put(&st, "job_running", s->running != NULL);

@@ -171,6 +171,7 @@ int df_session_commit(df_session *s, df_change *c)
     if (srv->commit_hook) srv->commit_hook(srv->commit_hook_arg, s, c);
     for (size_t i = 0; i < c->frames.n; i++) df_session_broadcast(s, c->frames.v[i]);
     if (c->frames.n) srv->stats.versions++;
+    if (c->version) df_session_resync_record(s, c->version, &c->frames); /* resync.h */
     if (strokes && srv->hid_ops && srv->hid_ops->strokes_changed)
         srv->hid_ops->strokes_changed(srv, s);
     if (c->req && !c->answered_by_job) df_req_ack(c->req, s->id, atomic_load(&s->version));

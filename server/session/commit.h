@@ -16,7 +16,8 @@
  *   3. accounting: timings, cache hit/miss, install / drop cached factorizations, LRU eviction;
  *   4. hook:     srv->commit_hook (an observer: a scale-out log entry; the durable store
  *                writes at step 0, where it can still refuse the change);
- *   5. broadcast the version's frames to the subscribers; a change to the session's strokes
+ *   5. broadcast the version's frames to the subscribers and keep them in the session's resync
+ *      ring (session.h df_session_resync_record: by reference); a change to the session's strokes
  *      (begin, update, knob, end, cancel) then tells the HID subsystem (force feedback,
  *      srv->hid_ops->strokes_changed);
  *   6. answer the request (ack with the new version), unless the job answers itself.

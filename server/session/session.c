@@ -11,6 +11,7 @@
 #include "server/session/meshload.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
+#include "server/session/stream.h"
 
 uint64_t df_session_estimate_bytes(const df_mesh *mesh)
 {
@@ -62,6 +63,25 @@ static uint64_t reclaim_history(df_server *srv, uint64_t want)
     return freed;
 }
 
+/* Drops the oldest versions of resync rings, largest ring first, until `want` bytes are freed
+ * or no ring is left; returns the bytes freed. Rings give way before undo steps: a version
+ * dropped from a ring costs a resyncing client a snapshot at worst, a dropped step is lost. */
+static uint64_t reclaim_resync(df_server *srv, uint64_t want)
+{
+    uint64_t freed = 0;
+    while (freed < want) {
+        df_session *best = NULL;
+        for (df_session *s = srv->sessions; s; s = s->next)
+            if (s->resync.count && (!best || s->resync.bytes > best->resync.bytes)) best = s;
+        if (!best) break;
+        uint64_t left = want - freed, have = best->resync.bytes;
+        freed += df_resync_trim(&best->resync, have > left ? have - left : 0);
+        df_mem_adjust(df_server_mem(srv), DF_MEM_RESYNC, best->resync_charged, best->resync.bytes);
+        best->resync_charged = best->resync.bytes;
+    }
+    return freed;
+}
+
 int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
                           df_error *err)
 {
@@ -69,6 +89,7 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
     if ((unsigned)kind < DF_MEM_KINDS && mb->used[kind] <= mb->kind_max[kind] &&
         bytes <= mb->kind_max[kind] - mb->used[kind]) {
         uint64_t used = df_mem_used(mb), room = used < mb->max ? mb->max - used : 0;
+        if (bytes > room) room += reclaim_resync(srv, bytes - room);
         if (bytes > room) reclaim_history(srv, bytes - room);
     }
     return df_mem_charge(mb, kind, bytes, what, err);
@@ -206,8 +227,10 @@ void df_session_destroy(df_session *s)
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
     df_history_free(&s->hist);
+    df_resync_free(&s->resync);
     df_membudget *mb = df_server_mem(srv);
     df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);
+    df_mem_release(mb, DF_MEM_RESYNC, s->resync_charged);
     df_mem_release(mb, DF_MEM_SESSIONS, s->mem_bytes);
     df_mem_release(mb, DF_MEM_SHM, s->shm_charged);
     df_meshload_free(&s->mesh);
@@ -347,12 +370,36 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
 
 int df_session_history_commit(df_session *s, df_error *err)
 {
+    /* undo steps come before resync rings when the memory budget is short: make room for a
+     * step (at most one full state) out of the rings first */
+    uint64_t per = (uint64_t)s->srv->cfg.history_max_mb << 20;
+    uint64_t room = df_mem_room(df_server_mem(s->srv), DF_MEM_HISTORY) + s->hist_charged;
+    uint64_t step = 3 * (uint64_t)s->nv * sizeof(double);
+    uint64_t free_room = room - s->hist_charged; /* room counts what the history holds */
+    if (room < per && free_room < step) {
+        uint64_t want = step - free_room;
+        reclaim_resync(s->srv, per - room < want ? per - room : want);
+    }
     uint64_t d0 = s->hist.dropped;
     df_history_set_max_bytes(&s->hist, history_budget(s));
     int rc = df_history_commit(&s->hist, s->cur, err);
     s->srv->history_dropped += s->hist.dropped - d0;
     history_recharge(s);
     return rc;
+}
+
+void df_session_resync_record(df_session *s, uint64_t version, const df_frames *frames)
+{
+    df_membudget *mb = df_server_mem(s->srv);
+    uint64_t per = (uint64_t)s->srv->cfg.resync_ring_mb << 20;
+    uint64_t room = df_mem_room(mb, DF_MEM_RESYNC) + s->resync_charged;
+    df_error err;
+    if (df_resync_push(&s->resync, version, frames->v, frames->n, per < room ? per : room,
+                       &err) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: %s (a resync from before gets a snapshot)",
+               (unsigned long long)s->id, err.msg);
+    df_mem_adjust(mb, DF_MEM_RESYNC, s->resync_charged, s->resync.bytes);
+    s->resync_charged = s->resync.bytes;
 }
 
 int df_session_history_reset(df_session *s, df_error *err)

@@ -28,6 +28,7 @@
 #include "core/mesh/mesh.h"
 #include "server/session/brush_state.h"
 #include "server/session/history.h"
+#include "server/session/resync.h"
 #include "server/server.h"
 
 #define DF_SESSION_NAME_MAX 256
@@ -125,6 +126,8 @@ typedef struct df_session {
     uint64_t mem_bytes;          /* charged to srv->mem: DF_MEM_SESSIONS (the estimate) */
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
+    df_resync resync;            /* frames of the versions last broadcast (resync.h), loop thread */
+    uint64_t resync_charged;     /* ... DF_MEM_RESYNC (resync.bytes at the last change) */
     char owner[48];              /* principal of the creator (df_conn.principal), access.h */
     uint64_t upload_bytes;       /* bytes of its uploaded file (quota_upload_mb), 0 for paths */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
@@ -194,6 +197,14 @@ int df_session_history_commit(df_session *s, df_error *err);
  * step is left. Errors: df_mem_charge's DF_ELIMIT (nothing charged). Loop thread. */
 int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
                           df_error *err);
+
+/* Records the frames of version `version` (just broadcast) in the session's resync ring
+ * (resync.h) within its budget: the smaller of resync_ring_mb and what the memory budget has
+ * left (counting what the ring holds); the oldest versions are dropped to fit, and
+ * resync_ring_mb 0 keeps nothing. The ring's bytes are charged as DF_MEM_RESYNC. Never fails:
+ * out of memory empties the ring (a later resync from before gets a snapshot). Loop thread. */
+struct df_frames;
+void df_session_resync_record(df_session *s, uint64_t version, const struct df_frames *frames);
 
 /* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
  * Errors: DF_ENOMEM (history unchanged). */

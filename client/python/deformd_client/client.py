@@ -531,11 +531,21 @@ class Client:
     def close_session(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.CLOSE_SESSION, m.encode_session_ref(session_id)))
 
-    def subscribe(self, session_id: int, snapshot: bool = False) -> m.SessionInfo:
+    def subscribe(self, session_id: int, snapshot: bool = False,
+                  from_version: Optional[int] = None) -> m.SessionInfo:
         """Subscribes to the displacement stream; with snapshot=True a dense snapshot event of
-        the current version comes first."""
-        return m.decode_session_info(self._one(
-            m.SUBSCRIBE, m.encode_subscribe(session_id, m.SUBSCRIBE_SNAPSHOT if snapshot else 0)))
+        the current version comes first. With from_version=V (the version whose displacements
+        the caller holds, e.g. a MeshState's .version after a reconnect; PROTOCOL.md 6.2) the
+        events that come first bring it to the returned SessionInfo.version: the versions
+        V+1 .. that version exactly as they were broadcast (none when V is current), or, when
+        the daemon no longer keeps them or V is ahead of the session, one dense snapshot of
+        that version (kind CHANGE_SNAPSHOT). MeshState.apply takes either."""
+        if from_version is not None and snapshot:
+            raise ValueError("subscribe: snapshot and from_version are exclusive")
+        body = (m.encode_subscribe(session_id, m.SUBSCRIBE_FROM_VERSION, from_version)
+                if from_version is not None else
+                m.encode_subscribe(session_id, m.SUBSCRIBE_SNAPSHOT if snapshot else 0))
+        return m.decode_session_info(self._one(m.SUBSCRIBE, body))
 
     def unsubscribe(self, session_id: int) -> m.Ack:
         """Leaves the session's stream; this also ends its shared-memory stream, whose mapping

@@ -273,6 +273,7 @@ class GetMeshFlag(IntFlag):
 
 class SubscribeFlag(IntFlag):
     SNAPSHOT = 1 << 0
+    FROM_VERSION = 1 << 1  # resync: a u64 from_version follows (PROTOCOL.md 6.2)
 
 
 class BrushStateField(IntFlag):

@@ -204,7 +204,10 @@ static void test_session_bodies(void **state)
     u64("handles_get", 0, 0, DF_EINVAL, "session_id 0");
     u64("open_session", 0, 5, DF_EINVAL, "not both");
     u16("open_session", 8, 0, DF_EPROTO_TRAILING, NULL);
-    u32("subscribe", 8, 2, DF_EINVAL, "flag");
+    u32("subscribe", 8, 4, DF_EINVAL, "flag");
+    u32("subscribe", 8, 2, DF_EPROTO_TRUNCATED, "from_version"); /* flag without its field */
+    u32("subscribe_from", 8, 3, DF_EINVAL, "exclusive");
+    u32("subscribe_from", 8, 0, DF_EPROTO_TRAILING, NULL); /* field without its flag */
     u64("subscribe", 0, 0, DF_EINVAL, "session_id");
     u8("session_info", 16, 4, DF_EINVAL, "kind 4");
     u8("session_info", 16, 0, DF_EINVAL, "kind 0");
