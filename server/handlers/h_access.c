@@ -8,7 +8,7 @@
  * principal a member; a wrong key is EPERM ("wrong join key"), logged with the peer, and counts
  * against the peer's address in a token bucket like failed AUTHs (auth_fail_burst,
  * auth_fail_refill_s; net/auth_limit.h): a peer without tokens gets ELIMIT without its key
- * being checked. A policy change is written to the store before it applies (journal.h). */
+ * being checked. Counters: stats join_ok, join_failed, join_limited. A policy change is written to the store before it applies (journal.h). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -126,6 +126,7 @@ int df_h_join(df_req *r, const uint8_t *p, df_error *err)
     const char *host = limit_host(c, ubuf, sizeof ubuf);
     uint64_t wait = df_auth_limit_wait(srv->join_limit, host, uv_now(srv->loop));
     if (wait) {
+        srv->stats.join_limited++;
         OPENSSL_cleanse(&m, sizeof m);
         df_log(DF_LOG_WARN, "client %llu (%s, %s): join refused: too many wrong join keys",
                (unsigned long long)c->id, c->is_tcp ? c->peer_addr : host, c->principal);
@@ -155,6 +156,7 @@ int df_h_join(df_req *r, const uint8_t *p, df_error *err)
     int ok = df_membership_key_ok(&s->acc, m.key, sizeof m.key);
     OPENSSL_cleanse(&m, sizeof m);
     if (!ok) {
+        srv->stats.join_failed++;
         df_auth_limit_fail(srv->join_limit, host, uv_now(srv->loop));
         df_log(DF_LOG_WARN, "client %llu (%s, %s): join of session %llu '%s' failed: wrong join "
                "key", (unsigned long long)c->id, c->is_tcp ? c->peer_addr : host, c->principal,
@@ -170,6 +172,7 @@ int df_h_join(df_req *r, const uint8_t *p, df_error *err)
         return rc;
     }
     if ((rc = apply(srv, s, &next, err)) != DF_OK) return rc;
+    srv->stats.join_ok++;
     df_log(DF_LOG_INFO, "session %llu '%s': %s joined (%d members)", (unsigned long long)s->id,
            s->name, c->principal, s->acc.n);
     info_fill(s, &out);

@@ -47,6 +47,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "auth_ok", (double)x->auth_ok);
         put(&st, "auth_failed", (double)x->auth_failed);
         put(&st, "auth_limited", (double)x->auth_limited);
+        put(&st, "join_ok", (double)x->join_ok);
+        put(&st, "join_failed", (double)x->join_failed);
+        put(&st, "join_limited", (double)x->join_limited);
         put(&st, "frames_in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);

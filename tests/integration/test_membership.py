@@ -182,6 +182,8 @@ def test_wrong_join_keys_are_rate_limited_per_peer(run):
                 "retry in")
         assert a.session_access(sid).members == 0
         b.ping(b"still open")
+        st = a.stats()
+        assert (st["join_failed"], st["join_limited"], st["join_ok"]) == (2, 1, 0)
 
 
 def test_bad_join_and_access_requests_change_nothing(run):
