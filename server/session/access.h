@@ -4,11 +4,12 @@
  * peer_key, "admin" for key_file, "tcp" on a server without keys; server/net/peer.h, auth.h).
  * The principal that loads a session owns it (df_session.owner). Rights on a session:
  *   DF_RIGHT_OBSERVE  subscribe, unsubscribe, shared-memory stream, get mesh, snapshot,
- *                     handles get, brush state get
+ *                     handles get, brush state get; also open session, a session's stats and
+ *                     being listed (checked by their handlers)
  *   DF_RIGHT_EDIT     brush strokes and parameters, brush state set, handles set / move,
  *                     undo / redo, device bind and device view
  *   DF_RIGHT_OWN      close session, reset rest
- *   DF_RIGHT_OWN also: SESSION_ACCESS setting the policy (its plain get needs observe)
+ *                     and SESSION_ACCESS setting the policy (its plain get needs observe)
  * The owner and admins (key_file, the daemon's own uid or root on the Unix socket, and
  * internal requests of HID devices) hold every right; the others' rights follow the session's
  * policy (df_session.acc, membership.h: open / key / owner mode, observers on or off).

@@ -153,6 +153,7 @@ def test_observers_off_hides_the_session_and_refuses_observing(run):
         refused(lambda: b.get_mesh(sid), E.ErrorCode.EPERM, "needs the observe right")
         refused(lambda: b.snapshot(sid), E.ErrorCode.EPERM)
         refused(lambda: b.open_session(sid), E.ErrorCode.EPERM)
+        refused(lambda: b.stats(sid), E.ErrorCode.EPERM, "needs the observe right")
         refused(lambda: b.session_access(sid), E.ErrorCode.EPERM)
         key = a.session_access(sid, new_key=True).key
         b.join(sid, key)                                  # a member observes and lists it
