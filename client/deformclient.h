@@ -263,6 +263,20 @@ int df_client_devices_list(df_client *c, df_msg_device_list *out, df_error *err)
 int df_client_device_bind(df_client *c, uint64_t device_id, uint64_t session_id, df_error *err);
 int df_client_device_view(df_client *c, const df_msg_device_view *m, df_error *err);
 
+/* Per-session access (PROTOCOL.md 4.34..4.36). session_access: m->mode, m->observers and
+ * m->flags all 0 read the session's policy into *out (may be NULL); any other value changes it
+ * (owner or admin only: remote DF_EPERM otherwise) and *out gets the new policy; with flag
+ * DF_ACCESS_NEW_KEY (or a switch to key mode without a key) out->has_key is 1 and out->key the
+ * new join key, sent this once: keep it secret. join: becomes a member of session_id with its
+ * join key (DF_JOIN_KEY_BYTES bytes); *out (may be NULL) the policy. Remote errors: DF_ENOTFOUND,
+ * DF_EPERM (a wrong key, nothing changed; an owner-only session), DF_ELIMIT (too many wrong
+ * keys from this peer: retry later). Local: DF_EINVAL from the encoder, DF_EFORMAT when the
+ * reply names another session. */
+int df_client_session_access(df_client *c, const df_msg_session_access *m,
+                             df_msg_access_info *out, df_error *err);
+int df_client_join(df_client *c, uint64_t session_id, const uint8_t *key,
+                   df_msg_access_info *out, df_error *err);
+
 /* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets). */
 int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);
 

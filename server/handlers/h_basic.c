@@ -10,6 +10,7 @@
 #include "server/exec/job.h"
 #include "server/log.h"
 #include "server/net/reply.h"
+#include "server/session/access.h"
 #include "server/session/session.h"
 #include "server/net/shm.h"
 #include "server/session/stream.h"
@@ -109,14 +110,17 @@ int df_h_list_sessions(df_req *r, const uint8_t *p, df_error *err)
     if (rc != DF_OK) return rc;
     df_msg_session_list l = {0, NULL};
     int n = 0;
-    for (df_session *s = c->srv->sessions; s; s = s->next) n += !s->closed;
+    /* a session that admits no observers is hidden from those who may not observe it */
+#define LISTED(s) (!(s)->closed && (df_access_rights(c, (s)) & DF_RIGHT_OBSERVE))
+    for (df_session *s = c->srv->sessions; s; s = s->next) n += LISTED(s);
     if (n > (int)DF_MAX_SESSIONS) n = (int)DF_MAX_SESSIONS;
     l.items = calloc((size_t)(n ? n : 1), sizeof *l.items);
     if (!l.items) return df_error_set(err, DF_ENOMEM, "out of memory");
     /* Oldest first (the registry list is newest first). */
     int i = n;
     for (df_session *s = c->srv->sessions; s && i > 0; s = s->next)
-        if (!s->closed) df_session_info_fill(s, &l.items[--i]);
+        if (LISTED(s)) df_session_info_fill(s, &l.items[--i]);
+#undef LISTED
     l.count = (uint32_t)n;
     df_req_reply_session_list(r, &l);
     free(l.items);
@@ -136,6 +140,8 @@ int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
                                 (unsigned long long)m.session_id);
         return df_error_set(err, DF_ENOTFOUND, "open_session: no session named '%s'", m.name);
     }
+    rc = df_access_require(r, s, DF_RIGHT_OBSERVE, err); /* observers off (membership.h) */
+    if (rc != DF_OK) return rc;
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(r, &info);

@@ -8,6 +8,7 @@
 #include "server/exec/pool.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
+#include "server/session/access.h"
 
 #define DF_STATS_MAX 128 /* entries this server reports (a device's: h_devices.c) */
 
@@ -30,6 +31,8 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
     if (m.session_id && !(s = df_session_find(srv, m.session_id)))
         return df_error_set(err, DF_ENOTFOUND, "stats: no session %llu",
                             (unsigned long long)m.session_id);
+    if (s && (rc = df_access_require(r, s, DF_RIGHT_OBSERVE, err)) != DF_OK)
+        return rc; /* a session that admits no observers shows its counters to members only */
     df_msg_stat items[DF_STATS_MAX];
     df_msg_stats st = {0, items};
     const df_stats *x = &srv->stats;
@@ -47,6 +50,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "auth_ok", (double)x->auth_ok);
         put(&st, "auth_failed", (double)x->auth_failed);
         put(&st, "auth_limited", (double)x->auth_limited);
+        put(&st, "join_ok", (double)x->join_ok);
+        put(&st, "join_failed", (double)x->join_failed);
+        put(&st, "join_limited", (double)x->join_limited);
         put(&st, "frames_in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);

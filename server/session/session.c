@@ -98,6 +98,16 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err)
 {
+    return df_session_create_as(srv, mesh, name, "", out, err);
+}
+
+_Static_assert((int)DF_SESSION_ACCESS_OPEN == (int)DF_ACCESS_MODE_OPEN &&
+               (int)DF_SESSION_ACCESS_KEY == (int)DF_ACCESS_MODE_KEY &&
+               (int)DF_SESSION_ACCESS_OWNER == (int)DF_ACCESS_MODE_OWNER, "config modes are access modes");
+
+int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const char *owner,
+                         df_session **out, df_error *err)
+{
     int max = srv->cfg.max_sessions < (int)DF_MAX_SESSIONS ? srv->cfg.max_sessions
                                                            : (int)DF_MAX_SESSIONS;
     if (srv->n_sessions >= max) {
@@ -159,9 +169,16 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
+    snprintf(s->owner, sizeof s->owner, "%s", owner ? owner : "");
+    df_membership_init(&s->acc, srv->cfg.access.session_access, srv->cfg.access.session_observers);
     s->next = srv->sessions;
     srv->sessions = s;
     srv->n_sessions++;
+    if (s->acc.mode == DF_ACCESS_MODE_KEY && df_membership_new_key(&s->acc, NULL, err) != DF_OK) {
+        int rc = err ? err->code : DF_EINTERNAL;
+        df_session_destroy(s);
+        return rc;
+    }
     if (srv->store_ops && srv->store_ops->session_created(srv, s, err) != DF_OK) {
         int rc = err ? err->code : DF_EIO;
         df_session_destroy(s); /* not durable: not created */
@@ -228,6 +245,7 @@ void df_session_destroy(df_session *s)
     df_cache_drop_kelvinlet(srv, s);
     df_history_free(&s->hist);
     df_resync_free(&s->resync);
+    df_membership_free(&s->acc);
     df_membudget *mb = df_server_mem(srv);
     df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);
     df_mem_release(mb, DF_MEM_RESYNC, s->resync_charged);

@@ -29,6 +29,7 @@
 #include "server/session/brush_state.h"
 #include "server/session/history.h"
 #include "server/session/resync.h"
+#include "server/session/membership.h"
 #include "server/server.h"
 
 #define DF_SESSION_NAME_MAX 256
@@ -128,7 +129,9 @@ typedef struct df_session {
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
     df_resync resync;            /* frames of the versions last broadcast (resync.h), loop thread */
     uint64_t resync_charged;     /* ... DF_MEM_RESYNC (resync.bytes at the last change) */
-    char owner[48];              /* principal of the creator (df_conn.principal), access.h */
+    char owner[DF_PRINCIPAL_MAX];/* principal of the creator (df_conn.principal), access.h;
+                                  * "" for a session of an older store (admins own it) */
+    df_membership acc;           /* access mode, observers, join key hash, members */
     uint64_t upload_bytes;       /* bytes of its uploaded file (quota_upload_mb), 0 for paths */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
     /* The session brush (brush_state.h), loop thread only: workers never read it. */
@@ -151,6 +154,15 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh);
  * DF_ELIMIT when full; the session is not created). On error the mesh is freed. */
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err);
+
+/* df_session_create for principal `owner` (may be ""; longer than DF_PRINCIPAL_MAX - 1 is
+ * cut): the session's owner and its access policy (membership.h: mode session_access and
+ * observers session_observers of the config; in key mode a fresh random join key that nobody
+ * learns until the owner rotates it) are set before the store writes the session, so they
+ * are durable with it. Errors: as df_session_create, and DF_EINTERNAL when no key could be
+ * made. */
+int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const char *owner,
+                         df_session **out, df_error *err);
 
 /* Finds a live (not closed) session by id / by name; NULL when absent. */
 df_session *df_session_find(df_server *srv, uint64_t id);

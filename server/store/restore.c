@@ -70,6 +70,31 @@ static int column_copy(sqlite3_stmt *q, int col, size_t len, void **out)
     return DF_OK;
 }
 
+/* The access columns 16..20 of restore_all's query (NULL: no access row, a session of a
+ * schema 1 store: the configured mode, no owner) into s. */
+static int restore_access(df_server *srv, df_session *s, sqlite3_stmt *q, df_error *err)
+{
+    if (sqlite3_column_type(q, 16) == SQLITE_NULL) return DF_OK; /* as df_session_create */
+    snprintf(s->owner, sizeof s->owner, "%s", (const char *)sqlite3_column_text(q, 16));
+    int mode = sqlite3_column_int(q, 17), obs = sqlite3_column_int(q, 18);
+    if (mode < DF_ACCESS_MODE_OPEN || mode > DF_ACCESS_MODE_OWNER || obs < 0 || obs > 1)
+        return df_error_set(err, DF_EFORMAT, "access row: mode %d observers %d", mode, obs);
+    df_membership_free(&s->acc);
+    df_membership_init(&s->acc, mode, obs);
+    if (sqlite3_column_type(q, 19) != SQLITE_NULL) {
+        if (sqlite3_column_bytes(q, 19) != DF_JOIN_HASH_BYTES)
+            return df_error_set(err, DF_EFORMAT, "access row: join key hash of %d bytes",
+                                sqlite3_column_bytes(q, 19));
+        memcpy(s->acc.key_hash, sqlite3_column_blob(q, 19), DF_JOIN_HASH_BYTES);
+        s->acc.has_key = 1;
+    }
+    const char *members = (const char *)sqlite3_column_text(q, 20);
+    (void)srv;
+    return members ? df_membership_members_parse(&s->acc, members,
+                                                 (size_t)sqlite3_column_bytes(q, 20), err)
+                   : DF_OK;
+}
+
 /* One session row (the columns of restore_all's query) restored into srv. */
 static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *err)
 {
@@ -125,6 +150,7 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         }
         memcpy(col == 14 ? s->cur : s->rest, sqlite3_column_blob(q, col), pb);
     }
+    if (rc == DF_OK) rc = restore_access(srv, s, q, &e);
     if (rc == DF_OK) rc = df_session_history_reset(s, &e); /* undo starts at the snapshot */
     if (rc == DF_OK) rc = replay(st, s, &n_changes, &e);
     if (rc == DF_OK && memcmp(s->hist.state, s->cur, 3 * (size_t)s->nv * sizeof(double)) != 0) {
@@ -172,8 +198,9 @@ static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
     if (sqlite3_step(q) == SQLITE_ROW) next = (uint64_t)sqlite3_column_int64(q, 0);
     sqlite3_finalize(q);
     if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, base, elems, faces,"
-                           " version, brush, brush_seq, handles, cur, rest FROM sessions"
-                           " ORDER BY id",
+                           " version, brush, brush_seq, handles, cur, rest, a.owner, a.mode,"
+                           " a.observers, a.key_hash, a.members FROM sessions"
+                           " LEFT JOIN access a ON a.session = sessions.id ORDER BY id",
                            -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the sessions", err);
     int rc = DF_OK, step;

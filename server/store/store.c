@@ -10,12 +10,20 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "server/log.h"
+
 struct df_store {
     sqlite3 *db;
     char *path;
     uint64_t log_bytes, log_changes;
     uint64_t snapshot_min;
 };
+
+/* Schema 2 added the access table (per-session access policy, membership.h). */
+#define DF_STORE_ACCESS_TABLE                                                                 \
+    "CREATE TABLE access(session INTEGER PRIMARY KEY, owner TEXT NOT NULL,"                  \
+    " mode INTEGER NOT NULL, observers INTEGER NOT NULL, key_hash BLOB,"                     \
+    " members TEXT NOT NULL DEFAULT '');"
 
 static const char k_schema[] =
     "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
@@ -28,6 +36,7 @@ static const char k_schema[] =
     " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
     " flags INTEGER NOT NULL, delta BLOB, aux BLOB);"
     "CREATE INDEX changes_session ON changes(session, id);"
+    DF_STORE_ACCESS_TABLE
     "INSERT INTO meta VALUES('next_session_id', 0);";
 
 int df_store_resolve_path(const char *cfg, const char *state_directory,
@@ -130,8 +139,9 @@ static int check_integrity(df_store *st, int64_t size, const char **checked, df_
     return DF_OK;
 }
 
-/* The schema check of an existing database; *fresh = 1 when it holds nothing (new file). */
-static int check_schema(df_store *st, int *fresh, df_error *err)
+/* The schema check of an existing database; *fresh = 1 when it holds nothing (new file),
+ * *old = its schema version when it is an older one this build migrates (else 0). */
+static int check_schema(df_store *st, int *fresh, int *old, df_error *err)
 {
     int64_t app, ver, tables;
     int rc;
@@ -140,15 +150,39 @@ static int check_schema(df_store *st, int *fresh, df_error *err)
         (rc = query_int(st, "SELECT count(*) FROM sqlite_master", &tables, err)) != DF_OK)
         return rc;
     *fresh = app == 0 && ver == 0 && tables == 0;
+    *old = 0;
     if (*fresh) return DF_OK;
     if (app != DF_STORE_APP_ID)
         return df_error_set(err, DF_EFORMAT, "store %s: not a deformd store (an SQLite database "
                             "of another application: application_id 0x%llx, %lld table(s)); "
                             "set another store path", st->path, (unsigned long long)app,
                             (long long)tables);
+    if (ver == 1 && app == DF_STORE_APP_ID) { /* migrated by df_store_open (migrate) */
+        *old = 1;
+        return DF_OK;
+    }
     if (ver != DF_STORE_SCHEMA)
         return df_error_set(err, DF_EFORMAT, "store %s: schema version %lld, this deformd "
-                            "knows version %d only", st->path, (long long)ver, DF_STORE_SCHEMA);
+                            "knows versions 1 (migrated) and %d only", st->path, (long long)ver,
+                            DF_STORE_SCHEMA);
+    return DF_OK;
+}
+
+/* Brings a schema `old` store to DF_STORE_SCHEMA in one transaction (nothing changes when it
+ * fails): 1 -> 2 adds the access table; its sessions have no row there (restore gives them
+ * the configured mode and no owner: admins own them). */
+static int migrate(df_store *st, int old, df_error *err)
+{
+    char sql[512];
+    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;%sPRAGMA user_version=%d;COMMIT",
+             DF_STORE_ACCESS_TABLE, DF_STORE_SCHEMA);
+    int rc = df_store_exec(st, sql, "migrating the schema", err);
+    if (rc != DF_OK) {
+        sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
+        return rc;
+    }
+    df_log(DF_LOG_INFO, "store %s: schema %d migrated to %d (per-session access)", st->path,
+           old, DF_STORE_SCHEMA);
     return DF_OK;
 }
 
@@ -232,11 +266,11 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
     } else {
         sqlite3_extended_result_codes(st->db, 0);
         sqlite3_busy_timeout(st->db, 0);
-        int fresh = 0;
+        int fresh = 0, old = 0;
         /* read-only checks first (the first read fails on a text file: SQLITE_NOTADB); a
          * refused file is never written to */
         if ((rc = df_store_exec(st, "PRAGMA locking_mode=EXCLUSIVE", "locking", err)) == DF_OK &&
-            (rc = check_schema(st, &fresh, err)) == DF_OK &&
+            (rc = check_schema(st, &fresh, &old, err)) == DF_OK &&
             (fresh || (rc = check_integrity(st, size, checked, err)) == DF_OK) &&
             (rc = configure(st, durability, max_mb, err)) == DF_OK) {
             if (fresh) {
@@ -246,6 +280,8 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
                          DF_STORE_SCHEMA);
                 rc = df_store_exec(st, sql, "creating the schema", err);
                 if (rc != DF_OK) sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
+            } else if (old) {
+                rc = migrate(st, old, err);
             }
         }
         /* take the exclusive lock now: a second daemon on this file is refused at start */

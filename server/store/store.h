@@ -18,11 +18,18 @@
  *                                                   the log's bytes since (journal.h)
  *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux)
  *                                                   the change log, in commit order (journal.h)
+ *   access(session INTEGER PRIMARY KEY, owner, mode, observers, key_hash, members)
+ *                                                   each session's owner and access policy
+ *                                                   (membership.h): mode 1..3, observers 0/1,
+ *                                                   the join key's SHA-256 (NULL: none) and
+ *                                                   the members, each principal ended by '\n'
+ * Schema 1 (no access table) is migrated to 2 at open, in one transaction; a session without
+ * an access row gets the configured mode and no owner (admins own it).
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
  *
  * Checks at open (df_store_open): an existing empty file, a file that is not SQLite (a text
  * file), an SQLite database of another application (foreign application_id, or tables without
- * ours), a schema version this build does not know, or an integrity failure refuse the open with
+ * ours), a schema version this build does not know (other than 1, which is migrated), or an integrity failure refuse the open with
  * a message naming the file; nothing is written to such a file. Integrity: PRAGMA
  * integrity_check for files up to DF_STORE_FULL_CHECK_BYTES, PRAGMA quick_check (no index
  * content cross-check) above. The store takes an exclusive lock (locking_mode EXCLUSIVE): a
@@ -43,7 +50,7 @@
 #include "core/common/df_error.h"
 
 #define DF_STORE_APP_ID 0x44665244            /* "DfRD" */
-#define DF_STORE_SCHEMA 1
+#define DF_STORE_SCHEMA 2                     /* 1 -> 2 (access table) is migrated at open */
 #define DF_STORE_FULL_CHECK_BYTES ((int64_t)256 << 20) /* integrity_check up to 256 MiB */
 #define DF_STORE_SNAPSHOT_MIN ((uint64_t)1 << 20) /* journal.h: snapshot once the log since the
                                                    * last one exceeds max(this, 2 x 24 x nv) */

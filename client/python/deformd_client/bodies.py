@@ -8,6 +8,7 @@ import struct
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Sequence, Tuple
 
+from . import access as ac
 from . import brush_state as bs
 from . import devices as dv
 from . import messages as m
@@ -279,6 +280,11 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "device_bind": (dv.decode_device_bind, lambda x: dv.encode_device_bind(*x)),
     "device_view": (dv.decode_device_view, lambda x: dv.encode_device_view(
         x.device_id, x.session_id, x.view_proj, x.viewport)),
+    # per-session access
+    "session_access": (ac.decode_session_access, lambda x: ac.encode_session_access(
+        x.session_id, x.mode, x.observers, x.flags)),
+    "join": (ac.decode_join, lambda x: ac.encode_join(*x)),
+    "access_info": (ac.decode_access_info, ac.encode_access_info),
 }
 
 

@@ -26,6 +26,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
+from . import access as ac
 from . import auth
 from . import brush_state as bs
 from . import devices as dv
@@ -686,6 +687,28 @@ class Client:
     def stats(self, session_id: int = 0) -> Dict[str, float]:
         """Daemon-wide (0) or one session's counters, key -> value."""
         return m.decode_stats(self._one(m.STATS, m.encode_stats_req(session_id)))
+
+    # ------------------------------------------------------------------ per-session access
+    def session_access(self, session_id: int, mode: Optional[str] = None,
+                       observers: Optional[bool] = None,
+                       new_key: bool = False) -> ac.AccessInfo:
+        """The session's access policy (PROTOCOL.md 4.34): with no change given, reads it (any
+        principal that may observe); mode "open" / "key" / "owner", observers True / False or
+        new_key=True change it (owner or admin only: EPERM otherwise). A new join key (new_key,
+        or a switch to key mode without one) comes back in .key (32 bytes) to the owner only."""
+        if mode is not None and mode not in ac.MODES:
+            raise ValueError("mode %r: open, key or owner" % (mode,))
+        payload = ac.encode_session_access(session_id, int(ac.MODES[mode]) if mode else 0,
+                                           ac.OBSERVERS[observers],
+                                           int(schema.AccessFlag.NEW_KEY) if new_key else 0)
+        return ac.decode_access_info(self._one(m.SESSION_ACCESS, payload))
+
+    def join(self, session_id: int, key: Union[bytes, str]) -> ac.AccessInfo:
+        """Becomes a member of a key-mode session with its join key (32 bytes, or 64 hex
+        digits); membership belongs to this connection's principal and outlasts it. A wrong key
+        is EPERM (and rate-limited per peer: ELIMIT)."""
+        raw = bytes.fromhex(key) if isinstance(key, str) else bytes(key)
+        return ac.decode_access_info(self._one(m.JOIN, ac.encode_join(session_id, raw)))
 
     # ------------------------------------------------------------------ devices (HID)
     def devices_list(self) -> List[dv.DeviceInfo]:

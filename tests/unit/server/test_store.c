@@ -208,6 +208,33 @@ static void test_refuses_foreign_and_unknown_version(void **state)
     assert_refused(p, DF_EFORMAT, "schema version");
 }
 
+/* A schema 1 store (the tables before the access table) is migrated to DF_STORE_SCHEMA at open:
+ * the access table appears and the other tables keep their rows; a second open finds
+ * schema 2 and changes nothing. */
+static void test_migrates_schema_1(void **state)
+{
+    (void)state;
+    char p[128];
+    path_of(p, sizeof p, "v1.db");
+    char sql[1024];
+    snprintf(sql, sizeof sql, "PRAGMA application_id=%d; PRAGMA user_version=1;"
+             "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
+             "CREATE TABLE sessions(id INTEGER PRIMARY KEY, name TEXT NOT NULL);"
+             "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL);"
+             "INSERT INTO meta VALUES('next_session_id', 7);", DF_STORE_APP_ID);
+    make_db(p, sql);
+    df_store *st;
+    df_error e;
+    assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_OK);
+    assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA);
+    assert_int_equal(pragma(st, "SELECT count(*) FROM access"), 0);
+    assert_int_equal(pragma(st, "SELECT value FROM meta WHERE key = 'next_session_id'"), 7);
+    df_store_close(st);
+    assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_OK);
+    assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA); /* stays */
+    df_store_close(st);
+}
+
 static void test_refuses_corrupt(void **state)
 {
     (void)state;
@@ -272,6 +299,7 @@ int main(void)
         cmocka_unit_test(test_refuses_empty_and_text),
         cmocka_unit_test(test_refuses_foreign_and_unknown_version),
         cmocka_unit_test(test_refuses_corrupt),
+        cmocka_unit_test(test_migrates_schema_1),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
