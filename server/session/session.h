@@ -183,7 +183,7 @@ void df_stroke_free(df_stroke *st);
 /* Unlinks and frees the stroke of `conn_id` (no-op when none). */
 void df_session_drop_stroke(df_session *s, uint64_t conn_id);
 
-/* Commits s->cur as a new undo step (loop thread) within the history budget: the smaller of
+/* Commits s->cur as a new (XOR) undo step (loop thread) within the history budget: the smaller of
  * history_max_mb and what the memory budget has left; the oldest steps are dropped to fit
  * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
 int df_session_history_commit(df_session *s, df_error *err);
