@@ -12,7 +12,7 @@
  * The history keeps one full copy of the current state (`state`, n doubles). So that states
  * below a RECIPE step stay reachable it keeps CHECKPOINTS (history_ckpt.c) as soon as it holds a
  * RECIPE step: state indices ck[0] < ... < ck[nck-1], a full copy of the newest one (the
- * ANCHOR) and between consecutive ones a lossless packed link (server/store/codec.h delta
+ * ANCHOR) and between consecutive ones a lossless packed link (delta.h delta
  * layout, taken from the newer to the older state). Every RECIPE step is at or above ck[0].
  * State j is reached from the current state when only XOR steps lie between (or forwards, for
  * redo), else from the newest checkpoint <= j (the anchor, or the anchor with links applied

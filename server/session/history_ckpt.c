@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "server/session/stroke_recipe.h" /* df_positions_checksum only */
-#include "server/store/codec.h"           /* the packed delta layout of links */
+#include "server/session/delta.h"        /* the packed delta layout of links */
 
 size_t hi_step_bytes(const df_history_step *s)
 {
