@@ -31,7 +31,8 @@
  * to cur + 1; a commit after undos drops the redo tail. Bounds: at most max_states - 1 steps,
  * and at most `max_bytes` held in total; beyond either the oldest steps are dropped (counted in
  * `dropped`; with several checkpoints the whole oldest checkpoint segment goes at once; with one
- * checkpoint at state 0 the anchor is moved up one step, which replays a RECIPE step once). A
+ * checkpoint at state 0 the anchor is moved up one step, which replays a RECIPE step once on
+ * the calling thread, unless no step would be left below the current state). A
  * replay whose checksum differs is never installed: the plan fails with DF_EINTERNAL and
  * df_history_repair drops the steps it made unreachable (counted). Version numbers are NOT kept
  * here: undo/redo are broadcast as new versions by the session. */

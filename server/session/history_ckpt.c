@@ -215,6 +215,8 @@ int hi_drop_oldest(df_history *h)
         shift_steps(h, 1);
     } else if (h->nck >= 2) {      /* the oldest checkpoint segment */
         hi_drop_prefix(h, h->ck[1]);
+    } else if (h->cur == 1) {      /* nothing left below: the current state is the anchor */
+        hi_drop_prefix(h, 1);
     } else {                       /* the anchor is state 0: move it up one step */
         double *tmp = malloc(h->n * sizeof *tmp);
         uint64_t replays = 0;
