@@ -42,6 +42,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     if (hist > DF_CONFIG_HISTORY_MAX_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MAX_DEFAULT_MB;
     cfg->history_max_mb = (int)hist;
     cfg->resync_ring_mb = DF_CONFIG_DEFAULT_RESYNC_RING_MB;
+    cfg->history_replay_ms = DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS;
     uint64_t mem = ram_mb ? ram_mb / DF_CONFIG_MEMORY_RAM_DIVISOR : DF_CONFIG_MEMORY_UNKNOWN_RAM_MB;
     if (mem < DF_CONFIG_MEMORY_MIN_DEFAULT_MB) mem = DF_CONFIG_MEMORY_MIN_DEFAULT_MB;
     if (mem > DF_CONFIG_MAX_MEMORY_MB) mem = DF_CONFIG_MAX_MEMORY_MB;
@@ -195,6 +196,8 @@ static const int_key k_int_keys[] = {
     {"history_max_mb", offsetof(df_server_config, history_max_mb), 0, DF_CONFIG_MAX_HISTORY_MB},
     {"resync_ring_mb", offsetof(df_server_config, resync_ring_mb), 0,
      DF_CONFIG_MAX_RESYNC_RING_MB},
+    {"history_replay_ms", offsetof(df_server_config, history_replay_ms), 0,
+     DF_CONFIG_MAX_HISTORY_REPLAY_MS},
     {"memory_max_mb", offsetof(df_server_config, memory_max_mb), DF_CONFIG_MIN_MEMORY_MB,
      DF_CONFIG_MAX_MEMORY_MB},
     {"handshake_timeout_s", offsetof(df_server_config, handshake_timeout_s), 0,
@@ -469,9 +472,9 @@ static const char k_usage[] =
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
     "                      max_sessions, threads, spin_us, inline_us, cursor_hz, shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
-    "                      resync_ring_mb, memory_max_mb, tcp_insecure, socket_mode,\n"
-    "                      socket_group,\n"
-    "                      handshake_timeout_s, idle_timeout_s, hid.<class>.<key> with\n"
+    "                      history_replay_ms, resync_ring_mb, memory_max_mb, tcp_insecure,\n"
+    "                      socket_mode, socket_group, handshake_timeout_s, idle_timeout_s,\n"
+    "                      hid.<class>.<key> with\n"
     "                      class knob|3d-mouse|pen or a VID:PID like 046d:c626);\n"
     "                      command-line options override the file\n"
     "  --store PATH        durable session store (SQLite; default $STATE_DIRECTORY/deformd.db\n"

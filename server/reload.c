@@ -43,6 +43,7 @@ static void note_restart(const df_server_config *cur, const df_server_config *n)
     DF_RESTART_KEY(cur->uploads_max_mb != n->uploads_max_mb, "uploads_max_mb");
     DF_RESTART_KEY(cur->history_max_mb != n->history_max_mb, "history_max_mb");
     DF_RESTART_KEY(cur->resync_ring_mb != n->resync_ring_mb, "resync_ring_mb");
+    DF_RESTART_KEY(cur->history_replay_ms != n->history_replay_ms, "history_replay_ms");
     DF_RESTART_KEY(cur->memory_max_mb != n->memory_max_mb, "memory_max_mb");
     DF_RESTART_KEY(cur->hid_on != n->hid_on, "hid");
     DF_RESTART_KEY(cur->n_hid_replay != n->n_hid_replay ||

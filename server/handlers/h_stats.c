@@ -140,6 +140,12 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "redo_depth", df_history_can_redo(&s->hist));
         put(&st, "history_bytes", (double)df_history_bytes(&s->hist));
         put(&st, "history_steps_dropped", (double)s->hist.dropped);
+        put(&st, "history_undo_bytes", (double)df_history_undo_bytes(&s->hist));
+        put(&st, "history_recipe_steps", df_history_steps_of(&s->hist, DF_HISTORY_RECIPE));
+        put(&st, "history_xor_steps", df_history_steps_of(&s->hist, DF_HISTORY_XOR));
+        put(&st, "history_checkpoints", s->hist.nck);
+        put(&st, "history_replays", (double)s->hist.replays);
+        put(&st, "history_replay_mismatches", (double)s->hist.mismatches);
         put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged +
                                           s->resync_charged));
         put(&st, "resync_ring_bytes", (double)s->resync.bytes);

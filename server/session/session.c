@@ -9,6 +9,7 @@
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/session/meshload.h"
+#include "server/session/stroke_recipe.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
 #include "server/session/stream.h"
@@ -19,6 +20,27 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh)
     return (uint64_t)(mesh->nv > 0 ? mesh->nv : 0) * DF_SESSION_BYTES_PER_VERTEX +
            (uint64_t)(mesh->ne > 0 ? mesh->ne : 0) * (uint64_t)es * sizeof(int32_t) +
            (uint64_t)(mesh->nf > 0 ? mesh->nf : 0) * 3 * sizeof(int32_t) + sizeof(df_session);
+}
+
+/* The history's replay of a RECIPE step (history.h): a stroke recipe (stroke_recipe.h)
+ * recomputed on this session's mesh, with the server's thread count. Any thread: reads only
+ * fields fixed at creation. */
+static int replay_recipe(void *ctx, const uint8_t *blob, size_t len, const double *from,
+                         double *to, df_error *err)
+{
+    const df_session *s = ctx;
+    df_stroke_recipe r;
+    int rc = df_stroke_recipe_decode(blob, len, &r, err);
+    if (rc != DF_OK) return rc;
+    rc = df_stroke_recipe_replay(&r, from, s->nv, s->mesh.planar, s->srv->cfg.threads, to, err);
+    df_stroke_recipe_free(&r);
+    return rc;
+}
+
+static void history_set_replay(df_session *s)
+{
+    df_history_set_replay(&s->hist, replay_recipe, s,
+                          (uint64_t)s->srv->cfg.history_replay_ms * 1000000u);
 }
 
 /* Recharges the history's bytes after a change (it bounded itself against df_mem_room). */
@@ -155,6 +177,7 @@ int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const 
                             mesh->nv);
     }
     s->srv = srv;
+    history_set_replay(s);
     s->mem_bytes = est;
     s->hist_charged = state;
     history_recharge(s);
@@ -388,8 +411,13 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
 
 int df_session_history_commit(df_session *s, df_error *err)
 {
-    /* undo steps come before resync rings when the memory budget is short: make room for a
-     * step (at most one full state) out of the rings first */
+    return df_session_history_commit_recipe(s, NULL, 0, err);
+}
+
+/* Undo steps come before resync rings when the memory budget is short: makes room for a step
+ * (at most one full state) out of the rings first. */
+static void history_room(df_session *s)
+{
     uint64_t per = (uint64_t)s->srv->cfg.history_max_mb << 20;
     uint64_t room = df_mem_room(df_server_mem(s->srv), DF_MEM_HISTORY) + s->hist_charged;
     uint64_t step = 3 * (uint64_t)s->nv * sizeof(double);
@@ -398,12 +426,41 @@ int df_session_history_commit(df_session *s, df_error *err)
         uint64_t want = step - free_room;
         reclaim_resync(s->srv, per - room < want ? per - room : want);
     }
+}
+
+int df_session_history_commit_recipe(df_session *s, const uint8_t *blob, size_t len,
+                                     df_error *err)
+{
+    history_room(s);
     uint64_t d0 = s->hist.dropped;
     df_history_set_max_bytes(&s->hist, history_budget(s));
-    int rc = df_history_commit(&s->hist, s->cur, err);
+    int rc = df_history_commit_recipe(&s->hist, s->cur, blob, len, err);
     s->srv->history_dropped += s->hist.dropped - d0;
     history_recharge(s);
     return rc;
+}
+
+int df_session_history_install(df_session *s, df_history_plan *plan, df_error *err)
+{
+    history_room(s);
+    uint64_t d0 = s->hist.dropped;
+    int rc = df_history_install(&s->hist, plan, s->cur, err);
+    if (rc == DF_OK) df_history_set_max_bytes(&s->hist, history_budget(s));
+    s->srv->history_dropped += s->hist.dropped - d0;
+    history_recharge(s);
+    return rc;
+}
+
+void df_session_history_repair(df_session *s, const df_history_plan *plan)
+{
+    uint64_t d0 = s->hist.dropped;
+    int n = df_history_repair(&s->hist, plan);
+    if (!n && !plan->mismatch) return;
+    df_log(DF_LOG_ERROR, "session %llu: undo history: a recorded stroke no longer replays to "
+           "the state it recorded; %d unreachable step(s) dropped",
+           (unsigned long long)s->id, n);
+    s->srv->history_dropped += s->hist.dropped - d0;
+    history_recharge(s);
 }
 
 void df_session_resync_record(df_session *s, uint64_t version, const df_frames *frames)
@@ -426,8 +483,11 @@ int df_session_history_reset(df_session *s, df_error *err)
     int rc = df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, err);
     if (rc != DF_OK) return rc;
     h.dropped = s->hist.dropped; /* the session's count survives a reset */
+    h.replays = s->hist.replays; /* and its replay counters */
+    h.mismatches = s->hist.mismatches;
     df_history_free(&s->hist);
     s->hist = h;
+    history_set_replay(s);
     df_history_set_max_bytes(&s->hist, history_budget(s));
     history_recharge(s);
     return DF_OK;

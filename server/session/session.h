@@ -198,10 +198,25 @@ void df_stroke_free(df_stroke *st);
 /* Unlinks and frees the stroke of `conn_id` (no-op when none). */
 void df_session_drop_stroke(df_session *s, uint64_t conn_id);
 
-/* Commits s->cur as a new undo step (loop thread) within the history budget: the smaller of
+/* Commits s->cur as a new (XOR) undo step (loop thread) within the history budget: the smaller of
  * history_max_mb and what the memory budget has left; the oldest steps are dropped to fit
  * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
 int df_session_history_commit(df_session *s, df_error *err);
+
+/* As df_session_history_commit, with the recipe `blob` (len bytes, stroke_recipe.h) that
+ * should turn the history's current state into s->cur: replayed on the calling thread, a
+ * RECIPE step when it reproduces s->cur bitwise, else an XOR step (history.h). For restore. */
+int df_session_history_commit_recipe(df_session *s, const uint8_t *blob, size_t len,
+                                     df_error *err);
+
+/* Installs a history plan a job's work made (df_history_plan_commit / _move, target s->cur,
+ * already swapped in), then bounds the history to its budget as df_session_history_commit.
+ * Loop thread. Errors: df_history_install's DF_ESTATE (a stale plan: history unchanged). */
+int df_session_history_install(df_session *s, df_history_plan *plan, df_error *err);
+
+/* After a plan that failed with a replay mismatch: drops the unreachable steps
+ * (df_history_repair), logs it and recharges. No-op for other plans. Loop thread. */
+void df_session_history_repair(df_session *s, const df_history_plan *plan);
 
 /* Charges `bytes` of `kind` to the memory budget (df_mem_charge). When only the total
  * (memory_max_mb) is short, the undo history of idle sessions (no running job) gives way first:

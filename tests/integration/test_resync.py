@@ -301,15 +301,24 @@ def test_deformctl_watch_from_version(make_daemon):
 def test_undo_history_comes_before_the_ring_under_memory_pressure(make_daemon):
     """With a small memory budget the undo history keeps as many steps as it would with no ring
     at all (resync_ring_mb = 0, computed by a second daemon); the ring gets what is left."""
-    depth = {}
+    depth, strokes = {}, None
     for ring in (32, 0):
-        d = make_daemon("memory_max_mb = 16\nresync_ring_mb = %d\n" % ring)
+        # history_replay_ms = 0: a checkpoint link per stroke, so the history fills the budget
+        d = make_daemon("memory_max_mb = 16\nresync_ring_mb = %d\nhistory_replay_ms = 0\n"
+                        % ring)
         with d.unix_client() as b:
             sid = b.load_mesh(grid_obj(150, 150), fmt=".obj", name="tight").session_id
             X = b.get_mesh(sid).positions
-            for k in range(24):
-                b.stroke(sid, Brush(type="grab", center=X[900 * k:900 * k + 3],
-                                    move=(0, 0, 0.01), radius=0.5))
+            # strokes until the budget drops a step (the first daemon), the same count after
+            k = 0
+            while k < (strokes or 200):
+                c = 3 * ((900 * k + 37 * (k // 25)) % (150 * 150))
+                b.stroke(sid, Brush(type="grab", center=X[c:c + 3], move=(0, 0, 0.01),
+                                    radius=0.5))
+                k += 1
+                if strokes is None and b.stats(sid)["history_steps_dropped"] > 0:
+                    break
+            strokes = k
             s, g = b.stats(sid), b.stats()
             depth[ring] = (s["undo_depth"], s["history_steps_dropped"])
             assert s["history_steps_dropped"] > 0, s        # the budget binds the history
