@@ -99,9 +99,14 @@ BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
+# The Blender add-on (client/blender/deformd_blender) as an installable zip with the Python client
+# package (client/python/deformd_client) vendored in as deformd_blender/deformd_client: copied
+# here by the build, never kept as a copy in the tree.
+ADDON_SRC  := $(shell find client/blender/deformd_blender client/python/deformd_client -name '*.py' 2>/dev/null)
+ADDON_ZIP  := $(if $(wildcard client/blender/deformd_blender),$(BUILD)/blender/deformd_blender.zip)
 
 .PHONY: all deps test unit bench asan tsan tsan-build fuzz fuzz-build run install uninstall clean
-all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
+all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN) $(ADDON_ZIP)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need (hidapi,
 # libusb for the HID device sources; SQLite for the durable-store work, nothing links it yet;
@@ -118,7 +123,15 @@ deps:
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
-             libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev
+             libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev \
+            blender python3-numpy xvfb xauth
+
+$(BUILD)/blender/deformd_blender.zip: $(ADDON_SRC)
+	rm -rf $(BUILD)/blender/stage && mkdir -p $(BUILD)/blender/stage
+	cp -r client/blender/deformd_blender $(BUILD)/blender/stage/
+	cp -r client/python/deformd_client $(BUILD)/blender/stage/deformd_blender/
+	find $(BUILD)/blender/stage -name __pycache__ -prune -exec rm -rf {} +
+	rm -f $@ && cd $(BUILD)/blender/stage && $(PYTHON) -m zipfile -c ../$(notdir $@) deformd_blender
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)

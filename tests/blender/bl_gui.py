@@ -1,0 +1,166 @@
+"""GUI case (under xvfb-run, software GL, Blender started with --enable-event-simulate and a
+user config whose userpref.blend turns the splash off): the modal sculpt operator driven by
+simulated mouse events, the 60 Hz timer applying a second user's stroke, the large-mesh overlay
+path, screenshots before and after. Steps run from a bpy.app.timers generator so that Blender's
+event loop processes each simulated event and redraws in between. Results go to --out as JSON;
+Blender exits 0 only when every check passed."""
+import json
+import os
+import sys
+import traceback
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bl_common as bc  # noqa: E402
+
+A = bc.args()
+STEP_S = 0.05
+MAX_WAIT_STEPS = 400
+R = {"passed": False}
+
+
+def view3d():
+    for w in bpy.context.window_manager.windows:
+        for a in w.screen.areas:
+            if a.type == "VIEW_3D":
+                for r in a.regions:
+                    if r.type == "WINDOW":
+                        return w, a, r
+    raise AssertionError("no 3D view")
+
+
+def shot(name):
+    w, a, r = view3d()
+    path = os.path.join(os.path.dirname(A.out), name + ".png")
+    with bpy.context.temp_override(window=w, area=a, region=r):
+        bpy.ops.screen.screenshot(filepath=path)
+    R[name] = path
+    return path
+
+
+def pixels(path):
+    img = bpy.data.images.load(path)
+    px = np.empty(img.size[0] * img.size[1] * 4, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    bpy.data.images.remove(img)
+    return px
+
+
+def drag(w, x0, y0, dx, dy, n, ctrl=False):
+    """Yields between simulated events: press at (x0, y0), n moves to (x0+dx, y0+dy), release."""
+    w.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x0, y=y0)
+    yield
+    w.event_simulate(type="LEFTMOUSE", value="PRESS", x=x0, y=y0, ctrl=ctrl)
+    yield
+    for k in range(1, n + 1):
+        w.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x0 + dx * k // n,
+                         y=y0 + dy * k // n, ctrl=ctrl)
+        yield
+    w.event_simulate(type="LEFTMOUSE", value="RELEASE", x=x0 + dx, y=y0 + dy, ctrl=ctrl)
+    yield
+
+
+def steps():
+    mod = bc.install(A.zip)
+    st = bc.state(mod)
+    bpy.ops.object.select_all(action="SELECT")
+    bpy.ops.object.delete()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)
+    obj = bpy.context.active_object
+    obj.scale = (1.5, 1.0, 1.0)
+    bpy.ops.deformd.connect(address="unix:" + A.socket)
+    bpy.ops.deformd.share()
+    sid = int(obj["deformd_session"])
+    R["session"] = sid
+    c2 = bc.client(mod, A.socket)
+    yield
+    yield
+    before_px = pixels(shot("before"))
+    rest = bc.positions(obj).copy()
+    w, a, r = view3d()
+    cx, cy = r.x + r.width // 2, r.y + r.height // 2
+    with bpy.context.temp_override(window=w, area=a, region=r):
+        assert bpy.ops.deformd.sculpt("INVOKE_DEFAULT") == {"RUNNING_MODAL"}
+    yield
+    ticks0 = st.ticks
+    yield from drag(w, cx, cy, 120, 80, 12)                  # a grab stroke
+    yield from drag(w, cx - 40, cy + 30, 90, 0, 8, ctrl=True)  # Ctrl: twist
+    w.event_simulate(type="ESC", value="PRESS", x=cx, y=cy)
+    yield
+    w.event_simulate(type="ESC", value="RELEASE", x=cx, y=cy)
+    yield
+    # the modal strokes: Blender shows exactly the daemon's positions
+    for _ in range(MAX_WAIT_STEPS):
+        if st.mirrors[sid].version == c2.get_mesh(sid).version and not st.mirrors[sid].dirty:
+            break
+        yield
+    mine = bc.positions(obj)
+    assert np.array_equal(mine, bc.daemon_positions(c2, sid))
+    assert not np.array_equal(mine, rest)
+    R["versions"] = st.mirrors[sid].version
+    R["max_displacement"] = float(np.abs(mine - rest).max())
+    # a second user's stroke arrives through the 60 Hz timer alone (no sync call here)
+    ack = c2.stroke(sid, mod.deformd_client.Brush(type="grab", center=(0.0, -1.0, 0.0),
+                                                  move=(0.0, -0.3, 0.0), radius=0.5, nu=0.4))
+    for _ in range(MAX_WAIT_STEPS):
+        if st.mirrors[sid].version >= ack.version and not st.mirrors[sid].dirty:
+            break
+        yield
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+    R["timer_ticks"] = st.ticks - ticks0
+    # large-mesh path: overlay while the stream runs, the mesh written when it pauses
+    mod.prefs.get().overlay_threshold = 100
+    mod.prefs.get().write_interval = 60.0
+    draws0 = mod.overlay.STATS["draws"]
+    c2.brush_begin(sid, mod.deformd_client.Brush(type="grab", center=(0.0, 0.0, 1.0),
+                                                 radius=0.5))
+    ack = c2.brush_update(sid, (0.0, 0.0, 0.2))
+    shown = False
+    for _ in range(MAX_WAIT_STEPS):
+        if st.mirrors[sid].version >= ack.version and mod.overlay.STATS["draws"] > draws0:
+            shown = True
+            break
+        yield
+    assert shown, "the overlay was not drawn"
+    c2.brush_end(sid)
+    for _ in range(MAX_WAIT_STEPS):                          # the stream pauses: written
+        if not st.mirrors[sid].dirty:
+            break
+        yield
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+    assert not mod.overlay.shown()
+    yield
+    yield
+    after_px = pixels(shot("after"))
+    R["pixels_changed"] = int(np.count_nonzero(np.abs(after_px - before_px) > 1e-3))
+    R["updates_sent"] = mod.modal.STATS["updates_sent"]
+    R["blender_positions_hex"] = bc.positions(obj).tobytes().hex()
+    R["passed"] = R["pixels_changed"] > 0
+
+
+def run():
+    gen = steps()
+
+    def step():
+        try:
+            next(gen)
+            return STEP_S
+        except StopIteration:
+            finish(0 if R["passed"] else 1)
+        except Exception:
+            traceback.print_exc()
+            finish(1)
+        return None
+    bpy.app.timers.register(step, first_interval=0.5)
+
+
+def finish(code):
+    bc.write_out(A.out, **R)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
+run()
