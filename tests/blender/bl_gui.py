@@ -49,17 +49,15 @@ def pixels(path):
 
 
 def drag(w, x0, y0, dx, dy, n, ctrl=False):
-    """Yields between simulated events: press at (x0, y0), n moves to (x0+dx, y0+dy), release."""
+    """Queues the events of one drag: press at (x0, y0), n moves to (x0+dx, y0+dy), release.
+    Blender's loop hands them to the modal operator in order (moves that come while an update is
+    in flight are coalesced)."""
     w.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x0, y=y0)
-    yield
     w.event_simulate(type="LEFTMOUSE", value="PRESS", x=x0, y=y0, ctrl=ctrl)
-    yield
     for k in range(1, n + 1):
         w.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x0 + dx * k // n,
                          y=y0 + dy * k // n, ctrl=ctrl)
-        yield
     w.event_simulate(type="LEFTMOUSE", value="RELEASE", x=x0 + dx, y=y0 + dy, ctrl=ctrl)
-    yield
 
 
 def steps():
@@ -69,13 +67,13 @@ def steps():
     bpy.ops.object.delete()
     bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)
     obj = bpy.context.active_object
-    obj.scale = (1.5, 1.0, 1.0)
+    obj.scale = (4.5, 3.0, 3.0)                  # object space != world space
+    mod.prefs.get().brush_pixels = 20
     bpy.ops.deformd.connect(address="unix:" + A.socket)
     bpy.ops.deformd.share()
     sid = int(obj["deformd_session"])
     R["session"] = sid
     c2 = bc.client(mod, A.socket)
-    yield
     yield
     before_px = pixels(shot("before"))
     rest = bc.positions(obj).copy()
@@ -85,10 +83,10 @@ def steps():
         assert bpy.ops.deformd.sculpt("INVOKE_DEFAULT") == {"RUNNING_MODAL"}
     yield
     ticks0 = st.ticks
-    yield from drag(w, cx, cy, 120, 80, 12)                  # a grab stroke
-    yield from drag(w, cx - 40, cy + 30, 90, 0, 8, ctrl=True)  # Ctrl: twist
-    w.event_simulate(type="ESC", value="PRESS", x=cx, y=cy)
+    drag(w, cx, cy, 60, 40, 12)                              # a grab stroke
     yield
+    drag(w, cx - 20, cy + 15, 45, 0, 8, ctrl=True)           # Ctrl: twist
+    w.event_simulate(type="ESC", value="PRESS", x=cx, y=cy)
     w.event_simulate(type="ESC", value="RELEASE", x=cx, y=cy)
     yield
     # the modal strokes: Blender shows exactly the daemon's positions
@@ -103,7 +101,7 @@ def steps():
     R["max_displacement"] = float(np.abs(mine - rest).max())
     # a second user's stroke arrives through the 60 Hz timer alone (no sync call here)
     ack = c2.stroke(sid, mod.deformd_client.Brush(type="grab", center=(0.0, -1.0, 0.0),
-                                                  move=(0.0, -0.3, 0.0), radius=0.5, nu=0.4))
+                                                  move=(0.0, -0.1, 0.0), radius=0.5, nu=0.4))
     for _ in range(MAX_WAIT_STEPS):
         if st.mirrors[sid].version >= ack.version and not st.mirrors[sid].dirty:
             break
@@ -146,6 +144,7 @@ def run():
     def step():
         try:
             next(gen)
+            R["steps"] = R.get("steps", 0) + 1
             return STEP_S
         except StopIteration:
             finish(0 if R["passed"] else 1)

@@ -107,8 +107,9 @@ def test_blender_gui_modal_sculpt(tmp_path, make_daemon):
     assert os.path.isfile(os.path.join(env["BLENDER_USER_CONFIG"], "userpref.blend"))
     env["LIBGL_ALWAYS_SOFTWARE"] = "1"
     out = tmp_path / "gui.json"
-    log = run_blender(["xvfb-run", "-a", "-s", "-screen 0 1280x800x24", "blender",
-                       "--enable-event-simulate", "--python-exit-code", "1"], env, "bl_gui.py",
+    log = run_blender(["xvfb-run", "-a", "-s", "-screen 0 800x600x24", "blender",
+                       "--window-geometry", "0", "0", "640", "480", "--enable-event-simulate",
+                       "--python-exit-code", "1"], env, "bl_gui.py",
                       ["--socket", d.socket_path, "--out", str(out)])
     r = json.loads(out.read_text())
     assert r["passed"], log[-4000:]
