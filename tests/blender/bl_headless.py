@@ -167,6 +167,59 @@ def case_join_reconnect():
     assert obj.name == bpy.context.active_object.name
 
 
+def case_handles():
+    """Handle-drag mode's operators: the selected vertices become the handles (energy, w, s
+    from the panel); a move by an offset solves on the daemon and Blender shows its result."""
+    mod = bc.install(A.zip)
+    obj, sid = _shared(mod)
+    c2 = bc.client(mod, A.socket)
+    sel = np.zeros(len(obj.data.vertices), dtype=bool)
+    sel[[0, 24, 600, 624, 312]] = True                     # corners and centre of the 25x25
+    obj.data.vertices.foreach_set("select", sel)
+    wm = bpy.context.window_manager.deformd
+    wm.handle_energy, wm.handle_w, wm.handle_s = "arap", 2e-4, 0.02
+    bpy.ops.deformd.handles_set()
+    hs = c2.get_handles(sid)
+    assert sorted(hs.handles) == [0, 24, 312, 600, 624]
+    assert hs.energy == "arap"                              # panel values are float32
+    assert hs.params.w == float(np.float32(2e-4)) and hs.params.s == float(np.float32(0.02))
+    before = bc.positions(obj).copy()
+    bpy.ops.deformd.handles_move(offset=(0.0, 0.0, 0.2))
+    after = bc.positions(obj)
+    assert np.array_equal(after, bc.daemon_positions(c2, sid))
+    dz = after[312, 2] - before[312, 2]
+    assert dz > 0.1, dz                                     # the handle followed its target
+    obj.data.vertices.foreach_set("select", np.zeros(len(sel), dtype=bool))
+    t = bc.report_of(bpy.ops.deformd.handles_set)
+    assert "select the handle vertices" in t, t
+
+
+def case_elastic():
+    """The active Elastic Deform brush -> the session brush (brush_map)."""
+    mod = bc.install(A.zip)
+    obj, sid = _shared(mod)
+    c2 = bc.client(mod, A.socket)
+    b = bpy.data.brushes.new("elastic", mode="SCULPT")
+    b.sculpt_tool = "ELASTIC_DEFORM"
+    b.elastic_deform_type = "GRAB_TRISCALE"
+    b.elastic_deform_volume_preservation = 0.8
+    b.strength = 0.7
+    bpy.context.scene.tool_settings.sculpt.brush = b
+    bpy.ops.deformd.brush_from_elastic()
+    got = c2.brush_state_get(sid)
+    assert (got.type, got.falloff, got.ratio, got.nu) == ("grab", 3, 2.0, 0.5)
+    assert got.strength == float(np.float32(0.7))
+    assert bpy.context.window_manager.deformd.brush_falloff == 3
+    b.elastic_deform_type = "TWIST"
+    b.elastic_deform_volume_preservation = 0.25
+    bpy.ops.deformd.brush_from_elastic()
+    got = c2.brush_state_get(sid)
+    assert (got.type, got.falloff) == ("twist", 1) and got.nu == float(np.float32(0.25))
+    b.sculpt_tool = "DRAW"
+    t = bc.report_of(bpy.ops.deformd.brush_from_elastic)
+    assert "not an Elastic Deform brush" in t, t
+
+
 def case_errors():
     mod = bc.install(A.zip)
     t = bc.report_of(bpy.ops.deformd.connect, address="unix:/nonexistent/deformd.sock")

@@ -3,8 +3,8 @@
 
 Blender elastic_deform_type    deformd brush          falloff   ratio
   GRAB                          grab                   1         (2)
-  BISCALE_GRAB                  grab                   2         2   (Blender's radii r, 2r)
-  TRISCALE_GRAB                 grab                   3         2   (r, 2r, 4r)
+  GRAB_BISCALE                  grab                   2         2   (Blender's radii r, 2r)
+  GRAB_TRISCALE                 grab                   3         2   (r, 2r, 4r)
   SCALE                         scale                  1
   TWIST                         twist                  1
 elastic_deform_volume_preservation -> nu, clamped to 0.5 (Blender allows up to 0.9; nu > 0.5 is
@@ -17,7 +17,7 @@ from typing import Dict
 
 NU_MAX = 0.5
 ELASTIC_TYPES = {
-    "GRAB": ("grab", 1), "BISCALE_GRAB": ("grab", 2), "TRISCALE_GRAB": ("grab", 3),
+    "GRAB": ("grab", 1), "GRAB_BISCALE": ("grab", 2), "GRAB_TRISCALE": ("grab", 3),
     "SCALE": ("scale", 1), "TWIST": ("twist", 1),
 }
 MULTISCALE_RATIO = 2.0
