@@ -4,7 +4,6 @@ simulated mouse events, the 60 Hz timer applying a second user's stroke, the lar
 path, screenshots before and after. Steps run from a bpy.app.timers generator so that Blender's
 event loop processes each simulated event and redraws in between. Results go to --out as JSON;
 Blender exits 0 only when every check passed."""
-import json
 import os
 import sys
 import traceback
