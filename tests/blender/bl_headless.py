@@ -184,7 +184,7 @@ def case_handles():
     assert hs.energy == "arap"                              # panel values are float32
     assert hs.params.w == float(np.float32(2e-4)) and hs.params.s == float(np.float32(0.02))
     before = bc.positions(obj).copy()
-    bpy.ops.deformd.handles_move(offset=(0.0, 0.0, 0.2))
+    bpy.ops.deformd.handles_move(offset=(0.0, 0.0, 0.2), max_iters=100)
     after = bc.positions(obj)
     assert np.array_equal(after, bc.daemon_positions(c2, sid))
     dz = after[312, 2] - before[312, 2]

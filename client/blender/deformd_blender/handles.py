@@ -11,7 +11,7 @@ from mathutils import Vector
 from . import sync
 from .connection import CLIENT_ERRORS, STATE
 from .dc import MsgType, messages
-from .operators import need_session
+from .operators import MOVE_TIMEOUT_S, need_session
 
 TICK_S = 1.0 / 60.0
 
@@ -92,11 +92,11 @@ class DEFORMD_OT_handle_drag(bpy.types.Operator):
         if event.type == "LEFTMOUSE" and event.value == "RELEASE" and self.dragging:
             self.pending = self._targets(context, event)
             if self.rid:
-                STATE.client.wait_reply(self.rid)
+                STATE.client.wait_reply(self.rid, MOVE_TIMEOUT_S)
                 self.rid = 0
             self._pump()
             if self.rid:
-                STATE.client.wait_reply(self.rid)
+                STATE.client.wait_reply(self.rid, MOVE_TIMEOUT_S)
                 self.rid = 0
             self.dragging = False
             STATE.stroke_active = False

@@ -9,6 +9,7 @@ from .connection import CLIENT_ERRORS, STATE, describe
 from .dc import Brush
 
 FLOAT3 = dict(size=3, subtype="XYZ")
+MOVE_TIMEOUT_S = 600.0      # a handle solve may run long (max_iters 0: the daemon's default)
 
 
 def _fail(op, exc) -> set:
@@ -318,7 +319,8 @@ class DEFORMD_OT_handles_move(bpy.types.Operator):
         try:
             sid = need_session(context)
             STATE.client.move_handles(sid, handle_targets(sid, self.offset),
-                                      max_iters=self.max_iters, progress_every=10)
+                                      max_iters=self.max_iters, progress_every=10,
+                                      timeout=MOVE_TIMEOUT_S)
         except CLIENT_ERRORS as e:
             return _fail(self, e)
         err = sync.tick(force=True)

@@ -37,8 +37,8 @@ class DEFORMD_PT_panel(bpy.types.Panel):
             return
         m = STATE.mirrors[sid]
         lay.label(text="Session %d, version %d, %d vertices" % (sid, m.version, m.nv))
-        lay.label(text="Subscribers: %d (you included); names: not in the protocol"
-                  % STATE.subscribers)
+        # the protocol gives a count, not who (no per-session client list)
+        lay.label(text="Subscribers: %d (you included)" % STATE.subscribers)
         if STATE.last_changer:
             lay.label(text="Brush last changed by: %s" % STATE.last_changer)
         box = lay.box()
