@@ -142,6 +142,36 @@ def steps():
         yield
     assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
     assert not mod.overlay.shown()
+    mod.prefs.get().overlay_threshold = 10 ** 6
+    # handle-drag mode: the top cap's vertices become handles and follow a simulated drag
+    cur = bc.positions(obj)
+    sel = cur[:, 2] > 0.9 * cur[:, 2].max()
+    obj.data.vertices.foreach_set("select", sel)
+    bpy.context.window_manager.deformd.handle_max_iters = 60
+    bpy.ops.deformd.handles_set()
+    v0 = st.mirrors[sid].version
+    hstats = mod.handles.STATS
+    with bpy.context.temp_override(window=w, area=a, region=r):
+        assert bpy.ops.deformd.handle_drag("INVOKE_DEFAULT") == {"RUNNING_MODAL"}
+    yield
+    drag(w, cx, cy, 0, 40, 4)
+    yield
+    for _ in range(MAX_WAIT_STEPS):                          # every move answered
+        if hstats["moves_sent"] and hstats["moves_done"] == hstats["moves_sent"]:
+            break
+        yield
+    w.event_simulate(type="ESC", value="PRESS", x=cx, y=cy + 40)
+    w.event_simulate(type="ESC", value="RELEASE", x=cx, y=cy + 40)
+    yield
+    for _ in range(MAX_WAIT_STEPS):
+        if st.mirrors[sid].version > v0 and \
+                st.mirrors[sid].version == c2.get_mesh(sid).version and not st.mirrors[sid].dirty:
+            break
+        yield
+    after_drag = bc.positions(obj)
+    assert np.array_equal(after_drag, bc.daemon_positions(c2, sid))
+    R["handle_move"] = float(np.abs(after_drag[sel] - cur[sel]).max())
+    assert R["handle_move"] > 0
     yield
     yield
     after_px = pixels(shot("after"))

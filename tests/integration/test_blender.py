@@ -97,8 +97,10 @@ def test_blender_error_reports(tmp_path, make_daemon):
 
 def test_blender_gui_modal_sculpt(tmp_path, make_daemon):
     """Under Xvfb (software GL, splash off through a user preferences file): the modal sculpt
-    operator driven by simulated mouse events deforms the mesh exactly as the daemon says, the
-    60 Hz timer applies the stream, and a screenshot differs from the one before the stroke."""
+    operator driven by simulated mouse events (grab, Ctrl twist) deforms the mesh exactly as the
+    daemon says, the 60 Hz timer applies another user's stroke, the large-mesh overlay is drawn
+    and the mesh written when the stream pauses, the handle drag moves the handles, the panel
+    draws, and a screenshot differs from the one before the stroke."""
     need("xvfb-run")
     d = make_daemon()
     env = blender_env(tmp_path)
@@ -114,6 +116,7 @@ def test_blender_gui_modal_sculpt(tmp_path, make_daemon):
     r = json.loads(out.read_text())
     assert r["passed"], log[-4000:]
     assert r["timer_ticks"] > 0 and r["updates_sent"] >= 1 and r["versions"] >= 2
+    assert r["panel_draws"] > 0 and r["handle_move"] > 0
     with d.unix_client() as c:
         pos = np.frombuffer(c.get_mesh(r["session"]).positions, dtype=np.float32)
     assert pos.tobytes().hex() == r["blender_positions_hex"]

@@ -2,18 +2,22 @@
 left drag in the view plane (at the handles' centroid depth, converted to object space) and the
 daemon solves the energy chosen in the panel (HANDLES_MOVE). One move is in flight at a time;
 newer mouse positions wait and go out when its reply arrives (the daemon would supersede it
-anyway). Esc / right click / Enter leaves the mode."""
+anyway). Nothing blocks: after the release the last targets go out when the move in flight
+answers, and the 60 Hz timer shows the iterates (PROGRESS events, with Blender's progress
+indicator). Esc / right click / Enter leaves the mode. Max iterations: the panel's value (0: the
+daemon's default)."""
 import bpy
 import numpy as np
 from bpy_extras import view3d_utils
 from mathutils import Vector
 
-from . import sync
+from . import props, sync
 from .connection import CLIENT_ERRORS, STATE
 from .dc import MsgType, messages
-from .operators import MOVE_TIMEOUT_S, need_session
+from .operators import need_session
 
 TICK_S = 1.0 / 60.0
+STATS = {"moves_sent": 0, "moves_done": 0}
 
 
 class DEFORMD_OT_handle_drag(bpy.types.Operator):
@@ -32,6 +36,7 @@ class DEFORMD_OT_handle_drag(bpy.types.Operator):
             self.report({"ERROR"}, "deformd: run handle drag in a 3D view")
             return {"CANCELLED"}
         self.idx = np.asarray(hs.handles, dtype=np.int64)
+        self.max_iters = props.get(context).handle_max_iters
         self.obj = context.active_object
         self.dragging = False
         self.rid = 0
@@ -53,10 +58,12 @@ class DEFORMD_OT_handle_drag(bpy.types.Operator):
             if c.poll_reply(self.rid) is None:
                 return
             self.rid = 0
+            STATS["moves_done"] += 1
         if self.pending is not None:
             self.rid = c.send(MsgType.HANDLES_MOVE, messages.encode_handle_move(
-                self.sid, self.pending, 0, 0, 10))
+                self.sid, self.pending, self.max_iters, 0, 10))
             self.pending = None
+            STATS["moves_sent"] += 1
 
     def modal(self, context, event):
         try:
@@ -86,21 +93,16 @@ class DEFORMD_OT_handle_drag(bpy.types.Operator):
             self.pending = self._targets(context, event)
             self._pump()
             return {"RUNNING_MODAL"}
-        if event.type == "TIMER" and self.dragging:
+        if event.type == "TIMER" and (self.dragging or self.rid or self.pending is not None):
             self._pump()
+            if not (self.dragging or self.rid or self.pending is not None):
+                sync.tick(force=True)
             return {"RUNNING_MODAL"}
         if event.type == "LEFTMOUSE" and event.value == "RELEASE" and self.dragging:
             self.pending = self._targets(context, event)
-            if self.rid:
-                STATE.client.wait_reply(self.rid, MOVE_TIMEOUT_S)
-                self.rid = 0
             self._pump()
-            if self.rid:
-                STATE.client.wait_reply(self.rid, MOVE_TIMEOUT_S)
-                self.rid = 0
             self.dragging = False
             STATE.stroke_active = False
-            sync.tick(force=True)
             return {"RUNNING_MODAL"}
         return {"PASS_THROUGH"}
 

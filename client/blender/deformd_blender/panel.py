@@ -56,6 +56,7 @@ class DEFORMD_PT_panel(bpy.types.Panel):
         row = box.row()
         row.prop(w, "handle_w")
         row.prop(w, "handle_s")
+        box.prop(w, "handle_max_iters")
         box.operator("deformd.handles_set")
         box.operator("deformd.handle_drag")
         lay.label(text="Updates: %.0f Hz, last write %.1f ms" % (STATE.rate_hz,

@@ -59,6 +59,8 @@ class DeformdProps(bpy.types.PropertyGroup):
     handle_energy: bpy.props.EnumProperty(name="Energy", items=ENERGIES)
     handle_w: bpy.props.FloatProperty(name="w", default=1e-4, min=0.0, precision=6)
     handle_s: bpy.props.FloatProperty(name="s", default=0.01, min=0.0, precision=4)
+    handle_max_iters: bpy.props.IntProperty(name="Max iterations", default=0, min=0,
+                                            description="Per drag move; 0: the daemon's default")
 
 
 def get(context=None):
