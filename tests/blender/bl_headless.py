@@ -220,6 +220,30 @@ def case_elastic():
     assert "not an Elastic Deform brush" in t, t
 
 
+def case_modifiers():
+    """The upload is the evaluated mesh: a Displace modifier's positions reach the daemon; a
+    Subdivision modifier (another vertex count) is refused with a report, nothing shared."""
+    mod = bc.install(A.zip)
+    bpy.ops.deformd.connect(address=ADDR)
+    c2 = bc.client(mod, A.socket)
+    obj = bc.grid_object("displaced")
+    m = obj.modifiers.new("d", "DISPLACE")
+    m.strength = 0.25
+    ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    want = np.empty(len(ev.data.vertices) * 3, dtype=np.float32)
+    ev.data.vertices.foreach_get("co", want)
+    assert not np.array_equal(want.reshape(-1, 3), bc.positions(obj))   # the modifier moves it
+    bpy.ops.deformd.share()
+    sid = int(obj["deformd_session"])
+    assert np.array_equal(bc.daemon_positions(c2, sid), want.reshape(-1, 3))
+    n = len(c2.list_sessions())
+    sub = bc.grid_object("subdivided", n=4)
+    sub.modifiers.new("s", "SUBSURF")
+    t = bc.report_of(bpy.ops.deformd.share)
+    assert "vertex count" in t, t
+    assert len(c2.list_sessions()) == n and "deformd_session" not in sub
+
+
 def case_errors():
     mod = bc.install(A.zip)
     t = bc.report_of(bpy.ops.deformd.connect, address="unix:/nonexistent/deformd.sock")

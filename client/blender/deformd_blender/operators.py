@@ -104,10 +104,10 @@ def _new_object(context, sid: int, name: str):
     mesh.vertices.foreach_set("co", pos)
     nt = len(tri) // 3
     mesh.loops.add(3 * nt)
-    mesh.loops.foreach_set("vertex_index", tri.astype(np.int32))
+    mesh.loops.foreach_set("vertex_index", tri.astype(np.uint32))   # uint32: the raw-copy path
     mesh.polygons.add(nt)
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * nt, 3, dtype=np.int32))
-    mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * nt, 3, dtype=np.uint32))
+    mesh.polygons.foreach_set("loop_total", np.full(nt, 3, dtype=np.uint32))
     mesh.update()
     obj = bpy.data.objects.new(name, mesh)
     context.collection.objects.link(obj)
