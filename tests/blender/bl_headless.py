@@ -87,6 +87,19 @@ def case_second_user():
                            scale=0.2, radius=0.4, nu=0.3)
     assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
     assert bc.state(mod).versions_applied >= 5
+    # a lost version: the add-on's next version does not follow -> resync by snapshot
+    st = bc.state(mod)
+    ack = c2.stroke(sid, mod.deformd_client.Brush(type="grab", center=(0.0, 0.0, 0.0),
+                                                  move=(0.0, 0.0, 0.1), radius=0.3))
+    lost = []
+    while not any(getattr(e, "version", 0) == ack.version for e in lost):
+        bc.wait_readable(st.client, "version %d" % ack.version)
+        lost += st.client.poll()                            # taken away: never applied
+    ack = c2.stroke(sid, mod.deformd_client.Brush(type="grab", center=(0.0, 0.0, 0.0),
+                                                  move=(0.0, 0.1, 0.0), radius=0.3))
+    bc.sync_until(mod, sid, ack.version)
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+    assert st.resyncs == 1
 
 
 def case_brush_state():

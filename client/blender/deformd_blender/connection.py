@@ -65,6 +65,7 @@ class State:
         self.applying_remote = False           # panel props being set from an event
         self.ticks = 0                         # timer polls run
         self.versions_applied = 0
+        self.resyncs = 0                       # snapshots taken after a gap
         self.mesh_writes = 0
         self.rate_hz = 0.0                     # mesh updates per second (smoothed)
         self.last_apply_ms = 0.0

@@ -49,6 +49,7 @@ def attach(obj, sid: int) -> Mirror:
 def resync(m: Mirror) -> None:
     """Replaces the replica's displacements by a dense snapshot of the current version."""
     m.apply(STATE.client.snapshot(m.sid))
+    STATE.resyncs += 1
 
 
 def reattach_scene(scene) -> int:
