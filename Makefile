@@ -113,7 +113,9 @@ all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN) $(ADDON_ZIP)
 # systemd for `systemd-analyze verify/security` of the units and systemd-socket-activate,
 # python3-seccomp and strace for running deformd under the unit's system-call filter and
 # auditing the paths it opens (tests/integration/test_systemd.py), man-db (with groff-base)
-# for rendering the man pages in tests/integration/test_man.py).
+# for rendering the man pages in tests/integration/test_man.py; blender (3.4.1) and
+# python3-numpy, which Debian's blender does not pull in, for the add-on's tests and bench, and
+# xvfb + xauth for its GUI test under xvfb-run).
 deps:
 	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
@@ -126,7 +128,8 @@ DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopen
              libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev \
             blender python3-numpy xvfb xauth
 
-$(BUILD)/blender/deformd_blender.zip: $(ADDON_SRC)
+# (the folders are prerequisites too: a removed module rebuilds the zip)
+$(BUILD)/blender/deformd_blender.zip: $(ADDON_SRC) client/blender/deformd_blender client/python/deformd_client
 	rm -rf $(BUILD)/blender/stage && mkdir -p $(BUILD)/blender/stage
 	cp -r client/blender/deformd_blender $(BUILD)/blender/stage/
 	cp -r client/python/deformd_client $(BUILD)/blender/stage/deformd_blender/
@@ -223,7 +226,7 @@ tsan:
 	  OMP_THREAD_LIMIT=1 OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
 	  BUILD=$(TSAN_BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" \
 	  PYTEST_ARGS="$(TSAN_DESELECT)" bash tests/run_tests.sh
-tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN))
+tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN)) $(ADDON_ZIP)
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
 # sources (compiled once into $(BUILD)/fuzz/obj; -MMD -MP: header changes rebuild them; their .d
