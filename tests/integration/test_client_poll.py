@@ -95,3 +95,28 @@ def test_poll_reports_a_closed_connection(make_daemon):
                 c.poll()
     finally:
         c.close()
+
+
+def test_poll_returns_what_came_before_the_close(make_daemon):
+    """A version that arrived before the daemon closed the connection comes out of poll() (read
+    in the same drain as the end of stream); the next poll raises ConnectionClosed."""
+    d = make_daemon()
+    c = d.unix_client()
+    try:
+        sid = c.load_mesh(grid_obj(5, 5), fmt=".obj", name="poll-goodbye").session_id
+        c.subscribe(sid)
+        with d.unix_client() as c2:
+            ack = c2.stroke(sid, Brush(type="grab", center=(0.5, 0.5, 0.0), move=(0, 0, 0.1),
+                                       radius=0.3))
+        r, _, _ = select.select([c.sock], [], [], 10.0)   # the version is in c's socket buffer
+        assert r
+        assert d.stop() == 0
+        select.select([c.sock], [], [], 10.0)
+        evs = c.poll()
+        assert [e.version for e in evs] == [ack.version]
+        with pytest.raises(ConnectionClosed):
+            while True:
+                select.select([c.sock], [], [], 10.0)
+                c.poll()
+    finally:
+        c.close()

@@ -70,6 +70,7 @@ class State:
         self.rate_hz = 0.0                     # mesh updates per second (smoothed)
         self.last_apply_ms = 0.0
         self.last_list_t = 0.0
+        self.list_rid = 0                      # LIST_SESSIONS in flight (the timer's)
         self.stroke_active = False             # the modal operator holds a stroke
 
     @property
@@ -106,6 +107,7 @@ class State:
         self.client = None
         self.mirrors.clear()
         self.stroke_active = False
+        self.list_rid = 0
         self.status = "disconnected" + (": " + why if why else "")
         if why:
             self.last_error = why

@@ -35,11 +35,15 @@ def set_from_state(wm_props, st) -> None:
         STATE.applying_remote = False
 
 
+_ITEMS = []   # Blender keeps only pointers to dynamic enum strings: hold them here
+
+
 def session_items(self, context):
     items = [(str(s.session_id), "%s (#%d, %d verts)" % (s.name or "unnamed", s.session_id, s.nv),
               "%d subscriber(s), version %d" % (s.subscribers, s.version))
              for s in STATE.sessions]
-    return items or [("0", "(no sessions listed)", "")]
+    _ITEMS[:] = items or [("0", "(no sessions listed)", "")]
+    return _ITEMS
 
 
 class DeformdProps(bpy.types.PropertyGroup):

@@ -7,6 +7,7 @@ import numpy as np
 from . import overlay, prefs, progress
 from . import props as panel_props
 from .connection import CLIENT_ERRORS, STATE, describe, now
+from .dc import MsgType, messages
 from .mirror import Gap, Mirror
 
 TIMER_INTERVAL_S = 1.0 / 60.0
@@ -140,16 +141,28 @@ def tick(force: bool = False) -> str:
         t = now()
         for m in list(STATE.mirrors.values()):
             _write(m, force, t)
-        if t - STATE.last_list_t > LIST_EVERY_S and not STATE.stroke_active:
-            STATE.last_list_t = t
-            STATE.sessions = c.list_sessions()
-            for s in STATE.sessions:
-                if s.session_id == STATE.current_sid:
-                    STATE.subscribers = s.subscribers
+        _list_sessions(c, t)
     except CLIENT_ERRORS as e:
         return STATE.lost(e)
     _redraw()
     return ""
+
+
+def _list_sessions(c, t: float) -> None:
+    """Every LIST_EVERY_S: LIST_SESSIONS sent, its reply collected on a later tick (never
+    waited for); refreshes the join list and the subscriber count."""
+    if STATE.list_rid:
+        parts = c.poll_reply(STATE.list_rid)
+        if parts is None:
+            return
+        STATE.list_rid = 0
+        STATE.sessions = messages.decode_session_list(b"".join(p.payload for p in parts))
+        for s in STATE.sessions:
+            if s.session_id == STATE.current_sid:
+                STATE.subscribers = s.subscribers
+    elif t - STATE.last_list_t > LIST_EVERY_S:
+        STATE.last_list_t = t
+        STATE.list_rid = c.send(MsgType.LIST_SESSIONS)
 
 
 def _redraw() -> None:

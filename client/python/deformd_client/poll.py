@@ -16,7 +16,7 @@ from typing import List, Optional
 
 from . import frame as fr
 from . import messages as m
-from .errors import DeformdError, error_name
+from .errors import ConnectionClosed, DeformdError, error_name
 
 RECV_BYTES = 1 << 20       # Client.RECV_BYTES: what one read takes at most
 POLL_MAX_BYTES = 64 << 20   # per poll(): a daemon streaming faster than we read cannot pin us
@@ -28,26 +28,35 @@ class PollMixin:
 
     def _drain_now(self, max_bytes: int) -> None:
         """Reads what the socket holds now (at most about max_bytes) and sorts the frames:
-        events to the event queue, replies to their requests. Raises ConnectionClosed when the
-        daemon closed the connection, DeformdError for an unsolicited ERROR event (e.g. the
-        daemon shutting down or a timeout), ProtocolError for a malformed frame."""
+        events to the event queue, replies to their requests; frames that arrived before the
+        daemon closed the connection are sorted too. Raises ConnectionClosed when the daemon
+        closed the connection, DeformdError for an unsolicited ERROR event (e.g. the daemon
+        shutting down or a timeout), ProtocolError for a malformed frame."""
         reads = max(1, max_bytes // RECV_BYTES)
-        for _ in range(reads):                 # each read takes at most RECV_BYTES
-            if not self._read_more(0.0):       # deadline in the past: zero timeout
-                break
-        while self._frames:
-            f = self._frames.popleft()
-            if f.is_event or (f.type == m.ERROR and f.request_id == 0 and not f.is_reply):
-                self._take_event_frame(f)
-            else:
-                self._keep_reply(f)
+        try:
+            for _ in range(reads):                 # each read takes at most RECV_BYTES
+                if not self._read_more(0.0):       # deadline in the past: zero timeout
+                    break
+        finally:
+            while self._frames:
+                f = self._frames.popleft()
+                if f.is_event or (f.type == m.ERROR and f.request_id == 0 and not f.is_reply):
+                    self._take_event_frame(f)
+                else:
+                    self._keep_reply(f)
 
     def poll(self, max_bytes: int = POLL_MAX_BYTES) -> List:
         """Every event complete now (queued or arrived on the socket), oldest first, without
         blocking: [] when nothing has arrived. Replies that arrive meanwhile are kept for
-        wait_reply() / poll_reply(). Errors: ConnectionClosed, DeformdError (an unsolicited
-        error event), ProtocolError. Main thread of the client only (one Client per thread)."""
-        self._drain_now(max_bytes)
+        wait_reply() / poll_reply(). Errors: ConnectionClosed (raised once every event that
+        arrived before the close was returned: a poll that finds the connection closed returns
+        the queued events first, the next one raises), DeformdError (an unsolicited error
+        event), ProtocolError. Main thread of the client only (one Client per thread)."""
+        try:
+            self._drain_now(max_bytes)
+        except ConnectionClosed:
+            if not self._events:
+                raise
         out = list(self._events)
         self._events.clear()
         return out
