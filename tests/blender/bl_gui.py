@@ -98,7 +98,33 @@ def steps():
     ticks0 = st.ticks
     drag(w, cx, cy, 60, 40, 12)                              # a grab stroke
     yield
+    for _ in range(MAX_WAIT_STEPS):
+        if mod.modal.STATS["last"] is not None:
+            break
+        yield
+    grab = mod.modal.STATS["last"]
+    assert not grab["twisting"]
+    # object space -> world -> screen: the centre is under the press, centre + move under the
+    # release (the view-plane move at the hit depth, through the object's scale)
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    from mathutils import Vector
+    mw = obj.matrix_world
+    rv3d = a.spaces[0].region_3d
+    p0 = location_3d_to_region_2d(r, rv3d, mw @ Vector(grab["center"]))
+    p1 = location_3d_to_region_2d(r, rv3d, mw @ (Vector(grab["center"]) + Vector(grab["move"])))
+    R["press_px"], R["release_px"] = tuple(p0), tuple(p1)
+    assert abs(p0.x - r.width // 2) < 1.0 and abs(p0.y - r.height // 2) < 1.0, p0
+    assert abs(p1.x - (r.width // 2 + 60)) < 1.0 and abs(p1.y - (r.height // 2 + 40)) < 1.0, p1
     drag(w, cx - 20, cy + 15, 45, 0, 8, ctrl=True)           # Ctrl: twist
+    yield
+    for _ in range(MAX_WAIT_STEPS):
+        if mod.modal.STATS["last"]["twisting"]:
+            break
+        yield
+    tw = mod.modal.STATS["last"]
+    R["twist"] = list(tw["twist"])
+    p = mod.prefs.get()
+    assert abs(Vector(tw["twist"]).length - 45 * p.twist_per_pixel) < 1e-5, tw   # float32 math
     w.event_simulate(type="ESC", value="PRESS", x=cx, y=cy)
     w.event_simulate(type="ESC", value="RELEASE", x=cx, y=cy)
     yield

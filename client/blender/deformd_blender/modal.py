@@ -16,7 +16,7 @@ from .dc import Brush, MsgType, messages
 from .operators import need_session
 
 TICK_S = 1.0 / 120.0
-STATS = {"updates_sent": 0, "strokes": 0}
+STATS = {"updates_sent": 0, "strokes": 0, "last": None}   # last: the last stroke's loads
 
 
 def hit_point(context, obj, coord):
@@ -87,6 +87,7 @@ class DEFORMD_OT_sculpt(bpy.types.Operator):
                   ratio=w.brush_ratio)
         STATE.client.brush_begin(self.sid, b)
         self.radius = radius
+        self.center = tuple(ho)
         self.stroking = True
         STATE.stroke_active = True
         STATS["strokes"] += 1
@@ -120,8 +121,13 @@ class DEFORMD_OT_sculpt(bpy.types.Operator):
         if self.rid:
             c.wait_reply(self.rid)
             self.rid = 0
+        final = self.sent
         if not cancel and self.pending is not None and self.pending != self.sent:
             c.brush_update(self.sid, *self.pending)
+            final = self.pending
+        STATS["last"] = {"center": self.center, "radius": self.radius, "twisting": self.twisting,
+                         "move": final[0] if final else None,
+                         "twist": final[1] if final else None}
         if cancel:
             c.brush_cancel(self.sid)
         else:
