@@ -69,6 +69,11 @@ def main():
         p50, p95 = pct(lat, 0.5), pct(lat, 0.95)
         report("%s vertices: daemon round trip (update -> ack), p50" % tag, pct(r["ack"], 0.5),
                "ms")
+        tick = [t - a - e for t, a, e in zip(lat, r["ack"], r["eval"])]
+        report("%s vertices: add-on tick (poll, replica, foreach_set), p50" % tag,
+               pct(tick, 0.5), "ms")
+        report("%s vertices: Blender's depsgraph evaluation, p50" % tag, pct(r["eval"], 0.5),
+               "ms")
         if nv <= 200000:
             report("%s vertices: update -> applied in Blender, p50" % tag, p50, "ms",
                    "<= %.1f (60 Hz)" % FRAME_MS, p50 <= FRAME_MS)

@@ -29,6 +29,7 @@ A = p.parse_args(argv)
 
 
 def wait_version(mod, m, version, overlay):
+    """Ticks until the version is applied; returns the depsgraph evaluation's ms (0 overlay)."""
     st = bc.state(mod)
     while m.version < version or (not overlay and m.dirty):
         if not st.client.pending_events():
@@ -36,8 +37,10 @@ def wait_version(mod, m, version, overlay):
         mod.sync.tick(force=not overlay)
     if overlay:
         m.positions()          # what the overlay batch is built from
-    else:
-        bpy.context.evaluated_depsgraph_get()   # Blender re-evaluates the written mesh
+        return 0.0
+    t0 = time.perf_counter()
+    bpy.context.evaluated_depsgraph_get()   # Blender re-evaluates the written mesh
+    return (time.perf_counter() - t0) * 1e3
 
 
 def stroke_figures(mod, obj, sid, updates, overlay):
@@ -47,21 +50,21 @@ def stroke_figures(mod, obj, sid, updates, overlay):
     dc = mod.deformd_client
     c.brush_begin(sid, dc.Brush(type="grab", center=(0.0, 0.0, 0.0), radius=0.3, nu=0.45))
     st.stroke_active = overlay
-    lat, acks = [], []
+    lat, acks, evals = [], [], []
     for k in range(1, updates + 1):
         t0 = time.perf_counter()
         rid = c.send(dc.MsgType.BRUSH_UPDATE,
                      dc.messages.encode_brush_update(sid, (0.0, 0.0, 0.002 * k)))
         ack = dc.messages.decode_ack(b"".join(f.payload for f in c.wait_reply(rid)))
         acks.append((time.perf_counter() - t0) * 1e3)
-        wait_version(mod, m, ack.version, overlay)
+        evals.append(wait_version(mod, m, ack.version, overlay))
         lat.append((time.perf_counter() - t0) * 1e3)
     c.brush_end(sid)
     st.stroke_active = False
     mod.sync.tick(force=True)
     assert np.array_equal(bc.positions(obj), np.frombuffer(c.get_mesh(sid).positions,
                                                            dtype=np.float32).reshape(-1, 3))
-    return lat, acks
+    return lat, acks, evals
 
 
 def main():
@@ -85,13 +88,14 @@ def main():
         sid = int(obj["deformd_session"])
         updates = A.updates if nv < 500000 else max(5, A.updates // 3)
         mod.prefs.get().overlay_threshold = 10 ** 9
-        lat, acks = stroke_figures(mod, obj, sid, updates, overlay=False)
+        lat, acks, evals = stroke_figures(mod, obj, sid, updates, overlay=False)
         r = {"nv": nv, "ply_ms": (t1 - t0) * 1e3, "ply_mb": len(data) / 1e6,
-             "share_ms": (t2 - t1) * 1e3, "mesh": lat, "ack": acks}
+             "share_ms": (t2 - t1) * 1e3, "mesh": lat, "ack": acks, "eval": evals}
         if side == sizes[-1]:
             mod.prefs.get().overlay_threshold = 0
             mod.prefs.get().write_interval = 1e9
-            r["overlay"], r["overlay_ack"] = stroke_figures(mod, obj, sid, updates, overlay=True)
+            r["overlay"], r["overlay_ack"], _ = stroke_figures(mod, obj, sid, updates,
+                                                               overlay=True)
         res.append(r)
         bc.state(mod).client.close_session(sid)
         bc.state(mod).mirrors.pop(sid, None)
