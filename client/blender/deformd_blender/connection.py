@@ -69,6 +69,7 @@ class State:
         self.mesh_writes = 0
         self.rate_hz = 0.0                     # mesh updates per second (smoothed)
         self.last_apply_ms = 0.0
+        self.last_write_t = 0.0                # perf_counter of the last mesh write
         self.last_list_t = 0.0
         self.list_rid = 0                      # LIST_SESSIONS in flight (the timer's)
         self.stroke_active = False             # the modal operator holds a stroke
@@ -121,6 +122,10 @@ class State:
         else:
             self.last_error = msg
         return msg
+
+    def rate_now(self) -> float:
+        """The smoothed write rate, 0 once no write came for a second."""
+        return self.rate_hz if now() - self.last_write_t < 1.0 else 0.0
 
     def note_rate(self, dt_s: float) -> None:
         if dt_s > 0:

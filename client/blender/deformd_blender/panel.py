@@ -3,7 +3,7 @@ BRUSH_STATE events update it; edits send BRUSH_STATE_SET), handles, undo / redo,
 the session, the update rate."""
 import bpy
 
-from . import props, sync
+from . import overlay, props, sync
 from .connection import STATE
 
 
@@ -59,8 +59,8 @@ class DEFORMD_PT_panel(bpy.types.Panel):
         box.prop(w, "handle_max_iters")
         box.operator("deformd.handles_set")
         box.operator("deformd.handle_drag")
-        lay.label(text="Updates: %.0f Hz, last write %.1f ms" % (STATE.rate_hz,
-                                                                 STATE.last_apply_ms))
+        lay.label(text="Mesh writes: %.0f Hz, last %.1f ms%s" % (
+            STATE.rate_now(), STATE.last_apply_ms, " (overlay live)" if overlay.shown() else ""))
 
 
 CLASSES = (DEFORMD_PT_panel,)

@@ -119,6 +119,7 @@ def _write(m: Mirror, force: bool, t: float) -> None:
     if m.last_write_t:
         STATE.note_rate(t1 - m.last_write_t)
     m.last_write_t = t1
+    STATE.last_write_t = t1
     STATE.last_apply_ms = (t1 - t0) * 1e3
     STATE.mesh_writes += 1
     if big:
