@@ -88,6 +88,7 @@ class DEFORMD_OT_sculpt(bpy.types.Operator):
         STATE.client.brush_begin(self.sid, b)
         self.radius = radius
         self.center = tuple(ho)
+        self.sent = self.pending = None       # loads are per stroke (cumulative since begin)
         self.stroking = True
         STATE.stroke_active = True
         STATS["strokes"] += 1
