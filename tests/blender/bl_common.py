@@ -22,6 +22,10 @@ def args():
     p.add_argument("--socket", default="")
     p.add_argument("--out", default="")
     p.add_argument("--daemon-pid", type=int, default=0)
+    p.add_argument("--tcp", default="")          # HOST:PORT of the daemon's TLS + key TCP
+    p.add_argument("--key-file", default="")
+    p.add_argument("--tls-ca", default="")
+    p.add_argument("--wrong-key-file", default="")
     return p.parse_args(argv)
 
 

@@ -257,6 +257,29 @@ def case_modifiers():
     assert len(c2.list_sessions()) == n and "deformd_session" not in sub
 
 
+def case_tls():
+    """TCP with the daemon's key and TLS (preferences key_file, tls_ca): share and stroke as on
+    the Unix socket; a wrong key or no CA is a report, not a connection."""
+    mod = bc.install(A.zip)
+    p = mod.prefs.get()
+    p.key_file, p.tls_ca = A.wrong_key_file, A.tls_ca
+    t = bc.report_of(bpy.ops.deformd.connect, address=A.tcp)
+    assert "EPROTO_AUTH" in t, t
+    p.key_file, p.tls_ca = A.key_file, ""
+    t = bc.report_of(bpy.ops.deformd.connect, address=A.tcp)     # plain TCP to a TLS daemon
+    assert "deformd" in t and not bc.state(mod).connected, t
+    p.tls_ca = A.tls_ca
+    obj = bc.grid_object()
+    bpy.ops.deformd.connect(address=A.tcp)
+    assert bc.state(mod).client.authenticated
+    bpy.ops.deformd.share()
+    sid = int(obj["deformd_session"])
+    bpy.ops.deformd.stroke(brush="grab", center=(0.0, 0.0, 0.0), move=(0.0, 0.0, 0.1),
+                           radius=0.4)
+    c2 = bc.client(mod, A.socket)
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+
+
 def case_errors():
     mod = bc.install(A.zip)
     t = bc.report_of(bpy.ops.deformd.connect, address="unix:/nonexistent/deformd.sock")

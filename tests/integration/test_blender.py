@@ -16,6 +16,7 @@ import pytest
 
 from conftest import BUILD, ROOT, skip_or_fail
 from helpers import grab_displacement
+from test_tls import make_ca, make_server_cert, write_key
 
 ZIP = os.path.join(BUILD, "blender", "deformd_blender.zip")
 SCRIPTS = os.path.join(ROOT, "tests", "blender")
@@ -85,6 +86,24 @@ def test_blender_scripted_stroke_is_the_kelvinlet_grab(tmp_path, make_daemon):
         worst = max(worst, max(abs(y[k] - x[k] - u[k]) for k in range(3)))
     assert worst < 1e-5, worst
     assert np.abs(after - base).max() > 0.01
+
+
+def test_blender_tcp_with_key_and_tls(tmp_path, make_daemon):
+    """The add-on over TCP with the daemon's key and TLS (preferences key_file and tls_ca)."""
+    pki = str(tmp_path / "pki")
+    os.makedirs(pki)
+    ca = make_ca(pki, "ca")
+    cert = make_server_cert(pki, ca, "server")
+    kf, wrong = str(tmp_path / "deformd.key"), str(tmp_path / "wrong.key")
+    write_key(kf)
+    write_key(wrong)
+    d = make_daemon("key_file = %s\ntls_cert = %s\ntls_key = %s\n" % (kf, cert[0], cert[1]),
+                    tcp=True, tls_ca=ca[0])
+    extra = ["--case", "tls", "--socket", d.socket_path, "--tcp", "localhost:%d" % d.tcp_port,
+             "--key-file", kf, "--wrong-key-file", wrong, "--tls-ca", ca[0]]
+    log = run_blender(["blender", "-b", "--factory-startup", "--python-exit-code", "1"],
+                      blender_env(tmp_path), "bl_headless.py", extra)
+    assert "bl_headless: case tls passed" in log, log[-4000:]
 
 
 def test_blender_error_reports(tmp_path, make_daemon):

@@ -78,8 +78,9 @@ class State:
     def connected(self) -> bool:
         return self.client is not None
 
-    def connect(self, address: str, key_file: str = "") -> None:
-        """Opens the connection (HELLO, AUTH with key_file when given). Raises CLIENT_ERRORS."""
+    def connect(self, address: str, key_file: str = "", tls_ca: str = "") -> None:
+        """Opens the connection (HELLO, AUTH with key_file when given; TCP over TLS verified
+        against tls_ca when given). Raises CLIENT_ERRORS (ssl errors are OSErrors)."""
         self.disconnect()
         kind, where = parse_address(address)
         key = key_file or None
@@ -88,10 +89,10 @@ class State:
                 c = Client.connect_unix(where, timeout=TIMEOUT_S, name=CLIENT_NAME, key_file=key)
             else:
                 c = Client.connect_tcp(where[0], where[1], timeout=TIMEOUT_S, name=CLIENT_NAME,
-                                       key_file=key)
+                                       key_file=key, tls_ca=tls_ca or None)
         except DeformdError:
             raise
-        except OSError as e:     # no daemon there: say where we looked
+        except OSError as e:     # no daemon there (or TLS refused): say where we looked
             raise ValueError("cannot reach deformd at %s: %s" % (address, e.strerror or e))
         self.client = c
         self.address = address

@@ -38,7 +38,7 @@ class DEFORMD_OT_connect(bpy.types.Operator):
         p = prefs.get(context)
         addr = self.address or (p.address if p else "")
         try:
-            STATE.connect(addr, p.key_file if p else "")
+            STATE.connect(addr, p.key_file if p else "", p.tls_ca if p else "")
             sync.start_timer()
             n = sync.reattach_scene(context.scene)
             STATE.sessions = STATE.client.list_sessions() if STATE.connected else []

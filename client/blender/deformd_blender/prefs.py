@@ -13,6 +13,10 @@ class DeformdPreferences(bpy.types.AddonPreferences):
     key_file: bpy.props.StringProperty(
         name="Key file", default="", subtype="FILE_PATH",
         description="Shared key for a daemon that requires authentication (TCP); empty: none")
+    tls_ca: bpy.props.StringProperty(
+        name="TLS CA", default="", subtype="FILE_PATH",
+        description="PEM file of the CA that signed the daemon's tls_cert: TCP goes over TLS "
+                    "1.3, the certificate must name the host; empty: plain TCP")
     overlay_threshold: bpy.props.IntProperty(
         name="Overlay above (vertices)", default=300000, min=0,
         description="Meshes with more vertices show live strokes as a GPU point overlay and "
@@ -28,7 +32,7 @@ class DeformdPreferences(bpy.types.AddonPreferences):
 
     def draw(self, context):
         col = self.layout.column()
-        for p in ("address", "key_file", "overlay_threshold", "write_interval", "brush_pixels",
+        for p in ("address", "key_file", "tls_ca", "overlay_threshold", "write_interval", "brush_pixels",
                   "twist_per_pixel"):
             col.prop(self, p)
 
