@@ -62,6 +62,9 @@ def drag(w, x0, y0, dx, dy, n, ctrl=False):
 def steps():
     mod = bc.install(A.zip)
     st = bc.state(mod)
+    km = bpy.context.window_manager.keyconfigs.addon.keymaps["3D View"]
+    assert any(k.idname == "deformd.sculpt" and k.type == "D" and k.ctrl and k.shift
+               for k in km.keymap_items)
     bpy.ops.object.select_all(action="SELECT")
     bpy.ops.object.delete()
     bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)

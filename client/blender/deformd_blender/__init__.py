@@ -24,14 +24,25 @@ CLASSES = (prefs.CLASSES + props.CLASSES + operators.CLASSES + modal.CLASSES + h
            + panel.CLASSES)
 
 
+_KEYMAPS = []   # (keymap, item) added to the add-on key configuration
+
+
 def register():
     for c in CLASSES:
         bpy.utils.register_class(c)
     props.register_props()
     sync.start_timer()
+    kc = bpy.context.window_manager.keyconfigs.addon
+    if kc is not None:                     # None in background mode
+        km = kc.keymaps.new(name="3D View", space_type="VIEW_3D")
+        _KEYMAPS.append((km, km.keymap_items.new("deformd.sculpt", "D", "PRESS", ctrl=True,
+                                                 shift=True)))
 
 
 def unregister():
+    for km, kmi in _KEYMAPS:
+        km.keymap_items.remove(kmi)
+    _KEYMAPS.clear()
     sync.stop_timer()
     STATE.disconnect()
     overlay.remove()
