@@ -99,16 +99,23 @@ BENCH_SRC  := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN  := $(patsubst tests/bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BINS       := $(if $(wildcard server/main.c),$(BUILD)/bin/deformd) $(if $(CTL_SRC),$(BUILD)/bin/deformctl)
+# The Blender add-on (client/blender/deformd_blender) as an installable zip with the Python client
+# package (client/python/deformd_client) vendored in as deformd_blender/deformd_client: copied
+# here by the build, never kept as a copy in the tree.
+ADDON_SRC  := $(shell find client/blender/deformd_blender client/python/deformd_client -name '*.py' 2>/dev/null)
+ADDON_ZIP  := $(if $(wildcard client/blender/deformd_blender),$(BUILD)/blender/deformd_blender.zip)
 
 .PHONY: all deps test unit bench asan tsan tsan-build fuzz fuzz-build run install uninstall clean
-all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN)
+all: $(ALL_LIBS) $(BINS) $(UNIT_BIN) $(BENCH_BIN) $(ADDON_ZIP)
 
 # Idempotent: installs every Debian package the build, the tests and the fuzzers need (hidapi,
 # libusb for the HID device sources; SQLite for the durable-store work, nothing links it yet;
 # systemd for `systemd-analyze verify/security` of the units and systemd-socket-activate,
 # python3-seccomp and strace for running deformd under the unit's system-call filter and
 # auditing the paths it opens (tests/integration/test_systemd.py), man-db (with groff-base)
-# for rendering the man pages in tests/integration/test_man.py).
+# for rendering the man pages in tests/integration/test_man.py; blender (3.4.1) and
+# python3-numpy, which Debian's blender does not pull in, for the add-on's tests and bench, and
+# xvfb + xauth for its GUI test under xvfb-run).
 deps:
 	@if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
 	need=$$(dpkg-query -W -f='$${Status}\n' $(DEB_PKGS) 2>/dev/null | grep -c 'install ok installed'); \
@@ -118,7 +125,16 @@ deps:
 DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopenblas-dev \
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
-             libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev
+             libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev \
+            blender python3-numpy xvfb xauth
+
+# (the folders are prerequisites too: a removed module rebuilds the zip)
+$(BUILD)/blender/deformd_blender.zip: $(ADDON_SRC) client/blender/deformd_blender client/python/deformd_client
+	rm -rf $(BUILD)/blender/stage && mkdir -p $(BUILD)/blender/stage
+	cp -r client/blender/deformd_blender $(BUILD)/blender/stage/
+	cp -r client/python/deformd_client $(BUILD)/blender/stage/deformd_blender/
+	find $(BUILD)/blender/stage -name __pycache__ -prune -exec rm -rf {} +
+	rm -f $@ && cd $(BUILD)/blender/stage && $(PYTHON) -m zipfile -c ../$(notdir $@) deformd_blender
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -210,7 +226,7 @@ tsan:
 	  OMP_THREAD_LIMIT=1 OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
 	  BUILD=$(TSAN_BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" \
 	  PYTEST_ARGS="$(TSAN_DESELECT)" bash tests/run_tests.sh
-tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN))
+tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN)) $(ADDON_ZIP)
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
 # sources (compiled once into $(BUILD)/fuzz/obj; -MMD -MP: header changes rebuild them; their .d

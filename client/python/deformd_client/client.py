@@ -34,6 +34,7 @@ from . import frame as fr
 from . import messages as m
 from . import schema
 from . import stream as st
+from .poll import PollMixin
 from .stream import ShmRing
 from .errors import ConnectionClosed, DeformdError, error_name
 from .wire import ProtocolError
@@ -89,7 +90,7 @@ class ShmLost:
 
 Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor]
 
-class Client:
+class Client(PollMixin):
     """A connection to deformd. Not thread-safe: use one Client per thread."""
 
     def __init__(self, sock: socket.socket, timeout: float = DEFAULT_TIMEOUT_S,
