@@ -104,6 +104,10 @@ enum { DF_WIRE_DEV_BACKENDS(DF_X_DEVBACKEND) };
 enum { DF_WIRE_DEV_STATES(DF_X_DEVSTATE) };
 #define DF_X_AUTHM(n, v) DF_X_ENUM(DF_AUTH_, n, v)
 enum { DF_WIRE_AUTH_METHODS(DF_X_AUTHM) }; /* DF_AUTH_HMAC_CHALLENGE, DF_AUTH_HMAC_PROOF */
+#define DF_X_STAGE(n, v) DF_X_ENUM(DF_STAGE_, n, v)
+typedef enum df_work_stage { DF_WIRE_WORK_STAGES(DF_X_STAGE) } df_work_stage;
+#define DF_X_WOPT(n, v) DF_X_ENUM(DF_WORK_OPT_, n, v)
+enum { DF_WIRE_WORK_OPTS(DF_X_WOPT) };
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -120,6 +124,8 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_LOAD_OPTS_ALL (0u DF_WIRE_LOAD_OPTS(DF_X_OR))
 #define DF_BS_ALL (0u DF_WIRE_BRUSH_STATE_FIELDS(DF_X_OR))  /* every brush state field */
 #define DF_CURSOR_FLAGS_ALL (0u DF_WIRE_CURSOR_FLAGS(DF_X_OR))
+#define DF_WORK_OPTS_ALL (0u DF_WIRE_WORK_OPTS(DF_X_OR))
+#define DF_STAGE_MAX (0 DF_WIRE_WORK_STAGES(DF_X_COUNT)) /* stages this build sends: 1..MAX */
 #define DF_ORIGIN_MAX (0 DF_WIRE_ORIGINS(DF_X_COUNT) - 1)    /* origins are 0..DF_ORIGIN_MAX */
 #define DF_FMT_MAX (0 DF_WIRE_FORMATS(DF_X_COUNT) - 1)        /* formats are 0..DF_FMT_MAX */
 #define DF_BRUSH_TYPE_MAX (0 DF_WIRE_BRUSH_TYPES(DF_X_COUNT)) /* the 1..MAX enums: */
@@ -380,6 +386,8 @@ typedef struct df_msg_handles {        /* define the session's handle set (repla
     int32_t *handles;                  /* handle vertex indices, malloc'd on decode */
     uint32_t n_affine;                 /* 0..DF_MAX_AFFINE_SETS */
     df_msg_affine_set *affine;         /* malloc'd on decode */
+    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32 on the wire: sent
+                                        * only when != 0, so 0 keeps the original layout) */
 } df_msg_handles;
 
 typedef struct df_msg_handle_move {    /* move the handles; supersedes a running move */
@@ -389,6 +397,8 @@ typedef struct df_msg_handle_move {    /* move the handles; supersedes a running
     uint32_t progress_every;           /* progress event every N iterations, 0 = final only */
     uint32_t n_targets;                /* must equal the handle set's n_handles (server checks) */
     double *targets;                   /* n_targets x 3 target positions, finite, malloc'd on decode */
+    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32: sent only when
+                                        * != 0, so 0 keeps the original layout) */
 } df_msg_handle_move;
 
 typedef struct df_msg_move_result {    /* final reply of a handle move */
@@ -453,6 +463,15 @@ typedef struct df_msg_progress {       /* one ADMM iterate of a handle move (a s
     double elapsed_ms;                 /* finite, >= 0 */
     df_msg_disp disp;                  /* the iterate (kind DF_CHANGE_HANDLE_MOVE) */
 } df_msg_progress;
+
+typedef struct df_msg_work_progress {  /* WORK_PROGRESS event (PROTOCOL.md 4.35), 36 bytes */
+    uint64_t session_id;               /* the request's session; 0 while a load has none */
+    uint8_t stage;                     /* df_work_stage; any value >= 1 decodes (newer stages) */
+    uint8_t final;                     /* 0/1: the last event of this stage for this request */
+    uint64_t done;                     /* units of the stage done (bytes, steps, iterations) */
+    uint64_t total;                    /* units in all, >= done; 0 when unknown */
+    double elapsed_ms;                 /* since the stage began, finite, >= 0 */
+} df_msg_work_progress;
 
 typedef struct df_msg_stats_req {
     uint64_t session_id;               /* 0: daemon-wide stats; else that session's */
@@ -541,6 +560,7 @@ DF_MSG_CODEC(device_info)
 DF_MSG_CODEC(device_list)
 DF_MSG_CODEC(device_bind)
 DF_MSG_CODEC(device_view)
+DF_MSG_CODEC(work_progress)
 #undef DF_MSG_CODEC
 
 /* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
@@ -613,7 +633,8 @@ typedef enum df_body_kind {
     DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY, DF_BODY_BRUSH_STATE_SET, DF_BODY_BRUSH_STATE,
     DF_BODY_BRUSH_CURSOR,
     /* devices (HID) */
-    DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW
+    DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW,
+    DF_BODY_WORK_PROGRESS
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -654,6 +675,7 @@ typedef struct df_msg_any {
         df_msg_device_list device_list;
         df_msg_device_bind device_bind;
         df_msg_device_view device_view;
+        df_msg_work_progress work_progress;
     } u;
 } df_msg_any;
 

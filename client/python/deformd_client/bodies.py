@@ -11,6 +11,7 @@ from typing import Any, Callable, Dict, List, Sequence, Tuple
 from . import brush_state as bs
 from . import devices as dv
 from . import messages as m
+from . import progress as pg
 from . import schema
 from . import stream as st
 from .wire import ProtocolError, Reader, pack_str
@@ -61,6 +62,7 @@ class HandleMove:
     max_ms: int
     progress_every: int
     targets: List[Tuple[float, float, float]]
+    options: int = 0
 
 
 def _end(r: Reader, v):
@@ -160,7 +162,8 @@ def decode_handle_move(p: bytes) -> HandleMove:
     sid, iters, ms, every, n = r.take("QIIII")
     if n > schema.MAX_HANDLES:
         raise ProtocolError("handle_move: %d targets" % n)
-    return _end(r, HandleMove(sid, iters, ms, every, [tuple(r.take("3d")) for _ in range(n)]))
+    targets = [tuple(r.take("3d")) for _ in range(n)]
+    return _end(r, HandleMove(sid, iters, ms, every, targets, m._read_options(r, "handle_move")))
 
 
 def decode_stats_req(p: bytes) -> int:
@@ -248,9 +251,9 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
         x.session_id, x.move, x.twist, x.scale, x.matrix)),
     "brush_param": (decode_brush_param, lambda x: m.encode_brush_param(*x)),
     "handles": (m.decode_handles, lambda h: m.encode_handles(h.session_id, h.energy, h.handles,
-                                                             h.params, h.affine)),
+                                                             h.params, h.affine, h.options)),
     "handle_move": (decode_handle_move, lambda x: m.encode_handle_move(
-        x.session_id, x.targets, x.max_iters, x.max_ms, x.progress_every)),
+        x.session_id, x.targets, x.max_iters, x.max_ms, x.progress_every, x.options)),
     "move_result": (m.decode_move_result, encode_move_result),
     "get_mesh": (_fixed("QI", "get_mesh"), lambda x: m.encode_get_mesh(*x)),
     "mesh_chunk": (st.decode_mesh_chunk, encode_mesh_chunk),
@@ -270,6 +273,7 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "device_bind": (dv.decode_device_bind, lambda x: dv.encode_device_bind(*x)),
     "device_view": (dv.decode_device_view, lambda x: dv.encode_device_view(
         x.device_id, x.session_id, x.view_proj, x.viewport)),
+    "work_progress": (pg.decode_work_progress, pg.encode_work_progress),
 }
 
 
