@@ -386,8 +386,10 @@ typedef struct df_msg_handles {        /* define the session's handle set (repla
     int32_t *handles;                  /* handle vertex indices, malloc'd on decode */
     uint32_t n_affine;                 /* 0..DF_MAX_AFFINE_SETS */
     df_msg_affine_set *affine;         /* malloc'd on decode */
-    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32 on the wire: sent
-                                        * only when != 0, so 0 keeps the original layout) */
+    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32 on the wire) */
+    uint8_t options_field;             /* 1: the body carries `options` (decode: it was present;
+                                        * encode: write it even when 0); 0: written only when
+                                        * options != 0, else the original layout */
 } df_msg_handles;
 
 typedef struct df_msg_handle_move {    /* move the handles; supersedes a running move */
@@ -397,8 +399,8 @@ typedef struct df_msg_handle_move {    /* move the handles; supersedes a running
     uint32_t progress_every;           /* progress event every N iterations, 0 = final only */
     uint32_t n_targets;                /* must equal the handle set's n_handles (server checks) */
     double *targets;                   /* n_targets x 3 target positions, finite, malloc'd on decode */
-    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32: sent only when
-                                        * != 0, so 0 keeps the original layout) */
+    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32) */
+    uint8_t options_field;             /* as in df_msg_handles */
 } df_msg_handle_move;
 
 typedef struct df_msg_move_result {    /* final reply of a handle move */

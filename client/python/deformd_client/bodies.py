@@ -6,7 +6,7 @@ adds the directions a client does not need in normal use (decoding requests, enc
 events), for tools, tests and fake servers."""
 import struct
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import brush_state as bs
 from . import devices as dv
@@ -62,7 +62,7 @@ class HandleMove:
     max_ms: int
     progress_every: int
     targets: List[Tuple[float, float, float]]
-    options: int = 0
+    options: Optional[int] = None   # the optional trailing field; None: absent
 
 
 def _end(r: Reader, v):

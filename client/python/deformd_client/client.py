@@ -679,7 +679,7 @@ class Client:
         p = m.HandleParams.for_energy(energy, **params)
         rid = self.send(m.HANDLES_SET, m.encode_handles(
             session_id, energy, handles, p, affine,
-            pg.WORK_OPT_PROGRESS if progress is not None else 0))
+            pg.WORK_OPT_PROGRESS if progress is not None else None))
         return m.decode_ack(self._wait_with_progress(rid, progress))
 
     def get_handles(self, session_id: int) -> m.HandleSet:
@@ -697,7 +697,7 @@ class Client:
         the module doc."""
         rid = self.send(m.HANDLES_MOVE, m.encode_handle_move(
             session_id, targets, max_iters, max_ms, progress_every,
-            pg.WORK_OPT_PROGRESS if progress is not None else 0))
+            pg.WORK_OPT_PROGRESS if progress is not None else None))
         return m.decode_move_result(self._wait_with_progress(rid, progress, timeout))
 
     def reset_rest(self, session_id: int) -> m.Ack:

@@ -323,8 +323,9 @@ assert HANDLES_STRUCT.size == 92
 
 
 def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: HandleParams,
-                   affine: Sequence[AffineSet] = (), options: int = 0) -> bytes:
-    """options: WorkOpt bits (PROGRESS: WORK_PROGRESS events), appended only when non-zero."""
+                   affine: Sequence[AffineSet] = (), options: Optional[int] = None) -> bytes:
+    """options: WorkOpt bits (PROGRESS: WORK_PROGRESS events), the optional trailing field:
+    None leaves it out (the original layout), an int (0 too) appends it."""
     if energy not in ENERGIES:
         raise ValueError("energy %r not one of %s" % (energy, sorted(ENERGIES)))
     out = [HANDLES_STRUCT.pack(session_id, ENERGIES[energy], 1 if p.area_weighting else 0,
@@ -340,7 +341,7 @@ def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: Hand
         out.append(struct.pack("<B", rows) + f64_rows(a.A, "affine row")
                    + struct.pack("<%dd" % rows, *[float(x) for x in a.b])
                    + struct.pack("<I", len(a.indices)) + u32_array(a.indices))
-    if options:
+    if options is not None:
         out.append(struct.pack("<I", options))
     return b"".join(out)
 
@@ -355,7 +356,8 @@ class HandleSet:
     params: HandleParams
     handles: List[int]
     affine: List[AffineSet]
-    options: int = 0     # WorkOpt bits of a HANDLES_SET request (never in a HANDLES_GET reply)
+    options: Optional[int] = None   # WorkOpt bits of a HANDLES_SET request; None: field absent
+                                    # (always so in a HANDLES_GET reply)
 
 
 ENERGY_NAMES = {v: k for k, v in ENERGIES.items()}
@@ -400,12 +402,12 @@ def decode_handles(p: bytes) -> HandleSet:
     return HandleSet(session_id, ENERGY_NAMES[energy], params, handles, affine, options)
 
 
-def _read_options(r: Reader, what: str) -> int:
+def _read_options(r: Reader, what: str) -> Optional[int]:
     """The optional trailing u32 `options` (WorkOpt bits) of handles / handle_move, read as the
-    C decoder does: 0 when the body ends; unknown bits are a ProtocolError."""
+    C decoder does: None when the body ends (absent); unknown bits are a ProtocolError."""
     left = len(r.p) - r.off
     if left == 0 or left > 4:
-        return 0        # absent, or trailing bytes r.end() refuses
+        return None     # absent, or trailing bytes r.end() refuses
     o = r.take("I")     # 1..3 bytes: a cut field (truncated)
     if o & ~int(WorkOpt.PROGRESS):
         raise ProtocolError("%s: options 0x%x has unknown bits" % (what, o))
@@ -413,10 +415,12 @@ def _read_options(r: Reader, what: str) -> int:
 
 
 def encode_handle_move(session_id: int, targets: Sequence[Sequence[float]], max_iters: int = 0,
-                       max_ms: int = 0, progress_every: int = 0, options: int = 0) -> bytes:
-    """options: WorkOpt bits (PROGRESS: WORK_PROGRESS events), appended only when non-zero."""
+                       max_ms: int = 0, progress_every: int = 0,
+                       options: Optional[int] = None) -> bytes:
+    """options: WorkOpt bits (PROGRESS: WORK_PROGRESS events), as in encode_handles."""
     return (struct.pack("<QIIII", session_id, max_iters, max_ms, progress_every, len(targets))
-            + f64_rows(targets, "target") + (struct.pack("<I", options) if options else b""))
+            + f64_rows(targets, "target")
+            + (struct.pack("<I", options) if options is not None else b""))
 
 
 @dataclass

@@ -166,7 +166,7 @@ static inline void build_samples(sample *s)
     df_msg_affine_set aff;
     df_msg_handles hs = sample_handles_msg(&aff);
     ADD("handles", DF_MSG_HANDLES_SET, 0, df_msg_handles_encode(&hs, out, &e));
-    df_msg_handle_move hm = {7, 0, 250, 10, 4, sample_targets, 0};
+    df_msg_handle_move hm = {7, 0, 250, 10, 4, sample_targets, 0, 0};
     ADD("handle_move", DF_MSG_HANDLES_MOVE, 0, df_msg_handle_move_encode(&hm, out, &e));
     df_msg_move_result mr = {7, 60, DF_MOVE_CONVERGED, 123, 4.5, 1e-12, 37.5};
     ADD("move_result", DF_MSG_HANDLES_MOVE, DF_FLAG_REPLY, df_msg_move_result_encode(&mr, out, &e));
@@ -267,7 +267,7 @@ static inline void build_samples(sample *s)
     df_msg_handles hsp = sample_handles_msg(&aff);
     hsp.options = DF_WORK_OPT_PROGRESS;
     ADD("handles_progress", DF_MSG_HANDLES_SET, 0, df_msg_handles_encode(&hsp, out, &e));
-    df_msg_handle_move hmp = {7, 0, 250, 10, 4, sample_targets, DF_WORK_OPT_PROGRESS};
+    df_msg_handle_move hmp = {7, 0, 250, 10, 4, sample_targets, DF_WORK_OPT_PROGRESS, 0};
     ADD("handle_move_progress", DF_MSG_HANDLES_MOVE, 0, df_msg_handle_move_encode(&hmp, out, &e));
     df_msg_work_progress wp = {0, DF_STAGE_PARSE, 0, 1 << 20, 3 << 20, 12.5};
     ADD("work_progress", DF_MSG_WORK_PROGRESS, DF_FLAG_EVENT,

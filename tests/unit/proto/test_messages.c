@@ -272,7 +272,7 @@ static void test_handles_and_move_fields(void **state)
     df_msg_handles_free(&out);
     assert_null(out.handles);
 
-    df_msg_handle_move mv = {7, 0, 250, 10, 4, sample_targets, 0}, mo;
+    df_msg_handle_move mv = {7, 0, 250, 10, 4, sample_targets, 0, 0}, mo;
     df_buf_reset(&b);
     assert_int_equal(df_msg_handle_move_encode(&mv, &b, &e), DF_OK);
     assert_int_equal(b.len, 24 + 96);
@@ -280,7 +280,29 @@ static void test_handles_and_move_fields(void **state)
     assert_int_equal(mo.max_ms, 250);
     assert_int_equal(mo.progress_every, 10);
     assert_true(mo.targets[11] == -3.25);
+    assert_int_equal(mo.options, 0);
+    assert_int_equal(mo.options_field, 0); /* the original layout: no options field */
     df_msg_handle_move_free(&mo);
+    /* the optional options (PROTOCOL.md 4.16): PROGRESS read back; an explicit 0 is kept as a
+     * field so that the body re-encodes to the same bytes */
+    for (uint32_t opt = 0; opt <= DF_WORK_OPT_PROGRESS; opt++) {
+        df_msg_handle_move mp = mv;
+        mp.options = opt;
+        mp.options_field = 1;
+        df_buf_reset(&b);
+        assert_int_equal(df_msg_handle_move_encode(&mp, &b, &e), DF_OK);
+        assert_int_equal(b.len, 24 + 96 + 4);
+        assert_int_equal(df_msg_handle_move_decode(b.data, b.len, &mo, &e), DF_OK);
+        assert_int_equal(mo.options, opt);
+        assert_int_equal(mo.options_field, 1);
+        df_buf c;
+        df_buf_init(&c);
+        assert_int_equal(df_msg_handle_move_encode(&mo, &c, &e), DF_OK);
+        assert_int_equal(c.len, b.len);
+        assert_memory_equal(c.data, b.data, b.len);
+        df_buf_free(&c);
+        df_msg_handle_move_free(&mo);
+    }
     df_buf_free(&b);
 }
 
