@@ -304,6 +304,10 @@ typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet pa
     uint8_t use_session_field;         /* decode: 1 when the body carried the u16 (even 0);
                                         * encode: write it when use_session != 0 or this is 1.
                                         * 0 with use_session 0 is the original 253 + 24n layout */
+    uint32_t options;                  /* DF_WORK_OPT_* (PROGRESS: WORK_PROGRESS of the pinned
+                                        * points' LU for this stroke); optional trailing u32
+                                        * after use_session (which is then always written) */
+    uint8_t options_field;             /* as use_session_field, for `options` */
 } df_msg_brush;
 
 typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */

@@ -178,3 +178,28 @@ def test_deformctl_plain_progress_lines(daemon, big_obj, tmp_path):
                         "--targets", str(tf), "--progress", "sometimes"], capture_output=True,
                        text=True, timeout=30, stdin=subprocess.DEVNULL)
     assert p.returncode == 2 and "--progress" in p.stderr
+
+
+def test_pinned_stroke_reports_its_lu(daemon):
+    from deformd_client import Brush
+    with daemon.unix_client(timeout=60) as c:
+        sid = c.load_mesh(grid_obj(20, 20), fmt=".obj").session_id
+        pins = [(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)]
+        brush = Brush(type="grab", center=(0.5, 0.5, 0.0), move=(0, 0, 0.1), radius=0.4,
+                      pinned=pins)
+        fac = []
+        rid = c._next_id
+        c.brush_begin(sid, brush, progress=fac.append)   # non-zero load: the begin builds it
+        f = check_stream(fac, [WorkStage.FACTORIZE])[WorkStage.FACTORIZE]
+        assert (f.done, f.total, f.request_id, f.session_id) == (1, 1, rid, sid)
+        assert fac[0].done == 0 or len(fac) == 1
+        no_late_events(c, rid)
+        upd = []
+        c.brush_update(sid, move=(0, 0, 0.2), progress=upd.append)   # the same LU: no events
+        assert upd == []
+        c.brush_end(sid)
+        # a stroke that did not ask gets nothing, also when its begin builds an LU
+        moved = Brush(type="grab", center=(0.5, 0.5, 0.0), move=(0, 0, 0.1), radius=0.4,
+                      pinned=[(0.0, 0.0, 0.0)])
+        c.stroke(sid, moved)
+        assert [e for e in c.events(timeout=0) if isinstance(e, WorkProgress)] == []

@@ -245,6 +245,7 @@ ENUM_FIELDS = [
     ("4.30", "backend", "DevBackend", False, ()),
     ("4.30", "state", "DevState", False, ()),
     ("4.3 auth", "method", "AuthMethod", False, ()),
+    ("4.12", "options", "WorkOpt", True, ()),
     ("4.15", "options", "WorkOpt", True, ()),
     ("4.16", "options", "WorkOpt", True, ()),
     ("4.35", "stage", "WorkStage", False, ()),

@@ -27,6 +27,7 @@ out of the call (the connection stays usable: the reply is collected by the next
 dropped). A daemon without the feature refuses the request (EPROTO_RESERVED / EPROTO_TRAILING):
 call again without `progress`.
 """
+import dataclasses
 import os
 import secrets
 import socket
@@ -622,14 +623,24 @@ class Client:
         return info
 
     # ------------------------------------------------------------------ brush
-    def brush_begin(self, session_id: int, brush: m.Brush) -> m.Ack:
-        return m.decode_ack(self._one(m.BRUSH_BEGIN, m.encode_brush(session_id, brush)))
+    def brush_begin(self, session_id: int, brush: m.Brush,
+                    progress: Optional["ProgressFn"] = None) -> m.Ack:
+        """Opens a stroke. progress: a callback for the "factorize" stage of the LU of the
+        brush's pinned points (built by the begin when its load is non-zero, else by the first
+        update; see the module doc); the stroke's later updates report to brush_update's."""
+        if progress is not None:
+            brush = dataclasses.replace(brush, options=pg.WORK_OPT_PROGRESS)
+        rid = self.send(m.BRUSH_BEGIN, m.encode_brush(session_id, brush))
+        return m.decode_ack(self._wait_with_progress(rid, progress))
 
     def brush_update(self, session_id: int, move=None, twist=None, scale: float = 0.0,
-                     matrix=None) -> m.Ack:
-        """Cumulative load since the stroke began (same meaning as in Brush)."""
-        return m.decode_ack(self._one(m.BRUSH_UPDATE,
-                                      m.encode_brush_update(session_id, move, twist, scale, matrix)))
+                     matrix=None, progress: Optional["ProgressFn"] = None) -> m.Ack:
+        """Cumulative load since the stroke began (same meaning as in Brush). progress: the
+        pin LU's "factorize" events when this update (re)builds it, for a stroke whose
+        brush_begin asked for progress."""
+        rid = self.send(m.BRUSH_UPDATE,
+                        m.encode_brush_update(session_id, move, twist, scale, matrix))
+        return m.decode_ack(self._wait_with_progress(rid, progress))
 
     def brush_end(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.BRUSH_END, m.encode_session_ref(session_id)))
@@ -637,10 +648,12 @@ class Client:
     def brush_cancel(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.BRUSH_CANCEL, m.encode_session_ref(session_id)))
 
-    def stroke(self, session_id: int, brush: m.Brush) -> m.Ack:
+    def stroke(self, session_id: int, brush: m.Brush,
+               progress: Optional["ProgressFn"] = None) -> m.Ack:
         """One whole stroke committed as one version (like `deformctl brush`): begin with the
-        brush's load (applied as its first update), then end. Returns the end's ack."""
-        self.brush_begin(session_id, brush)
+        brush's load (applied as its first update), then end. Returns the end's ack. progress:
+        as in brush_begin."""
+        self.brush_begin(session_id, brush, progress)
         return self.brush_end(session_id)
 
     def set_brush_param(self, session_id: int, param: str, value: float) -> m.Ack:

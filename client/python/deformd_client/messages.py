@@ -245,6 +245,9 @@ class Brush:
     # BrushStateField bits: take these fields from the session brush (brush_state_set) instead
     # of the values above. None: the field is not sent (the original layout, old daemons).
     use_session: Optional[int] = None
+    # WorkOpt bits (PROGRESS: WORK_PROGRESS of the pinned points' LU), sent after use_session
+    # (then written as 0 when None). None: not sent. Client.brush_begin(progress=) sets it.
+    options: Optional[int] = None
 
 
 PIN_DISPLACEMENT, PIN_GRADIENT = PinFlag.DISPLACEMENT, PinFlag.GRADIENT
@@ -265,7 +268,10 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
         float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
         *vec(b.center, 3, "center"), *vec(b.move, 3, "move"), *vec(b.twist, 3, "twist"),
         float(b.scale), *vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
-    tail = b"" if b.use_session is None else struct.pack("<H", int(b.use_session))
+    tail = b"" if b.use_session is None and b.options is None else \
+        struct.pack("<H", int(b.use_session or 0))
+    if b.options is not None:
+        tail += struct.pack("<I", int(b.options))
     return head + f64_rows(b.pinned, "pinned point") + tail
 
 

@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES_WORK = 3,
+enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES_WORK = 4,
        N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_WORK };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
@@ -269,6 +269,9 @@ static inline void build_samples(sample *s)
     ADD("handles_progress", DF_MSG_HANDLES_SET, 0, df_msg_handles_encode(&hsp, out, &e));
     df_msg_handle_move hmp = {7, 0, 250, 10, 4, sample_targets, DF_WORK_OPT_PROGRESS, 0};
     ADD("handle_move_progress", DF_MSG_HANDLES_MOVE, 0, df_msg_handle_move_encode(&hmp, out, &e));
+    df_msg_brush bpr = sample_brush(); /* pinned points: their LU's progress */
+    bpr.options = DF_WORK_OPT_PROGRESS;
+    ADD("brush_progress", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bpr, out, &e));
     df_msg_work_progress wp = {0, DF_STAGE_PARSE, 0, 1 << 20, 3 << 20, 12.5};
     ADD("work_progress", DF_MSG_WORK_PROGRESS, DF_FLAG_EVENT,
         df_msg_work_progress_encode(&wp, out, &e));
