@@ -147,6 +147,17 @@ def test_preview_tet_and_2d_sessions(ctl, tmp_path):
     assert j["triangles"] > 0  # the boundary faces
     w, h, rows = read_png(str(tmp_path / "t.png"))
     assert (w, h) == (800, 400)
+    line = tmp_path / "line.obj"
+    line.write_text("v 0 0 0\nv 1 0.2 0\nv 2 0 0.3\nv 3 0.5 0\nl 1 2\nl 2 3\nl 3 4\n")
+    lid = int(ctl("load", line).stdout.strip())
+    j = json.loads(ctl("--json", "preview", lid, "--out", tmp_path / "l.png", "--size",
+                       "200x100").stdout)
+    assert (j["segments"], j["triangles"]) == (3, 0)   # a polyline is drawn as lines
+    rows = read_png(str(tmp_path / "l.png"))[2]
+    assert panel(rows, j["panels"][0]) == panel(rows, j["panels"][1])
+    bg = rows[0][:3]
+    assert any(row[i:i + 3] != bg for row in panel(rows, j["panels"][0])
+               for i in range(0, len(row), 3))
     flat = tmp_path / "flat.obj"
     flat.write_text("v 0 0\nv 1 0\nv 0 1\nv 1 1\nf 1 2 3\nf 2 4 3\n")
     fid = int(ctl("load", flat).stdout.strip())
