@@ -47,6 +47,9 @@ SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lzstd -lpthread $(CRYPTO_SYS)
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers
 # (they compile every core source).
 GEOM_SYS    := -lembree3
+# libpng (libpng-dev): deformctl's PNG output (client/deformctl/png_out.c, `deformctl preview`),
+# linked by deformctl and its unit tests only; libdeformclient does not need it.
+PNG_SYS     := -lpng
 
 srcs = $(if $(wildcard $(1)),$(shell find $(1) -name '*.c' $(2) | sort))
 lib  = $(BUILD)/lib/libdf_$(1).a
@@ -88,7 +91,7 @@ UNIT_SYS_proto      := -lm $(CRYPTO_SYS)
 UNIT_LINK_client    := $(CLIENT_LIB) $(PROTO_LIB) $(CORE_LIBS)
 UNIT_SYS_client     := $(MATH_LIBS) $(CRYPTO_SYS)
 UNIT_LINK_deformctl := $(CTL_LINK)
-UNIT_SYS_deformctl  := $(KELV_SYS) $(CRYPTO_SYS)
+UNIT_SYS_deformctl  := $(KELV_SYS) $(CRYPTO_SYS) $(PNG_SYS)
 UNIT_LINK_server    := $(SERVER_LINK)
 UNIT_SYS_server     := $(MATH_LIBS) $(GEOM_SYS) $(SERVER_SYS)
 # hid: server/hid/ (parsers: core/common only; device sources: hidapi, libusb, pthread), taken
@@ -126,7 +129,7 @@ DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopen
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
              libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev \
-            blender python3-numpy xvfb xauth
+            blender python3-numpy xvfb xauth libpng-dev
 
 # (the folders are prerequisites too: a removed module rebuilds the zip)
 $(BUILD)/blender/deformd_blender.zip: $(ADDON_SRC) client/blender/deformd_blender client/python/deformd_client
@@ -166,7 +169,8 @@ $(BUILD)/lib/libdf_ctl.a: $(call objs,$(filter-out client/deformctl/main.c,$(CTL
 	rm -f $@ && ar rcs $@ $^
 $(BUILD)/bin/deformctl: $(BUILD)/obj/client/deformctl/main.o $(CTL_LINK)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(CTL_LINK)) $(KELV_SYS) $(CRYPTO_SYS)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(call group,$(CTL_LINK)) $(KELV_SYS) $(CRYPTO_SYS) \
+	  $(PNG_SYS)
 
 define unit_area
 $(BUILD)/tests/unit/$(1)/%: tests/unit/$(1)/%.c $(call objs,$(UNIT_HELP)) $$(UNIT_LINK_$(1))

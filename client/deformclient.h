@@ -143,10 +143,12 @@ int df_client_authenticate(df_client *c, const void *key, size_t key_len, df_err
  * it and says what to do). The key is wiped from memory afterwards. */
 int df_client_authenticate_file(df_client *c, const char *key_file, df_error *err);
 
-/* Sets extra load_mesh option bits (0 or DF_LOAD_OPT_2D: a 2D session even if the file gives z)
- * ORed into the options of every later load on `c` (df_client_load_mesh_bytes / _file / _path
- * and their _ex forms, which always set DF_LOAD_OPT_EXT themselves); 0 at connect. Unknown bits
- * are refused by the server (DF_EPROTO_RESERVED). */
+/* Sets extra load_mesh option bits (DF_LOAD_OPT_2D: a 2D session even if the file gives z;
+ * DF_LOAD_OPT_PROGRESS: WORK_PROGRESS events of the upload and parse, PROTOCOL.md 4.37, which
+ * reach the event callback during the load, all before it returns) ORed into the options of
+ * every later load on `c` (df_client_load_mesh_bytes / _file / _path and their _ex forms, which
+ * always set DF_LOAD_OPT_EXT themselves); 0 at connect. Unknown bits are refused by the server
+ * (DF_EPROTO_RESERVED). */
 void df_client_set_load_flags(df_client *c, uint16_t flags);
 
 /* Uploads `len` bytes of a mesh file in `format` (DF_FMT_*, DF_FMT_AUTO sniffs) as session
@@ -277,7 +279,10 @@ int df_client_session_access(df_client *c, const df_msg_session_access *m,
 int df_client_join(df_client *c, uint64_t session_id, const uint8_t *key,
                    df_msg_access_info *out, df_error *err);
 
-/* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets). */
+/* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets).
+ * h->options DF_WORK_OPT_PROGRESS asks for WORK_PROGRESS events of the solver build (stage
+ * FACTORIZE, PROTOCOL.md 4.37), delivered to the event callback before this returns; a daemon
+ * without them answers DF_EPROTO_TRAILING. */
 int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);
 
 /* Fetches the session's current handle set into *out: every parameter as set, the handle vertex
@@ -288,7 +293,9 @@ int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);
 int df_client_handles_get(df_client *c, uint64_t session_id, df_msg_handles *out, df_error *err);
 
 /* Moves the handles to m->targets and waits for the final reply (*res). Progress iterates
- * arrive meanwhile as DF_MSG_PROGRESS events (the callback). */
+ * arrive meanwhile as DF_MSG_PROGRESS events (the callback); with m->options
+ * DF_WORK_OPT_PROGRESS also DF_MSG_WORK_PROGRESS events (stage SOLVE: iterations of the budget;
+ * FACTORIZE when the solver is rebuilt; body df_msg_work_progress), all before this returns. */
 int df_client_handles_move(df_client *c, const df_msg_handle_move *m, df_msg_move_result *res,
                            df_error *err);
 

@@ -108,6 +108,10 @@ enum { DF_WIRE_AUTH_METHODS(DF_X_AUTHM) }; /* DF_AUTH_HMAC_CHALLENGE, DF_AUTH_HM
 enum { DF_WIRE_ACCESS_MODES(DF_X_AMODE) }; /* DF_ACCESS_MODE_OPEN .. OWNER */
 #define DF_X_AFLAG(n, v) DF_X_ENUM(DF_ACCESS_, n, v)
 enum { DF_WIRE_ACCESS_FLAGS(DF_X_AFLAG) }; /* DF_ACCESS_NEW_KEY */
+#define DF_X_STAGE(n, v) DF_X_ENUM(DF_STAGE_, n, v)
+typedef enum df_work_stage { DF_WIRE_WORK_STAGES(DF_X_STAGE) } df_work_stage;
+#define DF_X_WOPT(n, v) DF_X_ENUM(DF_WORK_OPT_, n, v)
+enum { DF_WIRE_WORK_OPTS(DF_X_WOPT) };
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -124,6 +128,8 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_LOAD_OPTS_ALL (0u DF_WIRE_LOAD_OPTS(DF_X_OR))
 #define DF_BS_ALL (0u DF_WIRE_BRUSH_STATE_FIELDS(DF_X_OR))  /* every brush state field */
 #define DF_CURSOR_FLAGS_ALL (0u DF_WIRE_CURSOR_FLAGS(DF_X_OR))
+#define DF_WORK_OPTS_ALL (0u DF_WIRE_WORK_OPTS(DF_X_OR))
+#define DF_STAGE_MAX (0 DF_WIRE_WORK_STAGES(DF_X_COUNT)) /* stages this build sends: 1..MAX */
 #define DF_ORIGIN_MAX (0 DF_WIRE_ORIGINS(DF_X_COUNT) - 1)    /* origins are 0..DF_ORIGIN_MAX */
 #define DF_FMT_MAX (0 DF_WIRE_FORMATS(DF_X_COUNT) - 1)        /* formats are 0..DF_FMT_MAX */
 #define DF_BRUSH_TYPE_MAX (0 DF_WIRE_BRUSH_TYPES(DF_X_COUNT)) /* the 1..MAX enums: */
@@ -308,6 +314,10 @@ typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet pa
     uint8_t use_session_field;         /* decode: 1 when the body carried the u16 (even 0);
                                         * encode: write it when use_session != 0 or this is 1.
                                         * 0 with use_session 0 is the original 253 + 24n layout */
+    uint32_t options;                  /* DF_WORK_OPT_* (PROGRESS: WORK_PROGRESS of the pinned
+                                        * points' LU for this stroke); optional trailing u32
+                                        * after use_session (which is then always written) */
+    uint8_t options_field;             /* as use_session_field, for `options` */
 } df_msg_brush;
 
 typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */
@@ -390,6 +400,10 @@ typedef struct df_msg_handles {        /* define the session's handle set (repla
     int32_t *handles;                  /* handle vertex indices, malloc'd on decode */
     uint32_t n_affine;                 /* 0..DF_MAX_AFFINE_SETS */
     df_msg_affine_set *affine;         /* malloc'd on decode */
+    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32 on the wire) */
+    uint8_t options_field;             /* 1: the body carries `options` (decode: it was present;
+                                        * encode: write it even when 0); 0: written only when
+                                        * options != 0, else the original layout */
 } df_msg_handles;
 
 typedef struct df_msg_handle_move {    /* move the handles; supersedes a running move */
@@ -399,6 +413,8 @@ typedef struct df_msg_handle_move {    /* move the handles; supersedes a running
     uint32_t progress_every;           /* progress event every N iterations, 0 = final only */
     uint32_t n_targets;                /* must equal the handle set's n_handles (server checks) */
     double *targets;                   /* n_targets x 3 target positions, finite, malloc'd on decode */
+    uint32_t options;                  /* DF_WORK_OPT_* (optional trailing u32) */
+    uint8_t options_field;             /* as in df_msg_handles */
 } df_msg_handle_move;
 
 typedef struct df_msg_move_result {    /* final reply of a handle move */
@@ -463,6 +479,15 @@ typedef struct df_msg_progress {       /* one ADMM iterate of a handle move (a s
     double elapsed_ms;                 /* finite, >= 0 */
     df_msg_disp disp;                  /* the iterate (kind DF_CHANGE_HANDLE_MOVE) */
 } df_msg_progress;
+
+typedef struct df_msg_work_progress {  /* WORK_PROGRESS event (PROTOCOL.md 4.37), 36 bytes */
+    uint64_t session_id;               /* the request's session; 0 while a load has none */
+    uint8_t stage;                     /* df_work_stage; any value >= 1 decodes (newer stages) */
+    uint8_t final;                     /* 0/1: the last event of this stage for this request */
+    uint64_t done;                     /* units of the stage done (bytes, steps, iterations) */
+    uint64_t total;                    /* units in all, >= done; 0 when unknown */
+    double elapsed_ms;                 /* since the stage began, finite, >= 0 */
+} df_msg_work_progress;
 
 typedef struct df_msg_stats_req {
     uint64_t session_id;               /* 0: daemon-wide stats; else that session's */
@@ -577,6 +602,7 @@ DF_MSG_CODEC(device_view)
 DF_MSG_CODEC(session_access)
 DF_MSG_CODEC(join)
 DF_MSG_CODEC(access_info)
+DF_MSG_CODEC(work_progress)
 #undef DF_MSG_CODEC
 
 /* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
@@ -651,7 +677,8 @@ typedef enum df_body_kind {
     /* devices (HID) */
     DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW,
     /* per-session access */
-    DF_BODY_SESSION_ACCESS, DF_BODY_JOIN, DF_BODY_ACCESS_INFO
+    DF_BODY_SESSION_ACCESS, DF_BODY_JOIN, DF_BODY_ACCESS_INFO,
+    DF_BODY_WORK_PROGRESS
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -695,6 +722,7 @@ typedef struct df_msg_any {
         df_msg_session_access session_access;
         df_msg_join join;
         df_msg_access_info access_info;
+        df_msg_work_progress work_progress;
     } u;
 } df_msg_any;
 

@@ -70,6 +70,9 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
         break;
     case DF_BODY_JOIN: rc = df_msg_join_decode(p, n, &t.u.join, err); break;
     case DF_BODY_ACCESS_INFO: rc = df_msg_access_info_decode(p, n, &t.u.access_info, err); break;
+    case DF_BODY_WORK_PROGRESS:
+        rc = df_msg_work_progress_decode(p, n, &t.u.work_progress, err);
+        break;
     default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
     }
     if (rc)
@@ -142,6 +145,7 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
         return df_msg_session_access_encode(&m->u.session_access, out, e);
     case DF_BODY_JOIN: return df_msg_join_encode(&m->u.join, out, e);
     case DF_BODY_ACCESS_INFO: return df_msg_access_info_encode(&m->u.access_info, out, e);
+    case DF_BODY_WORK_PROGRESS: return df_msg_work_progress_encode(&m->u.work_progress, out, e);
     }
     return DF_EINTERNAL;
 }

@@ -5,6 +5,7 @@
  *   n_pinned x f64[3]   (253 + 24 n_pinned bytes)
  *   [u16 use_session]   optional trailing field (DF_BS_* bits); absent = 0, so bodies of
  *                       clients that predate it decode unchanged (+2 bytes when present)
+ *   [u32 options]       optional, only after use_session: DF_WORK_OPT_* bits (+4 bytes)
  * brush_update: u64 session_id, f64 move[3], twist[3], scale, matrix[9]   (136 bytes)
  * brush_param: u64 session_id, u8 param, f64 value                        (17 bytes) */
 #include <math.h>
@@ -86,6 +87,11 @@ static int brush_check(const df_msg_brush *m, df_error *err)
     if (m->use_session_field > 1)
         return df_error_set(err, DF_EINVAL, "%s: use_session_field %u not 0/1", M,
                             m->use_session_field);
+    if (m->options & ~DF_WORK_OPTS_ALL)
+        return df_error_set(err, DF_EPROTO_RESERVED, "%s: options 0x%x has unknown bits 0x%x", M,
+                            (unsigned)m->options, (unsigned)(m->options & ~DF_WORK_OPTS_ALL));
+    if (m->options_field > 1)
+        return df_error_set(err, DF_EINVAL, "%s: options_field %u not 0/1", M, m->options_field);
     return df_check_finite(m->pinned, 3 * (size_t)m->n_pinned, M, "pinned", err);
 }
 
@@ -104,8 +110,9 @@ static void get_f64s(df_rd *r, double *v, size_t n, const char *field)
 int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
 {
     int rc = brush_check(m, err);
-    int trailer = m->use_session != 0 || m->use_session_field;
-    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0);
+    int opts = m->options != 0 || m->options_field;
+    int trailer = m->use_session != 0 || m->use_session_field || opts;
+    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0) + (opts ? 4 : 0);
     if (rc || (rc = df_enc_reserve(out, size, "brush", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
@@ -132,6 +139,8 @@ int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
     put_f64s(out, m->pinned, 3 * (size_t)m->n_pinned);
     if (trailer)
         df_buf_put_u16(out, m->use_session);
+    if (opts)
+        df_buf_put_u32(out, m->options);
     return DF_OK;
 }
 
@@ -172,6 +181,10 @@ int df_msg_brush_decode(const uint8_t *p, size_t n, df_msg_brush *m, df_error *e
     t.use_session_field = !r.rc && r.off < r.n; /* the optional trailer (else: old layout) */
     if (t.use_session_field)
         t.use_session = df_rd_u16(&r, "use_session");
+    t.options = 0;
+    t.options_field = !r.rc && t.use_session_field && r.off < r.n && r.n - r.off <= 4;
+    if (t.options_field) /* 1..3 bytes: a cut field (truncated); more than 4: trailing */
+        t.options = df_rd_u32(&r, "options");
     int rc = df_rd_end(&r);
     if (rc || (rc = brush_check(&t, err))) {
         free(t.pinned);

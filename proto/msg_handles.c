@@ -2,9 +2,10 @@
  * handles: u64 session_id, u8 energy, u8 area_weighting, u8 accelerate, u8 anderson_m, f64 w, s,
  *   rho, tol, youngs, poisson, strain_min, strain_max, bending, u32 max_iters, u32 n_handles
  *   (92 bytes), n_handles x u32 index, u32 n_affine, n_affine x { u8 rows, rows x 3 f64 A (row-major),
- *   rows x f64 b, u32 n_indices, n_indices x u32 index }
- * handle_move: u64 session_id, u32 max_iters, u32 max_ms, u32 progress_every, u32 n_targets,
- *   n_targets x f64[3]
+ *   rows x f64 b, u32 n_indices, n_indices x u32 index } [, u32 options]
+ * [options]: optional trailing DF_WORK_OPT_* bits (written only when non-zero; a body without
+ *   them decodes with options 0, as before the field existed)  * handle_move: u64 session_id, u32 max_iters, u32 max_ms, u32 progress_every, u32 n_targets,
+ *   n_targets x f64[3] [, u32 options]
  * move_result: u64 session_id, u64 version, u8 status, u32 iterations, f64 objective,
  *   f64 residual, f64 elapsed_ms   (45 bytes) */
 #include <math.h>
@@ -27,11 +28,41 @@ static int indices_check(const int32_t *idx, uint32_t n, const char *M, const ch
     return DF_OK;
 }
 
+/* The optional trailing `options` u32 (DF_WORK_OPT_*) of handles and handle_move: 0 when the
+ * body ends here; 4 more bytes hold it (*present = 1; unknown bits: DF_EPROTO_RESERVED); 1..3
+ * are a cut field (DF_EPROTO_TRUNCATED); more are left for df_rd_end (DF_EPROTO_TRAILING). */
+static uint32_t read_options(df_rd *r, uint8_t *present)
+{
+    size_t left = r->rc ? 0 : r->n - r->off;
+    *present = 0;
+    if (left == 0 || left > 4)
+        return 0;
+    *present = 1;
+    uint32_t o = df_rd_u32(r, "options");
+    if (o & ~DF_WORK_OPTS_ALL)
+        df_rd_fail(r, DF_EPROTO_RESERVED, "options", "unknown bits 0x%x",
+                   (unsigned)(o & ~DF_WORK_OPTS_ALL));
+    return o;
+}
+
+static int options_check(uint32_t o, uint8_t field, const char *M, df_error *err)
+{
+    if (field > 1)
+        return df_error_set(err, DF_EINVAL, "%s: options_field %u not 0/1", M, field);
+    if (o & ~DF_WORK_OPTS_ALL)
+        return df_error_set(err, DF_EPROTO_RESERVED, "%s: options 0x%x has unknown bits 0x%x", M,
+                            (unsigned)o, (unsigned)(o & ~DF_WORK_OPTS_ALL));
+    return DF_OK;
+}
+
 static int handles_check(const df_msg_handles *m, df_error *err)
 {
     const char *M = "handles";
     if (m->session_id == 0)
         return df_error_set(err, DF_EINVAL, "%s: session_id 0 is not a session", M);
+    int orc = options_check(m->options, m->options_field, M, err);
+    if (orc)
+        return orc;
     if (m->energy < 1 || m->energy > DF_ENERGY_MAX)
         return df_error_set(err, DF_EINVAL, "%s: energy %u not in 1..%u", M, m->energy,
                             DF_ENERGY_MAX);
@@ -97,7 +128,8 @@ int df_msg_handles_encode(const df_msg_handles *m, df_buf *out, df_error *err)
     int rc = handles_check(m, err);
     if (rc)
         return rc;
-    size_t size = 92 + 4 * (size_t)m->n_handles + 4;
+    int with_options = m->options != 0 || m->options_field;
+    size_t size = 92 + 4 * (size_t)m->n_handles + 4 + (with_options ? 4 : 0);
     for (uint32_t k = 0; k < m->n_affine; k++)
         size += 1 + 32 * (size_t)m->affine[k].rows + 4 + 4 * (size_t)m->affine[k].n_indices;
     if ((rc = df_enc_reserve(out, size, "handles", err)))
@@ -132,6 +164,8 @@ int df_msg_handles_encode(const df_msg_handles *m, df_buf *out, df_error *err)
         for (uint32_t i = 0; i < a->n_indices; i++)
             df_buf_put_u32(out, (uint32_t)a->indices[i]);
     }
+    if (with_options)
+        df_buf_put_u32(out, m->options);
     return DF_OK;
 }
 
@@ -188,6 +222,7 @@ int df_msg_handles_decode(const uint8_t *p, size_t n, df_msg_handles *m, df_erro
     uint32_t got = 0;
     for (; got < t.n_affine && !r.rc; got++)
         affine_read(&r, &t.affine[got]);
+    t.options = read_options(&r, &t.options_field);
     int rc = df_rd_end(&r);
     if (!rc)
         rc = handles_check(&t, err);
@@ -219,6 +254,9 @@ static int move_check(const df_msg_handle_move *m, df_error *err)
     const char *M = "handle_move";
     if (m->session_id == 0)
         return df_error_set(err, DF_EINVAL, "%s: session_id 0 is not a session", M);
+    int orc = options_check(m->options, m->options_field, M, err);
+    if (orc)
+        return orc;
     if (m->max_iters > DF_MAX_MOVE_ITERS)
         return df_error_set(err, DF_EINVAL, "%s: max_iters %u exceeds %u", M, m->max_iters,
                             DF_MAX_MOVE_ITERS);
@@ -233,7 +271,9 @@ static int move_check(const df_msg_handle_move *m, df_error *err)
 int df_msg_handle_move_encode(const df_msg_handle_move *m, df_buf *out, df_error *err)
 {
     int rc = move_check(m, err);
-    if (rc || (rc = df_enc_reserve(out, 24 + 24 * (size_t)m->n_targets, "handle_move", err)))
+    int with_options = m->options != 0 || m->options_field;
+    if (rc || (rc = df_enc_reserve(out, 24 + 24 * (size_t)m->n_targets + (with_options ? 4 : 0),
+                                   "handle_move", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
     df_buf_put_u32(out, m->max_iters);
@@ -242,6 +282,8 @@ int df_msg_handle_move_encode(const df_msg_handle_move *m, df_buf *out, df_error
     df_buf_put_u32(out, m->n_targets);
     for (size_t i = 0; i < 3 * (size_t)m->n_targets; i++)
         df_buf_put_f64(out, m->targets[i]);
+    if (with_options)
+        df_buf_put_u32(out, m->options);
     return DF_OK;
 }
 
@@ -262,6 +304,7 @@ int df_msg_handle_move_decode(const uint8_t *p, size_t n, df_msg_handle_move *m,
     t.targets = df_rd_alloc(&r, 3 * (size_t)t.n_targets, sizeof(double), "targets");
     for (size_t i = 0; !r.rc && i < 3 * (size_t)t.n_targets; i++)
         t.targets[i] = df_rd_f64(&r, "targets");
+    t.options = read_options(&r, &t.options_field);
     int rc = df_rd_end(&r);
     if (rc || (rc = move_check(&t, err))) {
         free(t.targets);

@@ -125,6 +125,7 @@
     X(BRUSH_STATE, 0x0084, brush_state, NONE, NONE, BRUSH_STATE) /* session brush changed */ \
     X(BRUSH_CURSOR, 0x0085, brush_cursor, NONE, NONE, BRUSH_CURSOR) /* rate-limited */       \
     X(DEVICE_STATE, 0x0086, device_state, NONE, NONE, DEVICE_INFO) /* a device changed */    \
+    X(WORK_PROGRESS, 0x0087, work_progress, NONE, NONE, WORK_PROGRESS) /* opt-in, 4.37 */    \
     X(ERROR, 0x00FF, error, NONE, NONE, NONE) /* error body not tied to a request type */
 
 /* ------------------------------------------------------------------------------ feature bits
@@ -148,7 +149,8 @@
 
 #define DF_WIRE_LOAD_OPTS(X)                                                                 \
     X(EXT, 0x0001u) /* a str file_name follows the data; the reply is a load_reply */        \
-    X(2D, 0x0002u)  /* a 2D session even if the file gives z (every z 0, no tetrahedra) */
+    X(2D, 0x0002u)  /* a 2D session even if the file gives z (every z 0, no tetrahedra) */    \
+    X(PROGRESS, 0x0004u) /* WORK_PROGRESS events of the upload and the parse (4.37) */
 
 /* load_mesh `format` (DF_WFMT_*; core's df_mesh_format via proto/wire_core_map.h). TETGEN inline
  * data is the node bytes then the ele bytes. */
@@ -220,6 +222,17 @@
 
 #define DF_WIRE_CURSOR_FLAGS(X) X(IN_RANGE, 1u << 0) X(STROKE_ACTIVE, 1u << 1) /* DF_CURSOR_* */
 
+/* work_progress `stage` (DF_STAGE_*; PROTOCOL.md 4.37): what a long request is doing. New stages
+ * are added at the end; clients show a stage they do not know by its number. */
+#define DF_WIRE_WORK_STAGES(X)                                                               \
+    X(UPLOAD, 1)    /* load: bytes of the inline upload received */                          \
+    X(PARSE, 2)     /* load: bytes of the mesh file parsed */                                \
+    X(FACTORIZE, 3) /* handles set / move: ADMM solver build (analysis, factorization) */     \
+    X(SOLVE, 4)     /* handles move: ADMM iterations of the budget */
+
+/* handles `options`, handle_move `options` (optional trailing u32, DF_WORK_OPT_*) */
+#define DF_WIRE_WORK_OPTS(X) X(PROGRESS, 1u << 0) /* WORK_PROGRESS events of this request */
+
 /* devices (HID, issue 11): device_info `class`, `backend`, `state` (PROTOCOL.md 4.30) */
 #define DF_WIRE_DEV_CLASSES(X)                                                               \
     X(NONE, 0)    /* not classified (not driven) */                                          \
@@ -273,7 +286,9 @@
     X(DF_WIRE_DEV_STATES, DF_DEVSTATE_, DevState, enum)                                      \
     X(DF_WIRE_AUTH_METHODS, DF_AUTH_, AuthMethod, enum)                                      \
     X(DF_WIRE_ACCESS_MODES, DF_ACCESS_MODE_, AccessMode, enum)                               \
-    X(DF_WIRE_ACCESS_FLAGS, DF_ACCESS_, AccessFlag, flags)
+    X(DF_WIRE_ACCESS_FLAGS, DF_ACCESS_, AccessFlag, flags)                               \
+    X(DF_WIRE_WORK_STAGES, DF_STAGE_, WorkStage, enum)                                       \
+    X(DF_WIRE_WORK_OPTS, DF_WORK_OPT_, WorkOpt, flags)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

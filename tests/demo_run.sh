@@ -5,7 +5,8 @@
 # the shared meshes are absent, a 40x40 grid OBJ generated here), applies a Kelvinlet grab and
 # a twist through build/bin/deformctl, writes the mesh before and after to $DEMO_OUT
 # (default /tmp/deformd-demo/before.obj and after.obj), prints how many vertices moved and by
-# how much at most, and stops the daemon (also on error or interrupt). Needs no stdin; works
+# how much at most, writes a preview picture (rest | current, shaded by displacement) to
+# $DEMO_OUT/preview.png with `deformctl preview` and prints its path, and stops the daemon (also on error or interrupt). Needs no stdin; works
 # under CI=true. Environment: BUILD (build dir, default build), MESHES, DEMO_OUT.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -101,3 +102,5 @@ awk -v diag="$diag" '$1 == "v" { if (FNR == NR) { b[++n] = $2 " " $3 " " $4 } el
         if (moved == 0) exit 1 }' "$OUT/before.obj" "$OUT/after.obj"
 echo "demo: before: $OUT/before.obj"
 echo "demo: after:  $OUT/after.obj"
+ctl preview "$sid" --out "$OUT/preview.png" --view iso >/dev/null
+echo "demo: preview (rest | current, coloured by displacement): $OUT/preview.png"

@@ -8,10 +8,11 @@
 #include "client/dc_files.h"
 #include "core/admm/admm_defaults.h"
 #include "client/deformctl/ctl.h"
+#include "client/deformctl/progress_out.h"
 
 enum {
     H_ENERGY = CTL_NGLOBAL, H_HANDLES, H_W, H_S, H_RHO, H_ITERS, H_TOL, H_YOUNGS, H_POISSON,
-    H_ACCEL, H_AREA, H_COUNT
+    H_ACCEL, H_AREA, H_PROGRESS, H_COUNT
 };
 
 /* Defaults in the help text come from core/admm/admm_defaults.h (the values themselves from
@@ -31,6 +32,7 @@ static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
     {"poisson", 1, "--poisson NU       neohookean Poisson ratio in (-1, 0.5) (default " S(DF_ADMM_DEFAULT_POISSON) ")"},
     {"accelerate", 0, "--accelerate       Anderson-accelerated ADMM"},
     {"area-weighting", 0, "--area-weighting   weight the locality term by vertex area/volume"},
+    {"progress", 1, CTL_PROGRESS_HELP},
 };
 
 static const char *const ENERGIES[] = {"arap", "acap", "neohookean", "cloth", "polyline", NULL};
@@ -84,6 +86,10 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     }
     if (check_ranges(a, &h, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
+    int pmode = CTL_PROGRESS_AUTO;
+    if (a->val[H_PROGRESS] &&
+        (pmode = dc_cli_choice(a->val[H_PROGRESS], "--progress", ctl_progress_modes, &e)) < 0)
+        return ctl_usage_error(ctx, cmd, e.msg);
     int32_t *idx = NULL, n = 0;
     if (dc_load_index_file(a->val[H_HANDLES], &idx, &n, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
@@ -94,9 +100,14 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         free(idx);
         return CTL_EXIT_SERVER;
     }
+    ctl_progress pr;
+    ctl_progress_init(&pr, ctx->prog, cmd->name, pmode, stderr);
+    df_client_set_event_callback(c, ctl_progress_event, &pr);
+    h.options = ctl_progress_wanted(&pr) ? DF_WORK_OPT_PROGRESS : 0;
     int rc = ctl_session_id(c, a->pos[0], &h.session_id, &e);
     if (rc == DF_OK)
         rc = df_client_handles_set(c, &h, &e);
+    ctl_progress_finish(&pr);
     free(idx);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);
@@ -112,7 +123,7 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     return CTL_EXIT_OK;
 }
 
-enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_COUNT };
+enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_PROGRESS, M_COUNT };
 
 static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     CTL_GLOBAL_OPTS,
@@ -123,6 +134,7 @@ static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     {"max-iters", 1, "--max-iters N      iteration budget (default: the handle set's --iters)"},
     {"max-ms", 1, "--max-ms MS        wall-clock budget in ms (default: none)"},
     {"progress-every", 1, "--progress-every N progress event every N iterations (default 10)"},
+    {"progress", 1, CTL_PROGRESS_HELP},
 };
 
 static const char *status_name(unsigned s)
@@ -160,6 +172,10 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
             return ctl_usage_error(ctx, cmd, e.msg);
         m.progress_every = (uint32_t)v;
     }
+    int pmode = CTL_PROGRESS_AUTO;
+    if (a->val[M_PROGRESS] &&
+        (pmode = dc_cli_choice(a->val[M_PROGRESS], "--progress", ctl_progress_modes, &e)) < 0)
+        return ctl_usage_error(ctx, cmd, e.msg);
     size_t tl = strlen(tf);
     int is_node = tl >= 5 && strcasecmp(tf + tl - 5, ".node") == 0;
     if (!is_node && a->val[M_HANDLES])
@@ -222,7 +238,12 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     m.targets = targets;
     df_msg_move_result r;
     memset(&r, 0, sizeof r);
+    ctl_progress pr;
+    ctl_progress_init(&pr, ctx->prog, cmd->name, pmode, stderr);
+    df_client_set_event_callback(c, ctl_progress_event, &pr);
+    m.options = ctl_progress_wanted(&pr) ? DF_WORK_OPT_PROGRESS : 0;
     rc = df_client_handles_move(c, &m, &r, &e);
+    ctl_progress_finish(&pr);
     free(targets);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);
@@ -258,12 +279,12 @@ const ctl_cmd ctl_cmds_handles[] = {
     {"handles",
      "handles SESSION --energy arap|acap|neohookean|cloth|polyline --handles FILE [--w W]\n"
      "       [--s S] [--rho RHO] [--iters N] [--tol T] [--youngs E] [--poisson NU]\n"
-     "       [--accelerate] [--area-weighting]",
+     "       [--accelerate] [--area-weighting] [--progress MODE]",
      "Define the session's handle set for SC-L1 local deformation (ADMM).", HANDLES_OPTS, H_COUNT,
      1, run_handles},
     {"move",
      "move SESSION --targets FILE [--handles FILE] [--max-iters N] [--max-ms MS]\n"
-     "       [--progress-every N]",
+     "       [--progress-every N] [--progress MODE]",
      "Move the handles to their targets; waits for the final iterate and prints iterations, "
      "residual, objective.",
      MOVE_OPTS, M_COUNT, 1, run_move},

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "client/deformctl/ctl.h"
+#include "client/deformctl/progress_out.h"
 #include "core/mesh/mesh_io.h"
 
 static const char *kind_name(unsigned k)
@@ -85,13 +86,23 @@ static int run_load(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
         snprintf(m, sizeof m, "cannot read %.400s", file);
         return ctl_usage_error(ctx, cmd, m);
     }
+    df_error pe;
+    int pmode = CTL_PROGRESS_AUTO;
+    if (a->val[CTL_NGLOBAL + 2] &&
+        (pmode = dc_cli_choice(a->val[CTL_NGLOBAL + 2], "--progress", ctl_progress_modes, &pe)) < 0)
+        return ctl_usage_error(ctx, cmd, pe.msg);
     df_client *c = ctl_connect(ctx, cmd);
     if (!c)
         return CTL_EXIT_SERVER;
     df_error e;
     df_msg_load_reply r;
-    df_client_set_load_flags(c, a->val[CTL_NGLOBAL + 1] ? DF_LOAD_OPT_2D : 0);
+    ctl_progress pr;
+    ctl_progress_init(&pr, ctx->prog, cmd->name, pmode, stderr);
+    df_client_set_event_callback(c, ctl_progress_event, &pr);
+    df_client_set_load_flags(c, (uint16_t)((a->val[CTL_NGLOBAL + 1] ? DF_LOAD_OPT_2D : 0) |
+                                           (ctl_progress_wanted(&pr) ? DF_LOAD_OPT_PROGRESS : 0)));
     int rc = df_client_load_mesh_file_ex(c, file, name, &r, &e);
+    ctl_progress_finish(&pr);
     if (rc) {
         rc = ctl_fail(ctx, cmd, c, &e);
         df_client_close(c);
@@ -416,6 +427,7 @@ static const dc_cli_opt LOAD_OPTS[] = {
     {"2d", 0, "--2d               a 2D session even if the file gives z (every z must be 0); "
               "else 2D only when the file is (OBJ `v x y`, MEDIT Dimension 2, 2D .node, PLY "
               "without z)"},
+    {"progress", 1, CTL_PROGRESS_HELP},
 };
 static const dc_cli_opt STATS_OPTS[] = {
     CTL_GLOBAL_OPTS,
@@ -436,7 +448,7 @@ static const dc_cli_opt WATCH_OPTS[] = {
 const ctl_cmd ctl_cmds_session[] = {
     {"ping", "ping", "Check that the daemon answers; prints the round trip.", PLAIN_OPTS,
      N(PLAIN_OPTS), 0, run_ping},
-    {"load", "load FILE [--name NAME] [--2d]",
+    {"load", "load FILE [--name NAME] [--2d] [--progress MODE]",
      "Upload a mesh (.obj .off .ply .mesh, or X.node with X.ele); prints the new session id "
      "(--json: also the load report); warnings about the mesh (dropped elements, duplicates, "
      "non-manifold edges, unused vertices) go to stderr.",

@@ -20,7 +20,9 @@
 
 static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
                                         ctl_cmds_mesh, ctl_cmds_brush_state, ctl_cmds_devices,
-                                        ctl_cmds_access};
+                                        ctl_cmds_access,
+
+                                        ctl_cmds_preview};
 
 static void usage_top(FILE *f)
 {

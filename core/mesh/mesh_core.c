@@ -25,7 +25,8 @@ void df_mesh_free(df_mesh *m)
 
 df_mesh_read_opts df_mesh_read_opts_default(void)
 {
-    df_mesh_read_opts o = {DF_MESH_DEFAULT_MAX_VERTICES, DF_MESH_DEFAULT_MAX_ELEMENTS, 1, 0, 0};
+    df_mesh_read_opts o = {DF_MESH_DEFAULT_MAX_VERTICES, DF_MESH_DEFAULT_MAX_ELEMENTS, 1, 0, 0,
+                           NULL, NULL};
     return o;
 }
 

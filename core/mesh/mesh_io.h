@@ -64,6 +64,12 @@ typedef struct df_mesh_read_opts {
                             * dimension 2, PLY without z) */
     int redact_content;    /* 1: error messages never quote bytes of the input (names, lines and
                               counts only): for files a server reads on a client's behalf */
+    /* Optional progress of text formats (NULL: none): called on the reading thread with the
+     * bytes of the current buffer scanned so far and its length, every DF_SCAN_PROGRESS_LINES
+     * (16384) lines; TetGen calls it for the .node then the .ele buffer. Binary PLY bodies do
+     * not report. It must not call back into the reader. */
+    void (*progress)(void *user, size_t done, size_t total);
+    void *progress_user;
 } df_mesh_read_opts;
 
 /* The defaults used for a NULL opts: default limits, allow_inverted = 1 (read succeeds, the report

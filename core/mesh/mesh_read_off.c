@@ -46,6 +46,7 @@ int df_mesh_read_off(const char *buf, size_t len, const char *name, const df_mes
     df_scan s;
     df_scan_init(&s, buf, len, name);
     s.redact = o && o->redact_content;
+    if (o) df_scan_set_progress(&s, o->progress, o->progress_user);
     df_mesh_build b;
     df_mesh_build_init(&b, s.name, 0, o);
     int32_t nv = 0, nf = 0;

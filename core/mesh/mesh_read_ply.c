@@ -337,6 +337,7 @@ int df_mesh_read_ply(const char *buf, size_t len, const char *name, const df_mes
     *c = zero;
     df_scan_init(&c->s, buf, len, name);
     c->s.redact = o && o->redact_content;
+    if (o) df_scan_set_progress(&c->s, o->progress, o->progress_user);
     int rc = parse_header(c, err);
     df_mesh_build_init(&c->b, c->s.name, c->binary, o);
     c->pos = c->s.pos;

@@ -137,6 +137,7 @@ int df_mesh_read_tetgen_memory(const void *node, size_t node_len, const void *el
     df_scan s;
     df_scan_init(&s, node, node_len, nn);
     s.redact = o && o->redact_content;
+    if (o) df_scan_set_progress(&s, o->progress, o->progress_user);
     df_mesh_build b;
     df_mesh_build_init(&b, nn, 0, o);
     int base = 0;
@@ -144,6 +145,7 @@ int df_mesh_read_tetgen_memory(const void *node, size_t node_len, const void *el
     if (!rc) {
         df_scan_init(&s, ele, ele_len, en);
         s.redact = o && o->redact_content;
+    if (o) df_scan_set_progress(&s, o->progress, o->progress_user);
         b.name = en;
         rc = parse_elements(&s, &b, base, err);
     }

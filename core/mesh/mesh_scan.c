@@ -20,6 +20,24 @@ void df_scan_init(df_scan *s, const void *buf, size_t len, const char *name)
     s->name = name ? name : "<memory>";
     s->comment = '#';
     s->redact = 0;
+    s->progress = NULL;
+    s->progress_user = NULL;
+}
+
+void df_scan_set_progress(df_scan *s, void (*fn)(void *user, size_t done, size_t total),
+                          void *user)
+{
+    s->progress = fn;
+    s->progress_user = user;
+}
+
+/* One more line scanned: counts it and calls the progress callback every
+ * DF_SCAN_PROGRESS_LINES lines. */
+static void new_line(df_scan *s)
+{
+    s->line++;
+    if (s->progress && s->line % DF_SCAN_PROGRESS_LINES == 0)
+        s->progress(s->progress_user, s->pos, s->len);
 }
 
 void df_scan_skip_blank(df_scan *s)
@@ -33,7 +51,7 @@ void df_scan_next_line(df_scan *s)
     const char *nl = s->pos < s->len ? memchr(s->p + s->pos, '\n', s->len - s->pos) : NULL;
     if (nl) {
         s->pos = (size_t)(nl - s->p) + 1;
-        s->line++;
+        new_line(s);
     } else {
         s->pos = s->len;
     }
@@ -47,7 +65,7 @@ void df_scan_skip_ws(df_scan *s)
             s->pos++;
         } else if (c == '\n') {
             s->pos++;
-            s->line++;
+            new_line(s);
         } else if (s->comment && c == s->comment) {
             df_scan_next_line(s);
         } else {

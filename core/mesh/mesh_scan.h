@@ -20,10 +20,21 @@ typedef struct df_scan {
     const char *name;  /* file name for messages */
     char comment;      /* comment character ('#') or 0 */
     int redact;        /* 1: messages never quote input bytes (df_scan_quote) */
+    /* Optional progress callback: called with (user, pos, len) every DF_SCAN_PROGRESS_LINES
+     * lines (NULL: none); set by df_scan_set_progress. */
+    void (*progress)(void *user, size_t done, size_t total);
+    void *progress_user;
 } df_scan;
+
+/* Lines between two calls of a scanner's progress callback. */
+#define DF_SCAN_PROGRESS_LINES 16384
 
 /* Starts scanning `len` bytes at `buf`; line 1, comment char '#'. */
 void df_scan_init(df_scan *s, const void *buf, size_t len, const char *name);
+
+/* Sets the progress callback of `s` (fn NULL: none); see df_scan.progress. */
+void df_scan_set_progress(df_scan *s, void (*fn)(void *user, size_t done, size_t total),
+                          void *user);
 
 /* Formats the n-byte token t for an error message into buf (size bn >= 20): "'tok'" (cut at 32
  * bytes), or "(value not shown)" when s->redact is set (files a server reads for a client must

@@ -30,6 +30,7 @@
 #include "server/session/cache.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
+#include "server/exec/work_progress.h"
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/stream.h"
@@ -56,9 +57,11 @@ static void req_free(df_server *srv, void *body)
 
 /* Computes the displacement of the stroke's brush under `load` at st->startf into disp. A pin
  * LU built here goes to the change (ch->kc); an existing one (s->kc, the running job's cache
- * object: only evicted while its session is idle) is refactorized in place when pins changed. */
+ * object: only evicted while its session is idle) is refactorized in place when pins changed.
+ * `w` gets the FACTORIZE stage of an LU built (start and end) or refactorized (end only: known
+ * after the fact). Worker thread (pinned strokes never run inline). */
 static int stroke_field(const df_session *s, const df_stroke *st, const double *load,
-                        float *disp, df_change *ch, df_error *err)
+                        float *disp, df_change *ch, df_work *w, df_error *err)
 {
     df_kelvinlet_brush b;
     df_stroke_loaded_brush(&st->brush, st->strength, load, &b);
@@ -71,6 +74,7 @@ static int stroke_field(const df_session *s, const df_stroke *st, const double *
                                   .threads = threads};
         df_kelvinlet_constraints *kc = s->kc;
         if (!kc) {
+            df_work_report(w, DF_STAGE_FACTORIZE, 0, 1, 0, 1);
             rc = df_kelvinlet_constraints_create(&pins, &ch->kc, err);
             kc = ch->kc;
             ch->kc_hit = 0;
@@ -80,6 +84,7 @@ static int stroke_field(const df_session *s, const df_stroke *st, const double *
             ch->kc_hit = df_kelvinlet_constraints_factorizations(kc) == before;
         }
         if (rc != DF_OK) return rc;
+        if (!ch->kc_hit) df_work_report(w, DF_STAGE_FACTORIZE, 1, 1, 1, 1);
         ch->kc_used = 1;
         ch->kc_pins = st->n_pins;
         rc = df_kelvinlet_constraints_solve(kc, &b, &prep, err);
@@ -291,6 +296,7 @@ static void begin_work_inner(df_job *j)
     st->conn_id = j->conn_id;
     st->n_pins = m->n_pinned;
     st->pin_flags = pin_flags;
+    st->progress = (m->options & DF_WORK_OPT_PROGRESS) != 0;
     if (m->n_pinned) memcpy(st->pins, m->pinned, 3 * (size_t)m->n_pinned * sizeof(double));
     memcpy(st->base, s->cur, n * sizeof *st->base);
     for (size_t i = 0; i < n; i++) st->startf[i] = (float)s->cur[i];
@@ -302,7 +308,9 @@ static void begin_work_inner(df_job *j)
     if ((j->rc = planar_check(s, &st->brush, st, r->load, "brush_begin", &j->err)) != DF_OK)
         return;
     if (load_is_zero(r->load)) return;
-    j->rc = stroke_field(s, st, r->load, disp, &j->change, &j->err);
+    df_work w;
+    df_work_init(&w, j->srv, j->req.c, j->req.id, s->id, st->progress);
+    j->rc = stroke_field(s, st, r->load, disp, &j->change, &w, &j->err);
     if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r->load, &j->change, &j->err);
 }
 
@@ -352,7 +360,9 @@ static void update_work_inner(df_job *j)
         j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH_CANCEL, NULL, ch, &j->err);
     } else {
         j->rc = planar_check(s, NULL, st, r->load, "brush_update", &j->err);
-        if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, ch, &j->err);
+        df_work w;
+        df_work_init(&w, j->srv, j->req.c, j->req.id, s->id, st->progress);
+        if (j->rc == DF_OK) j->rc = stroke_field(s, st, r->load, disp, ch, &w, &j->err);
         if (j->rc == DF_OK) j->rc = stroke_publish(s, st, DF_CHANGE_BRUSH, r->load, ch, &j->err);
     }
 }

@@ -15,6 +15,7 @@
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
+#include "server/exec/work_progress.h"
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/stream.h"
@@ -38,6 +39,7 @@ typedef struct hs_req {
     df_admm *solver;           /* move: the solver it runs (the set's, or one it rebuilt) */
     uint64_t version;          /* move: version of its last iterate (or the session's) */
     int yield;                 /* move: on_progress asked to yield */
+    uint64_t budget;           /* move: its iteration budget (SOLVE progress total) */
     int iters_done;            /* move: iterations of the earlier slices */
     uint64_t slice_t0;         /* move: start of the current slice (uv_hrtime) */
     /* Loop thread only: an iterate the durable store refused (commit.h step 0). That iterate
@@ -47,6 +49,7 @@ typedef struct hs_req {
     int store_failed;
     df_error store_err;
     float *store_uf;
+    df_work work;              /* WORK_PROGRESS of the request (options PROGRESS), else off */
 } hs_req;
 
 static void req_free(df_server *srv, void *body)
@@ -58,14 +61,26 @@ static void req_free(df_server *srv, void *body)
     free(r->store_uf);
 }
 
-/* Builds a solver for handle set `hs` against the session's rest shape into *out. */
+/* Builds a solver for handle set `hs` against the session's rest shape into *out (the
+ * FACTORIZE stage of `w`: its start, and its end when the build succeeds). Worker thread. */
 static int build_solver(const df_session *s, const df_handleset *hs, df_admm **out,
-                        df_error *err)
+                        df_work *w, df_error *err)
 {
     df_mesh m = s->mesh;
     m.V = s->rest;
-    return df_admm_create(&m, &hs->params, hs->handles, hs->nh, hs->affine, hs->n_affine, out,
-                          err);
+    df_work_report(w, DF_STAGE_FACTORIZE, 0, 1, 0, 1);
+    int rc = df_admm_create(&m, &hs->params, hs->handles, hs->nh, hs->affine, hs->n_affine, out,
+                            err);
+    if (rc == DF_OK) df_work_report(w, DF_STAGE_FACTORIZE, 1, 1, 1, 1);
+    return rc;
+}
+
+/* Starts the request's progress reporting (worker thread, first slice). */
+static void work_start(df_job *j, uint32_t options)
+{
+    hs_req *r = j->body;
+    df_work_init(&r->work, j->srv, j->req.c, j->req.id, j->s->id,
+                 (options & DF_WORK_OPT_PROGRESS) != 0);
 }
 
 static void set_work(df_job *j)
@@ -73,6 +88,7 @@ static void set_work(df_job *j)
     hs_req *r = j->body;
     df_session *s = j->s;
     const df_msg_handles *m = &r->m;
+    work_start(j, m->options);
     for (uint32_t i = 0; i < m->n_handles; i++)
         if (m->handles[i] < 0 || m->handles[i] >= s->nv) {
             j->rc = df_error_set(&j->err, DF_EINVAL, "handles_set: handle %u is vertex %d, "
@@ -129,7 +145,8 @@ static void set_work(df_job *j)
         memcpy(hs->affine[k].b, a->b, sizeof a->b);
         hs->n_affine++;
     }
-    j->rc = build_solver(s, hs, &hs->solver, &j->err); /* hs is the job's own until committed */
+    /* hs is the job's own until committed */
+    j->rc = build_solver(s, hs, &hs->solver, &r->work, &j->err);
     if (j->rc != DF_OK) return;
     j->change.hs = hs; /* installed, its solver cached, by the commit */
     j->change.solver_created = 1;
@@ -312,6 +329,7 @@ static int on_progress(void *user, const df_admm_progress *p)
     hs_req *r = j->body;
     if (atomic_load(&j->cancel)) return 1;
     int it = r->iters_done + p->iteration;
+    df_work_report(&r->work, DF_STAGE_SOLVE, (uint64_t)(it > 0 ? it : 0), r->budget, 0, 1);
     if (r->progress_every && it % (int)r->progress_every == 0) {
         int prc = publish_iterate(j, p->V, it, p->objective, p->residual, DF_MOVE_RUNNING, 0);
         if (prc != DF_OK) { /* e.g. an iterate not finite in float32: the move fails */
@@ -362,7 +380,7 @@ static int move_setup(df_job *j)
     int rc = targets_check(s, hs, r->mv.targets, &j->err);
     if (rc != DF_OK) return rc;
     if (!hs->solver) { /* evicted: rebuilt into the change, cached by the commit */
-        rc = build_solver(s, hs, &j->change.solver, &j->err);
+        rc = build_solver(s, hs, &j->change.solver, &r->work, &j->err);
         if (rc != DF_OK) return rc;
         r->created = 1;
     } else {
@@ -386,13 +404,16 @@ static void move_work(df_job *j)
 {
     hs_req *r = j->body;
     const df_handleset *hs = j->s->hs;
+    /* no handle set: move_setup refuses the move (ESTATE) */
+    int max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs ? hs->max_iters : 0;
     if (!r->resumed) {
         r->t0 = uv_hrtime();
+        work_start(j, r->mv.options);
+        r->budget = (uint64_t)max_iters;
         if ((j->rc = move_setup(j)) != DF_OK) return;
     }
     r->slice_t0 = uv_hrtime();
     r->yield = 0;
-    int max_iters = r->mv.max_iters ? (int)r->mv.max_iters : hs->max_iters;
     double max_ms = 0;
     if (r->mv.max_ms) { /* the budget counts from the move's start, waits included */
         max_ms = (double)r->mv.max_ms - (double)(r->slice_t0 - r->t0) / 1e6;
@@ -434,6 +455,8 @@ static void move_work(df_job *j)
     int prc = publish_iterate(j, df_admm_positions(r->solver), r->res.iterations,
                               r->res.objective, r->res.residual, r->status, 1);
     j->rc = rc != DF_OK ? rc : prc;
+    if (j->rc == DF_OK) /* the last SOLVE event: the iterations run, of the budget */
+        df_work_report(&r->work, DF_STAGE_SOLVE, (uint64_t)r->res.iterations, r->budget, 1, 1);
 }
 
 /* A move's commit: the solver's cache accounting and, when it published iterates (each already

@@ -7,7 +7,9 @@
  * loads read only through pathload.h (allow_paths on the resolved path of both TetGen halves,
  * regular files, size cap, no content in errors). Upload errors name the client's file_name.
  * Without a session name the session is named after the file (base name without extension,
- * "spot", then "spot-2", ... when taken), else "session-N".
+ * "spot", then "spot-2", ... when taken), else "session-N". With options PROGRESS the requester
+ * gets WORK_PROGRESS events (work_progress.h): UPLOAD as chunks arrive (loop thread), PARSE from
+ * the reader on the worker, all before the reply.
  *
  * Memory: total_size is checked against max_upload_mb (and uploads_max_mb, which it could never
  * fit) at the first chunk, but the buffer is not allocated up front: it grows as chunks arrive
@@ -25,6 +27,7 @@
 #include "server/session/access.h"
 #include "server/handlers/handlers.h"
 #include "server/exec/job.h"
+#include "server/exec/work_progress.h"
 #include "server/log.h"
 #include "server/session/meshload.h"
 #include "server/session/pathload.h"
@@ -48,6 +51,8 @@ typedef struct df_upload {
     char owner[DF_PRINCIPAL_MAX]; /* the requester's principal: the new session's owner */
     df_mesh mesh;           /* parsed by the worker */
     df_mesh_report rep;     /* the reader's report */
+    df_work work;           /* WORK_PROGRESS of the request (options PROGRESS), else off */
+    uint64_t parse_total;   /* bytes of the buffer being parsed (last progress callback) */
 } df_upload;
 
 void df_upload_free(struct df_upload *u)
@@ -60,19 +65,36 @@ void df_upload_free(struct df_upload *u)
     free(u);
 }
 
+/* The reader's progress (worker thread): PARSE events, rate-limited by the reporter. */
+static void parse_progress(void *user, size_t done, size_t total)
+{
+    df_upload *u = user;
+    u->parse_total = total;
+    df_work_report(&u->work, DF_STAGE_PARSE, done, total, 0, 1);
+}
+
 static void load_work(df_job *j)
 {
     df_upload *u = j->body;
     int32_t maxv = j->srv->cfg.max_mesh_vertices;
     if ((uint32_t)maxv > DF_MAX_MESH_VERTICES) maxv = (int32_t)DF_MAX_MESH_VERTICES;
+    df_mesh_progress prog = {parse_progress, u};
+    const df_mesh_progress *pp = u->work.c ? &prog : NULL;
+    u->parse_total = u->path ? 0 : u->total;
+    df_work_report(&u->work, DF_STAGE_PARSE, 0, u->parse_total, 0, 1);
     if (u->path)
         j->rc = df_pathload_mesh(&j->srv->cfg, u->path, u->format, maxv,
-                                 (u->options & DF_LOAD_OPT_2D) != 0, &u->mesh, &u->rep, &j->err);
+                                 (u->options & DF_LOAD_OPT_2D) != 0, &u->mesh, &u->rep, pp,
+                                 &j->err);
     else
         j->rc = df_meshload_memory(u->data, (size_t)u->total, u->format, (size_t)u->part2, maxv,
                                    (u->options & DF_LOAD_OPT_2D) != 0,
                                    u->file_name[0] ? u->file_name : "upload", &u->mesh, &u->rep,
-                                   &j->err);
+                                   pp, &j->err);
+    if (j->rc == DF_OK) { /* inline: the whole upload; a path: the last buffer reported */
+        uint64_t t = u->path ? u->parse_total : u->total;
+        df_work_report(&u->work, DF_STAGE_PARSE, t, t, 1, 1);
+    }
     if (j->rc == DF_OK && (uint32_t)u->mesh.ne > DF_MAX_MESH_ELEMENTS)
         j->rc = df_error_set(&j->err, DF_ELIMIT, "mesh has %d elements (max %u)", u->mesh.ne,
                              DF_MAX_MESH_ELEMENTS);
@@ -222,6 +244,7 @@ static int load_path(df_req *r, const df_msg_load_mesh *m, df_error *err)
     u->format = m->format;
     u->options = m->options;
     u->path = path; /* resolved and checked on the worker (pathload.h) */
+    df_work_init(&u->work, c->srv, c, r->id, 0, (m->options & DF_LOAD_OPT_PROGRESS) != 0);
     snprintf(u->name, sizeof u->name, "%s", m->name);
     snprintf(u->owner, sizeof u->owner, "%s", c->principal);
     if (df_access_quota_check(c->srv, u->owner, 0, 0, err) != DF_OK) {
@@ -310,6 +333,7 @@ int df_h_load_mesh(df_req *r, const uint8_t *p, df_error *err)
         u->total = m.total_size;
         u->part2 = m.part2_offset;
         u->options = m.options;
+        df_work_init(&u->work, c->srv, c, r->id, 0, (m.options & DF_LOAD_OPT_PROGRESS) != 0);
         snprintf(u->name, sizeof u->name, "%s", m.name);
         snprintf(u->file_name, sizeof u->file_name, "%s", m.file_name);
         snprintf(u->owner, sizeof u->owner, "%s", c->principal);
@@ -334,6 +358,9 @@ int df_h_load_mesh(df_req *r, const uint8_t *p, df_error *err)
     memcpy(u->data + u->received, m.data, m.data_len);
     u->received += m.data_len;
     df_msg_load_mesh_free(&m);
+    if (!(r->flags & DF_FLAG_MORE) || u->received < u->total) /* loop thread: sent now */
+        df_work_report(&u->work, DF_STAGE_UPLOAD, u->received, u->total,
+                       u->received == u->total, 0);
     if (r->flags & DF_FLAG_MORE) {
         if (u->received >= u->total) {
             df_error_set(err, DF_EPROTO_CHUNK, "load_mesh: MORE flag on a chunk that completes "

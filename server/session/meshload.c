@@ -5,10 +5,13 @@
 
 int df_meshload_memory(const uint8_t *data, size_t len, int fmt, size_t part2,
                        int32_t max_vertices, int want_2d, const char *name, df_mesh *out,
-                       df_mesh_report *rep,
-                       df_error *err)
+                       df_mesh_report *rep, const df_mesh_progress *progress, df_error *err)
 {
     df_mesh_read_opts o = df_mesh_read_opts_default();
+    if (progress) {
+        o.progress = progress->fn;
+        o.progress_user = progress->user;
+    }
     o.max_vertices = max_vertices;
     o.want_2d = want_2d;
     if (fmt < DF_FMT_AUTO || fmt > DF_FMT_TETGEN)

@@ -137,7 +137,7 @@ static int read_pair(const df_server_config *cfg, const char *path, const df_mes
 
 int df_pathload_mesh(const df_server_config *cfg, const char *path, int fmt,
                      int32_t max_vertices, int want_2d, df_mesh *out, df_mesh_report *rep,
-                     df_error *err)
+                     const df_mesh_progress *progress, df_error *err)
 {
     if (!cfg || !path || !out)
         return df_error_set(err, DF_EINVAL, "%s: NULL argument", M);
@@ -147,6 +147,10 @@ int df_pathload_mesh(const df_server_config *cfg, const char *path, int fmt,
     o.max_vertices = max_vertices;
     o.redact_content = 1;
     o.want_2d = want_2d;
+    if (progress) {
+        o.progress = progress->fn;
+        o.progress_user = progress->user;
+    }
     df_mesh_format f = fmt ? (df_mesh_format)fmt : df_mesh_format_from_path(path);
     if (f == DF_FMT_AUTO)
         return df_error_set(err, DF_EFORMAT,

@@ -17,6 +17,7 @@
 
 #include "core/common/df_error.h"
 #include "core/mesh/mesh_io.h"
+#include "server/session/meshload.h"
 #include "server/config.h"
 
 /* Largest server-side mesh file (both halves of a TetGen pair together): the inline upload cap,
@@ -36,10 +37,11 @@ int df_pathload_read(const df_server_config *cfg, const char *path, size_t max_b
  * reads both halves, the sibling found by df_mesh_tetgen_sibling (case kept: T1.NODE + T1.ELE),
  * each through df_pathload_read. At most `max_vertices` vertices. `want_2d` 1: a 2D mesh even
  * if the file gives z (every z must be 0, no tets: else DF_EFORMAT); 0: 2D only when the file
- * declares it. *out receives the mesh, *rep (may be NULL) the reader's report. Errors: those of
+ * declares it. *out receives the mesh, *rep (may be NULL) the reader's report; `progress` (may
+ * be NULL) is called while text formats are parsed (meshload.h). Errors: those of
  * df_pathload_read and of the readers. */
 int df_pathload_mesh(const df_server_config *cfg, const char *path, int fmt,
                      int32_t max_vertices, int want_2d, df_mesh *out, df_mesh_report *rep,
-                     df_error *err);
+                     const df_mesh_progress *progress, df_error *err);
 
 #endif

@@ -48,6 +48,8 @@ typedef struct df_stroke {
                                     load whose Kelvinlet force HID force feedback plays */
     uint32_t n_pins;
     int pin_flags;               /* DF_KELVINLET_PIN_* bits */
+    int progress;                /* its BRUSH_BEGIN asked for WORK_PROGRESS (options PROGRESS):
+                                    the pin LU's FACTORIZE events, to each request that builds it */
     double *pins;                /* n_pins x 3, NULL when none */
     double *base;                /* positions without this stroke's contribution, nv x 3 */
     float *startf;               /* fl32(positions at begin): the points the field is evaluated at */

@@ -177,10 +177,13 @@ def test_load_mesh_ext_and_load_reply_bodies():
                              "spot.obj")
     assert struct.unpack_from("<H", ext, 2)[0] == m.LOAD_OPT_EXT
     assert ext == plain[:2] + b"\x01\x00" + plain[4:] + struct.pack("<H", 8) + b"spot.obj"
-    # one options field: bit 0 EXT, bit 1 2D (2D alone keeps the original layout)
-    assert (m.LOAD_OPT_EXT, m.LOAD_OPT_2D, m.LOAD_OPTS_ALL) == (1, 2, 3)
+    # one options field: bit 0 EXT, bit 1 2D, bit 2 PROGRESS (2D and PROGRESS keep the layout)
+    assert (m.LOAD_OPT_EXT, m.LOAD_OPT_2D, m.LOAD_OPT_PROGRESS, m.LOAD_OPTS_ALL) == (1, 2, 4, 7)
     two_d = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc", m.LOAD_OPT_2D)
     assert two_d == plain[:2] + b"\x02\x00" + plain[4:]
+    prog = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc",
+                              m.LOAD_OPT_PROGRESS)
+    assert prog == plain[:2] + b"\x04\x00" + plain[4:]
     both = m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "s", "", 3, 0, 0, b"abc",
                               m.LOAD_OPT_EXT | m.LOAD_OPT_2D, "spot.obj")
     assert both == ext[:2] + b"\x03\x00" + ext[4:]

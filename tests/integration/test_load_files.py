@@ -265,8 +265,8 @@ def test_load_options_ext_and_2d_together(jail):
         assert ei.value.code == E.EPROTO_CHUNK
         with pytest.raises(DeformdError) as ei:
             c._one(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_INLINE, m.FMT_OBJ, "u", "", len(FLAT),
-                                                   0, 0, FLAT, 0x0004))
-        assert ei.value.code == E.EPROTO_RESERVED and "unknown bits 0x4" in ei.value.message
+                                                   0, 0, FLAT, 0x0008))   # bit 2 is PROGRESS
+        assert ei.value.code == E.EPROTO_RESERVED and "unknown bits 0x8" in ei.value.message
     # deformctl: --2d and the load report together
     p = ctl(d, "--json", "load", allowed / "flat.obj", "--2d", "--name", "ctl2d")
     assert p.returncode == 0, p.stderr

@@ -247,6 +247,10 @@ ENUM_FIELDS = [
     ("4.3 auth", "method", "AuthMethod", False, ()),
     ("4.36", "mode", "AccessMode", False, ()),
     ("4.35", "flags", "AccessFlag", True, ()),
+    ("4.12", "options", "WorkOpt", True, ()),
+    ("4.15", "options", "WorkOpt", True, ()),
+    ("4.16", "options", "WorkOpt", True, ()),
+    ("4.37", "stage", "WorkStage", False, ()),
 ]
 
 

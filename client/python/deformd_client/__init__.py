@@ -21,7 +21,9 @@ from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, Mo
 from .schema import (BrushParam, BrushStateField, BrushType, ChangeKind, CursorFlag,
                      DispEncoding, Energy, Feature, Format, FrameFlag, GetMeshFlag, Integrator,
                      LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType, Origin,
-                     PinFlag, SubscribeFlag, DevClass, DevBackend, DevState, AuthMethod)
+                     PinFlag, SubscribeFlag, DevClass, DevBackend, DevState, AuthMethod,
+                     WorkOpt, WorkStage)
+from .progress import WorkProgress
 from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
@@ -37,5 +39,6 @@ __all__ = [
     "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
     "BrushCursor", "BrushState", "BrushValues", "BrushStateField", "CursorFlag", "Origin",
     "DeviceInfo", "DevClass", "DevBackend", "DevState", "AuthError", "AuthMethod",
+    "WorkProgress", "WorkOpt", "WorkStage",
 ]
 __version__ = "0.1.0"

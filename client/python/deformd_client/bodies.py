@@ -6,12 +6,13 @@ adds the directions a client does not need in normal use (decoding requests, enc
 events), for tools, tests and fake servers."""
 import struct
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import access as ac
 from . import brush_state as bs
 from . import devices as dv
 from . import messages as m
+from . import progress as pg
 from . import schema
 from . import stream as st
 from .wire import ProtocolError, Reader, pack_str
@@ -62,6 +63,7 @@ class HandleMove:
     max_ms: int
     progress_every: int
     targets: List[Tuple[float, float, float]]
+    options: Optional[int] = None   # the optional trailing field; None: absent
 
 
 def _end(r: Reader, v):
@@ -144,11 +146,16 @@ def decode_brush(p: bytes) -> BrushBegin:
     use_session = r.take("H") if r.off < len(p) else None   # optional trailing field
     if use_session is not None and use_session & ~sum(schema.BrushStateField):
         raise ProtocolError("brush: use_session bits 0x%x not defined" % use_session)
+    options = None    # optional, after use_session (4.12)
+    if use_session is not None and 0 < len(p) - r.off <= 4:
+        options = r.take("I")
+        if options & ~sum(schema.WorkOpt):
+            raise ProtocolError("brush: options 0x%x has unknown bits" % options)
     b = m.Brush(type=names[btype], center=list(center), move=list(move), twist=list(twist),
                 scale=scale, matrix=list(matrix), radius=radius, nu=nu, strength=strength,
                 falloff=falloff, ratio=ratio, dim=dim, integrator=integs[integ], steps=steps,
                 moving=bool(moving), mirror=list(mirror) if has_mirror else None,
-                pinned=pinned, pin_flags=pin_flags, use_session=use_session)
+                pinned=pinned, pin_flags=pin_flags, use_session=use_session, options=options)
     return _end(r, BrushBegin(sid, b))
 
 
@@ -170,7 +177,8 @@ def decode_handle_move(p: bytes) -> HandleMove:
     sid, iters, ms, every, n = r.take("QIIII")
     if n > schema.MAX_HANDLES:
         raise ProtocolError("handle_move: %d targets" % n)
-    return _end(r, HandleMove(sid, iters, ms, every, [tuple(r.take("3d")) for _ in range(n)]))
+    targets = [tuple(r.take("3d")) for _ in range(n)]
+    return _end(r, HandleMove(sid, iters, ms, every, targets, m._read_options(r, "handle_move")))
 
 
 def decode_stats_req(p: bytes) -> int:
@@ -258,9 +266,9 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
         x.session_id, x.move, x.twist, x.scale, x.matrix)),
     "brush_param": (decode_brush_param, lambda x: m.encode_brush_param(*x)),
     "handles": (m.decode_handles, lambda h: m.encode_handles(h.session_id, h.energy, h.handles,
-                                                             h.params, h.affine)),
+                                                             h.params, h.affine, h.options)),
     "handle_move": (decode_handle_move, lambda x: m.encode_handle_move(
-        x.session_id, x.targets, x.max_iters, x.max_ms, x.progress_every)),
+        x.session_id, x.targets, x.max_iters, x.max_ms, x.progress_every, x.options)),
     "move_result": (m.decode_move_result, encode_move_result),
     "get_mesh": (_fixed("QI", "get_mesh"), lambda x: m.encode_get_mesh(*x)),
     "mesh_chunk": (st.decode_mesh_chunk, encode_mesh_chunk),
@@ -285,6 +293,7 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
         x.session_id, x.mode, x.observers, x.flags)),
     "join": (ac.decode_join, lambda x: ac.encode_join(*x)),
     "access_info": (ac.decode_access_info, ac.encode_access_info),
+    "work_progress": (pg.decode_work_progress, pg.encode_work_progress),
 }
 
 

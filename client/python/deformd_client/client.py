@@ -15,7 +15,19 @@ On the Unix socket, stream_shm(sid) moves a subscribed session's large stream fr
 shared-memory ring the daemon writes once for all subscribers (PROTOCOL.md 6.1); events() reads
 them from the ring transparently, and reports frames overwritten before they were read as ShmLost
 events (resync with snapshot()).
+
+Progress of long work (PROTOCOL.md 4.37): load_mesh, load_file, set_handles and move_handles take
+an optional `progress` callback. When given, the request asks the daemon for WORK_PROGRESS events
+and the callback is called with each progress.WorkProgress (stage "upload" / "parse" /
+"factorize" / "solve", done, total, final, elapsed_ms) while the call waits, in order, all before
+the call returns (none after the reply; at most ~20 per second per request plus each stage's
+final event). It runs on the calling thread inside the call: it may update a UI (e.g. Blender's
+window_manager.progress_update) but must not use this Client; an exception it raises propagates
+out of the call (the connection stays usable: the reply is collected by the next wait, or
+dropped). A daemon without the feature refuses the request (EPROTO_RESERVED / EPROTO_TRAILING):
+call again without `progress`.
 """
+import dataclasses
 import os
 import secrets
 import socket
@@ -24,7 +36,7 @@ import time
 from array import array
 from collections import deque
 from dataclasses import dataclass
-from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
+from typing import Callable, Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
 from . import access as ac
 from . import auth
@@ -32,6 +44,7 @@ from . import brush_state as bs
 from . import devices as dv
 from . import frame as fr
 from . import messages as m
+from . import progress as pg
 from . import schema
 from . import stream as st
 from .poll import PollMixin
@@ -88,7 +101,10 @@ class ShmLost:
     kind_name: str = "shm_lost"
 
 
-Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor]
+Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor,
+              pg.WorkProgress]
+# A progress callback (load_mesh, load_file, set_handles, move_handles): one WorkProgress a call.
+ProgressFn = Callable[[pg.WorkProgress], None]
 
 class Client(PollMixin):
     """A connection to deformd. Not thread-safe: use one Client per thread."""
@@ -108,6 +124,7 @@ class Client(PollMixin):
         self._next_id = 1
         self._pending: Dict[int, List[fr.Frame]] = {}   # sent, not awaited: frames so far
         self._done: Dict[int, List[fr.Frame]] = {}      # complete replies not yet collected
+        self._work_cbs: Dict[int, ProgressFn] = {}      # request id -> its progress callback
         self._closed = False
         self._shm: Dict[int, ShmRing] = {}          # session -> mapped ring (stream_shm)
         self._shm_gap: Set[int] = set()             # sessions whose ring lost a chunk
@@ -261,7 +278,16 @@ class Client(PollMixin):
     # ------------------------------------------------------------------ events
     def _take_event_frame(self, f: fr.Frame) -> None:
         """Assembles stream chunks; completed events go to the event queue. An SHM_REF is
-        replaced by the frame it references in the shared-memory ring (or a ShmLost event)."""
+        replaced by the frame it references in the shared-memory ring (or a ShmLost event).
+        A WORK_PROGRESS event goes to its request's progress callback (else to the queue)."""
+        if f.type == m.WORK_PROGRESS and f.is_event:
+            w = pg.decode_work_progress(f.payload, f.request_id)
+            cb = self._work_cbs.get(f.request_id)
+            if cb is None:
+                self._events.append(w)
+            else:
+                cb(w)
+            return
         if f.type == m.SHM_REF:
             sid, position, length = m.decode_shm_ref(f.payload)
             inner = self._resolve_ref(sid, position, length)
@@ -426,6 +452,16 @@ class Client(PollMixin):
         parts = self.request(msg_type, payload)
         return b"".join(p.payload for p in parts)
 
+    def _wait_with_progress(self, rid: int, progress: Optional["ProgressFn"],
+                            timeout: Optional[float] = None) -> bytes:
+        """wait_reply(rid) with `progress` receiving that request's WORK_PROGRESS events."""
+        if progress is not None:
+            self._work_cbs[rid] = progress
+        try:
+            return b"".join(p.payload for p in self.wait_reply(rid, timeout))
+        finally:
+            self._work_cbs.pop(rid, None)
+
     # ------------------------------------------------------------------ handshake
     def hello(self, name: str = "deformd-python") -> m.HelloReply:
         self.server = m.decode_hello_reply(
@@ -461,7 +497,7 @@ class Client(PollMixin):
     def load_mesh(self, data: Optional[bytes] = None, path: Optional[str] = None,
                   fmt: Union[int, str] = m.FMT_AUTO, name: str = "",
                   ele: Optional[bytes] = None, file_name: str = "",
-                  two_d: bool = False) -> m.SessionInfo:
+                  two_d: bool = False, progress: Optional["ProgressFn"] = None) -> m.SessionInfo:
         """Creates a session from inline file bytes (`data`; for TetGen pass the .node bytes as
         data and the .ele bytes as ele) or from a server-side `path`. fmt: a FMT_* value or a
         file extension (".obj"). file_name (uploads): the user's file name, which the daemon's
@@ -469,13 +505,16 @@ class Client(PollMixin):
         two_d: a 2D session even if the file gives z (every z must be 0); otherwise the session
         is 2D only when the file declares it (OBJ `v x y`, ...).
         The returned SessionInfo carries the reader's LoadReport in .report (dropped,
-        duplicate, degenerate and inverted elements, non-manifold edges, unused vertices)."""
+        duplicate, degenerate and inverted elements, non-manifold edges, unused vertices).
+        progress: a callback for the upload and parse stages (see the module doc)."""
         if isinstance(fmt, str):
             fmt = m.FORMAT_BY_EXT[fmt.lower()]
-        opts = m.LOAD_OPT_EXT | (m.LOAD_OPT_2D if two_d else 0)
+        opts = m.LOAD_OPT_EXT | (m.LOAD_OPT_2D if two_d else 0) | \
+            (m.LOAD_OPT_PROGRESS if progress is not None else 0)
         if path is not None:
-            return m.decode_load_reply(self._one(m.LOAD_MESH, m.encode_load_mesh(
-                m.LOAD_PATH, fmt, name, path, 0, 0, 0, b"", opts)))
+            rid = self.send(m.LOAD_MESH, m.encode_load_mesh(m.LOAD_PATH, fmt, name, path, 0, 0, 0,
+                                                            b"", opts))
+            return m.decode_load_reply(self._wait_with_progress(rid, progress))
         if data is None:
             raise ValueError("load_mesh needs data or path")
         part2 = 0
@@ -486,6 +525,8 @@ class Client(PollMixin):
         total = len(data)
         rid = self._next_id
         self._next_id += 1
+        if progress is not None:    # upload progress arrives between the chunks' sends
+            self._work_cbs[rid] = progress
         off = 0
         while True:
             chunk = data[off:off + m.LOAD_CHUNK_BYTES]
@@ -496,14 +537,14 @@ class Client(PollMixin):
             off += len(chunk)
             if last:
                 break
-        parts = self.wait_reply(rid)
-        return m.decode_load_reply(b"".join(p.payload for p in parts))
+        return m.decode_load_reply(self._wait_with_progress(rid, progress))
 
-    def load_file(self, filename: str, name: str = "", two_d: bool = False) -> m.SessionInfo:
+    def load_file(self, filename: str, name: str = "", two_d: bool = False,
+                  progress: Optional["ProgressFn"] = None) -> m.SessionInfo:
         """Reads a local mesh file and uploads it inline (X.node brings X.ele along, X.NODE
         brings X.ELE: the case of the extension is kept). The daemon's errors name the file and,
         without `name`, the session is named after it. Raises ValueError for an extension that
-        names no mesh format. two_d as in load_mesh."""
+        names no mesh format. two_d and progress as in load_mesh."""
         stem, ext = os.path.splitext(filename)
         base = os.path.basename(filename)
         if ext.lower() in (".node", ".ele"):
@@ -514,14 +555,14 @@ class Client(PollMixin):
                 data = f.read()
             with open(other, "rb") as f:
                 return self.load_mesh(data, ele=f.read(), name=name, file_name=base,
-                                      two_d=two_d)
+                                      two_d=two_d, progress=progress)
         if ext.lower() not in m.FORMAT_BY_EXT:
             raise ValueError("%s: mesh format not recognised from the file name; formats: .obj, "
                              ".off, .ply, .mesh (MEDIT), .node + .ele (TetGen)" % filename)
         with open(filename, "rb") as f:
             data = f.read()
         return self.load_mesh(data, fmt=m.FORMAT_BY_EXT[ext.lower()], name=name, file_name=base,
-                              two_d=two_d)
+                              two_d=two_d, progress=progress)
 
     def list_sessions(self) -> List[m.SessionInfo]:
         return m.decode_session_list(self._one(m.LIST_SESSIONS))
@@ -594,14 +635,24 @@ class Client(PollMixin):
         return info
 
     # ------------------------------------------------------------------ brush
-    def brush_begin(self, session_id: int, brush: m.Brush) -> m.Ack:
-        return m.decode_ack(self._one(m.BRUSH_BEGIN, m.encode_brush(session_id, brush)))
+    def brush_begin(self, session_id: int, brush: m.Brush,
+                    progress: Optional["ProgressFn"] = None) -> m.Ack:
+        """Opens a stroke. progress: a callback for the "factorize" stage of the LU of the
+        brush's pinned points (built by the begin when its load is non-zero, else by the first
+        update; see the module doc); the stroke's later updates report to brush_update's."""
+        if progress is not None:
+            brush = dataclasses.replace(brush, options=pg.WORK_OPT_PROGRESS)
+        rid = self.send(m.BRUSH_BEGIN, m.encode_brush(session_id, brush))
+        return m.decode_ack(self._wait_with_progress(rid, progress))
 
     def brush_update(self, session_id: int, move=None, twist=None, scale: float = 0.0,
-                     matrix=None) -> m.Ack:
-        """Cumulative load since the stroke began (same meaning as in Brush)."""
-        return m.decode_ack(self._one(m.BRUSH_UPDATE,
-                                      m.encode_brush_update(session_id, move, twist, scale, matrix)))
+                     matrix=None, progress: Optional["ProgressFn"] = None) -> m.Ack:
+        """Cumulative load since the stroke began (same meaning as in Brush). progress: the
+        pin LU's "factorize" events when this update (re)builds it, for a stroke whose
+        brush_begin asked for progress."""
+        rid = self.send(m.BRUSH_UPDATE,
+                        m.encode_brush_update(session_id, move, twist, scale, matrix))
+        return m.decode_ack(self._wait_with_progress(rid, progress))
 
     def brush_end(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.BRUSH_END, m.encode_session_ref(session_id)))
@@ -609,10 +660,12 @@ class Client(PollMixin):
     def brush_cancel(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.BRUSH_CANCEL, m.encode_session_ref(session_id)))
 
-    def stroke(self, session_id: int, brush: m.Brush) -> m.Ack:
+    def stroke(self, session_id: int, brush: m.Brush,
+               progress: Optional["ProgressFn"] = None) -> m.Ack:
         """One whole stroke committed as one version (like `deformctl brush`): begin with the
-        brush's load (applied as its first update), then end. Returns the end's ack."""
-        self.brush_begin(session_id, brush)
+        brush's load (applied as its first update), then end. Returns the end's ack. progress:
+        as in brush_begin."""
+        self.brush_begin(session_id, brush, progress)
         return self.brush_end(session_id)
 
     def set_brush_param(self, session_id: int, param: str, value: float) -> m.Ack:
@@ -640,15 +693,19 @@ class Client(PollMixin):
 
     # ------------------------------------------------------------------ handles
     def set_handles(self, session_id: int, handles: Sequence[int], energy: str = "arap",
-                    affine: Sequence[m.AffineSet] = (), **params) -> m.Ack:
+                    affine: Sequence[m.AffineSet] = (),
+                    progress: Optional["ProgressFn"] = None, **params) -> m.Ack:
         """Defines the session's handle set (replacing any previous one). params: any field of
         messages.HandleParams (w, s, rho, tol, max_iters, youngs, poisson, strain_min,
         strain_max, bending, area_weighting, accelerate, anderson_m); the rest take the
         reference defaults for `energy` (w 1e-4, s 0.01, rho 0.1; Neo-Hookean w 500, rho 5e5;
-        the solver needs rho > w / s)."""
+        the solver needs rho > w / s). progress: a callback for the solver build
+        ("factorize" stage; see the module doc)."""
         p = m.HandleParams.for_energy(energy, **params)
-        return m.decode_ack(self._one(m.HANDLES_SET, m.encode_handles(
-            session_id, energy, handles, p, affine)))
+        rid = self.send(m.HANDLES_SET, m.encode_handles(
+            session_id, energy, handles, p, affine,
+            pg.WORK_OPT_PROGRESS if progress is not None else None))
+        return m.decode_ack(self._wait_with_progress(rid, progress))
 
     def get_handles(self, session_id: int) -> m.HandleSet:
         """The session's current handle set (energy, every parameter, handle indices in handle
@@ -657,13 +714,16 @@ class Client(PollMixin):
 
     def move_handles(self, session_id: int, targets: Sequence[Sequence[float]],
                      max_iters: int = 0, max_ms: int = 0, progress_every: int = 0,
-                     timeout: Optional[float] = None) -> m.MoveResult:
+                     timeout: Optional[float] = None,
+                     progress: Optional["ProgressFn"] = None) -> m.MoveResult:
         """Moves the handles to `targets` (one xyz per handle) and waits for the final result;
-        progress iterates (and displacement frames) are queued as events."""
-        rid = self.send(m.HANDLES_MOVE, m.encode_handle_move(session_id, targets, max_iters,
-                                                             max_ms, progress_every))
-        parts = self.wait_reply(rid, timeout)
-        return m.decode_move_result(b"".join(p.payload for p in parts))
+        progress iterates (and displacement frames) are queued as events. progress: a callback
+        for the "solve" stage (iterations of the budget) and a solver rebuild ("factorize"); see
+        the module doc."""
+        rid = self.send(m.HANDLES_MOVE, m.encode_handle_move(
+            session_id, targets, max_iters, max_ms, progress_every,
+            pg.WORK_OPT_PROGRESS if progress is not None else None))
+        return m.decode_move_result(self._wait_with_progress(rid, progress, timeout))
 
     def reset_rest(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.RESET_REST, m.encode_session_ref(session_id)))

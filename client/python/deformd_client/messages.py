@@ -13,7 +13,7 @@ from . import schema
 from .schema import SHM_HEADER_BYTES, SHM_MAGIC, SHM_MIN_CAPACITY  # noqa: F401
 from .schema import (MAX_AFFINE_SETS, MAX_HANDLES, MAX_PATH_LEN, BrushParam,  # noqa: F401
                      BrushType, ChangeKind, DispEncoding, Energy, Feature, Format, GetMeshFlag,
-                     Integrator, LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType,
+                     Integrator, LoadOpt, LoadSource, WorkOpt, MeshKind, MeshSection, MoveStatus, MsgType,
                      PinFlag, SubscribeFlag)
 from .wire import ProtocolError, Reader, enum_value, f64_rows, pack_str, u32_array, vec
 
@@ -32,7 +32,8 @@ FORMAT_BY_EXT = {".obj": Format.OBJ, ".off": Format.OFF, ".ply": Format.PLY,
 LOAD_INLINE, LOAD_PATH = LoadSource.INLINE, LoadSource.PATH
 LOAD_OPT_EXT = LoadOpt.EXT       # load_mesh options: file_name follows; reply has a LoadReport
 LOAD_OPT_2D = LoadOpt.TWO_D      # load_mesh options: a 2D session even if the file gives z
-LOAD_OPTS_ALL = LOAD_OPT_EXT | LOAD_OPT_2D
+LOAD_OPT_PROGRESS = LoadOpt.PROGRESS  # load_mesh options: WORK_PROGRESS events (4.37)
+LOAD_OPTS_ALL = LOAD_OPT_EXT | LOAD_OPT_2D | LOAD_OPT_PROGRESS
 
 BRUSH_TYPES = {t.name.lower(): t for t in BrushType}
 INTEGRATORS = {t.name.lower(): t for t in Integrator}
@@ -250,6 +251,9 @@ class Brush:
     # BrushStateField bits: take these fields from the session brush (brush_state_set) instead
     # of the values above. None: the field is not sent (the original layout, old daemons).
     use_session: Optional[int] = None
+    # WorkOpt bits (PROGRESS: WORK_PROGRESS of the pinned points' LU), sent after use_session
+    # (then written as 0 when None). None: not sent. Client.brush_begin(progress=) sets it.
+    options: Optional[int] = None
 
 
 PIN_DISPLACEMENT, PIN_GRADIENT = PinFlag.DISPLACEMENT, PinFlag.GRADIENT
@@ -270,7 +274,10 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
         float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
         *vec(b.center, 3, "center"), *vec(b.move, 3, "move"), *vec(b.twist, 3, "twist"),
         float(b.scale), *vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
-    tail = b"" if b.use_session is None else struct.pack("<H", int(b.use_session))
+    tail = b"" if b.use_session is None and b.options is None else \
+        struct.pack("<H", int(b.use_session or 0))
+    if b.options is not None:
+        tail += struct.pack("<I", int(b.options))
     return head + f64_rows(b.pinned, "pinned point") + tail
 
 
@@ -328,7 +335,9 @@ assert HANDLES_STRUCT.size == 92
 
 
 def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: HandleParams,
-                   affine: Sequence[AffineSet] = ()) -> bytes:
+                   affine: Sequence[AffineSet] = (), options: Optional[int] = None) -> bytes:
+    """options: WorkOpt bits (PROGRESS: WORK_PROGRESS events), the optional trailing field:
+    None leaves it out (the original layout), an int (0 too) appends it."""
     if energy not in ENERGIES:
         raise ValueError("energy %r not one of %s" % (energy, sorted(ENERGIES)))
     out = [HANDLES_STRUCT.pack(session_id, ENERGIES[energy], 1 if p.area_weighting else 0,
@@ -344,6 +353,8 @@ def encode_handles(session_id: int, energy: str, handles: Sequence[int], p: Hand
         out.append(struct.pack("<B", rows) + f64_rows(a.A, "affine row")
                    + struct.pack("<%dd" % rows, *[float(x) for x in a.b])
                    + struct.pack("<I", len(a.indices)) + u32_array(a.indices))
+    if options is not None:
+        out.append(struct.pack("<I", options))
     return b"".join(out)
 
 
@@ -357,6 +368,8 @@ class HandleSet:
     params: HandleParams
     handles: List[int]
     affine: List[AffineSet]
+    options: Optional[int] = None   # WorkOpt bits of a HANDLES_SET request; None: field absent
+                                    # (always so in a HANDLES_GET reply)
 
 
 ENERGY_NAMES = {v: k for k, v in ENERGIES.items()}
@@ -392,18 +405,34 @@ def decode_handles(p: bytes) -> HandleSet:
         b = [r.take("d") for _ in range(rows)]
         idx = list(r.farray("I", _count(r, "affine n_indices", MAX_HANDLES)))
         affine.append(AffineSet(A=A, b=b, indices=idx))
+    options = _read_options(r, "handles")
     r.end()
     params = HandleParams(w=w, s=s, rho=rho, tol=tol, max_iters=max_iters, youngs=youngs,
                           poisson=poisson, strain_min=smin, strain_max=smax, bending=bending,
                           area_weighting=bool(area), accelerate=bool(accel),
                           anderson_m=anderson_m)
-    return HandleSet(session_id, ENERGY_NAMES[energy], params, handles, affine)
+    return HandleSet(session_id, ENERGY_NAMES[energy], params, handles, affine, options)
+
+
+def _read_options(r: Reader, what: str) -> Optional[int]:
+    """The optional trailing u32 `options` (WorkOpt bits) of handles / handle_move, read as the
+    C decoder does: None when the body ends (absent); unknown bits are a ProtocolError."""
+    left = len(r.p) - r.off
+    if left == 0 or left > 4:
+        return None     # absent, or trailing bytes r.end() refuses
+    o = r.take("I")     # 1..3 bytes: a cut field (truncated)
+    if o & ~int(WorkOpt.PROGRESS):
+        raise ProtocolError("%s: options 0x%x has unknown bits" % (what, o))
+    return o
 
 
 def encode_handle_move(session_id: int, targets: Sequence[Sequence[float]], max_iters: int = 0,
-                       max_ms: int = 0, progress_every: int = 0) -> bytes:
+                       max_ms: int = 0, progress_every: int = 0,
+                       options: Optional[int] = None) -> bytes:
+    """options: WorkOpt bits (PROGRESS: WORK_PROGRESS events), as in encode_handles."""
     return (struct.pack("<QIIII", session_id, max_iters, max_ms, progress_every, len(targets))
-            + f64_rows(targets, "target"))
+            + f64_rows(targets, "target")
+            + (struct.pack("<I", options) if options is not None else b""))
 
 
 @dataclass

@@ -95,6 +95,7 @@ class MsgType(IntEnum):
     BRUSH_STATE = 0x0084
     BRUSH_CURSOR = 0x0085
     DEVICE_STATE = 0x0086      # devices (HID)
+    WORK_PROGRESS = 0x0087     # opt-in progress of long work (PROTOCOL.md 4.37)
     ERROR = 0x00FF
 
 
@@ -146,6 +147,7 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.DEVICE_BIND: Bodies("device_bind", "empty", None),
     MsgType.DEVICE_VIEW: Bodies("device_view", "empty", None),
     MsgType.DEVICE_STATE: Bodies(None, None, "device_info"),
+    MsgType.WORK_PROGRESS: Bodies(None, None, "work_progress"),
     MsgType.ERROR: Bodies(None, None, None),
 }
 
@@ -188,6 +190,7 @@ class LoadSource(IntEnum):
 class LoadOpt(IntFlag):
     EXT = 0x0001      # a file_name follows the data; the reply is a load_reply (with a report)
     TWO_D = 0x0002    # C DF_LOAD_OPT_2D: a 2D session even if the file gives z (all z 0)
+    PROGRESS = 0x0004  # WORK_PROGRESS events of the upload and the parse (PROTOCOL.md 4.37)
 
 
 class Format(IntEnum):
@@ -345,6 +348,20 @@ class AccessFlag(IntFlag):
 
 
 JOIN_KEY_BYTES = 32      # DF_JOIN_KEY_BYTES: a session's join key
+
+
+class WorkStage(IntEnum):
+    """work_progress `stage` (PROTOCOL.md 4.37). New stages are added at the end: a stage not
+    listed here arrives as a plain int."""
+    UPLOAD = 1        # load: bytes of the inline upload received
+    PARSE = 2         # load: bytes of the mesh file parsed
+    FACTORIZE = 3     # handles set / move: ADMM solver build (analysis, factorization)
+    SOLVE = 4         # handles move: ADMM iterations of the budget
+
+
+class WorkOpt(IntFlag):
+    """handles / handle_move `options` (optional trailing u32)."""
+    PROGRESS = 1 << 0  # WORK_PROGRESS events of this request
 
 
 # The AUTH exchange's sizes and MAC contexts (DF_AUTH_* of wire_schema.h; auth.py uses them).

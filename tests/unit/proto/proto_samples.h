@@ -17,7 +17,9 @@ typedef struct sample {
 } sample;
 
 enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
-       N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS };
+       N_SAMPLES_WORK = 4,
+       N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS +
+                   N_SAMPLES_WORK };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -166,7 +168,7 @@ static inline void build_samples(sample *s)
     df_msg_affine_set aff;
     df_msg_handles hs = sample_handles_msg(&aff);
     ADD("handles", DF_MSG_HANDLES_SET, 0, df_msg_handles_encode(&hs, out, &e));
-    df_msg_handle_move hm = {7, 0, 250, 10, 4, sample_targets};
+    df_msg_handle_move hm = {7, 0, 250, 10, 4, sample_targets, 0, 0};
     ADD("handle_move", DF_MSG_HANDLES_MOVE, 0, df_msg_handle_move_encode(&hm, out, &e));
     df_msg_move_result mr = {7, 60, DF_MOVE_CONVERGED, 123, 4.5, 1e-12, 37.5};
     ADD("move_result", DF_MSG_HANDLES_MOVE, DF_FLAG_REPLY, df_msg_move_result_encode(&mr, out, &e));
@@ -285,6 +287,18 @@ static inline void build_samples(sample *s)
     ai.mode = DF_ACCESS_MODE_OPEN;
     ai.observers = 1;
     ADD("access_info", DF_MSG_JOIN, DF_FLAG_REPLY, df_msg_access_info_encode(&ai, out, &e));
+    /* progress of long work (PROTOCOL.md 4.37): the opt-ins and the event */
+    df_msg_handles hsp = sample_handles_msg(&aff);
+    hsp.options = DF_WORK_OPT_PROGRESS;
+    ADD("handles_progress", DF_MSG_HANDLES_SET, 0, df_msg_handles_encode(&hsp, out, &e));
+    df_msg_handle_move hmp = {7, 0, 250, 10, 4, sample_targets, DF_WORK_OPT_PROGRESS, 0};
+    ADD("handle_move_progress", DF_MSG_HANDLES_MOVE, 0, df_msg_handle_move_encode(&hmp, out, &e));
+    df_msg_brush bpr = sample_brush(); /* pinned points: their LU's progress */
+    bpr.options = DF_WORK_OPT_PROGRESS;
+    ADD("brush_progress", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bpr, out, &e));
+    df_msg_work_progress wp = {0, DF_STAGE_PARSE, 0, 1 << 20, 3 << 20, 12.5};
+    ADD("work_progress", DF_MSG_WORK_PROGRESS, DF_FLAG_EVENT,
+        df_msg_work_progress_encode(&wp, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

@@ -151,18 +151,21 @@ static void test_load_mesh_bodies(void **state)
      * data_len at 35, data at 39 */
     u8("load_mesh", 0, 2, DF_EINVAL, "source");
     u8("load_mesh", 1, 6, DF_EINVAL, "format 6");
-    /* options: bit 0 EXT, bit 1 2D; any other bit is EPROTO_RESERVED */
-    u16("load_mesh", 2, 6, DF_EPROTO_RESERVED, "unknown bits 0x4");
-    u16("load_mesh", 2, 4, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    /* options: bit 0 EXT, bit 1 2D, bit 2 PROGRESS; any other bit is EPROTO_RESERVED */
+    u16("load_mesh", 2, 0xE, DF_EPROTO_RESERVED, "unknown bits 0x8");
+    u16("load_mesh", 2, 8, DF_EPROTO_RESERVED, "unknown bits 0x8");
     u16("load_mesh", 2, 0x8000, DF_EPROTO_RESERVED, "unknown bits 0x8000");
     u16("load_mesh", 2, DF_LOAD_OPT_2D, DF_OK, NULL);          /* 2D alone: same layout */
+    u16("load_mesh", 2, DF_LOAD_OPT_PROGRESS, DF_OK, NULL);    /* PROGRESS: same layout */
     u16("load_mesh", 2, DF_LOAD_OPT_EXT, DF_EPROTO_TRUNCATED, "file_name"); /* EXT needs it */
     u16("load_path_2d", 2, 0, DF_OK, NULL);
-    u16("load_path_2d", 2, 7, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_path_2d", 2, 6, DF_OK, NULL);                    /* 2D | PROGRESS */
+    u16("load_path_2d", 2, 0xE, DF_EPROTO_RESERVED, "unknown bits 0x8");
     u16("load_mesh_ext", 2, 0, DF_EPROTO_TRAILING, NULL);  /* file_name without the EXT option */
     u16("load_mesh_ext", 2, 3, DF_OK, NULL);                   /* EXT | 2D */
     u16("load_mesh_ext", 2, 2, DF_EPROTO_TRAILING, NULL);      /* 2D without EXT: trailing */
-    u16("load_mesh_ext", 2, 5, DF_EPROTO_RESERVED, "unknown bits 0x4");
+    u16("load_mesh_ext", 2, 5, DF_OK, NULL);                   /* EXT | PROGRESS */
+    u16("load_mesh_ext", 2, 9, DF_EPROTO_RESERVED, "unknown bits 0x8");
     /* load_reply: session_info "bunny" is 43 bytes, then format 43, index_base 44, reserved 45 */
     u8("load_reply", 43, 0, DF_EINVAL, "format");
     u8("load_reply", 43, 6, DF_EINVAL, "format");
@@ -344,6 +347,9 @@ static void test_brush_state_bodies(void **state)
     u16("brush_use_session", trailer, 0x100, DF_EPROTO_RESERVED, "use_session");
     u16("brush_use_session", trailer, 0, DF_OK, NULL);       /* explicit 0 = absent */
     u16("brush_use_session", trailer, 0xFF, DF_OK, NULL);    /* every field */
+    /* options after use_session (PROTOCOL.md 4.12): bit 0 PROGRESS, the others reserved */
+    u32("brush_progress", trailer + 2, 2, DF_EPROTO_RESERVED, "unknown bits 0x2");
+    u32("brush_progress", trailer + 2, 0, DF_OK, NULL);
     /* brush_state_set: mask at 8, values at 10 (sample mask RADIUS | INTEGRATOR | MIRROR) */
     u64("brush_state_set", 0, 0, DF_EINVAL, "session_id");
     u16("brush_state_set", 8, 0, DF_EINVAL, "mask 0");
@@ -408,6 +414,19 @@ static void test_handle_bodies(void **state)
 {
     (void)state;
     u8("handles", 8, 0, DF_EINVAL, "energy 0");
+    /* the optional trailing options (PROTOCOL.md 4.15, 4.16): bit 0 PROGRESS, others reserved */
+    u32("handles_progress", 193, 2, DF_EPROTO_RESERVED, "unknown bits 0x2");
+    u32("handles_progress", 193, 0, DF_OK, NULL); /* an explicit 0: as if absent */
+    u32("handle_move_progress", 120, 0x80000001u, DF_EPROTO_RESERVED, "unknown bits 0x80000000");
+    u32("handle_move_progress", 120, 0, DF_OK, NULL);
+    /* work_progress (4.37): stage at 8, final at 9, reserved at 10, done 12, total 20, ms 28 */
+    u8("work_progress", 8, 0, DF_EINVAL, "stage 0");
+    u8("work_progress", 8, 200, DF_OK, NULL); /* a stage newer than this build still decodes */
+    u8("work_progress", 9, 2, DF_EINVAL, "final 2");
+    u16("work_progress", 10, 1, DF_EPROTO_RESERVED, NULL);
+    u32("work_progress", 12, 0xFFFFFFFFu, DF_EINVAL, "exceeds total");
+    f64("work_progress", 28, NAN, DF_EINVAL, "elapsed_ms");
+    f64("work_progress", 28, -1, DF_EINVAL, "elapsed_ms");
     u8("handles_reply", 8, 0, DF_EINVAL, "energy 0");   /* HANDLES_GET reply: same rules */
     u32("handles_reply", 92 + 4, DF_MAX_MESH_VERTICES, DF_EINVAL, "out of range");
     f64("handles_reply", 28, NAN, DF_EINVAL, "rho");

@@ -77,7 +77,7 @@ static int load(fixture *f, const char *name, df_mesh *m, df_error *e)
     snprintf(p, sizeof p, "%s/%s", f->allowed, name);
     df_mesh_init(m);
     memset(e, 0, sizeof *e);
-    return df_pathload_mesh(&f->cfg, p, 0, 1000, 0, m, NULL, e);
+    return df_pathload_mesh(&f->cfg, p, 0, 1000, 0, m, NULL, NULL, e);
 }
 
 static void test_tetgen_halves_are_both_checked(void **state)
@@ -115,8 +115,8 @@ static void test_missing_and_disallowed_read_the_same(void **state)
     char p[256];
     snprintf(p, sizeof p, "%s/x.obj", f->outside);
     df_mesh_init(&m);
-    assert_int_equal(df_pathload_mesh(&f->cfg, p, 0, 1000, 0, &m, NULL, &outside), DF_EIO);
-    assert_int_equal(df_pathload_mesh(&f->cfg, "/proc/self/cwd/x.obj", 0, 1000, 0, &m, NULL, &proc),
+    assert_int_equal(df_pathload_mesh(&f->cfg, p, 0, 1000, 0, &m, NULL, NULL, &outside), DF_EIO);
+    assert_int_equal(df_pathload_mesh(&f->cfg, "/proc/self/cwd/x.obj", 0, 1000, 0, &m, NULL, NULL, &proc),
                      DF_EIO);
     assert_int_equal(missing.code, outside.code);
     assert_non_null(strstr(missing.msg, "not allowed or not found"));
@@ -145,7 +145,7 @@ static void test_fifo_device_and_size_cap(void **state)
     /* a device inside an allowed folder: allow /dev for this check */
     df_server_config dev = f->cfg;
     snprintf(dev.allow_paths[0], sizeof dev.allow_paths[0], "/dev");
-    assert_int_equal(df_pathload_mesh(&dev, "/dev/zero", DF_FMT_OBJ, 1000, 0, &m, NULL, &e),
+    assert_int_equal(df_pathload_mesh(&dev, "/dev/zero", DF_FMT_OBJ, 1000, 0, &m, NULL, NULL, &e),
                      DF_EIO);
     assert_non_null(strstr(e.msg, "not a regular file"));
     put(f->allowed, "big.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -190,7 +190,7 @@ static void test_case_kept_and_unknown_extension(void **state)
     char p[256];
     snprintf(p, sizeof p, "%s/T1.NODE", f->allowed);
     df_mesh_init(&m);
-    int rc = df_pathload_mesh(&f->cfg, p, 0, 1000, 0, &m, &r, &e);
+    int rc = df_pathload_mesh(&f->cfg, p, 0, 1000, 0, &m, &r, NULL, &e);
     if (rc)
         fail_msg("%s", e.msg);
     assert_int_equal(m.kind, DF_MESH_TET);
