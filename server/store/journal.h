@@ -25,10 +25,25 @@
  * rollback of the applied state would. Durability: the transaction's COMMIT returns once the
  * WAL holds it (and, with durability = full, fsynced), before the ack and the broadcast.
  * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
- * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), the change's transaction also writes the positions and rest shape after
- * it into the session row (cur, rest) and deletes the session's log rows: a session holds at
+ * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), or its replay cost the threshold
+ * below, the change's transaction also writes the positions and rest shape after it into the
+ * session row (cur, rest, snap_version = its version) and deletes the session's log rows: a session holds at
  * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
  * at most that (restore.h). The deleted rows' kind / who are not kept.
+ * Recipe records (schema 2, record.h): a brush version (BRUSH_BEGIN / BRUSH_UPDATE) whose
+ * stroke is replayable (df_stroke_recipe: the change's recipe_replayable, no rebase) and began
+ * at a version the log can rebuild (base_version >= the session's snap_version) is written as
+ * its recipe (brush, strength, cumulative load, pins: ~300 bytes + 24 per pin), base_version
+ * and the checksum of its positions, flag DF_JOURNAL_RECIPE, no delta. A BRUSH_END right
+ * after its stroke's last publish (no other version in between) carries the same recipe with
+ * the checksum of the state it commits (no flag: its positions are unchanged), so the undo
+ * history can keep the stroke as a recipe. Everything else (rebased or cancelled strokes,
+ * handle moves, undo / redo results, loads, reset-rest) keeps the packed delta below.
+ * Snapshot by replay cost too: sessions.replay_ns sums the live-measured field-evaluation time
+ * of the recipe records the restore will replay (a brush version immediately superseded by the
+ * next one of the same stroke is not replayed, restore.h, and stops counting); past
+ * df_store_snapshot_replay_ns (DF_STORE_SNAPSHOT_REPLAY_NS, 1 s) the change's transaction
+ * writes a snapshot as below, so a restart replays at most about that much per session.
  * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a
  * brush version's raw delta is dense: 24 bytes per vertex + 8. The codec writes it packed
  * (codec.h: XOR against the previous state, byte planes, zstd) when smaller: measured by
@@ -38,7 +53,7 @@
  * still above the issue's target (200 strokes within 2 x the position bytes, 0.24 bytes per
  * vertex per stroke): the low mantissa bits of the far-field motion are incompressible, and
  * only recording a stroke as its request plus checkpoints would reach it. The snapshot rule
- * below bounds the log either way. srv->store counts the bytes written (df_store_log_bytes).
+ * below bounds the log either way; recipe records above avoid it for unrebased strokes. srv->store counts the bytes written (df_store_log_bytes).
  *
  * Loop thread. */
 #ifndef DF_SERVER_STORE_JOURNAL_H
@@ -46,7 +61,8 @@
 
 #include "server/server.h"
 
-enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 4 };
+enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 4,
+       DF_JOURNAL_RECIPE = 8 /* the positions after the row are its recipe's replay */ };
 /* flags bits 4..6: the change's undo-history step (commit.h DF_HIST_*), replayed at restore */
 #define DF_JOURNAL_HIST_SHIFT 4
 #define DF_JOURNAL_HIST(flags) (((flags) >> DF_JOURNAL_HIST_SHIFT) & 7)

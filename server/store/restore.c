@@ -12,52 +12,11 @@
 #include "server/session/session.h"
 #include "server/store/codec.h"
 #include "server/store/journal.h"
+#include "server/store/replay.h"
 #include "server/store/store.h"
 
-/* Replays session s's change log onto its positions and rest shape (the last snapshot or the
- * base), with each row's undo-history step on s->hist, in the commit's order (state, then
- * history). */
-static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *err)
-{
-    sqlite3_stmt *q = NULL;
-    if (sqlite3_prepare_v2(df_store_db(st), "SELECT flags, delta FROM changes WHERE session = ?"
-                           " ORDER BY id", -1, &q, NULL) != SQLITE_OK)
-        return df_store_fail(st, DF_EIO, "reading the change log", err);
-    sqlite3_bind_int64(q, 1, (sqlite3_int64)s->id);
-    int rc = DF_OK, step;
-    *n_changes = 0;
-    while (rc == DF_OK && (step = sqlite3_step(q)) == SQLITE_ROW) {
-        int flags = sqlite3_column_int(q, 0);
-        const uint8_t *d = sqlite3_column_blob(q, 1);
-        size_t len = (size_t)sqlite3_column_bytes(q, 1);
-        if (d) rc = df_codec_delta_apply(d, len, s->cur, s->nv, NULL, err);
-        if (rc == DF_OK && (flags & DF_JOURNAL_REST_FROM_CUR))
-            memcpy(s->rest, s->cur, 3 * (size_t)s->nv * sizeof(double));
-        if (rc == DF_OK) {
-            switch (DF_JOURNAL_HIST(flags)) { /* as commit.c's apply_history */
-            case DF_HIST_COMMIT: rc = df_session_history_commit(s, err); break;
-            case DF_HIST_RESET: rc = df_session_history_reset(s, err); break;
-            case DF_HIST_UNDO:
-            case DF_HIST_REDO: {
-                /* The step it moved to may predate the snapshot the history starts at (an undo
-                 * of a change the snapshot folded in): the history then restarts at the
-                 * positions the row produced, so later undo steps revert to them, as live. */
-                const double *at = DF_JOURNAL_HIST(flags) == DF_HIST_UNDO
-                                       ? df_history_undo(&s->hist, NULL)
-                                       : df_history_redo(&s->hist, NULL);
-                if (!at || memcmp(at, s->cur, 3 * (size_t)s->nv * sizeof(double)))
-                    rc = df_session_history_reset(s, err);
-                break;
-            }
-            default: break;
-            }
-        }
-        (*n_changes)++;
-    }
-    if (rc == DF_OK && step != SQLITE_DONE) rc = df_store_fail(st, DF_EIO, "reading the log", err);
-    sqlite3_finalize(q);
-    return rc;
-}
+/* Below this many vertices a replayed field is evaluated by one thread (as h_brush.c). */
+#define REPLAY_PARALLEL_MIN_VERTICES 32768
 
 /* A copy of column `col` (exactly `len` bytes, NULL allowed when len is 0). */
 static int column_copy(sqlite3_stmt *q, int col, size_t len, void **out)
@@ -126,7 +85,32 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         memcpy(col == 14 ? s->cur : s->rest, sqlite3_column_blob(q, col), pb);
     }
     if (rc == DF_OK) rc = df_session_history_reset(s, &e); /* undo starts at the snapshot */
-    if (rc == DF_OK) rc = replay(st, s, &n_changes, &e);
+    df_replay_result rr;
+    memset(&rr, 0, sizeof rr);
+    if (rc == DF_OK)
+        rc = df_store_replay(st, s, (uint64_t)sqlite3_column_int64(q, 16),
+                             s->nv < REPLAY_PARALLEL_MIN_VERTICES ? 1 : srv->cfg.threads, &rr,
+                             &e);
+    n_changes = rr.rows;
+    srv->stats.store_recipes_replayed += rr.recipes_replayed;
+    srv->stats.store_recipes_skipped += rr.recipes_skipped;
+    if (rc == DF_OK && rr.mismatch) {
+        /* never a wrong mesh: the session stays at the last verified version's positions,
+         * published as a new version (no version number names two meshes), folded into a
+         * snapshot so that the next start does not replay the dropped rows onto them */
+        uint64_t stored = atomic_load(&s->version), next = stored + 1;
+        srv->stats.store_replay_mismatches++;
+        df_log(DF_LOG_ERROR, "store %s: session %llu '%s': the change of version %llu does not "
+               "replay to what was recorded (%s): restored at version %llu's positions, the "
+               "last verified, as version %llu; %llu logged change(s) from version %llu on are "
+               "lost", df_store_path(st), (unsigned long long)id, name,
+               (unsigned long long)rr.bad_version, rr.why,
+               (unsigned long long)rr.verified_version, (unsigned long long)next,
+               (unsigned long long)rr.rows_dropped, (unsigned long long)rr.bad_version);
+        atomic_store(&s->version, next);
+        rc = df_session_history_reset(s, &e);
+        if (rc == DF_OK) rc = df_store_replay_cut(st, s, next, &e);
+    }
     if (rc == DF_OK && memcmp(s->hist.state, s->cur, 3 * (size_t)s->nv * sizeof(double)) != 0) {
         /* the log ends inside a stroke or move (the daemon died before its end): it ends now,
          * as a disconnect ends a stroke: the positions become an undo step, logged first so
@@ -154,9 +138,11 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     }
     for (size_t i = 0; i < 3 * (size_t)s->nv; i++)
         s->uf[i] = (float)(s->cur[i] - s->mesh.V[i]);
-    df_log(DF_LOG_INFO, "session %llu '%s' restored at version %llu (%llu logged changes)",
+    df_log(DF_LOG_INFO, "session %llu '%s' restored at version %llu (%llu logged changes; "
+           "%llu stroke recipe(s) replayed and verified, %llu superseded)",
            (unsigned long long)id, s->name, (unsigned long long)atomic_load(&s->version),
-           (unsigned long long)n_changes);
+           (unsigned long long)n_changes, (unsigned long long)rr.recipes_replayed,
+           (unsigned long long)rr.recipes_skipped);
     return DF_OK;
 }
 
@@ -172,7 +158,7 @@ static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
     if (sqlite3_step(q) == SQLITE_ROW) next = (uint64_t)sqlite3_column_int64(q, 0);
     sqlite3_finalize(q);
     if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, base, elems, faces,"
-                           " version, brush, brush_seq, handles, cur, rest FROM sessions"
+                           " version, brush, brush_seq, handles, cur, rest, snap_version FROM sessions"
                            " ORDER BY id",
                            -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the sessions", err);
@@ -207,6 +193,9 @@ int df_store_start(df_server *srv, df_error *err)
     int rc = df_store_open(path, srv->cfg.durability, srv->cfg.store_max_mb, def, &st, &checked,
                            err);
     if (rc != DF_OK) return rc;
+    if (df_store_migrated_from(st))
+        df_log(DF_LOG_INFO, "store %s: schema version %d migrated to %d", path,
+               df_store_migrated_from(st), DF_STORE_SCHEMA);
     int count = 0;
     srv->store = st; /* store_ops stay NULL until restored (only a stroke left open writes) */
     if ((rc = restore_all(srv, st, &count, err)) != DF_OK) {

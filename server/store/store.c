@@ -15,6 +15,8 @@ struct df_store {
     char *path;
     uint64_t log_bytes, log_changes;
     uint64_t snapshot_min;
+    uint64_t snapshot_replay_ns;
+    int migrated_from;
 };
 
 static const char k_schema[] =
@@ -23,12 +25,22 @@ static const char k_schema[] =
     " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
     " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
     " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
-    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0);"
+    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0,"
+    " snap_version INTEGER NOT NULL DEFAULT 0, replay_ns INTEGER NOT NULL DEFAULT 0);"
     "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL,"
     " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
-    " flags INTEGER NOT NULL, delta BLOB, aux BLOB);"
+    " flags INTEGER NOT NULL, delta BLOB, aux BLOB, recipe BLOB);"
     "CREATE INDEX changes_session ON changes(session, id);"
     "INSERT INTO meta VALUES('next_session_id', 0);";
+
+/* Schema 1 -> 2 (store.h): the recipe column, the snapshot's version and the replay cost since
+ * it. A version-1 log holds deltas only, and every stroke begun after the migration starts at
+ * or after the version the store holds now: that version stands for the snapshot's. */
+static const char k_migrate_1_2[] =
+    "ALTER TABLE changes ADD COLUMN recipe BLOB;"
+    "ALTER TABLE sessions ADD COLUMN snap_version INTEGER NOT NULL DEFAULT 0;"
+    "ALTER TABLE sessions ADD COLUMN replay_ns INTEGER NOT NULL DEFAULT 0;"
+    "UPDATE sessions SET snap_version = version;";
 
 int df_store_resolve_path(const char *cfg, const char *state_directory,
                           const char *xdg_state_home, const char *home, char *out, size_t cap,
@@ -130,8 +142,9 @@ static int check_integrity(df_store *st, int64_t size, const char **checked, df_
     return DF_OK;
 }
 
-/* The schema check of an existing database; *fresh = 1 when it holds nothing (new file). */
-static int check_schema(df_store *st, int *fresh, df_error *err)
+/* The schema check of an existing database; *fresh = 1 when it holds nothing (new file),
+ * *ver its schema version. */
+static int check_schema(df_store *st, int *fresh, int64_t *ver_out, df_error *err)
 {
     int64_t app, ver, tables;
     int rc;
@@ -140,15 +153,40 @@ static int check_schema(df_store *st, int *fresh, df_error *err)
         (rc = query_int(st, "SELECT count(*) FROM sqlite_master", &tables, err)) != DF_OK)
         return rc;
     *fresh = app == 0 && ver == 0 && tables == 0;
+    *ver_out = ver;
     if (*fresh) return DF_OK;
     if (app != DF_STORE_APP_ID)
         return df_error_set(err, DF_EFORMAT, "store %s: not a deformd store (an SQLite database "
                             "of another application: application_id 0x%llx, %lld table(s)); "
                             "set another store path", st->path, (unsigned long long)app,
                             (long long)tables);
-    if (ver != DF_STORE_SCHEMA)
+    if (ver < 1 || ver > DF_STORE_SCHEMA)
         return df_error_set(err, DF_EFORMAT, "store %s: schema version %lld, this deformd "
-                            "knows version %d only", st->path, (long long)ver, DF_STORE_SCHEMA);
+                            "knows versions 1 to %d (%s); the file is left untouched", st->path,
+                            (long long)ver, DF_STORE_SCHEMA,
+                            ver > DF_STORE_SCHEMA ? "written by a newer deformd: run that one, "
+                                                    "or move the file away"
+                                                  : "not a version deformd ever wrote");
+    return DF_OK;
+}
+
+/* Brings a store of an older schema version (checked: 1 .. DF_STORE_SCHEMA - 1) to the current
+ * one in one transaction: all or nothing. */
+static int migrate(df_store *st, int64_t ver, df_error *err)
+{
+    if (ver == DF_STORE_SCHEMA) return DF_OK;
+    char sql[sizeof k_migrate_1_2 + 96];
+    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;%sPRAGMA user_version=%d;COMMIT", k_migrate_1_2,
+             DF_STORE_SCHEMA);
+    char what[96];
+    snprintf(what, sizeof what, "migrating schema version %lld to %d", (long long)ver,
+             DF_STORE_SCHEMA);
+    int rc = df_store_exec(st, sql, what, err);
+    if (rc != DF_OK) {
+        sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
+        return rc;
+    }
+    st->migrated_from = (int)ver;
     return DF_OK;
 }
 
@@ -220,7 +258,10 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
         return df_error_set(err, DF_EIO, "store %s: %s", path, strerror(errno));
     }
     df_store *st = calloc(1, sizeof *st);
-    if (st) st->snapshot_min = DF_STORE_SNAPSHOT_MIN;
+    if (st) {
+        st->snapshot_min = DF_STORE_SNAPSHOT_MIN;
+        st->snapshot_replay_ns = DF_STORE_SNAPSHOT_REPLAY_NS;
+    }
     if (!st || !(st->path = strdup(path))) {
         free(st);
         return df_error_set(err, DF_ENOMEM, "store %s: out of memory", path);
@@ -233,10 +274,11 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
         sqlite3_extended_result_codes(st->db, 0);
         sqlite3_busy_timeout(st->db, 0);
         int fresh = 0;
+        int64_t ver = 0;
         /* read-only checks first (the first read fails on a text file: SQLITE_NOTADB); a
          * refused file is never written to */
         if ((rc = df_store_exec(st, "PRAGMA locking_mode=EXCLUSIVE", "locking", err)) == DF_OK &&
-            (rc = check_schema(st, &fresh, err)) == DF_OK &&
+            (rc = check_schema(st, &fresh, &ver, err)) == DF_OK &&
             (fresh || (rc = check_integrity(st, size, checked, err)) == DF_OK) &&
             (rc = configure(st, durability, max_mb, err)) == DF_OK) {
             if (fresh) {
@@ -246,6 +288,8 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
                          DF_STORE_SCHEMA);
                 rc = df_store_exec(st, sql, "creating the schema", err);
                 if (rc != DF_OK) sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
+            } else {
+                rc = migrate(st, ver, err);
             }
         }
         /* take the exclusive lock now: a second daemon on this file is refused at start */
@@ -274,6 +318,9 @@ struct sqlite3 *df_store_db(df_store *st) { return st->db; }
 uint64_t df_store_log_bytes(const df_store *st) { return st->log_bytes; }
 uint64_t df_store_snapshot_min(const df_store *st) { return st->snapshot_min; }
 void df_store_set_snapshot_min(df_store *st, uint64_t bytes) { st->snapshot_min = bytes; }
+uint64_t df_store_snapshot_replay_ns(const df_store *st) { return st->snapshot_replay_ns; }
+void df_store_set_snapshot_replay_ns(df_store *st, uint64_t ns) { st->snapshot_replay_ns = ns; }
+int df_store_migrated_from(const df_store *st) { return st->migrated_from; }
 uint64_t df_store_log_changes(const df_store *st) { return st->log_changes; }
 
 void df_store_count_change(df_store *st, uint64_t bytes)

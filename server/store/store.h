@@ -9,15 +9,23 @@
  * Schema (PRAGMA application_id DF_STORE_APP_ID, PRAGMA user_version DF_STORE_SCHEMA):
  *   meta(key TEXT PRIMARY KEY, value INTEGER)      next_session_id: ids are never reused
  *   sessions(id, name, kind, planar, nv, ne, nf, base, elems, faces, version, brush, brush_seq,
- *            handles, cur, rest, log_bytes)        one row per live session: topology and the
+ *            handles, cur, rest, log_bytes,        one row per live session: topology and the
+ *            snap_version, replay_ns)
  *                                                   exact double BASE positions (load-time), the
  *                                                   last acknowledged version, the session brush
  *                                                   and the handle set (codec.h: blob layouts),
  *                                                   the last snapshot of the positions and rest
  *                                                   shape (3 x nv doubles; NULL: the base) and
- *                                                   the log's bytes since (journal.h)
- *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux)
- *                                                   the change log, in commit order (journal.h)
+ *                                                   the log's bytes since (journal.h), the
+ *                                                   version of that snapshot (0: the base) and
+ *                                                   the estimated replay time of the log's
+ *                                                   recipe records since (ns, journal.h)
+ *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux, recipe)
+ *                                                   the change log, in commit order (journal.h;
+ *                                                   recipe: record.h)
+ * Versions: 1 (no recipe records; snap_version, replay_ns, recipe absent) is migrated to 2 at
+ * open, in one transaction (snap_version = the stored version); 2 is current. Any other
+ * version is refused, the file untouched.
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
  *
  * Checks at open (df_store_open): an existing empty file, a file that is not SQLite (a text
@@ -43,10 +51,13 @@
 #include "core/common/df_error.h"
 
 #define DF_STORE_APP_ID 0x44665244            /* "DfRD" */
-#define DF_STORE_SCHEMA 1
+#define DF_STORE_SCHEMA 2
 #define DF_STORE_FULL_CHECK_BYTES ((int64_t)256 << 20) /* integrity_check up to 256 MiB */
 #define DF_STORE_SNAPSHOT_MIN ((uint64_t)1 << 20) /* journal.h: snapshot once the log since the
                                                    * last one exceeds max(this, 2 x 24 x nv) */
+#define DF_STORE_SNAPSHOT_REPLAY_NS ((uint64_t)1000000000) /* journal.h: snapshot also once the
+                                                   * log's recipe records would take longer
+                                                   * than this to replay at restart (1 s) */
 
 enum { DF_DURABILITY_FULL = 0, DF_DURABILITY_NORMAL = 1, DF_DURABILITY_OFF = 2 };
 
@@ -69,7 +80,8 @@ int df_store_resolve_path(const char *cfg, const char *state_directory,
  * the checks above; *checked (may be NULL) gets "integrity_check" or "quick_check". On success
  * *out is a new store. Errors (message names the file): DF_EIO (cannot open / create / lock:
  * "in use by another process"), DF_EFORMAT (empty, not SQLite, foreign, corrupt, unknown
- * schema version), DF_ENOMEM. */
+ * schema version), DF_ENOMEM. An older schema version is migrated (df_store_migrated_from);
+ * a failed migration (DF_EIO) leaves the file as it was. */
 int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent,
                   df_store **out, const char **checked, df_error *err);
 
@@ -98,5 +110,14 @@ void df_store_count_change(df_store *st, uint64_t bytes);
  * lower it to snapshot small meshes. */
 uint64_t df_store_snapshot_min(const df_store *st);
 void df_store_set_snapshot_min(df_store *st, uint64_t bytes);
+
+/* The replay-time threshold of a snapshot (journal.h; default DF_STORE_SNAPSHOT_REPLAY_NS):
+ * tests lower it. */
+uint64_t df_store_snapshot_replay_ns(const df_store *st);
+void df_store_set_snapshot_replay_ns(df_store *st, uint64_t ns);
+
+/* The schema version df_store_open migrated from, 0 when the file was already current (or
+ * new). */
+int df_store_migrated_from(const df_store *st);
 
 #endif

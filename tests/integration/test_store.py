@@ -46,7 +46,7 @@ def edit_two_sessions(d):
         s2 = b.load_mesh(data=grid_obj(12, 12), fmt=".obj", name="grid").session_id
         X1 = a.get_mesh(s1).positions
         X2 = b.get_mesh(s2).positions
-        for k in range(BUNNY_STROKES):  # past a snapshot (1 MB of log; packed deltas, codec.h)
+        for k in range(BUNNY_STROKES):  # recipe records (journal.h), not deltas
             a.stroke(s1, Brush(type="grab", center=X1[3 * k:3 * k + 3], move=(0, 0, 0.01 * (k + 1)),
                                radius=0.05))
             if k < 3:
@@ -80,11 +80,13 @@ def test_kill9_restart_restores_every_session(tmp_path):
     try:
         log = d.log()
         assert "2 session(s) restored" in log
-        # the bunny's log was folded into a snapshot on the way (journal.h): fewer rows replayed
-        # than its strokes, handle set, move, undo and redo
+        # the bunny's strokes are logged as recipes (journal.h): each one recomputed at the
+        # restart and verified against its checksum (replay.h), every row of its log replayed
         assert "session %d 'bunny' restored at version %d (" % (s1, before[s1][1]) in log
-        replayed = int(log.split("session %d 'bunny' restored" % s1)[1].split("(")[1].split()[0])
-        assert replayed < BUNNY_STROKES, log
+        line = log.split("session %d 'bunny' restored" % s1)[1].split("\n")[0]
+        replayed = int(line.split("(")[1].split()[0])
+        recipes = int(line.split("; ")[1].split()[0])
+        assert recipes == BUNNY_STROKES and replayed > BUNNY_STROKES, line
         with d.unix_client() as c:
             infos = {i.session_id: i for i in c.list_sessions()}
             assert sorted(infos) == sorted([s1, s2])
@@ -121,8 +123,9 @@ def test_kill9_restart_restores_every_session(tmp_path):
 
 
 def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
-    """store_max_mb = 1: a bunny (3485 vertices, 170 kB of mesh) fits, its stroke deltas (84 kB
-    each raw, about a third of that packed: codec.h) soon do not. The edit that does not fit is refused with the store's message,
+    """store_max_mb = 1: a bunny (3485 vertices, 170 kB of mesh) fits, a stroke too (two recipe
+    records: journal.h), the undo of one (a delta of 84 kB raw, about a third of that packed:
+    codec.h) soon does not. The edit that does not fit is refused with the store's message,
     not applied, not broadcast; after kill -9 the last acknowledged state is back."""
     store = str(tmp_path / "small.db")
     d = start(tmp_path, store, 1, "store_max_mb = 1\n")
@@ -138,22 +141,25 @@ def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
         rows = s1["store_changes"] - s0["store_changes"]
         size = s1["store_log_bytes"] - s0["store_log_bytes"]
         assert rows == 2                       # begin's version; end's undo step (no delta)
-        dense = 8 + 24 * nv                    # codec.h: a header, then every vertex's doubles
-        assert 8 < size <= dense, size         # raw, or packed when smaller (codec.h)
-        print("store: a Kelvinlet stroke on %d vertices logs %d bytes (%.1f per vertex)"
+        assert s1["store_recipe_records"] - s0["store_recipe_records"] == 2
+        # both rows are recipe records (record.h: a 32-byte header and the stroke's request)
+        assert size == 2 * (32 + 272), size
+        print("store: a Kelvinlet stroke on %d vertices logs %d bytes (%.2f per vertex)"
               % (nv, size, size / nv))
         acked = state(c, sid)
         err = None
-        for k in range(100):    # begin (a version) and end (an undo step) may each fail
-            try:
+        for k in range(100):    # begin (a version), end (an undo step) and the undo (a packed
+            try:                # delta: codec.h) may each fail
                 c.brush_begin(sid, Brush(type="grab", center=X[0:3],
                                          move=(0, 0, 0.001 * (k + 1)), radius=0.05))
                 acked = state(c, sid)
                 c.brush_end(sid)
+                c.undo(sid)
+                acked = state(c, sid)
             except DeformdError as e:
                 err = e
                 break
-        assert err is not None, "100 strokes fit in 1 MiB"
+        assert err is not None, "100 strokes and undos fit in 1 MiB"
         assert err.code == E.ELIMIT and "full" in str(err) and store in str(err), err
         assert state(c, sid) == acked          # nothing of the refused edit applied
         # a handle move: its first iterate does not fit either; the move fails, nothing moves
@@ -295,21 +301,23 @@ def _packed_rows(store):
     return [(i, bytes(b)) for i, b in rows if bytes(b[:4]) == b"\xff\xff\xff\xff"]
 
 
-def test_strokes_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tmp_path):
+def test_undo_redo_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tmp_path):
     store = str(tmp_path / "packed.db")
     d = start(tmp_path, store, 1)
     try:
         with d.unix_client() as c:
             sid = c.load_mesh(data=grid_obj(40, 40), fmt=".obj", name="packed").session_id
             X = c.get_mesh(sid).positions
-            for k in range(3):
+            for k in range(3):  # a stroke is a recipe record; its undo and redo are deltas
                 c.stroke(sid, Brush(type="grab", center=X[123 * k:123 * k + 3],
                                     move=(0, 0, 0.02), radius=0.1))
+                c.undo(sid)
+                c.redo(sid)
             acked = state(c, sid)
     finally:
         check_stopped(d, d.stop())
     packed = _packed_rows(store)
-    assert packed, "no stroke was logged packed"
+    assert len(packed) == 6, "undo and redo of 3 strokes: %d packed rows" % len(packed)
     for _, blob in packed:              # smaller than the raw layout of the same change
         nv = int.from_bytes(blob[4:8], "little", signed=True)
         count = int.from_bytes(blob[8:12], "little")
