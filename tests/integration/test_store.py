@@ -343,3 +343,74 @@ def test_undo_redo_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tm
     assert r.returncode == 1, r.stderr
     assert store in r.stderr and "compressed change delta is corrupt" in r.stderr, r.stderr
     assert not os.path.exists(sock)
+
+
+def _downgrade_to_v1(store):
+    """Rewrites a (recipe-free) version-2 store as the version-1 layout deformd wrote before
+    recipe records (store.h): the recipe, snap_version and replay_ns columns dropped."""
+    db = sqlite3.connect(store)
+    try:
+        assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() \
+            == (0,)
+        db.execute("ALTER TABLE changes DROP COLUMN recipe")
+        db.execute("ALTER TABLE sessions DROP COLUMN snap_version")
+        db.execute("ALTER TABLE sessions DROP COLUMN replay_ns")
+        db.execute("PRAGMA user_version = 1")
+        db.commit()
+    finally:
+        db.close()
+
+
+def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
+    """A store of schema version 1 (no recipe records) opens: migrated to 2 at start, every
+    session restored as it was, then strokes are logged as recipes. A store of a version this
+    deformd does not know (a newer one) refuses start-up with a message naming it, untouched."""
+    store = str(tmp_path / "old.db")
+    d = start(tmp_path, store, 1)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data=grid_obj(10, 10), fmt=".obj", name="old").session_id
+        X = c.get_mesh(sid).positions
+        c.set_handles(sid, [0, 5, 55], max_iters=10)     # deltas only: no stroke
+        c.move_handles(sid, [X[0:3], X[15:18], (X[165], X[166] + 0.05, X[167])], max_iters=10)
+        c.undo(sid)
+        c.redo(sid)
+        before = state(c, sid)
+    check_stopped(d, d.stop())
+    _downgrade_to_v1(store)
+    d = start(tmp_path, store, 2)
+    try:
+        assert "schema version 1 migrated to 2" in d.log()
+        with d.unix_client() as c:
+            assert state(c, sid) == before
+            c.stroke(sid, Brush(type="grab", center=X[30:33], move=(0, 0, 0.05), radius=0.3))
+            after = state(c, sid)
+            assert c.stats()["store_recipe_records"] == 2     # the begin's version and the end
+    finally:
+        check_stopped(d, d.stop())
+    db = sqlite3.connect(store)
+    assert db.execute("PRAGMA user_version").fetchone() == (2,)
+    assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() == (2,)
+    db.execute("PRAGMA user_version = 3")                    # as a newer deformd would write
+    db.commit()
+    db.close()
+    with open(store, "rb") as f:
+        newer = f.read()
+    sock = str(tmp_path / "d.sock")
+    r = subprocess.run([DEFORMD, "--foreground", "--socket", sock, "--store", store],
+                       stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=30)
+    assert r.returncode == 1, r.stderr
+    assert store in r.stderr and "schema version 3" in r.stderr and "newer deformd" in r.stderr, \
+        r.stderr
+    assert not os.path.exists(sock)
+    with open(store, "rb") as f:
+        assert f.read() == newer
+    db = sqlite3.connect(store)                              # back to 2: restored after all
+    db.execute("PRAGMA user_version = 2")
+    db.commit()
+    db.close()
+    d = start(tmp_path, store, 3)
+    try:
+        with d.unix_client() as c:
+            assert state(c, sid) == after
+    finally:
+        check_stopped(d, d.stop())
