@@ -18,8 +18,9 @@
  *   ones that do differ in a few mantissa bits: the XOR's high byte planes are zero and the
  *   gap planes nearly constant, which zstd (level DF_CODEC_ZSTD_LEVEL) shrinks many times over.
  *   XOR keeps it lossless and bit-exact for every bit pattern (NaN payloads, -0.0, denormals)
- *   and needs no recomputation at restore (which recording a stroke as its request plus
- *   checkpoints would, with a checksum and a fallback). The encoder writes whichever layout is
+ *   and needs no recomputation at restore. Brush versions of unrebased strokes are
+ *   journaled as their recipe instead (record.h, journal.h): recomputed and checksum-verified at
+ *   restore; deltas remain for everything else. The encoder writes whichever layout is
  *   smaller, raw below DF_CODEC_PACK_MIN_VERTICES changed vertices; readers accept both, so a
  *   store written before the packed layout restores unchanged.
  * brush (sessions.brush, changes.aux of a brush change): u8 type, falloff, integrator,

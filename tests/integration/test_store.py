@@ -414,3 +414,47 @@ def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
             assert state(c, sid) == after
     finally:
         check_stopped(d, d.stop())
+
+
+def test_a_recipe_that_does_not_replay_stops_at_the_last_verified_version(tmp_path):
+    """Strokes are journaled as recipe records with the checksum of the positions they made
+    (server/store/journal.h). A record whose recomputation does not reproduce its checksum (here
+    the checksum is damaged in the file) stops that session's restore at the last verified
+    version: its positions come back as a new version, the error is logged and counted
+    (STATS store_replay_mismatches), never a different mesh under the old version number."""
+    store = str(tmp_path / "mismatch.db")
+    d = start(tmp_path, store, 1)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data=grid_obj(12, 12), fmt=".obj", name="m").session_id
+        X = c.get_mesh(sid).positions
+        c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.3))
+        verified = state(c, sid)
+        c.stroke(sid, Brush(type="grab", center=X[60:63], move=(0.05, 0, 0), radius=0.3))
+        last = state(c, sid)
+    check_stopped(d, d.stop())
+    db = sqlite3.connect(store)
+    rows = db.execute("SELECT id, recipe FROM changes WHERE flags & 8 AND version = ?",
+                      (last[0],)).fetchall()
+    assert len(rows) == 1
+    row, rec = rows[0][0], bytearray(rows[0][1])
+    rec[16] ^= 1                        # record.h: the checksum is bytes 16..23
+    db.execute("UPDATE changes SET recipe = ? WHERE id = ?", (bytes(rec), row))
+    db.commit()
+    db.close()
+    d = start(tmp_path, store, 2)
+    try:
+        log = d.log()
+        assert "does not replay to what was recorded" in log and "session %d" % sid in log, log
+        with d.unix_client() as c:
+            assert c.stats()["store_replay_mismatches"] == 1
+            now = state(c, sid)
+            assert now[0] == last[0] + 1 and now[1:] == verified[1:]
+    finally:
+        check_stopped(d, d.stop())
+    d = start(tmp_path, store, 3)       # folded into a snapshot: the same, nothing to report
+    try:
+        with d.unix_client() as c:
+            assert c.stats()["store_replay_mismatches"] == 0
+            assert state(c, sid) == now
+    finally:
+        check_stopped(d, d.stop())
