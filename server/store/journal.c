@@ -168,8 +168,10 @@ static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c,
     const double *rest = c->rest_from_cur ? cur : s->rest;
     const void *p[4] = {cur, rest};
     int64_t v[4] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)version, (int64_t)s->id};
+    char types[] = "bbii"; /* a rest shape still the base is written NULL (restore: the base) */
+    if (!memcmp(rest, s->mesh.V, pos_bytes)) types[1] = 'n';
     int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, snap_version = ?, log_bytes = 0,"
-                 " replay_ns = 0 WHERE id = ?", "bbii", p, v, "writing a snapshot", err);
+                 " replay_ns = 0 WHERE id = ?", types, p, v, "writing a snapshot", err);
     if (rc == DF_OK)
         rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 3,
                  "trimming the log after a snapshot", err);

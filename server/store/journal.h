@@ -27,7 +27,8 @@
  * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
  * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), or its replay cost the threshold
  * below, the change's transaction also writes the positions and rest shape after it into the
- * session row (cur, rest, snap_version = its version) and deletes the session's log rows: a session holds at
+ * session row (cur, rest, snap_version = its version; rest NULL while it is still the base)
+ * and deletes the session's log rows: a session holds at
  * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
  * at most that (restore.h). The deleted rows' kind / who are not kept.
  * Recipe records (schema 2, record.h): a brush version (BRUSH_BEGIN / BRUSH_UPDATE) whose

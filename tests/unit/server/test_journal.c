@@ -250,6 +250,7 @@ static void test_snapshots(void **state)
     }
     assert_true(max_rows <= 5);                /* 144 / 36: trimmed after at most 5 rows */
     assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), 72);
+    assert_int_equal(query(&srv, "SELECT length(rest) FROM sessions"), 72); /* reset at k = 7 */
     double cur[9], rest[9];
     memcpy(cur, s->cur, sizeof cur);
     memcpy(rest, s->rest, sizeof rest);

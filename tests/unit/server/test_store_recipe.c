@@ -365,6 +365,8 @@ static void test_snapshot_by_replay_cost(void **state)
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 0);
     stroke(s, 90, 2, 0, 1000);           /* its begin (version 6) passes 2500 */
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 6);
+    assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), (int64_t)pb);
+    assert_int_equal(query(&srv, "SELECT rest IS NULL FROM sessions"), 1); /* still the base */
     /* the stroke began at version 5, before the snapshot: its version 7 and its end are no
      * recipe any more (the log cannot rebuild version 5), a delta and a plain end */
     assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), 0);
