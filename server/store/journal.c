@@ -158,12 +158,28 @@ static int read_log_state(df_store *st, uint64_t id, log_state *ls, df_error *er
  * max(snapshot_min, 2 x its position bytes), or replaying its recipe records would take longer
  * than the store's replay threshold, the positions and rest shape after this change become the
  * session row's snapshot (of `version`) and the log rows before it are deleted. */
+/* Strokes still open after change c (a begin links one; an end or cancel drops its
+ * requester's). */
+static int strokes_left_open(const df_session *s, const df_change *c)
+{
+    int n = c->link != NULL;
+    for (const df_stroke *x = s->strokes; x; x = x->next)
+        n += !(c->drop_stroke && c->req && x->conn_id == df_req_origin(c->req));
+    return n;
+}
+
 static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c, uint64_t version,
                           uint64_t logged, uint64_t replay_ns, df_error *err)
 {
     uint64_t pos_bytes = 24 * (uint64_t)s->nv, min = df_store_snapshot_min(st);
     uint64_t threshold = 2 * pos_bytes > min ? 2 * pos_bytes : min;
-    if (logged <= threshold && replay_ns <= df_store_snapshot_replay_ns(st)) return DF_OK;
+    uint64_t budget = df_store_snapshot_replay_ns(st);
+    /* by replay cost: between strokes (a snapshot inside an open stroke would leave its later
+     * versions without their base state: deltas), unless strokes stay open far too long */
+    int by_cost = replay_ns > budget &&
+                  (replay_ns > DF_STORE_SNAPSHOT_REPLAY_FORCE * budget ||
+                   strokes_left_open(s, c) == 0);
+    if (logged <= threshold && !by_cost) return DF_OK;
     const double *cur = c->pos ? c->pos : s->cur;
     const double *rest = c->rest_from_cur ? cur : s->rest;
     const void *p[4] = {cur, rest};

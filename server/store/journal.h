@@ -44,7 +44,10 @@
  * of the recipe records the restore will replay (a brush version immediately superseded by the
  * next one of the same stroke is not replayed, restore.h, and stops counting); past
  * df_store_snapshot_replay_ns (DF_STORE_SNAPSHOT_REPLAY_NS, 1 s) the change's transaction
- * writes a snapshot as below, so a restart replays at most about that much per session.
+ * writes a snapshot as below once no stroke stays open after it (a snapshot inside a stroke
+ * would leave the stroke's later versions without their base state: deltas), or inside one
+ * past DF_STORE_SNAPSHOT_REPLAY_FORCE times the threshold, so a restart replays at most about
+ * that much per session.
  * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a
  * brush version's raw delta is dense: 24 bytes per vertex + 8. The codec writes it packed
  * (codec.h: XOR against the previous state, byte planes, zstd) when smaller: measured by

@@ -58,6 +58,8 @@
 #define DF_STORE_SNAPSHOT_REPLAY_NS ((uint64_t)1000000000) /* journal.h: snapshot also once the
                                                    * log's recipe records would take longer
                                                    * than this to replay at restart (1 s) */
+#define DF_STORE_SNAPSHOT_REPLAY_FORCE 4          /* ... taken between strokes, inside one only
+                                                   * past this many times that */
 
 enum { DF_DURABILITY_FULL = 0, DF_DURABILITY_NORMAL = 1, DF_DURABILITY_OFF = 2 };
 

@@ -363,12 +363,16 @@ static void test_snapshot_by_replay_cost(void **state)
     stroke(s, 60, 2, 0, 1000);
     assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), 2000);
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 0);
-    stroke(s, 90, 2, 0, 1000);           /* its begin (version 6) passes 2500 */
-    assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 6);
+    stroke(s, 90, 2, 0, 1000);           /* its begin (version 6) passes 2500 ... */
+    assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 7); /* ... its end */
+    assert_int_equal(query(&srv, "SELECT count(*) FROM changes"), 0);
     assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), (int64_t)pb);
     assert_int_equal(query(&srv, "SELECT rest IS NULL FROM sessions"), 1); /* still the base */
-    /* the stroke began at version 5, before the snapshot: its version 7 and its end are no
-     * recipe any more (the log cannot rebuild version 5), a delta and a plain end */
+    /* inside a stroke only past DF_STORE_SNAPSHOT_REPLAY_FORCE x the threshold: the stroke
+     * began at version 7, before that snapshot (of version 8): its version 9 and its end are no
+     * recipe any more (the log cannot rebuild version 7), a delta and a plain end */
+    stroke(s, 120, 2, 0, DF_STORE_SNAPSHOT_REPLAY_FORCE * 2500 + 1);
+    assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 8);
     assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), 0);
     assert_int_equal(query(&srv, "SELECT count(*) FROM changes"), 2);
     assert_int_equal(query(&srv, "SELECT count(*) FROM changes WHERE recipe IS NOT NULL"), 0);
