@@ -66,6 +66,21 @@ static void count(df_server *srv, int rc, uint64_t bytes, int recipe)
     if (recipe) srv->stats.store_recipe_records++;
 }
 
+/* Session id's large value `name` (store.h: blobs) becomes `len` bytes at p (NULL: none). */
+static int put_blob(df_store *st, uint64_t id, const char *name, const void *p, size_t len,
+                    const char *what, df_error *err)
+{
+    if (!p) {
+        const void *pp[2] = {NULL, name};
+        int64_t v[2] = {(int64_t)id};
+        return run(st, "DELETE FROM blobs WHERE session = ? AND name = ?", "it", pp, v, what, err);
+    }
+    const void *pp[3] = {NULL, name, p};
+    int64_t v[3] = {(int64_t)id, 0, (int64_t)len};
+    return run(st, "INSERT OR REPLACE INTO blobs(session, name, data) VALUES(?,?,?)", "itb", pp, v,
+               what, err);
+}
+
 static int session_created(df_server *srv, const df_session *s, df_error *err)
 {
     df_store *st = srv->store;
@@ -73,20 +88,21 @@ static int session_created(df_server *srv, const df_session *s, df_error *err)
     size_t es = (size_t)df_mesh_elem_size(m->kind);
     uint8_t brush[DF_CODEC_BRUSH_BYTES];
     df_codec_brush_pack(&s->brush, brush);
-    const void *p[14] = {NULL, s->name, NULL, NULL, NULL, NULL, NULL, m->V, m->E, m->F, NULL,
-                         brush};
-    int64_t v[14] = {(int64_t)s->id, 0, m->kind, m->planar, m->nv, m->ne, m->nf,
-                     (int64_t)(24 * (size_t)m->nv), (int64_t)(4 * es * (size_t)m->ne),
-                     (int64_t)(12 * (size_t)m->nf), (int64_t)atomic_load(&s->version),
-                     DF_CODEC_BRUSH_BYTES, (int64_t)s->brush_seq};
-    char types[] = "itiiiiibbbibi";
-    if (!m->E || !m->ne) types[8] = 'n';
-    if (!m->F || !m->nf) types[9] = 'n';
+    const void *p[10] = {NULL, s->name, NULL, NULL, NULL, NULL, NULL, NULL, brush};
+    int64_t v[10] = {(int64_t)s->id, 0, m->kind, m->planar, m->nv, m->ne, m->nf,
+                     (int64_t)atomic_load(&s->version), DF_CODEC_BRUSH_BYTES,
+                     (int64_t)s->brush_seq};
     int rc = begin(st, err);
     if (rc != DF_OK) return rc;
-    rc = run(st, "INSERT INTO sessions(id, name, kind, planar, nv, ne, nf, base, elems, faces,"
-             " version, brush, brush_seq) VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?)",
-             types, p, v, "saving the new session", err);
+    rc = run(st, "INSERT INTO sessions(id, name, kind, planar, nv, ne, nf, version, brush,"
+             " brush_seq) VALUES(?,?,?,?,?,?,?,?,?,?)", "itiiiiiibi", p, v,
+             "saving the new session", err);
+    if (rc == DF_OK)
+        rc = put_blob(st, s->id, "base", m->V, 24 * (size_t)m->nv, "saving the mesh", err);
+    if (rc == DF_OK && m->E && m->ne)
+        rc = put_blob(st, s->id, "elems", m->E, 4 * es * (size_t)m->ne, "saving the mesh", err);
+    if (rc == DF_OK && m->F && m->nf)
+        rc = put_blob(st, s->id, "faces", m->F, 12 * (size_t)m->nf, "saving the mesh", err);
     if (rc == DF_OK) {
         int64_t id[1] = {(int64_t)s->id};
         rc = run(st, "UPDATE meta SET value = max(value, ?) WHERE key = 'next_session_id'", "i",
@@ -106,9 +122,29 @@ static int session_closing(df_server *srv, const df_session *s, df_error *err)
     rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, id,
              "deleting the session's log", err);
     if (rc == DF_OK)
+        rc = run(st, "DELETE FROM blobs WHERE session = ?", "i", NULL, id,
+                 "deleting the session's mesh", err);
+    if (rc == DF_OK)
         rc = run(st, "DELETE FROM sessions WHERE id = ?", "i", NULL, id, "deleting the session",
                  err);
     return finish(st, rc, err);
+}
+
+int df_journal_write_snapshot(df_store *st, const df_session *s, const double *cur,
+                              const double *rest, uint64_t version, df_error *err)
+{
+    size_t pb = 24 * (size_t)s->nv;
+    if (!memcmp(rest, s->mesh.V, pb)) rest = NULL; /* still the base: none kept */
+    int rc = put_blob(st, s->id, "cur", cur, pb, "writing a snapshot", err);
+    if (rc == DF_OK) rc = put_blob(st, s->id, "rest", rest, pb, "writing a snapshot", err);
+    int64_t v[2] = {(int64_t)version, (int64_t)s->id};
+    if (rc == DF_OK)
+        rc = run(st, "UPDATE sessions SET snap_version = ?, log_bytes = 0, replay_ns = 0 WHERE"
+                 " id = ?", "ii", NULL, v, "writing a snapshot", err);
+    if (rc == DF_OK)
+        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 1,
+                 "trimming the log after a snapshot", err);
+    return rc;
 }
 
 /* The session row's log state since its last snapshot, read in the change's transaction. */
@@ -181,17 +217,7 @@ static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c,
                    strokes_left_open(s, c) == 0);
     if (logged <= threshold && !by_cost) return DF_OK;
     const double *cur = c->pos ? c->pos : s->cur;
-    const double *rest = c->rest_from_cur ? cur : s->rest;
-    const void *p[4] = {cur, rest};
-    int64_t v[4] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)version, (int64_t)s->id};
-    char types[] = "bbii"; /* a rest shape still the base is written NULL (restore: the base) */
-    if (!memcmp(rest, s->mesh.V, pos_bytes)) types[1] = 'n';
-    int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, snap_version = ?, log_bytes = 0,"
-                 " replay_ns = 0 WHERE id = ?", types, p, v, "writing a snapshot", err);
-    if (rc == DF_OK)
-        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 3,
-                 "trimming the log after a snapshot", err);
-    return rc;
+    return df_journal_write_snapshot(st, s, cur, c->rest_from_cur ? cur : s->rest, version, err);
 }
 
 /* The stroke whose recipe change `c` may be logged as: the stroke a brush version publishes,
@@ -302,15 +328,12 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
     uint64_t logged = (uint64_t)ls.bytes + dlen + hlen + rlen;
     uint64_t replay = (uint64_t)ls.replay_ns + ns;
     if (rc == DF_OK) {
-        const void *p2[5] = {NULL, NULL, NULL, hs, NULL};
-        int64_t v2[5] = {(int64_t)version, (int64_t)logged, (int64_t)replay, (int64_t)hlen,
-                         (int64_t)s->id};
-        rc = hs ? run(st, "UPDATE sessions SET version = ?, log_bytes = ?, replay_ns = ?,"
-                      " handles = ? WHERE id = ?", "iiibi", p2, v2, "saving the handle set", err)
-                : run(st, "UPDATE sessions SET version = ?, log_bytes = ?, replay_ns = ?"
-                      " WHERE id = ?", "iiii", NULL, (int64_t[]){v2[0], v2[1], v2[2], v2[4]},
-                      "saving the version", err);
+        int64_t v2[4] = {(int64_t)version, (int64_t)logged, (int64_t)replay, (int64_t)s->id};
+        rc = run(st, "UPDATE sessions SET version = ?, log_bytes = ?, replay_ns = ? WHERE id = ?",
+                 "iiii", NULL, v2, "saving the version", err);
     }
+    if (rc == DF_OK && hs)
+        rc = put_blob(st, s->id, "handles", hs, hlen, "saving the handle set", err);
     if (rc == DF_OK) rc = maybe_snapshot(st, s, c, version, logged, replay, err);
     rc = finish(st, rc, err);
     count(srv, rc, dlen + hlen + rlen, rec != NULL);

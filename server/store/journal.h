@@ -2,14 +2,16 @@
  *
  * df_store_journal_ops are the srv->store_ops (server.h) the session layer calls:
  *   session_created  df_session_create, before the load is acknowledged: the session row
- *                    (id, name, mesh topology, exact double base positions, version 0, brush)
- *                    and meta.next_session_id, in one transaction;
- *   session_closing  the close request, before the session is closed: its row and its log;
+ *                    (id, name, sizes, version 0, brush), its blobs 'base' (exact double base
+ *                    positions), 'elems', 'faces' and meta.next_session_id, in one
+ *                    transaction;
+ *   session_closing  the close request, before the session is closed: its row, blobs and log;
  *   change           df_session_commit, BEFORE step 1 (commit.h): one change-log row (version,
  *                    kind = the request's message type, who = the request's origin: connection
  *                    or device id, flags, the position delta from s->cur to c->pos (codec.h),
- *                    the handle set it installs) and the session row's version / handles, in
- *                    one transaction;
+ *                    the handle set it installs; or a recipe record, below), the session row's
+ *                    version and log counters and the blob 'handles', in one transaction (the
+ *                    session row holds no large value: SQLite rewrites a whole row on UPDATE);
  *   brush            df_brush_state_apply, before the state changes: a change-log row (kind
  *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush.
  * A change with only an undo-history step (a stroke's end, a move's final commit) is a row
@@ -26,9 +28,9 @@
  * WAL holds it (and, with durability = full, fsynced), before the ack and the broadcast.
  * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
  * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), or its replay cost the threshold
- * below, the change's transaction also writes the positions and rest shape after it into the
- * session row (cur, rest, snap_version = its version; rest NULL while it is still the base)
- * and deletes the session's log rows: a session holds at
+ * below, the change's transaction also writes the positions and rest shape after it as the
+ * session's blobs 'cur' and 'rest' (none while the rest shape is the base), snap_version = its
+ * version, and deletes the session's log rows: a session holds at
  * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
  * at most that (restore.h). The deleted rows' kind / who are not kept.
  * Recipe records (schema 2, record.h): a brush version (BRUSH_BEGIN / BRUSH_UPDATE) whose
@@ -64,6 +66,7 @@
 #define DF_SERVER_STORE_JOURNAL_H
 
 #include "server/server.h"
+#include "server/session/session.h"
 
 enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 4,
        DF_JOURNAL_RECIPE = 8 /* the positions after the row are its recipe's replay */ };
@@ -72,5 +75,13 @@ enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 
 #define DF_JOURNAL_HIST(flags) (((flags) >> DF_JOURNAL_HIST_SHIFT) & 7)
 
 extern const df_store_ops df_store_journal_ops;
+
+/* Within the caller's transaction: positions `cur` and rest shape `rest` (3 x nv doubles each;
+ * a rest shape bitwise the base is kept as none) become session s's snapshot of `version`
+ * (store.h: blobs 'cur', 'rest'; sessions.snap_version), its log counters restart at 0 and its
+ * log rows are deleted. Errors: DF_EIO, DF_ELIMIT (store full), with the store's message. */
+struct df_store;
+int df_journal_write_snapshot(struct df_store *st, const df_session *s, const double *cur,
+                              const double *rest, uint64_t version, df_error *err);
 
 #endif

@@ -278,35 +278,16 @@ int df_store_replay(df_store *st, df_session *s, uint64_t snap_version, int thre
 
 int df_store_replay_cut(df_store *st, const df_session *s, uint64_t version, df_error *err)
 {
-    sqlite3 *db = df_store_db(st);
-    sqlite3_stmt *q = NULL;
     int rc = df_store_exec(st, "BEGIN IMMEDIATE", "begin", err);
     if (rc != DF_OK) return rc;
-    size_t pb = 24 * (size_t)s->nv;
-    if (sqlite3_prepare_v2(db, "UPDATE sessions SET cur = ?, rest = ?, version = ?,"
-                           " snap_version = ?, log_bytes = 0, replay_ns = 0 WHERE id = ?", -1, &q,
-                           NULL) != SQLITE_OK) {
-        rc = df_store_fail(st, DF_EIO, "writing the verified state", err);
-    } else {
-        sqlite3_bind_blob64(q, 1, s->cur, pb, SQLITE_STATIC);
-        sqlite3_bind_blob64(q, 2, s->rest, pb, SQLITE_STATIC);
-        sqlite3_bind_int64(q, 3, (sqlite3_int64)version);
-        sqlite3_bind_int64(q, 4, (sqlite3_int64)version);
-        sqlite3_bind_int64(q, 5, (sqlite3_int64)s->id);
-        int r = sqlite3_step(q);
-        sqlite3_finalize(q);
-        q = NULL;
-        if (r != SQLITE_DONE)
-            rc = df_store_fail(st, r == SQLITE_FULL ? DF_ELIMIT : DF_EIO,
-                               "writing the verified state", err);
-    }
+    rc = df_journal_write_snapshot(st, s, s->cur, s->rest, version, err);
     if (rc == DF_OK) {
         char sql[96];
-        snprintf(sql, sizeof sql, "DELETE FROM changes WHERE session = %llu",
-                 (unsigned long long)s->id);
-        rc = df_store_exec(st, sql, "dropping the unverified log", err);
+        snprintf(sql, sizeof sql, "UPDATE sessions SET version = %llu WHERE id = %llu",
+                 (unsigned long long)version, (unsigned long long)s->id);
+        rc = df_store_exec(st, sql, "writing the verified version", err);
     }
     if (rc == DF_OK) rc = df_store_exec(st, "COMMIT", "commit", err);
-    if (rc != DF_OK) sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+    if (rc != DF_OK) sqlite3_exec(df_store_db(st), "ROLLBACK", NULL, NULL, NULL);
     return rc;
 }

@@ -23,20 +23,29 @@ static const char k_schema[] =
     "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
     "CREATE TABLE sessions(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
     " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
-    " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
-    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
-    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0,"
-    " snap_version INTEGER NOT NULL DEFAULT 0, replay_ns INTEGER NOT NULL DEFAULT 0);"
+    " version INTEGER NOT NULL, brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0,"
+    " log_bytes INTEGER NOT NULL DEFAULT 0, snap_version INTEGER NOT NULL DEFAULT 0,"
+    " replay_ns INTEGER NOT NULL DEFAULT 0);"
+    "CREATE TABLE blobs(session INTEGER NOT NULL, name TEXT NOT NULL, data BLOB NOT NULL,"
+    " PRIMARY KEY(session, name));"
     "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL,"
     " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
     " flags INTEGER NOT NULL, delta BLOB, aux BLOB, recipe BLOB);"
     "CREATE INDEX changes_session ON changes(session, id);"
     "INSERT INTO meta VALUES('next_session_id', 0);";
 
-/* Schema 1 -> 2 (store.h): the recipe column, the snapshot's version and the replay cost since
- * it. A version-1 log holds deltas only, and every stroke begun after the migration starts at
- * or after the version the store holds now: that version stands for the snapshot's. */
+/* Schema 1 -> 2 (store.h): the session rows' large blobs move to `blobs` (SQLite rewrites a
+ * whole row on UPDATE: a per-change version update rewrote the mesh and snapshot, ~100 MB at 1M
+ * vertices), the recipe column, the snapshot's version and the replay cost since it. A
+ * version-1 log holds deltas only, and every stroke begun after the migration starts at or after
+ * the version the store holds now: that version stands for the snapshot's. */
+#define MOVE_BLOB(col) "INSERT INTO blobs SELECT id, '" col "', " col " FROM sessions WHERE " \
+                       col " IS NOT NULL;ALTER TABLE sessions DROP COLUMN " col ";"
 static const char k_migrate_1_2[] =
+    "CREATE TABLE blobs(session INTEGER NOT NULL, name TEXT NOT NULL, data BLOB NOT NULL,"
+    " PRIMARY KEY(session, name));"
+    MOVE_BLOB("base") MOVE_BLOB("elems") MOVE_BLOB("faces") MOVE_BLOB("handles")
+    MOVE_BLOB("cur") MOVE_BLOB("rest")
     "ALTER TABLE changes ADD COLUMN recipe BLOB;"
     "ALTER TABLE sessions ADD COLUMN snap_version INTEGER NOT NULL DEFAULT 0;"
     "ALTER TABLE sessions ADD COLUMN replay_ns INTEGER NOT NULL DEFAULT 0;"

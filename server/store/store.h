@@ -8,24 +8,30 @@
  *
  * Schema (PRAGMA application_id DF_STORE_APP_ID, PRAGMA user_version DF_STORE_SCHEMA):
  *   meta(key TEXT PRIMARY KEY, value INTEGER)      next_session_id: ids are never reused
- *   sessions(id, name, kind, planar, nv, ne, nf, base, elems, faces, version, brush, brush_seq,
- *            handles, cur, rest, log_bytes,        one row per live session: topology and the
- *            snap_version, replay_ns)
- *                                                   exact double BASE positions (load-time), the
- *                                                   last acknowledged version, the session brush
- *                                                   and the handle set (codec.h: blob layouts),
- *                                                   the last snapshot of the positions and rest
- *                                                   shape (3 x nv doubles; NULL: the base) and
- *                                                   the log's bytes since (journal.h), the
- *                                                   version of that snapshot (0: the base) and
- *                                                   the estimated replay time of the log's
- *                                                   recipe records since (ns, journal.h)
+ *   sessions(id, name, kind, planar, nv, ne, nf, version, brush, brush_seq, log_bytes,
+ *            snap_version, replay_ns)              one row per live session: topology sizes,
+ *                                                   the last acknowledged version, the session
+ *                                                   brush (codec.h), the log's bytes since the
+ *                                                   last snapshot (journal.h), that snapshot's
+ *                                                   version (0: the base) and the estimated
+ *                                                   replay time of the log's recipe records
+ *                                                   since (ns, journal.h); small, so that the
+ *                                                   per-change update rewrites no mesh
+ *   blobs(session, name, data, PRIMARY KEY(session, name))
+ *                                                   a session's large values, one row each:
+ *                                                   'base' (the exact double BASE positions,
+ *                                                   load-time), 'elems', 'faces' (topology),
+ *                                                   'handles' (the handle set, codec.h), 'cur',
+ *                                                   'rest' (the last snapshot of the positions
+ *                                                   and rest shape, 3 x nv doubles; absent: the
+ *                                                   base)
  *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux, recipe)
  *                                                   the change log, in commit order (journal.h;
  *                                                   recipe: record.h)
- * Versions: 1 (no recipe records; snap_version, replay_ns, recipe absent) is migrated to 2 at
- * open, in one transaction (snap_version = the stored version); 2 is current. Any other
- * version is refused, the file untouched.
+ * Versions: 1 (the large values in sessions' own columns base, elems, faces, handles, cur,
+ * rest; no recipe records, snap_version, replay_ns) is migrated to 2 at open, in one
+ * transaction (snap_version = the stored version); 2 is current. Any other version is refused,
+ * the file untouched.
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
  *
  * Checks at open (df_store_open): an existing empty file, a file that is not SQLite (a text

@@ -345,18 +345,37 @@ def test_undo_redo_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tm
     assert not os.path.exists(sock)
 
 
+_SESSIONS_V1 = (
+    "CREATE TABLE sessions_v1(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
+    " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
+    " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
+    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
+    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0)")
+
+
 def _downgrade_to_v1(store):
     """Rewrites a (recipe-free) version-2 store as the version-1 layout deformd wrote before
-    recipe records (store.h): the recipe, snap_version and replay_ns columns dropped."""
+    recipe records (store.h): the large values back in the session rows' own columns, no
+    blobs table, no recipe / snap_version / replay_ns columns."""
+    def blob(name):
+        return "(SELECT data FROM blobs WHERE session = s.id AND name = '%s')" % name
     db = sqlite3.connect(store)
     try:
         assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() \
             == (0,)
+        db.execute(_SESSIONS_V1)
+        db.execute("INSERT INTO sessions_v1 SELECT s.id, s.name, s.kind, s.planar, s.nv, s.ne, "
+                   "s.nf, %s, %s, %s, s.version, s.brush, s.brush_seq, %s, %s, %s, s.log_bytes "
+                   "FROM sessions s" % tuple(blob(n) for n in ("base", "elems", "faces",
+                                                               "handles", "cur", "rest")))
+        db.execute("DROP TABLE sessions")
+        db.execute("ALTER TABLE sessions_v1 RENAME TO sessions")
+        db.execute("DROP TABLE blobs")
         db.execute("ALTER TABLE changes DROP COLUMN recipe")
-        db.execute("ALTER TABLE sessions DROP COLUMN snap_version")
-        db.execute("ALTER TABLE sessions DROP COLUMN replay_ns")
         db.execute("PRAGMA user_version = 1")
         db.commit()
+        assert db.execute("SELECT count(*) FROM sessions WHERE handles IS NOT NULL").fetchone() \
+            == (1,)
     finally:
         db.close()
 
@@ -382,6 +401,7 @@ def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
         assert "schema version 1 migrated to 2" in d.log()
         with d.unix_client() as c:
             assert state(c, sid) == before
+            assert list(c.get_handles(sid).handles) == [0, 5, 55]
             c.stroke(sid, Brush(type="grab", center=X[30:33], move=(0, 0, 0.05), radius=0.3))
             after = state(c, sid)
             assert c.stats()["store_recipe_records"] == 2     # the begin's version and the end

@@ -269,6 +269,12 @@ static void test_migrates_version_1(void **state)
     assert_int_equal(df_store_migrated_from(st), 1);
     assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA);
     assert_int_equal(pragma(st, "SELECT snap_version FROM sessions WHERE id = 3"), 17);
+    /* the large values moved to blobs, their columns gone */
+    assert_int_equal(pragma(st, "SELECT length(data) FROM blobs WHERE session = 3 AND name ="
+                                " 'base'"), 24);
+    assert_int_equal(pragma(st, "SELECT count(*) FROM blobs"), 1);
+    assert_int_equal(pragma(st, "SELECT count(*) FROM pragma_table_info('sessions') WHERE name"
+                                " IN ('base', 'elems', 'faces', 'handles', 'cur', 'rest')"), 0);
     assert_int_equal(pragma(st, "SELECT replay_ns FROM sessions WHERE id = 3"), 0);
     assert_int_equal(pragma(st, "SELECT count(*) FROM changes WHERE recipe IS NULL AND "
                                 "length(delta) = 8"), 1);

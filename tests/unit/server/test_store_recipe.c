@@ -366,8 +366,8 @@ static void test_snapshot_by_replay_cost(void **state)
     stroke(s, 90, 2, 0, 1000);           /* its begin (version 6) passes 2500 ... */
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 7); /* ... its end */
     assert_int_equal(query(&srv, "SELECT count(*) FROM changes"), 0);
-    assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), (int64_t)pb);
-    assert_int_equal(query(&srv, "SELECT rest IS NULL FROM sessions"), 1); /* still the base */
+    assert_int_equal(query(&srv, "SELECT length(data) FROM blobs WHERE name = 'cur'"), (int64_t)pb);
+    assert_int_equal(query(&srv, "SELECT count(*) FROM blobs WHERE name = 'rest'"), 0); /* the base */
     /* inside a stroke only past DF_STORE_SNAPSHOT_REPLAY_FORCE x the threshold: the stroke
      * began at version 7, before that snapshot (of version 8): its version 9 and its end are no
      * recipe any more (the log cannot rebuild version 7), a delta and a plain end */
