@@ -334,7 +334,14 @@ static int enc_sub(const void *m, df_buf *out, df_error *err)
 int df_client_subscribe(df_client *c, uint64_t session_id, uint32_t flags,
                         df_msg_session_info *info, df_error *err)
 {
-    df_msg_subscribe m = {session_id, flags};
+    df_msg_subscribe m = {session_id, flags, 0};
+    return dc_request(c, DF_MSG_SUBSCRIBE, enc_sub, &m, dc_reply_session_info, info, err);
+}
+
+int df_client_subscribe_from(df_client *c, uint64_t session_id, uint64_t from_version,
+                             df_msg_session_info *info, df_error *err)
+{
+    df_msg_subscribe m = {session_id, DF_SUBSCRIBE_FROM_VERSION, from_version};
     return dc_request(c, DF_MSG_SUBSCRIBE, enc_sub, &m, dc_reply_session_info, info, err);
 }
 

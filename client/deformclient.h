@@ -203,6 +203,19 @@ int df_client_close_session(df_client *c, uint64_t session_id, df_msg_ack *ack, 
  * snapshot event first. *info (may be NULL) receives the session state at subscription. */
 int df_client_subscribe(df_client *c, uint64_t session_id, uint32_t flags,
                         df_msg_session_info *info, df_error *err);
+
+/* Subscribes and resyncs from `from_version`, the version whose published displacements the
+ * caller holds (e.g. a df_client_replica's r->version after a reconnect; PROTOCOL.md 6.2).
+ * *info (may be NULL) receives the session state: info->version is the version the stream
+ * brings the caller to. Then, through the event callback and before any live frame, come
+ * either the frames of versions from_version+1 .. info->version exactly as they were
+ * broadcast (none when from_version == info->version), or, when the daemon no longer keeps
+ * them (too old, a restart) or from_version > info->version, one dense snapshot of
+ * info->version (DF_MSG_DISPLACEMENT events of kind DF_CHANGE_SNAPSHOT carrying this
+ * request's id). Both feed a df_client_replica unchanged (df_client_replica_feed). Errors: the
+ * server's (DF_ENOTFOUND, DF_EPERM, ...), transport errors. */
+int df_client_subscribe_from(df_client *c, uint64_t session_id, uint64_t from_version,
+                             df_msg_session_info *info, df_error *err);
 int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err);
 
 /* Switches this subscription to the shared-memory stream (PROTOCOL.md 6.1; Unix socket, same
@@ -249,6 +262,20 @@ int df_client_brush_state_set(df_client *c, const df_msg_brush_state_set *m,
 int df_client_devices_list(df_client *c, df_msg_device_list *out, df_error *err);
 int df_client_device_bind(df_client *c, uint64_t device_id, uint64_t session_id, df_error *err);
 int df_client_device_view(df_client *c, const df_msg_device_view *m, df_error *err);
+
+/* Per-session access (PROTOCOL.md 4.34..4.36). session_access: m->mode, m->observers and
+ * m->flags all 0 read the session's policy into *out (may be NULL); any other value changes it
+ * (owner or admin only: remote DF_EPERM otherwise) and *out gets the new policy; with flag
+ * DF_ACCESS_NEW_KEY (or a switch to key mode without a key) out->has_key is 1 and out->key the
+ * new join key, sent this once: keep it secret. join: becomes a member of session_id with its
+ * join key (DF_JOIN_KEY_BYTES bytes); *out (may be NULL) the policy. Remote errors: DF_ENOTFOUND,
+ * DF_EPERM (a wrong key, nothing changed; an owner-only session), DF_ELIMIT (too many wrong
+ * keys from this peer: retry later). Local: DF_EINVAL from the encoder, DF_EFORMAT when the
+ * reply names another session. */
+int df_client_session_access(df_client *c, const df_msg_session_access *m,
+                             df_msg_access_info *out, df_error *err);
+int df_client_join(df_client *c, uint64_t session_id, const uint8_t *key,
+                   df_msg_access_info *out, df_error *err);
 
 /* Defines the session's handle set (energy, w, s, rho, tol, max_iters, handles, affine sets). */
 int df_client_handles_set(df_client *c, const df_msg_handles *h, df_error *err);

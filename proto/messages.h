@@ -104,6 +104,10 @@ enum { DF_WIRE_DEV_BACKENDS(DF_X_DEVBACKEND) };
 enum { DF_WIRE_DEV_STATES(DF_X_DEVSTATE) };
 #define DF_X_AUTHM(n, v) DF_X_ENUM(DF_AUTH_, n, v)
 enum { DF_WIRE_AUTH_METHODS(DF_X_AUTHM) }; /* DF_AUTH_HMAC_CHALLENGE, DF_AUTH_HMAC_PROOF */
+#define DF_X_AMODE(n, v) DF_X_ENUM(DF_ACCESS_MODE_, n, v)
+enum { DF_WIRE_ACCESS_MODES(DF_X_AMODE) }; /* DF_ACCESS_MODE_OPEN .. OWNER */
+#define DF_X_AFLAG(n, v) DF_X_ENUM(DF_ACCESS_, n, v)
+enum { DF_WIRE_ACCESS_FLAGS(DF_X_AFLAG) }; /* DF_ACCESS_NEW_KEY */
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -131,6 +135,9 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_DEVCLASS_MAX (0 DF_WIRE_DEV_CLASSES(DF_X_COUNT) - 1)   /* 0..MAX */
 #define DF_DEVBACKEND_MAX (0 DF_WIRE_DEV_BACKENDS(DF_X_COUNT))    /* 1..MAX */
 #define DF_DEVSTATE_MAX (0 DF_WIRE_DEV_STATES(DF_X_COUNT))        /* 1..MAX */
+#define DF_ACCESS_MODE_MAX (0 DF_WIRE_ACCESS_MODES(DF_X_COUNT))   /* 1..MAX */
+#define DF_ACCESS_FLAGS_ALL (0u DF_WIRE_ACCESS_FLAGS(DF_X_OR))
+_Static_assert(DF_ACCESS_MODE_OWNER == DF_ACCESS_MODE_MAX, "the access modes stay contiguous");
 _Static_assert(DF_DEVCLASS_PEN == DF_DEVCLASS_MAX && DF_DEVBACKEND_REPLAY == DF_DEVBACKEND_MAX &&
                DF_DEVSTATE_UNPLUGGED == DF_DEVSTATE_MAX, "the device enums stay contiguous");
 _Static_assert(DF_WFMT_TETGEN == DF_FMT_MAX && DF_BRUSH_AFFINE == DF_BRUSH_TYPE_MAX &&
@@ -206,7 +213,10 @@ typedef struct df_msg_open_session {   /* open: by id, or by name when session_i
 
 typedef struct df_msg_subscribe {
     uint64_t session_id;               /* != 0 */
-    uint32_t flags;                    /* DF_SUBSCRIBE_SNAPSHOT: send a dense snapshot first */
+    uint32_t flags;                    /* DF_SUBSCRIBE_SNAPSHOT: send a dense snapshot first;
+                                        * DF_SUBSCRIBE_FROM_VERSION: resync from from_version */
+    uint64_t from_version;             /* the version the client holds (with FROM_VERSION only:
+                                        * on the wire iff that flag is set; else 0) */
 } df_msg_subscribe;
 
 typedef struct df_msg_session_info {
@@ -502,6 +512,29 @@ typedef struct df_msg_device_view {    /* the view a pen's 2D position is cast t
                                         * width and height > 0 */
 } df_msg_device_view;
 
+/* ------------------------------------------------------- per-session access (PROTOCOL.md 4.34) */
+typedef struct df_msg_session_access { /* SESSION_ACCESS: all of mode, observers, flags 0 = get */
+    uint64_t session_id;               /* != 0 */
+    uint8_t mode;                      /* 0 keep, else DF_ACCESS_MODE_* */
+    uint8_t observers;                 /* 0 keep, 1 off, 2 on */
+    uint8_t flags;                     /* DF_ACCESS_* bits (NEW_KEY) */
+} df_msg_session_access;
+
+typedef struct df_msg_join {           /* JOIN: become a member with the session's join key */
+    uint64_t session_id;               /* != 0 */
+    uint8_t key[DF_JOIN_KEY_BYTES];
+} df_msg_join;
+
+typedef struct df_msg_access_info {    /* SESSION_ACCESS / JOIN reply: the session's policy */
+    uint64_t session_id;               /* != 0 */
+    uint8_t mode;                      /* DF_ACCESS_MODE_* */
+    uint8_t observers;                 /* 0/1 */
+    uint32_t members;                  /* principals that joined (key mode) */
+    char owner[DF_MAX_NAME_LEN + 1];   /* the owner's principal ("" when none is recorded) */
+    uint8_t has_key;                   /* 1: `key` is a new join key (NEW_KEY, owner only) */
+    uint8_t key[DF_JOIN_KEY_BYTES];
+} df_msg_access_info;
+
 /* ------------------------------------------------------------------------------ functions */
 #define DF_MSG_CODEC(T)                                                                \
     int df_msg_##T##_encode(const df_msg_##T *m, df_buf *out, df_error *err);          \
@@ -541,6 +574,9 @@ DF_MSG_CODEC(device_info)
 DF_MSG_CODEC(device_list)
 DF_MSG_CODEC(device_bind)
 DF_MSG_CODEC(device_view)
+DF_MSG_CODEC(session_access)
+DF_MSG_CODEC(join)
+DF_MSG_CODEC(access_info)
 #undef DF_MSG_CODEC
 
 /* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
@@ -613,7 +649,9 @@ typedef enum df_body_kind {
     DF_BODY_SHM_REF, DF_BODY_LOAD_REPLY, DF_BODY_BRUSH_STATE_SET, DF_BODY_BRUSH_STATE,
     DF_BODY_BRUSH_CURSOR,
     /* devices (HID) */
-    DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW
+    DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW,
+    /* per-session access */
+    DF_BODY_SESSION_ACCESS, DF_BODY_JOIN, DF_BODY_ACCESS_INFO
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -654,6 +692,9 @@ typedef struct df_msg_any {
         df_msg_device_list device_list;
         df_msg_device_bind device_bind;
         df_msg_device_view device_view;
+        df_msg_session_access session_access;
+        df_msg_join join;
+        df_msg_access_info access_info;
     } u;
 } df_msg_any;
 

@@ -65,6 +65,11 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
     case DF_BODY_DEVICE_LIST: rc = df_msg_device_list_decode(p, n, &t.u.device_list, err); break;
     case DF_BODY_DEVICE_BIND: rc = df_msg_device_bind_decode(p, n, &t.u.device_bind, err); break;
     case DF_BODY_DEVICE_VIEW: rc = df_msg_device_view_decode(p, n, &t.u.device_view, err); break;
+    case DF_BODY_SESSION_ACCESS:
+        rc = df_msg_session_access_decode(p, n, &t.u.session_access, err);
+        break;
+    case DF_BODY_JOIN: rc = df_msg_join_decode(p, n, &t.u.join, err); break;
+    case DF_BODY_ACCESS_INFO: rc = df_msg_access_info_decode(p, n, &t.u.access_info, err); break;
     default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
     }
     if (rc)
@@ -133,6 +138,10 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
     case DF_BODY_DEVICE_LIST: return df_msg_device_list_encode(&m->u.device_list, out, e);
     case DF_BODY_DEVICE_BIND: return df_msg_device_bind_encode(&m->u.device_bind, out, e);
     case DF_BODY_DEVICE_VIEW: return df_msg_device_view_encode(&m->u.device_view, out, e);
+    case DF_BODY_SESSION_ACCESS:
+        return df_msg_session_access_encode(&m->u.session_access, out, e);
+    case DF_BODY_JOIN: return df_msg_join_encode(&m->u.join, out, e);
+    case DF_BODY_ACCESS_INFO: return df_msg_access_info_encode(&m->u.access_info, out, e);
     }
     return DF_EINTERNAL;
 }

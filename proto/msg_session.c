@@ -69,23 +69,33 @@ int df_msg_open_session_decode(const uint8_t *p, size_t n, df_msg_open_session *
     return DF_OK;
 }
 
-/* ---- subscribe: u64 session_id, u32 flags */
+/* ---- subscribe: u64 session_id, u32 flags [, u64 from_version iff flags has FROM_VERSION] */
+#define SUBSCRIBE_FLAGS ((uint32_t)(DF_SUBSCRIBE_SNAPSHOT | DF_SUBSCRIBE_FROM_VERSION))
+
 static int subscribe_check(const df_msg_subscribe *m, df_error *err)
 {
     int rc = need_session(m->session_id, "subscribe", err);
-    if (!rc && (m->flags & ~(uint32_t)DF_SUBSCRIBE_SNAPSHOT))
+    if (!rc && (m->flags & ~SUBSCRIBE_FLAGS))
         rc = df_error_set(err, DF_EINVAL, "subscribe: unknown flag bits 0x%x",
-                          m->flags & ~(uint32_t)DF_SUBSCRIBE_SNAPSHOT);
+                          m->flags & ~SUBSCRIBE_FLAGS);
+    if (!rc && (m->flags & SUBSCRIBE_FLAGS) == SUBSCRIBE_FLAGS)
+        rc = df_error_set(err, DF_EINVAL, "subscribe: flags SNAPSHOT and FROM_VERSION are "
+                          "exclusive (FROM_VERSION already sends a snapshot when needed)");
+    if (!rc && !(m->flags & DF_SUBSCRIBE_FROM_VERSION) && m->from_version)
+        rc = df_error_set(err, DF_EINVAL, "subscribe: from_version %llu without flag "
+                          "FROM_VERSION", (unsigned long long)m->from_version);
     return rc;
 }
 
 int df_msg_subscribe_encode(const df_msg_subscribe *m, df_buf *out, df_error *err)
 {
     int rc = subscribe_check(m, err);
-    if (rc || (rc = df_enc_reserve(out, 12, "subscribe", err)))
+    int from = (m->flags & DF_SUBSCRIBE_FROM_VERSION) != 0;
+    if (rc || (rc = df_enc_reserve(out, from ? 20 : 12, "subscribe", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
     df_buf_put_u32(out, m->flags);
+    if (from) df_buf_put_u64(out, m->from_version);
     return DF_OK;
 }
 
@@ -96,6 +106,9 @@ int df_msg_subscribe_decode(const uint8_t *p, size_t n, df_msg_subscribe *m, df_
     df_rd_init(&r, p, n, "subscribe", err);
     t.session_id = df_rd_u64(&r, "session_id");
     t.flags = df_rd_u32(&r, "flags");
+    t.from_version = r.rc == DF_OK && (t.flags & DF_SUBSCRIBE_FROM_VERSION)
+                         ? df_rd_u64(&r, "from_version")
+                         : 0;
     int rc = df_rd_end(&r);
     if (rc || (rc = subscribe_check(&t, err)))
         return rc;

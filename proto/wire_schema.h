@@ -72,6 +72,9 @@
 #define DF_AUTH_CONTEXT_CLIENT "deformd-auth-v1 client" /* ends the client's MAC input */
 #define DF_AUTH_CONTEXT_SERVER "deformd-auth-v1 server" /* ends the server's MAC input */
 
+/* ------------------------------------------------ session join key (PROTOCOL.md 4.35, 4.36) */
+#define DF_JOIN_KEY_BYTES 32u               /* a session's join key: 32 random bytes */
+
 /* ------------------------------------------- shared-memory ring file (PROTOCOL.md 6.1, shm_ring.h) */
 #define DF_SHM_MAGIC "DFSHMRG1"             /* 8 bytes at offset 0 */
 #define DF_SHM_HEADER_BYTES 4096u           /* data starts here (one page) */
@@ -92,6 +95,9 @@
     X(SUBSCRIBE, 0x0014, subscribe, SUBSCRIBE, SESSION_INFO, NONE)                           \
     X(UNSUBSCRIBE, 0x0015, unsubscribe, SESSION_REF, ACK, NONE)                              \
     X(STREAM_SHM, 0x0016, stream_shm, SESSION_REF, SHM_INFO, NONE)                           \
+    /* per-session access (PROTOCOL.md 4.34..4.36) */                                         \
+    X(SESSION_ACCESS, 0x0017, session_access, SESSION_ACCESS, ACCESS_INFO, NONE)             \
+    X(JOIN, 0x0018, join, JOIN, ACCESS_INFO, NONE)                                           \
     X(BRUSH_BEGIN, 0x0020, brush_begin, BRUSH, ACK, NONE)                                    \
     X(BRUSH_UPDATE, 0x0021, brush_update, BRUSH_UPDATE, ACK, NONE)                           \
     X(BRUSH_END, 0x0022, brush_end, SESSION_REF, ACK, NONE)                                  \
@@ -194,7 +200,9 @@
 
 #define DF_WIRE_PIN_FLAGS(X) X(DISPLACEMENT, 1u << 0) X(GRADIENT, 1u << 1) /* u = 0, grad u = 0 */
 #define DF_WIRE_GET_MESH_FLAGS(X) X(REST, 1u << 0) X(BASE, 1u << 1) /* extra sections */
-#define DF_WIRE_SUBSCRIBE_FLAGS(X) X(SNAPSHOT, 1u << 0) /* a dense snapshot right after */
+#define DF_WIRE_SUBSCRIBE_FLAGS(X)                                                           \
+    X(SNAPSHOT, 1u << 0)     /* a dense snapshot right after */                               \
+    X(FROM_VERSION, 1u << 1) /* resync: a u64 from_version follows; the versions after it */
 
 /* Session brush state fields (DF_BS_*): brush_state_set `mask`, brush_state `changed`,
  * brush `use_session` (take these fields from the session brush instead of the message). */
@@ -230,6 +238,14 @@
     X(HMAC_CHALLENGE, 1) /* token: client nonce; reply token: server nonce */                \
     X(HMAC_PROOF, 2)     /* token: client MAC; reply token: server MAC */
 
+/* access_info `mode` (DF_ACCESS_MODE_*; PROTOCOL.md 4.34, 4.36) */
+#define DF_WIRE_ACCESS_MODES(X)                                                              \
+    X(OPEN, 1)  /* every principal is a member: observe and edit */                          \
+    X(KEY, 2)   /* members (JOIN with the join key) edit */                                  \
+    X(OWNER, 3) /* only the owner and admins edit; members observe */
+/* session_access `flags` (DF_ACCESS_*) */
+#define DF_WIRE_ACCESS_FLAGS(X) X(NEW_KEY, 1u << 0) /* rotate the join key; the reply has it */
+
 /* Every enum list: X(list macro, C prefix, Python class, kind) for tools that walk them all. */
 #define DF_WIRE_ENUMS(X)                                                                     \
     X(DF_WIRE_FLAGS, DF_FLAG_, FrameFlag, flags)                                                \
@@ -255,7 +271,9 @@
     X(DF_WIRE_DEV_CLASSES, DF_DEVCLASS_, DevClass, enum)                                     \
     X(DF_WIRE_DEV_BACKENDS, DF_DEVBACKEND_, DevBackend, enum)                                \
     X(DF_WIRE_DEV_STATES, DF_DEVSTATE_, DevState, enum)                                      \
-    X(DF_WIRE_AUTH_METHODS, DF_AUTH_, AuthMethod, enum)
+    X(DF_WIRE_AUTH_METHODS, DF_AUTH_, AuthMethod, enum)                                      \
+    X(DF_WIRE_ACCESS_MODES, DF_ACCESS_MODE_, AccessMode, enum)                               \
+    X(DF_WIRE_ACCESS_FLAGS, DF_ACCESS_, AccessFlag, flags)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

@@ -13,6 +13,8 @@ void df_access_config_defaults(df_access_config *a)
     memset(a, 0, sizeof *a);
     a->fail_burst = DF_ACCESS_DEFAULT_BURST;
     a->fail_refill_s = DF_ACCESS_DEFAULT_REFILL_S;
+    a->session_access = DF_SESSION_ACCESS_OPEN;
+    a->session_observers = 1;
 }
 
 int df_access_config_has(const char *key)
@@ -21,7 +23,8 @@ int df_access_config_has(const char *key)
                    strcmp(key, "key_file") == 0 || strcmp(key, "tls_cert") == 0 ||
                    strcmp(key, "tls_key") == 0 || strcmp(key, "auth_fail_burst") == 0 ||
                    strcmp(key, "auth_fail_refill_s") == 0 || strcmp(key, "peer_key") == 0 ||
-                   strcmp(key, "session_access") == 0 || strcmp(key, "quota_sessions") == 0 ||
+                   strcmp(key, "session_access") == 0 || strcmp(key, "session_observers") == 0 ||
+                   strcmp(key, "quota_sessions") == 0 ||
                    strcmp(key, "quota_upload_mb") == 0 || strcmp(key, "quota_memory_mb") == 0);
 }
 
@@ -156,8 +159,16 @@ int df_access_config_set(df_access_config *a, const char *key, const char *value
         return set_int(key, value, 0, DF_ACCESS_MAX_QUOTA, &a->quota_memory_mb, err);
     if (strcmp(key, "session_access") == 0) {
         if (strcmp(value, "open") == 0) a->session_access = DF_SESSION_ACCESS_OPEN;
+        else if (strcmp(value, "key") == 0) a->session_access = DF_SESSION_ACCESS_KEY;
         else if (strcmp(value, "owner") == 0) a->session_access = DF_SESSION_ACCESS_OWNER;
-        else return df_error_set(err, DF_EINVAL, "session_access: '%s' (open or owner)", value);
+        else return df_error_set(err, DF_EINVAL, "session_access: '%s' (open, key or owner)",
+                                 value);
+        return DF_OK;
+    }
+    if (strcmp(key, "session_observers") == 0) {
+        if (strcmp(value, "on") == 0) a->session_observers = 1;
+        else if (strcmp(value, "off") == 0) a->session_observers = 0;
+        else return df_error_set(err, DF_EINVAL, "session_observers: '%s' (on or off)", value);
         return DF_OK;
     }
     char *path = strcmp(key, "key_file") == 0   ? a->key_file

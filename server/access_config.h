@@ -22,8 +22,12 @@
  *   peer_key       "NAME FILE": a named TCP key (repeatable, up to DF_ACCESS_MAX_PEER_KEYS; NAME
  *                  1..31 bytes of [A-Za-z0-9_.-], unique). A TCP peer proving this key is the
  *                  principal "key:NAME"; one proving key_file is the admin (PROTOCOL.md 4.34)
- *   session_access default rights of peers other than a session's owner: "open" (default:
- *                  they may observe and edit) or "owner" (they may only observe)
+ *   session_access the access mode of new sessions (server/session/membership.h): "open"
+ *                  (default: every principal may observe and edit), "key" (principals that
+ *                  JOIN with the session's join key may edit) or "owner" (only the owner and
+ *                  admins edit); a session keeps its mode until its owner changes it
+ *   session_observers  "on" (default) or "off": whether principals that are not members of
+ *                  a new session may observe it (off: they get EPERM and LIST hides it)
  *   quota_sessions   live sessions one principal may own (0 = unlimited, default)
  *   quota_upload_mb  MiB of uploaded mesh files one principal's live sessions may hold (0 = off)
  *   quota_memory_mb  MiB of session memory (the memory budget's estimate) one principal's live
@@ -45,7 +49,8 @@
 #define DF_ACCESS_KEY_NAME_MAX 32        /* peer_key NAME: 1..31 bytes */
 #define DF_ACCESS_MAX_QUOTA 1000000      /* quota_* upper bound (sessions, MiB) */
 
-enum { DF_SESSION_ACCESS_OPEN = 0, DF_SESSION_ACCESS_OWNER = 1 };
+/* The values of server/session/membership.h's DF_ACCESS_MODE_* (checked there). */
+enum { DF_SESSION_ACCESS_OPEN = 1, DF_SESSION_ACCESS_KEY = 2, DF_SESSION_ACCESS_OWNER = 3 };
 
 typedef struct df_access_peer_key {
     char name[DF_ACCESS_KEY_NAME_MAX];
@@ -63,12 +68,14 @@ typedef struct df_access_config {
     int fail_refill_s;                       /* auth_fail_refill_s */
     int n_peer_keys;
     df_access_peer_key peer_keys[DF_ACCESS_MAX_PEER_KEYS];
-    int session_access;                      /* DF_SESSION_ACCESS_* */
+    int session_access;                      /* DF_SESSION_ACCESS_*: mode of new sessions */
+    int session_observers;                   /* 0/1: observers of new sessions */
     int quota_sessions;                      /* 0 = unlimited */
     int quota_upload_mb, quota_memory_mb;    /* 0 = unlimited */
 } df_access_config;
 
-/* Fills `a` with the defaults (no restriction, no key, burst and refill defaults). */
+/* Fills `a` with the defaults (no restriction, no key, burst and refill defaults, new sessions
+ * open with observers on). */
 void df_access_config_defaults(df_access_config *a);
 
 /* 1 when `key` is one of the keys above, else 0. */

@@ -41,6 +41,8 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     if (hist < DF_CONFIG_HISTORY_MIN_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MIN_DEFAULT_MB;
     if (hist > DF_CONFIG_HISTORY_MAX_DEFAULT_MB) hist = DF_CONFIG_HISTORY_MAX_DEFAULT_MB;
     cfg->history_max_mb = (int)hist;
+    cfg->resync_ring_mb = DF_CONFIG_DEFAULT_RESYNC_RING_MB;
+    cfg->history_replay_ms = DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS;
     uint64_t mem = ram_mb ? ram_mb / DF_CONFIG_MEMORY_RAM_DIVISOR : DF_CONFIG_MEMORY_UNKNOWN_RAM_MB;
     if (mem < DF_CONFIG_MEMORY_MIN_DEFAULT_MB) mem = DF_CONFIG_MEMORY_MIN_DEFAULT_MB;
     if (mem > DF_CONFIG_MAX_MEMORY_MB) mem = DF_CONFIG_MAX_MEMORY_MB;
@@ -192,6 +194,10 @@ static const int_key k_int_keys[] = {
      DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},
     {"uploads_max_mb", offsetof(df_server_config, uploads_max_mb), 1, DF_CONFIG_MAX_UPLOADS_MB},
     {"history_max_mb", offsetof(df_server_config, history_max_mb), 0, DF_CONFIG_MAX_HISTORY_MB},
+    {"resync_ring_mb", offsetof(df_server_config, resync_ring_mb), 0,
+     DF_CONFIG_MAX_RESYNC_RING_MB},
+    {"history_replay_ms", offsetof(df_server_config, history_replay_ms), 0,
+     DF_CONFIG_MAX_HISTORY_REPLAY_MS},
     {"memory_max_mb", offsetof(df_server_config, memory_max_mb), DF_CONFIG_MIN_MEMORY_MB,
      DF_CONFIG_MAX_MEMORY_MB},
     {"handshake_timeout_s", offsetof(df_server_config, handshake_timeout_s), 0,
@@ -466,8 +472,9 @@ static const char k_usage[] =
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
     "                      max_sessions, threads, spin_us, inline_us, cursor_hz, shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
-    "                      memory_max_mb, tcp_insecure, socket_mode, socket_group,\n"
-    "                      handshake_timeout_s, idle_timeout_s, hid.<class>.<key> with\n"
+    "                      history_replay_ms, resync_ring_mb, memory_max_mb, tcp_insecure,\n"
+    "                      socket_mode, socket_group, handshake_timeout_s, idle_timeout_s,\n"
+    "                      hid.<class>.<key> with\n"
     "                      class knob|3d-mouse|pen or a VID:PID like 046d:c626);\n"
     "                      command-line options override the file\n"
     "  --store PATH        durable session store (SQLite; default $STATE_DIRECTORY/deformd.db\n"
@@ -493,15 +500,16 @@ static const char k_usage[] =
     "                      (HMAC-SHA256 challenge-response; config key_file; the file must\n"
     "                      not be readable by others). Config allow_uids / allow_gids:\n"
     "                      users / groups allowed on the Unix socket. Config peer_key\n"
-    "                      (NAME FILE: named TCP keys), session_access = open|owner,\n"
-    "                      quota_sessions, quota_upload_mb, quota_memory_mb: PROTOCOL.md 4.34\n"
+    "                      (NAME FILE: named TCP keys), session_access = open|key|owner and\n"
+    "                      session_observers = on|off (of new sessions), quota_sessions,\n"
+    "                      quota_upload_mb, quota_memory_mb: PROTOCOL.md 4.34\n"
     "  --tls-cert FILE     TLS 1.3 on the TCP listener with this PEM certificate (chain)\n"
     "  --tls-key FILE      and its PEM private key (mode 0600; config tls_cert, tls_key)\n"
     "  -h, --help          print this help and exit\n"
     "\n"
     "SIGHUP re-reads the config file and the options: log_level, max_clients, max_sessions,\n"
     "handshake_timeout_s, idle_timeout_s, cursor_hz, output_queue_limit, allow_paths,\n"
-    "session_access and quota_* change live; a change of any other setting is logged as needing a restart; a file with an error\n"
+    "session_access, session_observers (for new sessions) and quota_* change live; a change of any other setting is logged as needing a restart; a file with an error\n"
     "is logged and the current settings stay.\n"
     "\n"
     "Socket activation (LISTEN_FDS) and sd_notify (NOTIFY_SOCKET) are supported.\n"

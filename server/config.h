@@ -42,7 +42,14 @@
  *   max_upload_mb      largest inline upload (LOAD_MESH total_size), MiB (1 .. 1024, default 1024)
  *   uploads_max_mb     buffers of all uploads in flight together, MiB (default 1024)
  *   history_max_mb     undo history of one session, MiB; the oldest steps are dropped beyond it
+ *   history_replay_ms  replay cost between undo checkpoints, ms (history.h; 0 = after every
+ *                      recipe step): an undo replays about this much at most
  *                      (0 .. 1048576; default physical RAM / 32, clamped to 64 .. 1024)
+ *   resync_ring_mb     frames of the versions last broadcast that one session keeps for clients
+ *                      resyncing from a version they hold (SUBSCRIBE FROM_VERSION, resync.h),
+ *                      MiB; the oldest versions are dropped beyond it (0 .. 1048576, default
+ *                      DF_CONFIG_DEFAULT_RESYNC_RING_MB; 0 = keep none: every resync gets a
+ *                      snapshot)
  *   cursor_hz          BRUSH_CURSOR events per second at most, per session and origin (a
  *                      device or client moving a brush cursor; brush_state.h): a value within
  *                      1/cursor_hz of the previous event waits for the end of that interval,
@@ -121,6 +128,10 @@
 #define DF_CONFIG_HISTORY_MIN_DEFAULT_MB 64   /* ... at least this ... */
 #define DF_CONFIG_HISTORY_MAX_DEFAULT_MB 1024 /* ... at most this */
 #define DF_CONFIG_MAX_HISTORY_MB (1 << 20)
+#define DF_CONFIG_DEFAULT_RESYNC_RING_MB 32
+#define DF_CONFIG_MAX_RESYNC_RING_MB (1 << 20)
+#define DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS 250
+#define DF_CONFIG_MAX_HISTORY_REPLAY_MS 3600000
 #define DF_CONFIG_MEMORY_RAM_DIVISOR 2        /* default memory_max_mb = RAM / 2 ... */
 #define DF_CONFIG_MEMORY_MIN_DEFAULT_MB 256   /* ... at least this */
 #define DF_CONFIG_MEMORY_UNKNOWN_RAM_MB 4096  /* when the RAM size is unknown */
@@ -156,6 +167,8 @@ typedef struct df_server_config {
     int max_upload_mb;           /* largest inline upload, MiB */
     int uploads_max_mb;          /* all in-flight upload buffers together, MiB */
     int history_max_mb;          /* undo history per session, MiB */
+    int resync_ring_mb;          /* resync ring per session, MiB (0 = none) */
+    int history_replay_ms;       /* replay cost between undo checkpoints, ms */
     int memory_max_mb;           /* memory budget (membudget.h), MiB */
     int tcp_insecure;            /* 1: a non-loopback TCP address is allowed */
     int socket_mode;             /* Unix socket file permissions (e.g. 0660) */

@@ -42,6 +42,8 @@ static void note_restart(const df_server_config *cur, const df_server_config *n)
     DF_RESTART_KEY(cur->max_upload_mb != n->max_upload_mb, "max_upload_mb");
     DF_RESTART_KEY(cur->uploads_max_mb != n->uploads_max_mb, "uploads_max_mb");
     DF_RESTART_KEY(cur->history_max_mb != n->history_max_mb, "history_max_mb");
+    DF_RESTART_KEY(cur->resync_ring_mb != n->resync_ring_mb, "resync_ring_mb");
+    DF_RESTART_KEY(cur->history_replay_ms != n->history_replay_ms, "history_replay_ms");
     DF_RESTART_KEY(cur->memory_max_mb != n->memory_max_mb, "memory_max_mb");
     DF_RESTART_KEY(cur->hid_on != n->hid_on, "hid");
     DF_RESTART_KEY(cur->n_hid_replay != n->n_hid_replay ||
@@ -77,17 +79,21 @@ static void apply(df_server *srv, const df_server_config *n)
     c->output_queue_limit = n->output_queue_limit;
     c->n_allow = n->n_allow;
     memcpy(c->allow_paths, n->allow_paths, sizeof c->allow_paths);
-    c->access.session_access = n->access.session_access; /* access.h: checked per request */
+    c->access.session_access = n->access.session_access; /* membership.h: of new sessions */
+    c->access.session_observers = n->access.session_observers;
     c->access.quota_sessions = n->access.quota_sessions;
     c->access.quota_upload_mb = n->access.quota_upload_mb;
     c->access.quota_memory_mb = n->access.quota_memory_mb;
     df_log_set_level(c->log_level);
     df_log(DF_LOG_INFO, "configuration reloaded: log_level %d, max_clients %d, max_sessions %d, "
            "handshake_timeout_s %d, idle_timeout_s %d, cursor_hz %d, output_queue_limit %zu, "
-           "%d allow_paths, session_access %s, quota_sessions %d, quota_upload_mb %d, "
+           "%d allow_paths, session_access %s, session_observers %s, quota_sessions %d, quota_upload_mb %d, "
            "quota_memory_mb %d", c->log_level, c->max_clients, c->max_sessions,
            c->handshake_timeout_s, c->idle_timeout_s, c->cursor_hz, c->output_queue_limit,
-           c->n_allow, c->access.session_access == DF_SESSION_ACCESS_OWNER ? "owner" : "open",
+           c->n_allow, c->access.session_access == DF_SESSION_ACCESS_OWNER  ? "owner"
+           : c->access.session_access == DF_SESSION_ACCESS_KEY ? "key"
+                                                                : "open",
+           c->access.session_observers ? "on" : "off",
            c->access.quota_sessions, c->access.quota_upload_mb, c->access.quota_memory_mb);
 }
 

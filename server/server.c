@@ -186,5 +186,7 @@ void df_server_free(df_server *srv)
     srv->pool = NULL;
     df_guard_free(srv);
     df_auth_free(srv);
+    free(srv->join_limit);
+    srv->join_limit = NULL;
     df_tls_free(srv);
 }

@@ -48,6 +48,7 @@ typedef struct df_hid_ops {
  * DF_ELIMIT for a full disk / store_max_mb) after which the caller changes nothing and fails
  * its request. Loop thread. */
 struct df_brush_state;
+struct df_membership;
 typedef struct df_store_ops {
     int (*session_created)(struct df_server *srv, const struct df_session *s, df_error *err);
     int (*session_closing)(struct df_server *srv, const struct df_session *s, df_error *err);
@@ -55,6 +56,8 @@ typedef struct df_store_ops {
                   df_error *err);
     int (*brush)(struct df_server *srv, const struct df_session *s,
                  const struct df_brush_state *next, uint64_t who, df_error *err);
+    int (*access)(struct df_server *srv, const struct df_session *s,
+                  const struct df_membership *next, df_error *err);
 } df_store_ops;
 
 #define DF_CONN_READ_CHUNK 65536       /* bytes requested from libuv per read */
@@ -148,6 +151,7 @@ typedef struct df_server {
                                    * (df_job_is_change): unbound HID devices drive it */
     struct df_tls_server *tls;    /* TLS of the TCP listener (net/tls.h), NULL without */
     struct df_auth_server *auth;  /* TCP key authentication (net/auth.h), NULL without a key */
+    struct df_auth_limit *join_limit; /* wrong JOIN keys per peer (h_access.c), made on use */
     struct df_hid_manager *hid;   /* HID devices (server/hid/hid_manager.h), NULL when off */
     const df_hid_ops *hid_ops;    /* its entry points (set by df_server_start) */
     /* Upward calls of the network layer (net never includes what is above it), set by

@@ -15,6 +15,8 @@ typedef struct df_stats {
     uint64_t clients_refused_peer;/* Unix peers refused by allow_uids / allow_gids (peer.h) */
     uint64_t auth_ok, auth_failed;/* TCP key authentications that succeeded / failed (auth.h) */
     uint64_t auth_limited;        /* AUTH requests refused by the failure rate limit */
+    uint64_t join_ok, join_failed;/* JOINs that made a member / had a wrong key (h_access.c) */
+    uint64_t join_limited;        /* JOINs refused by the wrong-key rate limit */
     uint64_t frames_in, bytes_in;
     uint64_t frames_out, bytes_out;
     uint64_t writes_blocked;      /* writes a full socket left to uv_write (a slow reader) */
@@ -28,6 +30,8 @@ typedef struct df_stats {
     uint64_t moves_preempted;     /* moves ended early for a request queued behind them */
     uint64_t moves_orphaned;      /* moves ended because their requester disconnected */
     uint64_t versions;            /* versions broadcast, all sessions */
+    uint64_t resync_replays;      /* FROM_VERSION subscribes answered from the resync ring */
+    uint64_t resync_snapshots;    /* ... answered with a snapshot (too old, ahead, not kept) */
     uint64_t shm_frames;          /* broadcast frames copied into a shared-memory ring */
     uint64_t shm_refs;            /* SHM_REF events queued in their place */
     uint64_t kelvin_lu_hits, kelvin_lu_misses;

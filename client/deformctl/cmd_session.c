@@ -1,6 +1,7 @@
 /* cmd_session.c — deformctl commands about the daemon and its sessions: ping, load, list,
  * close, stats, watch. */
 #include <inttypes.h>
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -350,10 +351,13 @@ static void watch_event(void *user, const df_frame_header *h, const uint8_t *pay
 
 static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
 {
-    long long count = 0;
+    long long count = 0, from = -1;
     df_error e;
     if (a->val[CTL_NGLOBAL] &&
         dc_cli_int(a->val[CTL_NGLOBAL], "--count", 1, 1000000000, &count, &e))
+        return ctl_usage_error(ctx, cmd, e.msg);
+    if (a->val[CTL_NGLOBAL + 2] &&
+        dc_cli_int(a->val[CTL_NGLOBAL + 2], "--from-version", 0, LLONG_MAX, &from, &e))
         return ctl_usage_error(ctx, cmd, e.msg);
     if (a->val[CTL_NGLOBAL + 1] && ctx->tcp)
         return ctl_usage_error(ctx, cmd, "--shm needs the daemon's Unix socket, not --tcp");
@@ -365,20 +369,27 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     int rc = ctl_session_id(c, a->pos[0], &w.session, &e);
     if (rc == DF_OK) {
         df_client_set_event_callback(c, watch_event, &w);
-        rc = df_client_subscribe(c, w.session, 0, &info, &e);
+        rc = from >= 0 ? df_client_subscribe_from(c, w.session, (uint64_t)from, &info, &e)
+                       : df_client_subscribe(c, w.session, 0, &info, &e);
     }
     if (rc == DF_OK && a->val[CTL_NGLOBAL + 1]) /* --shm */
         rc = df_client_stream_shm(c, w.session, NULL, &e);
     if (rc == DF_OK && ctx->json) { /* subscribed: events from here on are printed */
         printf("{\"session\":%" PRIu64 ",\"kind\":\"watching\",\"name\":", w.session);
         ctl_json_str(stdout, info.name);
-        printf(",\"version\":%" PRIu64 ",\"shm\":%s}\n", info.version,
+        printf(",\"version\":%" PRIu64 ",\"shm\":%s", info.version,
                a->val[CTL_NGLOBAL + 1] ? "true" : "false");
+        if (from >= 0)
+            printf(",\"from_version\":%lld", from);
+        printf("}\n");
         fflush(stdout);
     } else if (rc == DF_OK) {
-        printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "%s\n", w.session,
+        printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "%s", w.session,
                info.name[0] ? info.name : "-", info.version,
                a->val[CTL_NGLOBAL + 1] ? " through shared memory" : "");
+        if (from >= 0) /* the versions after it (or a snapshot) print first */
+            printf(", resyncing from version %lld", from);
+        printf("\n");
         fflush(stdout);
     }
     while (rc == DF_OK && !w.closed && !w.bad && (count == 0 || w.printed < count)) {
@@ -416,6 +427,9 @@ static const dc_cli_opt WATCH_OPTS[] = {
                  " brush\n                     events print but do not count)"},
     {"shm", 0, "--shm              read the stream from the daemon's shared-memory ring (Unix "
                "socket, same host)"},
+    {"from-version", 1, "--from-version V   resync from version V first: the versions after "
+                        "V as broadcast, or one\n                     snapshot when the daemon "
+                        "no longer keeps them (they count for --count)"},
 };
 #define N(x) ((int)(sizeof x / sizeof x[0]))
 
@@ -435,7 +449,7 @@ const ctl_cmd ctl_cmds_session[] = {
     {"stats", "stats [--session SESSION]",
      "Print the daemon's (or one session's) counters, one 'key value' per line.", STATS_OPTS,
      N(STATS_OPTS), 0, run_stats},
-    {"watch", "watch SESSION [--count N] [--shm]",
+    {"watch", "watch SESSION [--count N] [--shm] [--from-version V]",
      "Subscribe to a session and print one line per version (version, kind, vertices changed) "
      "and per brush_state / brush_cursor event (--count counts versions only).",
      WATCH_OPTS, N(WATCH_OPTS), 1, run_watch},

@@ -61,6 +61,7 @@ extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
 extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
 extern const ctl_cmd ctl_cmds_brush_state[]; /* brush-state */
 extern const ctl_cmd ctl_cmds_devices[];   /* devices [bind DEVICE SESSION] */
+extern const ctl_cmd ctl_cmds_access[];    /* access join */
 
 /* Prints a session brush (brush_state_out.c): event 0 as `brush-state` does ('key value' lines,
  * or one JSON object), event 1 as one `watch` line ("brush_state seq N changed radius,nu by

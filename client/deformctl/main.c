@@ -19,7 +19,8 @@
 #include "proto/auth_mac.h"
 
 static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
-                                        ctl_cmds_mesh, ctl_cmds_brush_state, ctl_cmds_devices};
+                                        ctl_cmds_mesh, ctl_cmds_brush_state, ctl_cmds_devices,
+                                        ctl_cmds_access};
 
 static void usage_top(FILE *f)
 {

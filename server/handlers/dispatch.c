@@ -26,6 +26,8 @@ static const struct {
     {DF_MSG_DEVICES_LIST, df_h_devices_list, NULL},
     {DF_MSG_DEVICE_BIND, df_h_device_bind, NULL},
     {DF_MSG_DEVICE_VIEW, df_h_device_view, NULL},
+    {DF_MSG_SESSION_ACCESS, df_h_session_access, NULL},
+    {DF_MSG_JOIN, df_h_join, NULL},
     {DF_MSG_CLOSE_SESSION, NULL, &df_k_close_session},
     {DF_MSG_SUBSCRIBE, NULL, &df_k_subscribe},
     {DF_MSG_UNSUBSCRIBE, NULL, &df_k_unsubscribe},

@@ -10,6 +10,7 @@
 #include "server/exec/job.h"
 #include "server/log.h"
 #include "server/net/reply.h"
+#include "server/session/access.h"
 #include "server/session/session.h"
 #include "server/net/shm.h"
 #include "server/session/stream.h"
@@ -109,14 +110,17 @@ int df_h_list_sessions(df_req *r, const uint8_t *p, df_error *err)
     if (rc != DF_OK) return rc;
     df_msg_session_list l = {0, NULL};
     int n = 0;
-    for (df_session *s = c->srv->sessions; s; s = s->next) n += !s->closed;
+    /* a session that admits no observers is hidden from those who may not observe it */
+#define LISTED(s) (!(s)->closed && (df_access_rights(c, (s)) & DF_RIGHT_OBSERVE))
+    for (df_session *s = c->srv->sessions; s; s = s->next) n += LISTED(s);
     if (n > (int)DF_MAX_SESSIONS) n = (int)DF_MAX_SESSIONS;
     l.items = calloc((size_t)(n ? n : 1), sizeof *l.items);
     if (!l.items) return df_error_set(err, DF_ENOMEM, "out of memory");
     /* Oldest first (the registry list is newest first). */
     int i = n;
     for (df_session *s = c->srv->sessions; s && i > 0; s = s->next)
-        if (!s->closed) df_session_info_fill(s, &l.items[--i]);
+        if (LISTED(s)) df_session_info_fill(s, &l.items[--i]);
+#undef LISTED
     l.count = (uint32_t)n;
     df_req_reply_session_list(r, &l);
     free(l.items);
@@ -136,6 +140,8 @@ int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
                                 (unsigned long long)m.session_id);
         return df_error_set(err, DF_ENOTFOUND, "open_session: no session named '%s'", m.name);
     }
+    rc = df_access_require(r, s, DF_RIGHT_OBSERVE, err); /* observers off (membership.h) */
+    if (rc != DF_OK) return rc;
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(r, &info);
@@ -207,24 +213,59 @@ static int stream_shm_decode(const df_req *r, const uint8_t *p, void *body, uint
 const df_job_kind df_k_stream_shm = {.decode = stream_shm_decode, .done = stream_shm_done,
                                      .beside = DF_JOB_BESIDE_READ};
 
+/* SUBSCRIBE's job body: what it asked for after the reply. */
+typedef struct sub_req {
+    uint32_t flags;              /* DF_SUBSCRIBE_* */
+    uint64_t from_version;       /* with DF_SUBSCRIBE_FROM_VERSION */
+} sub_req;
+
+/* A dense snapshot of the current version as events carrying the subscribe's request id. */
+static void send_snapshot(df_job *j)
+{
+    df_error err;
+    df_frames f = {0};
+    if (df_stream_snapshot(j->s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)
+        for (size_t i = 0; i < f.n && !j->req.c->closing; i++) df_req_reply_more(&j->req, f.v[i]);
+    else
+        df_log(DF_LOG_ERROR, "subscribe snapshot failed: %s", err.msg);
+    df_frames_clear(&f);
+}
+
+/* FROM_VERSION (PROTOCOL.md 6.2): the kept frames of versions from+1 .. current exactly as they
+ * were broadcast (nothing when from is current), else one snapshot of the current version. On
+ * the loop thread right after the reply, before any later broadcast: no gap, no duplicate. */
+static void resync(df_job *j, uint64_t from)
+{
+    df_session *s = j->s;
+    uint64_t cur = atomic_load(&s->version);
+    if (from != cur && !df_resync_covers(&s->resync, from, cur)) {
+        s->srv->stats.resync_snapshots++;
+        df_log(DF_LOG_DEBUG, "session %llu: resync from version %llu: snapshot of %llu (%s)",
+               (unsigned long long)s->id, (unsigned long long)from, (unsigned long long)cur,
+               from > cur ? "ahead of the session" : "not kept");
+        send_snapshot(j);
+        return;
+    }
+    s->srv->stats.resync_replays++;
+    for (uint64_t v = from + 1; v <= cur && !j->req.c->closing; v++) {
+        const df_resync_ver *e = df_resync_find(&s->resync, v);
+        for (size_t i = 0; e && i < e->n && !j->req.c->closing; i++)
+            df_req_reply_more(&j->req, e->frames[i]);
+    }
+}
+
 static void subscribe_done(df_job *j)
 {
     if (!join(j, df_session_subscribe)) return;
     df_session *s = j->s;
-    df_error err;
+    const sub_req *b = j->body;
     df_msg_session_info info;
     df_session_info_fill(s, &info);
     df_req_reply_session_info(&j->req, &info);
     if (s->srv->hid_ops) /* replay devices wait for a subscriber (hid_manager.h) */
         s->srv->hid_ops->session_active(s->srv, s);
-    if (*(const uint8_t *)j->body & DF_SUBSCRIBE_SNAPSHOT) {
-        df_frames f = {0};
-        if (df_stream_snapshot(s, DF_MSG_DISPLACEMENT, j->req.id, &f, &err) == DF_OK)
-            for (size_t i = 0; i < f.n; i++) df_req_reply_more(&j->req, f.v[i]);
-        else
-            df_log(DF_LOG_ERROR, "subscribe snapshot failed: %s", err.msg);
-        df_frames_clear(&f);
-    }
+    if (b->flags & DF_SUBSCRIBE_FROM_VERSION) resync(j, b->from_version);
+    else if (b->flags & DF_SUBSCRIBE_SNAPSHOT) send_snapshot(j);
 }
 
 static int subscribe_decode(const df_req *r, const uint8_t *p, void *body, uint64_t *sid,
@@ -234,11 +275,13 @@ static int subscribe_decode(const df_req *r, const uint8_t *p, void *body, uint6
     int rc = df_msg_subscribe_decode(p, r->len, &m, err);
     if (rc != DF_OK) return rc;
     *sid = m.session_id;
-    *(uint8_t *)body = (uint8_t)(m.flags & DF_SUBSCRIBE_SNAPSHOT);
+    sub_req *b = body;
+    b->flags = m.flags;
+    b->from_version = m.from_version;
     return rc;
 }
 
-const df_job_kind df_k_subscribe = {.body_size = sizeof(uint8_t), .decode = subscribe_decode,
+const df_job_kind df_k_subscribe = {.body_size = sizeof(sub_req), .decode = subscribe_decode,
                                     .done = subscribe_done,
                                     .beside = DF_JOB_BESIDE_READ}; /* may join a move */
 

@@ -426,15 +426,42 @@ const df_job_kind df_k_brush_cancel = {.body_size = sizeof(brush_req),
                                        .decode = df_job_decode_ref, .release = req_free,
                                        .work = update_work, .done = df_job_commit};
 
-/* BRUSH_END: the stroke becomes one undo step and is dropped (loop thread, in FIFO order). */
+/* BRUSH_END work (a worker): plans the stroke's undo step. A RECIPE step (the stroke's
+ * request, stroke_recipe.h) when its last publish is replayable and began from the history's
+ * current state: the plan replays it from that state and keeps it only when the replay is
+ * bitwise s->cur (history.h); else (another uncommitted change in between, a rebase, a cancel)
+ * an XOR step. The loop thread only installs the plan. */
+static void end_work(df_job *j)
+{
+    const df_session *s = j->s;
+    const df_stroke *st = df_session_stroke(j->s, j->conn_id);
+    if (!st) {
+        j->rc = df_error_set(&j->err, DF_ESTATE, "brush_end: no open stroke on session %llu",
+                             (unsigned long long)s->id);
+        return;
+    }
+    size_t n = 3 * (size_t)s->nv;
+    uint8_t *blob = NULL;
+    size_t len = 0;
+    if (st->last_replayable && memcmp(st->base, s->hist.state, n * sizeof(double)) == 0) {
+        df_stroke_recipe r = {.brush = st->last_brush, .strength = st->last_strength,
+                              .n_pins = st->n_pins, .pin_flags = st->pin_flags,
+                              .pins = st->pins};
+        memcpy(r.load, st->last_load, sizeof r.load);
+        df_error e;
+        if (df_stroke_recipe_encode(&r, &blob, &len, &e) != DF_OK) blob = NULL; /* XOR then */
+    }
+    j->rc = df_history_plan_commit(&s->hist, s->cur, blob, len, &j->change.hplan, &j->err);
+    free(blob);
+}
+
+/* BRUSH_END done: the stroke becomes one undo step and is dropped (loop thread, FIFO order). */
 static void end_done(df_job *j)
 {
-    if (j->rc == DF_OK && !df_session_stroke(j->s, j->conn_id))
-        j->rc = df_error_set(&j->err, DF_ESTATE, "brush_end: no open stroke on session %llu",
-                             (unsigned long long)j->s->id);
     j->change.hist = DF_HIST_COMMIT;
     j->change.drop_stroke = 1;
     df_job_commit(j);
 }
 
-const df_job_kind df_k_brush_end = {.decode = df_job_decode_ref, .done = end_done};
+const df_job_kind df_k_brush_end = {.decode = df_job_decode_ref, .work = end_work,
+                                    .done = end_done};

@@ -45,7 +45,7 @@ typedef struct df_upload {
     uint8_t *data;
     uint64_t cap;           /* bytes allocated for data (charged to srv->mem until freed) */
     char *path;             /* path loads: the path as the client sent it */
-    char owner[48];         /* the requester's principal: the new session's owner (access.h) */
+    char owner[DF_PRINCIPAL_MAX]; /* the requester's principal: the new session's owner */
     df_mesh mesh;           /* parsed by the worker */
     df_mesh_report rep;     /* the reader's report */
 } df_upload;
@@ -144,12 +144,11 @@ static void load_done(df_job *j)
     uint64_t up = u->path ? 0 : u->total; /* quotas again: other loads may have finished */
     if (df_access_quota_check(j->srv, u->owner, up, df_session_estimate_bytes(&u->mesh),
                               &j->err) != DF_OK ||
-        df_session_create(j->srv, &u->mesh, u->name, &s, &j->err) != DF_OK) {
+        df_session_create_as(j->srv, &u->mesh, u->name, u->owner, &s, &j->err) != DF_OK) {
         j->rc = j->err.code;
         df_job_failed(j);
         return;
     }
-    snprintf(s->owner, sizeof s->owner, "%s", u->owner);
     s->upload_bytes = up;
     df_log(DF_LOG_INFO, "session %llu '%s': %d vertices, %d elements%s%s",
            (unsigned long long)s->id, s->name, nv, ne, u->path ? " from " : "",

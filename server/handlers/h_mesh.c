@@ -49,11 +49,13 @@ static void history_work(df_job *j)
                              (unsigned long long)s->id);
         return;
     }
-    /* The target state is rebuilt from the history's steps into the scratch positions the job
-     * borrowed; the commit swaps them in and moves the history (commit.h). */
+    /* The target state is rebuilt from the history (replaying recipe steps, history.h) into
+     * the scratch positions the job borrowed; the commit swaps them in and installs the plan
+     * (commit.h). A replay mismatch fails the request and the commit repairs the history. */
     double *state = s->scratch_pos;
-    if ((j->rc = df_history_peek(&s->hist, undo ? -1 : 1, state, &j->err)) != DF_OK) return;
     df_change *ch = &j->change;
+    j->rc = df_history_plan_move(&s->hist, undo ? -1 : 1, state, &ch->hplan, &j->err);
+    if (j->rc != DF_OK) return;
     j->rc = df_stream_encode(s, NULL, 0, state, undo ? DF_CHANGE_UNDO : DF_CHANGE_REDO, NULL,
                              0, s->scratch_u, &ch->frames, NULL, &j->err);
     if (j->rc != DF_OK) return;

@@ -8,6 +8,7 @@
 #include "server/exec/pool.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
+#include "server/session/access.h"
 
 #define DF_STATS_MAX 128 /* entries this server reports (a device's: h_devices.c) */
 
@@ -30,6 +31,8 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
     if (m.session_id && !(s = df_session_find(srv, m.session_id)))
         return df_error_set(err, DF_ENOTFOUND, "stats: no session %llu",
                             (unsigned long long)m.session_id);
+    if (s && (rc = df_access_require(r, s, DF_RIGHT_OBSERVE, err)) != DF_OK)
+        return rc; /* a session that admits no observers shows its counters to members only */
     df_msg_stat items[DF_STATS_MAX];
     df_msg_stats st = {0, items};
     const df_stats *x = &srv->stats;
@@ -47,6 +50,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "auth_ok", (double)x->auth_ok);
         put(&st, "auth_failed", (double)x->auth_failed);
         put(&st, "auth_limited", (double)x->auth_limited);
+        put(&st, "join_ok", (double)x->join_ok);
+        put(&st, "join_failed", (double)x->join_failed);
+        put(&st, "join_limited", (double)x->join_limited);
         put(&st, "frames_in", (double)x->frames_in);
         put(&st, "frames_out", (double)x->frames_out);
         put(&st, "bytes_in", (double)x->bytes_in);
@@ -69,6 +75,10 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "moves_orphaned", (double)x->moves_orphaned);
         put(&st, "inline_us", srv->cfg.inline_us);
         put(&st, "versions", (double)x->versions);
+        put(&st, "resync_replays", (double)x->resync_replays);
+        put(&st, "resync_snapshots", (double)x->resync_snapshots);
+        put(&st, "resync_ring_bytes", (double)df_server_mem(srv)->used[DF_MEM_RESYNC]);
+        put(&st, "resync.limit_bytes", (double)((uint64_t)srv->cfg.resync_ring_mb << 20));
         put(&st, "brush_state_changes", (double)x->brush_state_changes);
         put(&st, "store_changes", (double)x->store_changes);
         put(&st, "store_log_bytes", (double)x->store_log_bytes);
@@ -97,6 +107,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "memory.sessions_bytes", (double)mb->used[DF_MEM_SESSIONS]);
         put(&st, "memory.shm_bytes", (double)mb->used[DF_MEM_SHM]);
         put(&st, "memory.history_bytes", (double)mb->used[DF_MEM_HISTORY]);
+        put(&st, "memory.resync_bytes", (double)mb->used[DF_MEM_RESYNC]);
         put(&st, "uploads_in_flight", uploads);
         put(&st, "uploads_max_bytes", (double)((uint64_t)srv->cfg.uploads_max_mb << 20));
         put(&st, "max_upload_bytes", (double)((uint64_t)srv->cfg.max_upload_mb << 20));
@@ -133,7 +144,19 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "redo_depth", df_history_can_redo(&s->hist));
         put(&st, "history_bytes", (double)df_history_bytes(&s->hist));
         put(&st, "history_steps_dropped", (double)s->hist.dropped);
-        put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged));
+        put(&st, "history_undo_bytes", (double)df_history_undo_bytes(&s->hist));
+        put(&st, "history_recipe_steps", df_history_steps_of(&s->hist, DF_HISTORY_RECIPE));
+        put(&st, "history_xor_steps", df_history_steps_of(&s->hist, DF_HISTORY_XOR));
+        put(&st, "history_checkpoints", s->hist.nck);
+        put(&st, "history_replays", (double)s->hist.replays);
+        put(&st, "history_replay_mismatches", (double)s->hist.mismatches);
+        put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged +
+                                          s->resync_charged));
+        put(&st, "resync_ring_bytes", (double)s->resync.bytes);
+        put(&st, "resync_versions", (double)s->resync.count);
+        /* the oldest from_version a resync replays (current version when nothing is kept) */
+        put(&st, "resync_from", (double)(s->resync.count ? df_resync_first(&s->resync) - 1
+                                                          : atomic_load(&s->version)));
         put(&st, "open_strokes", strokes);
         put(&st, "brush.seq", (double)s->brush_seq);
         put(&st, "job_running", s->running != NULL);

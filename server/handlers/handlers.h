@@ -29,6 +29,8 @@ DF_HANDLER(brush_state_set);
 DF_HANDLER(devices_list); /* devices (HID): h_devices.c */
 DF_HANDLER(device_bind);
 DF_HANDLER(device_view);
+DF_HANDLER(session_access); /* per-session access: h_access.c (membership.h) */
+DF_HANDLER(join);
 /* STATS of a device (stats_req.session_id = a device id, bit 63 set): h_devices.c */
 #define DF_DEVICE_ID_BIT (1ull << 63)
 int df_h_device_stats(df_req *r, uint64_t device_id, df_error *err);

@@ -43,6 +43,7 @@ DF_OUT_DECL(brush_state)
 DF_OUT_DECL(brush_cursor)
 DF_OUT_DECL(device_info)
 DF_OUT_DECL(device_list)
+DF_OUT_DECL(access_info)
 #undef DF_OUT_DECL
 
 /* Sends an error reply to request (type, request_id) with wire code `code` and a printf-style

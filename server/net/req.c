@@ -68,6 +68,7 @@ DF_REQ_REPLY_DEF(stats)
 DF_REQ_REPLY_DEF(shm_info)
 DF_REQ_REPLY_DEF(brush_state)
 DF_REQ_REPLY_DEF(device_list)
+DF_REQ_REPLY_DEF(access_info)
 
 void df_req_reply_empty(df_req *r)
 {

@@ -26,27 +26,46 @@ int df_access_needed(uint16_t type)
 
 int df_access_rights(const df_conn *c, const df_session *s)
 {
-    const int all = DF_RIGHT_OBSERVE | DF_RIGHT_EDIT | DF_RIGHT_OWN;
-    if (!c || c->admin || strcmp(c->principal, s->owner) == 0) return all;
-    if (s->srv->cfg.access.session_access == DF_SESSION_ACCESS_OWNER) return DF_RIGHT_OBSERVE;
-    return DF_RIGHT_OBSERVE | DF_RIGHT_EDIT;
+    if (!c) return DF_RIGHT_OBSERVE | DF_RIGHT_EDIT | DF_RIGHT_OWN;
+    return df_membership_rights(&s->acc, s->owner, c->principal, c->admin);
 }
+
+_Static_assert((int)DF_RIGHT_OBSERVE == (int)DF_MEMBER_OBSERVE &&
+               (int)DF_RIGHT_EDIT == (int)DF_MEMBER_EDIT && (int)DF_RIGHT_OWN == (int)DF_MEMBER_OWN, "membership rights are access rights");
 
 static const char *right_name(int right)
 {
     return right == DF_RIGHT_OWN ? "own" : right == DF_RIGHT_EDIT ? "edit" : "observe";
 }
 
+/* How a principal without `need` gets it on `s`. */
+static const char *how_to_get(int need, const df_session *s)
+{
+    if (need == DF_RIGHT_OWN) return "only the owner or an admin key has it";
+    if (s->acc.mode == DF_ACCESS_MODE_KEY)
+        return "join with the session's key: JOIN, deformctl join SESSION --key HEX";
+    if (need == DF_RIGHT_EDIT)
+        return "the session is owner-only: its owner may switch it to key mode";
+    return "the session admits no observers: its owner may give you its join key";
+}
+
 int df_access_check(const df_req *r, const df_session *s, df_error *err)
 {
-    int need = df_access_needed(r->type);
+    return df_access_require(r, s, df_access_needed(r->type), err);
+}
+
+int df_access_require(const df_req *r, const df_session *s, int need, df_error *err)
+{
     int have = df_access_rights(r->c, s);
-    if ((have & need) == need) return DF_OK;
-    const char *role = (have & DF_RIGHT_EDIT) ? "an editor" : "an observer";
+    if ((have & need) == need || !r->c) return DF_OK;
+    const char *role = (have & DF_RIGHT_EDIT)      ? "a member"
+                       : (have & DF_RIGHT_OBSERVE) ? "an observer"
+                                                   : "not admitted";
     return df_error_set(err, DF_EPERM,
-                        "%s: session '%s' needs the %s right (you are %s, %s; owner %s)",
-                        df_msg_type_name(r->type), s->name, right_name(need), r->c->principal,
-                        role, s->owner);
+                        "%s: session '%s' needs the %s right (you are %s, %s; owner %s; "
+                        "%s mode): %s", df_msg_type_name(r->type), s->name, right_name(need),
+                        r->c->principal, role, s->owner[0] ? s->owner : "none (admins)",
+                        df_membership_mode_name(s->acc.mode), how_to_get(need, s));
 }
 
 int df_access_quota_check(df_server *srv, const char *who, uint64_t upload_bytes,

@@ -36,6 +36,7 @@ void df_change_clear(df_server *srv, df_change *c)
     c->kc = NULL;
     df_admm_free(c->solver);
     c->solver = NULL;
+    df_history_plan_free(&c->hplan);
 }
 
 /* Step 1: the new state, swapped in (the old buffers become the session's scratch). */
@@ -99,10 +100,17 @@ static int apply_history(df_session *s, df_change *c)
 {
     int rc = DF_OK;
     switch (c->hist) {
-    case DF_HIST_COMMIT: rc = df_session_history_commit(s, c->err); break;
+    case DF_HIST_COMMIT:
+        rc = c->hplan.valid ? df_session_history_install(s, &c->hplan, c->err)
+                            : df_session_history_commit(s, c->err);
+        break;
     case DF_HIST_RESET: df_session_history_reset(s, NULL); break; /* keeps the old on ENOMEM */
-    case DF_HIST_UNDO: df_history_undo(&s->hist, NULL); break;
-    case DF_HIST_REDO: df_history_redo(&s->hist, NULL); break;
+    case DF_HIST_UNDO:
+    case DF_HIST_REDO:
+        if (c->hplan.valid) rc = df_session_history_install(s, &c->hplan, c->err);
+        else if (c->hist == DF_HIST_UNDO) df_history_undo(&s->hist, NULL);
+        else df_history_redo(&s->hist, NULL);
+        break;
     default: break;
     }
     if (rc == DF_OK && c->drop_stroke && c->req)
@@ -163,6 +171,7 @@ int df_session_commit(df_session *s, df_change *c)
         apply_state(s, c);
         c->rc = apply_history(s, c);
     }
+    if (c->rc != DF_OK && c->hplan.mismatch) df_session_history_repair(s, &c->hplan);
     apply_caches(s, c);
     if (c->rc != DF_OK) {
         if (c->req && !c->answered_by_job) df_req_fail(c->req, c->err);
@@ -171,6 +180,7 @@ int df_session_commit(df_session *s, df_change *c)
     if (srv->commit_hook) srv->commit_hook(srv->commit_hook_arg, s, c);
     for (size_t i = 0; i < c->frames.n; i++) df_session_broadcast(s, c->frames.v[i]);
     if (c->frames.n) srv->stats.versions++;
+    if (c->version) df_session_resync_record(s, c->version, &c->frames); /* resync.h */
     if (strokes && srv->hid_ops && srv->hid_ops->strokes_changed)
         srv->hid_ops->strokes_changed(srv, s);
     if (c->req && !c->answered_by_job) df_req_ack(c->req, s->id, atomic_load(&s->version));

@@ -16,12 +16,14 @@
  *   3. accounting: timings, cache hit/miss, install / drop cached factorizations, LRU eviction;
  *   4. hook:     srv->commit_hook (an observer: a scale-out log entry; the durable store
  *                writes at step 0, where it can still refuse the change);
- *   5. broadcast the version's frames to the subscribers; a change to the session's strokes
+ *   5. broadcast the version's frames to the subscribers and keep them in the session's resync
+ *      ring (session.h df_session_resync_record: by reference); a change to the session's strokes
  *      (begin, update, knob, end, cancel) then tells the HID subsystem (force feedback,
  *      srv->hid_ops->strokes_changed);
  *   6. answer the request (ack with the new version), unless the job answers itself.
  * A change whose compute failed (rc != DF_OK) does only step 3 (what it built is still cached
- * and counted) and answers the error. Loop thread only. */
+ * and counted; and a history plan that found a replay mismatch repairs the history) and
+ * answers the error. Loop thread only. */
 #ifndef DF_SERVER_COMMIT_H
 #define DF_SERVER_COMMIT_H
 
@@ -70,6 +72,11 @@ typedef struct df_change {
     double brush_ms, move_ms;    /* worker time; < 0: unchanged */
     /* 2. history */
     int hist;                    /* DF_HIST_* */
+    df_history_plan hplan;       /* COMMIT / UNDO / REDO planned by the work (history.h; valid
+                                  * set): installed, no replay on the loop thread. Not valid:
+                                  * COMMIT is an XOR step, UNDO / REDO replay here (restore).
+                                  * A failed plan with a replay mismatch is repaired (the
+                                  * unreachable steps dropped) even though the change fails. */
     /* 3. caches */
     int kc_used, kc_hit;         /* Kelvinlet pin LU used / reused without refactoring */
     uint32_t kc_pins;

@@ -1,50 +1,16 @@
-/* history.c — undo/redo stack of committed positions, XOR steps under a byte budget (see
- * history.h). */
+/* history.c — undo/redo stack of committed positions: plans made on a worker, installed on the
+ * loop thread, XOR and RECIPE steps under a byte budget (see history.h; steps, checkpoints and
+ * drops are in history_ckpt.c). */
 #include "server/session/history.h"
 
-#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
-static size_t step_bytes(const df_history_step *s)
-{
-    return (size_t)s->count * (3 * sizeof(uint64_t) + (s->idx ? sizeof(uint32_t) : 0)) +
-           sizeof *s;
-}
+#include "server/session/history_int.h"
+#include "server/session/stroke_recipe.h" /* df_positions_checksum only */
 
-static void step_free(df_history_step *s)
-{
-    free(s->idx);
-    free(s->x);
-    memset(s, 0, sizeof *s);
-}
-
-/* The bit pattern of a double and back (memcpy: no aliasing through other pointer types). */
-static inline uint64_t bits(const double *p)
-{
-    uint64_t u;
-    memcpy(&u, p, sizeof u);
-    return u;
-}
-
-static inline void xor_into(double *p, uint64_t x)
-{
-    uint64_t u = bits(p) ^ x;
-    memcpy(p, &u, sizeof u);
-}
-
-/* XORs step `s` into `state` (applies it forwards or backwards: the same operation). */
-static void step_apply(const df_history_step *s, double *state, size_t n)
-{
-    _Static_assert(sizeof(double) == sizeof(uint64_t), "double is 64 bits");
-    if (!s->idx) {
-        for (size_t i = 0; i < n; i++) xor_into(state + i, s->x[i]);
-        return;
-    }
-    for (uint32_t k = 0; k < s->count; k++)
-        for (int c = 0; c < 3; c++)
-            xor_into(state + 3 * (size_t)s->idx[k] + c, s->x[3 * (size_t)k + c]);
-}
+#define DF_HISTORY_DEFAULT_BUDGET_NS 250000000ull
 
 int df_history_init(df_history *h, const double *pos, size_t n, int max_states, df_error *err)
 {
@@ -53,10 +19,14 @@ int df_history_init(df_history *h, const double *pos, size_t n, int max_states, 
     if (!pos || n == 0 || n % 3 != 0 || n / 3 > UINT32_MAX || max_states < 2)
         return df_error_set(err, DF_EINVAL, "history: bad arguments (n %zu, max %d)", n,
                             max_states);
-    h->steps = calloc((size_t)max_states - 1, sizeof *h->steps);
+    h->steps = calloc((size_t)max_states, sizeof *h->steps);
+    h->ck = calloc((size_t)max_states + 1, sizeof *h->ck);
+    h->links = calloc((size_t)max_states, sizeof *h->links);
     h->state = malloc(n * sizeof *h->state);
-    if (!h->steps || !h->state) {
+    if (!h->steps || !h->ck || !h->links || !h->state) {
         free(h->steps);
+        free(h->ck);
+        free(h->links);
         free(h->state);
         memset(h, 0, sizeof *h);
         return df_error_set(err, DF_ENOMEM, "history: out of memory (%zu doubles)", n);
@@ -66,134 +36,350 @@ int df_history_init(df_history *h, const double *pos, size_t n, int max_states, 
     h->n = n;
     h->bytes = n * sizeof(double);
     h->max_bytes = SIZE_MAX;
+    h->replay_budget_ns = DF_HISTORY_DEFAULT_BUDGET_NS;
     return DF_OK;
+}
+
+void df_history_set_replay(df_history *h, df_history_replay_fn fn, void *ctx,
+                           uint64_t budget_ns)
+{
+    if (!h) return;
+    h->replay = fn;
+    h->replay_ctx = ctx;
+    h->replay_budget_ns = budget_ns;
 }
 
 void df_history_free(df_history *h)
 {
     if (!h) return;
-    for (int i = 0; i < h->count; i++) step_free(&h->steps[i]);
+    for (int i = 0; i < h->count; i++) hi_step_free(&h->steps[i]);
+    hi_ck_clear(h);
     free(h->steps);
+    free(h->ck);
+    free(h->links);
     free(h->state);
     memset(h, 0, sizeof *h);
-}
-
-/* Drops the oldest step (the current state stays: cur >= 1 after a commit). */
-static void drop_oldest(df_history *h)
-{
-    h->bytes -= step_bytes(&h->steps[0]);
-    step_free(&h->steps[0]);
-    memmove(h->steps, h->steps + 1, (size_t)(h->count - 1) * sizeof *h->steps);
-    h->count--;
-    h->cur--;
-    h->dropped++;
-}
-
-/* Drops oldest steps while over a cap; never a step above the current state. */
-static int enforce(df_history *h)
-{
-    int dropped = 0;
-    while (h->cur > 0 && (h->count > h->max_states - 1 || h->bytes > h->max_bytes)) {
-        drop_oldest(h);
-        dropped++;
-    }
-    return dropped;
 }
 
 int df_history_set_max_bytes(df_history *h, size_t max_bytes)
 {
     if (!h || !h->state) return 0;
     h->max_bytes = max_bytes;
-    return enforce(h);
+    int d = hi_enforce(h);
+    if (d) h->gen++;
+    return d;
 }
 
-int df_history_commit(df_history *h, const double *pos, df_error *err)
+void df_history_plan_free(df_history_plan *p)
 {
-    if (!h || !h->state || !pos) return df_error_set(err, DF_EINVAL, "history: NULL");
-    const double *a = h->state, *b = pos;
-    size_t nv = h->n / 3, changed = 0;
-    for (size_t i = 0; i < h->n; i += 3)
-        changed += ((bits(a + i) ^ bits(b + i)) | (bits(a + i + 1) ^ bits(b + i + 1)) |
-                    (bits(a + i + 2) ^ bits(b + i + 2))) != 0;
-    if (changed == 0) return DF_OK; /* no change */
-    df_history_step st = {.count = (uint32_t)changed};
-    int dense = changed * (3 * sizeof(uint64_t) + sizeof(uint32_t)) >= h->n * sizeof(uint64_t);
-    if (dense) st.count = (uint32_t)nv;
-    st.x = malloc(3 * (size_t)st.count * sizeof *st.x);
-    if (!dense) st.idx = malloc((size_t)st.count * sizeof *st.idx);
-    if (!st.x || (!dense && !st.idx)) {
-        step_free(&st);
-        return df_error_set(err, DF_ENOMEM, "history: out of memory (%zu changed vertices)",
-                            changed);
+    if (!p) return;
+    hi_step_free(&p->step);
+    free(p->anchor);
+    hi_link_free(&p->link);
+    memset(p, 0, sizeof *p);
+}
+
+static uint64_t now_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (uint64_t)t.tv_sec * 1000000000ull + (uint64_t)t.tv_nsec;
+}
+
+/* Replay cost of the RECIPE steps [from, to). */
+static uint64_t cost(const df_history *h, int from, int to)
+{
+    uint64_t c = 0;
+    for (int k = from; k < to; k++)
+        if (h->steps[k].kind == DF_HISTORY_RECIPE) c += h->steps[k].cost_ns;
+    return c;
+}
+
+static double *copy_of(const double *p, size_t n)
+{
+    double *c = malloc(n * sizeof *c);
+    if (c) memcpy(c, p, n * sizeof *c);
+    return c;
+}
+
+/* Plans a checkpoint at `target` (the state after step `last`, a RECIPE step of cost `extra`
+ * not held yet, or 0 when held) when the replay cost since the newest checkpoint is over
+ * budget: plan->anchor = a copy of target, plan->link from it to the current anchor. */
+static int plan_checkpoint(const df_history *h, int nck, int last, uint64_t extra,
+                           const double *target, df_history_plan *p, df_error *err)
+{
+    if (nck < 1 || h->ck[nck - 1] > last) return DF_OK;
+    if (cost(h, h->ck[nck - 1], last) + extra <= h->replay_budget_ns) return DF_OK;
+    if (!(p->anchor = copy_of(target, h->n)))
+        return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+    p->new_ck = 1;
+    return hi_link_make(target, h->anchor, h->n, &p->link, err);
+}
+
+/* The RECIPE step turning h->state into pos by `blob`, when a replay reproduces pos bitwise
+ * (else plan->fallback: 1 the replay failed, 2 it differed). */
+static int plan_recipe(const df_history *h, const double *pos, const uint8_t *blob, size_t len,
+                       df_history_plan *p, df_error *err)
+{
+    double *tmp = malloc(h->n * sizeof *tmp);
+    if (!tmp) return df_error_set(err, DF_ENOMEM, "history: out of memory (replay)");
+    df_error e;
+    uint64_t (*tick)(void) = h->clock_ns ? h->clock_ns : now_ns;
+    uint64_t t0 = tick();
+    int rc = h->replay(h->replay_ctx, blob, len, h->state, tmp, &e);
+    uint64_t t = tick() - t0;
+    p->replays++;
+    int same = rc == DF_OK && memcmp(tmp, pos, h->n * sizeof *tmp) == 0;
+    free(tmp);
+    if (!same) {
+        p->fallback = rc == DF_OK ? 2 : 1;
+        return DF_OK;
     }
-    if (dense) {
-        for (size_t i = 0; i < h->n; i++) st.x[i] = bits(a + i) ^ bits(b + i);
-    } else {
-        uint32_t k = 0;
-        for (size_t i = 0; i < nv; i++) {
-            uint64_t x0 = bits(a + 3 * i) ^ bits(b + 3 * i),
-                     x1 = bits(a + 3 * i + 1) ^ bits(b + 3 * i + 1),
-                     x2 = bits(a + 3 * i + 2) ^ bits(b + 3 * i + 2);
-            if (!(x0 | x1 | x2)) continue;
-            st.idx[k] = (uint32_t)i;
-            st.x[3 * (size_t)k] = x0;
-            st.x[3 * (size_t)k + 1] = x1;
-            st.x[3 * (size_t)k + 2] = x2;
-            k++;
-        }
-    }
-    for (int i = h->cur; i < h->count; i++) {
-        h->bytes -= step_bytes(&h->steps[i]);
-        step_free(&h->steps[i]);
-    }
-    h->count = h->cur;
-    if (h->count == h->max_states - 1) drop_oldest(h); /* the array has max_states - 1 slots */
-    h->steps[h->count++] = st;
-    h->cur = h->count;
-    h->bytes += step_bytes(&st);
-    memcpy(h->state, pos, h->n * sizeof *pos);
-    enforce(h);
+    if (!(p->step.blob = malloc(len ? len : 1)))
+        return df_error_set(err, DF_ENOMEM, "history: out of memory (recipe)");
+    memcpy(p->step.blob, blob, len);
+    p->step.kind = DF_HISTORY_RECIPE;
+    p->step.len = len;
+    p->step.sum = df_positions_checksum(pos, h->n);
+    p->step.cost_ns = t ? t : 1;
     return DF_OK;
 }
 
-int df_history_peek(const df_history *h, int dir, double *out, df_error *err)
+int df_history_plan_commit(const df_history *h, const double *pos, const uint8_t *blob,
+                           size_t len, df_history_plan *p, df_error *err)
 {
+    if (!p) return df_error_set(err, DF_EINVAL, "history: NULL plan");
+    memset(p, 0, sizeof *p);
+    if (!h || !h->state || !pos || (len && !blob))
+        return df_error_set(err, DF_EINVAL, "history: bad arguments");
+    p->gen = h->gen;
+    if (memcmp(h->state, pos, h->n * sizeof *pos) == 0) {
+        p->nochange = p->valid = 1;
+        return DF_OK;
+    }
+    int rc = DF_OK;
+    if (blob && h->replay) rc = plan_recipe(h, pos, blob, len, p, err);
+    else p->fallback = blob ? 1 : 0;
+    if (rc == DF_OK && p->step.kind != DF_HISTORY_RECIPE)
+        rc = hi_step_xor(h->state, pos, h->n, &p->step, err);
+    if (rc == DF_OK && p->step.kind == DF_HISTORY_RECIPE) {
+        /* the checkpoints go with the redo tail when it holds every RECIPE step (hi_truncate:
+         * then only a lone one can be above the current state) */
+        int nck = 0;
+        for (int k = 0; k < h->cur && !nck; k++)
+            if (h->steps[k].kind == DF_HISTORY_RECIPE) nck = h->nck;
+        if (nck == 0) { /* the first checkpoint: the state the recipe starts from */
+            if (!(p->anchor = copy_of(h->state, h->n)))
+                rc = df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+        } else {
+            rc = plan_checkpoint(h, nck, h->cur, p->step.cost_ns, pos, p, err);
+        }
+    }
+    if (rc != DF_OK) {
+        df_history_plan_free(p);
+        return rc;
+    }
+    p->valid = 1;
+    return DF_OK;
+}
+
+/* Undo to j = cur - 1 into out (see history.h: XOR from the current state, else replay from
+ * the newest checkpoint <= j, moving the anchor down when it is above j). */
+static int plan_undo(const df_history *h, double *out, double *tmp, df_history_plan *p,
+                     df_error *err)
+{
+    int j = h->cur - 1, i = -1, rc = DF_OK;
+    for (int c = 0; c < h->nck; c++)
+        if (h->ck[c] <= j) i = c;
+    p->keep_ck = h->nck;
+    if (h->nck >= 2 && h->ck[h->nck - 1] > j) { /* the anchor moves to ck[max(i, 0)] */
+        p->keep_ck = (i < 0 ? 0 : i) + 1;
+        if (!(p->anchor = malloc(h->n * sizeof *p->anchor)))
+            return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+        if ((rc = hi_ck_state(h, p->keep_ck - 1, p->anchor, err)) != DF_OK) return rc;
+    }
+    if (h->steps[j].kind == DF_HISTORY_XOR) {
+        memcpy(out, h->state, h->n * sizeof *out);
+        return hi_forward(h, j, out, tmp, &p->replays, &p->mismatch, err); /* XOR: both ways */
+    }
+    /* a RECIPE step: ck[0] <= j (history.h), so i >= 0 */
+    memcpy(out, p->anchor ? p->anchor : h->anchor, h->n * sizeof *out);
+    for (int k = h->ck[i]; rc == DF_OK && k < j; k++) {
+        rc = hi_forward(h, k, out, tmp, &p->replays, &p->mismatch, err);
+        if (p->mismatch) p->bad_step = k;
+    }
+    return rc;
+}
+
+int df_history_plan_move(const df_history *h, int dir, double *out, df_history_plan *p,
+                         df_error *err)
+{
+    if (!p) return df_error_set(err, DF_EINVAL, "history: NULL plan");
+    memset(p, 0, sizeof *p);
     if (!h || !h->state || !out || (dir != -1 && dir != 1))
         return df_error_set(err, DF_EINVAL, "history: bad arguments");
     if (dir < 0 ? h->cur == 0 : h->cur >= h->count)
         return df_error_set(err, DF_ESTATE, dir < 0 ? "nothing to undo" : "nothing to redo");
-    memcpy(out, h->state, h->n * sizeof *out);
-    step_apply(&h->steps[dir < 0 ? h->cur - 1 : h->cur], out, h->n);
+    p->dir = dir;
+    p->gen = h->gen;
+    double *tmp = malloc(h->n * sizeof *tmp);
+    if (!tmp) return df_error_set(err, DF_ENOMEM, "history: out of memory (undo)");
+    int rc;
+    if (dir < 0) {
+        rc = plan_undo(h, out, tmp, p, err);
+    } else {
+        memcpy(out, h->state, h->n * sizeof *out);
+        rc = hi_forward(h, h->cur, out, tmp, &p->replays, &p->mismatch, err);
+        if (p->mismatch) p->bad_step = h->cur;
+        if (rc == DF_OK && h->steps[h->cur].kind == DF_HISTORY_RECIPE)
+            rc = plan_checkpoint(h, h->nck, h->cur + 1, 0, out, p, err);
+    }
+    free(tmp);
+    if (rc != DF_OK) {
+        int mismatch = p->mismatch, bad = p->bad_step;
+        uint64_t replays = p->replays;
+        df_history_plan_free(p);
+        p->dir = dir; /* what df_history_repair needs */
+        p->gen = h->gen;
+        p->mismatch = mismatch;
+        p->bad_step = bad;
+        p->replays = replays;
+        return rc;
+    }
+    p->valid = 1;
     return DF_OK;
 }
 
-const double *df_history_undo(df_history *h, df_error *err)
+/* Appends the plan's new checkpoint (at h->cur) to h. */
+static void push_checkpoint(df_history *h, df_history_plan *p)
 {
-    if (!h || !h->state) {
-        df_error_set(err, DF_EINVAL, "history: NULL");
-        return NULL;
-    }
-    if (h->cur == 0) {
-        df_error_set(err, DF_ESTATE, "nothing to undo");
-        return NULL;
-    }
-    step_apply(&h->steps[--h->cur], h->state, h->n);
-    return h->state;
+    if (!p->new_ck) return;
+    h->links[h->nck - 1] = p->link;
+    memset(&p->link, 0, sizeof p->link);
+    h->ck[h->nck++] = h->cur;
+    free(h->anchor);
+    h->anchor = p->anchor;
+    p->anchor = NULL;
 }
 
-const double *df_history_redo(df_history *h, df_error *err)
+int df_history_install(df_history *h, df_history_plan *p, const double *state, df_error *err)
+{
+    if (!h || !h->state || !p || !state)
+        return df_error_set(err, DF_EINVAL, "history: bad arguments");
+    if (!p->valid || p->gen != h->gen)
+        return df_error_set(err, DF_ESTATE, "history: the plan is %s",
+                            p->valid ? "stale (the history changed since)" : "not valid");
+    h->replays += p->replays;
+    if (p->nochange) {
+        df_history_plan_free(p);
+        return DF_OK;
+    }
+    h->mismatches += p->fallback == 2;
+    if (p->dir == 0) {
+        hi_truncate(h, h->cur);
+        if (p->step.kind == DF_HISTORY_RECIPE && h->nck == 0) { /* the first checkpoint */
+            h->anchor = p->anchor;
+            p->anchor = NULL;
+            h->ck[0] = h->cur;
+            h->nck = 1;
+        }
+        h->steps[h->count++] = p->step;
+        memset(&p->step, 0, sizeof p->step);
+        h->cur = h->count;
+        push_checkpoint(h, p);
+    } else if (p->dir < 0) {
+        if (p->anchor) {
+            for (int i = p->keep_ck - 1; i + 1 < h->nck; i++) hi_link_free(&h->links[i]);
+            h->nck = p->keep_ck;
+            free(h->anchor);
+            h->anchor = p->anchor;
+            p->anchor = NULL;
+        }
+        h->cur--;
+    } else {
+        h->cur++;
+        push_checkpoint(h, p);
+    }
+    memcpy(h->state, state, h->n * sizeof *state);
+    df_history_plan_free(p);
+    h->gen++;
+    hi_enforce(h);
+    return DF_OK;
+}
+
+int df_history_repair(df_history *h, const df_history_plan *p)
+{
+    if (!h || !h->state || !p || !p->mismatch || p->gen != h->gen) return 0;
+    uint64_t d0 = h->dropped;
+    h->mismatches++;
+    if (p->dir > 0) {
+        h->dropped += (uint64_t)(h->count - h->cur);
+        hi_truncate(h, h->cur);
+    } else if (p->dir < 0) {
+        int upto = h->cur;
+        for (int c = h->nck - 1; c >= 0; c--)
+            if (h->ck[c] > p->bad_step && h->ck[c] <= h->cur) upto = h->ck[c];
+        hi_drop_prefix(h, upto);
+    }
+    h->gen++;
+    hi_account(h);
+    return (int)(h->dropped - d0);
+}
+
+static int commit_blob(df_history *h, const double *pos, const uint8_t *blob, size_t len,
+                       df_error *err)
+{
+    df_history_plan p;
+    int rc = df_history_plan_commit(h, pos, blob, len, &p, err);
+    if (rc == DF_OK) rc = df_history_install(h, &p, pos, err);
+    df_history_plan_free(&p);
+    return rc;
+}
+
+int df_history_commit(df_history *h, const double *pos, df_error *err)
+{
+    if (!h || !h->state) return df_error_set(err, DF_EINVAL, "history: NULL");
+    return commit_blob(h, pos, NULL, 0, err);
+}
+
+int df_history_commit_recipe(df_history *h, const double *pos, const uint8_t *blob, size_t len,
+                             df_error *err)
+{
+    if (!h || !h->state) return df_error_set(err, DF_EINVAL, "history: NULL");
+    return commit_blob(h, pos, blob, len, err);
+}
+
+int df_history_peek(const df_history *h, int dir, double *out, df_error *err)
+{
+    df_history_plan p;
+    int rc = df_history_plan_move(h, dir, out, &p, err);
+    df_history_plan_free(&p);
+    return rc;
+}
+
+static const double *move(df_history *h, int dir, df_error *err)
 {
     if (!h || !h->state) {
         df_error_set(err, DF_EINVAL, "history: NULL");
         return NULL;
     }
-    if (h->cur >= h->count) {
-        df_error_set(err, DF_ESTATE, "nothing to redo");
+    double *out = malloc(h->n * sizeof *out);
+    if (!out) {
+        df_error_set(err, DF_ENOMEM, "history: out of memory");
         return NULL;
     }
-    step_apply(&h->steps[h->cur++], h->state, h->n);
-    return h->state;
+    df_history_plan p;
+    int rc = df_history_plan_move(h, dir, out, &p, err);
+    if (rc == DF_OK) rc = df_history_install(h, &p, out, err);
+    else df_history_repair(h, &p);
+    df_history_plan_free(&p);
+    free(out);
+    return rc == DF_OK ? h->state : NULL;
 }
+
+const double *df_history_undo(df_history *h, df_error *err) { return move(h, -1, err); }
+
+const double *df_history_redo(df_history *h, df_error *err) { return move(h, 1, err); }
 
 int df_history_can_undo(const df_history *h) { return h && h->state ? h->cur : 0; }
 
@@ -203,3 +389,15 @@ int df_history_can_redo(const df_history *h)
 }
 
 size_t df_history_bytes(const df_history *h) { return h ? h->bytes : 0; }
+
+size_t df_history_undo_bytes(const df_history *h)
+{
+    return h && h->state ? h->bytes - h->n * sizeof(double) : 0;
+}
+
+int df_history_steps_of(const df_history *h, int kind)
+{
+    int c = 0;
+    for (int i = 0; h && i < h->count; i++) c += h->steps[i].kind == kind;
+    return c;
+}

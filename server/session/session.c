@@ -9,8 +9,10 @@
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/session/meshload.h"
+#include "server/session/stroke_recipe.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
+#include "server/session/stream.h"
 
 uint64_t df_session_estimate_bytes(const df_mesh *mesh)
 {
@@ -18,6 +20,27 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh)
     return (uint64_t)(mesh->nv > 0 ? mesh->nv : 0) * DF_SESSION_BYTES_PER_VERTEX +
            (uint64_t)(mesh->ne > 0 ? mesh->ne : 0) * (uint64_t)es * sizeof(int32_t) +
            (uint64_t)(mesh->nf > 0 ? mesh->nf : 0) * 3 * sizeof(int32_t) + sizeof(df_session);
+}
+
+/* The history's replay of a RECIPE step (history.h): a stroke recipe (stroke_recipe.h)
+ * recomputed on this session's mesh, with the server's thread count. Any thread: reads only
+ * fields fixed at creation. */
+static int replay_recipe(void *ctx, const uint8_t *blob, size_t len, const double *from,
+                         double *to, df_error *err)
+{
+    const df_session *s = ctx;
+    df_stroke_recipe r;
+    int rc = df_stroke_recipe_decode(blob, len, &r, err);
+    if (rc != DF_OK) return rc;
+    rc = df_stroke_recipe_replay(&r, from, s->nv, s->mesh.planar, s->srv->cfg.threads, to, err);
+    df_stroke_recipe_free(&r);
+    return rc;
+}
+
+static void history_set_replay(df_session *s)
+{
+    df_history_set_replay(&s->hist, replay_recipe, s,
+                          (uint64_t)s->srv->cfg.history_replay_ms * 1000000u);
 }
 
 /* Recharges the history's bytes after a change (it bounded itself against df_mem_room). */
@@ -62,6 +85,25 @@ static uint64_t reclaim_history(df_server *srv, uint64_t want)
     return freed;
 }
 
+/* Drops the oldest versions of resync rings, largest ring first, until `want` bytes are freed
+ * or no ring is left; returns the bytes freed. Rings give way before undo steps: a version
+ * dropped from a ring costs a resyncing client a snapshot at worst, a dropped step is lost. */
+static uint64_t reclaim_resync(df_server *srv, uint64_t want)
+{
+    uint64_t freed = 0;
+    while (freed < want) {
+        df_session *best = NULL;
+        for (df_session *s = srv->sessions; s; s = s->next)
+            if (s->resync.count && (!best || s->resync.bytes > best->resync.bytes)) best = s;
+        if (!best) break;
+        uint64_t left = want - freed, have = best->resync.bytes;
+        freed += df_resync_trim(&best->resync, have > left ? have - left : 0);
+        df_mem_adjust(df_server_mem(srv), DF_MEM_RESYNC, best->resync_charged, best->resync.bytes);
+        best->resync_charged = best->resync.bytes;
+    }
+    return freed;
+}
+
 int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
                           df_error *err)
 {
@@ -69,6 +111,7 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
     if ((unsigned)kind < DF_MEM_KINDS && mb->used[kind] <= mb->kind_max[kind] &&
         bytes <= mb->kind_max[kind] - mb->used[kind]) {
         uint64_t used = df_mem_used(mb), room = used < mb->max ? mb->max - used : 0;
+        if (bytes > room) room += reclaim_resync(srv, bytes - room);
         if (bytes > room) reclaim_history(srv, bytes - room);
     }
     return df_mem_charge(mb, kind, bytes, what, err);
@@ -76,6 +119,16 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
 
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err)
+{
+    return df_session_create_as(srv, mesh, name, "", out, err);
+}
+
+_Static_assert((int)DF_SESSION_ACCESS_OPEN == (int)DF_ACCESS_MODE_OPEN &&
+               (int)DF_SESSION_ACCESS_KEY == (int)DF_ACCESS_MODE_KEY &&
+               (int)DF_SESSION_ACCESS_OWNER == (int)DF_ACCESS_MODE_OWNER, "config modes are access modes");
+
+int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const char *owner,
+                         df_session **out, df_error *err)
 {
     int max = srv->cfg.max_sessions < (int)DF_MAX_SESSIONS ? srv->cfg.max_sessions
                                                            : (int)DF_MAX_SESSIONS;
@@ -124,6 +177,7 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
                             mesh->nv);
     }
     s->srv = srv;
+    history_set_replay(s);
     s->mem_bytes = est;
     s->hist_charged = state;
     history_recharge(s);
@@ -138,9 +192,16 @@ int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_sessio
     s->id = ++srv->next_session_id;
     if (name && name[0]) snprintf(s->name, sizeof s->name, "%s", name);
     else snprintf(s->name, sizeof s->name, "session-%llu", (unsigned long long)s->id);
+    snprintf(s->owner, sizeof s->owner, "%s", owner ? owner : "");
+    df_membership_init(&s->acc, srv->cfg.access.session_access, srv->cfg.access.session_observers);
     s->next = srv->sessions;
     srv->sessions = s;
     srv->n_sessions++;
+    if (s->acc.mode == DF_ACCESS_MODE_KEY && df_membership_new_key(&s->acc, NULL, err) != DF_OK) {
+        int rc = err ? err->code : DF_EINTERNAL;
+        df_session_destroy(s);
+        return rc;
+    }
     if (srv->store_ops && srv->store_ops->session_created(srv, s, err) != DF_OK) {
         int rc = err ? err->code : DF_EIO;
         df_session_destroy(s); /* not durable: not created */
@@ -206,8 +267,11 @@ void df_session_destroy(df_session *s)
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
     df_history_free(&s->hist);
+    df_resync_free(&s->resync);
+    df_membership_free(&s->acc);
     df_membudget *mb = df_server_mem(srv);
     df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);
+    df_mem_release(mb, DF_MEM_RESYNC, s->resync_charged);
     df_mem_release(mb, DF_MEM_SESSIONS, s->mem_bytes);
     df_mem_release(mb, DF_MEM_SHM, s->shm_charged);
     df_meshload_free(&s->mesh);
@@ -347,12 +411,70 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
 
 int df_session_history_commit(df_session *s, df_error *err)
 {
+    return df_session_history_commit_recipe(s, NULL, 0, err);
+}
+
+/* Undo steps come before resync rings when the memory budget is short: makes room for a step
+ * (at most one full state) out of the rings first. */
+static void history_room(df_session *s)
+{
+    uint64_t per = (uint64_t)s->srv->cfg.history_max_mb << 20;
+    uint64_t room = df_mem_room(df_server_mem(s->srv), DF_MEM_HISTORY) + s->hist_charged;
+    uint64_t step = 3 * (uint64_t)s->nv * sizeof(double);
+    uint64_t free_room = room - s->hist_charged; /* room counts what the history holds */
+    if (room < per && free_room < step) {
+        uint64_t want = step - free_room;
+        reclaim_resync(s->srv, per - room < want ? per - room : want);
+    }
+}
+
+int df_session_history_commit_recipe(df_session *s, const uint8_t *blob, size_t len,
+                                     df_error *err)
+{
+    history_room(s);
     uint64_t d0 = s->hist.dropped;
     df_history_set_max_bytes(&s->hist, history_budget(s));
-    int rc = df_history_commit(&s->hist, s->cur, err);
+    int rc = df_history_commit_recipe(&s->hist, s->cur, blob, len, err);
     s->srv->history_dropped += s->hist.dropped - d0;
     history_recharge(s);
     return rc;
+}
+
+int df_session_history_install(df_session *s, df_history_plan *plan, df_error *err)
+{
+    history_room(s);
+    uint64_t d0 = s->hist.dropped;
+    int rc = df_history_install(&s->hist, plan, s->cur, err);
+    if (rc == DF_OK) df_history_set_max_bytes(&s->hist, history_budget(s));
+    s->srv->history_dropped += s->hist.dropped - d0;
+    history_recharge(s);
+    return rc;
+}
+
+void df_session_history_repair(df_session *s, const df_history_plan *plan)
+{
+    uint64_t d0 = s->hist.dropped;
+    int n = df_history_repair(&s->hist, plan);
+    if (!n && !plan->mismatch) return;
+    df_log(DF_LOG_ERROR, "session %llu: undo history: a recorded stroke no longer replays to "
+           "the state it recorded; %d unreachable step(s) dropped",
+           (unsigned long long)s->id, n);
+    s->srv->history_dropped += s->hist.dropped - d0;
+    history_recharge(s);
+}
+
+void df_session_resync_record(df_session *s, uint64_t version, const df_frames *frames)
+{
+    df_membudget *mb = df_server_mem(s->srv);
+    uint64_t per = (uint64_t)s->srv->cfg.resync_ring_mb << 20;
+    uint64_t room = df_mem_room(mb, DF_MEM_RESYNC) + s->resync_charged;
+    df_error err;
+    if (df_resync_push(&s->resync, version, frames->v, frames->n, per < room ? per : room,
+                       &err) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: %s (a resync from before gets a snapshot)",
+               (unsigned long long)s->id, err.msg);
+    df_mem_adjust(mb, DF_MEM_RESYNC, s->resync_charged, s->resync.bytes);
+    s->resync_charged = s->resync.bytes;
 }
 
 int df_session_history_reset(df_session *s, df_error *err)
@@ -361,8 +483,11 @@ int df_session_history_reset(df_session *s, df_error *err)
     int rc = df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, err);
     if (rc != DF_OK) return rc;
     h.dropped = s->hist.dropped; /* the session's count survives a reset */
+    h.replays = s->hist.replays; /* and its replay counters */
+    h.mismatches = s->hist.mismatches;
     df_history_free(&s->hist);
     s->hist = h;
+    history_set_replay(s);
     df_history_set_max_bytes(&s->hist, history_budget(s));
     history_recharge(s);
     return DF_OK;

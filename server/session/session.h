@@ -28,6 +28,8 @@
 #include "core/mesh/mesh.h"
 #include "server/session/brush_state.h"
 #include "server/session/history.h"
+#include "server/session/resync.h"
+#include "server/session/membership.h"
 #include "server/server.h"
 
 #define DF_SESSION_NAME_MAX 256
@@ -125,7 +127,11 @@ typedef struct df_session {
     uint64_t mem_bytes;          /* charged to srv->mem: DF_MEM_SESSIONS (the estimate) */
     uint64_t hist_charged;       /* ... DF_MEM_HISTORY (df_history_bytes at the last change) */
     uint64_t shm_charged;        /* ... DF_MEM_SHM (the ring file) */
-    char owner[48];              /* principal of the creator (df_conn.principal), access.h */
+    df_resync resync;            /* frames of the versions last broadcast (resync.h), loop thread */
+    uint64_t resync_charged;     /* ... DF_MEM_RESYNC (resync.bytes at the last change) */
+    char owner[DF_PRINCIPAL_MAX];/* principal of the creator (df_conn.principal), access.h;
+                                  * "" for a session of an older store (admins own it) */
+    df_membership acc;           /* access mode, observers, join key hash, members */
     uint64_t upload_bytes;       /* bytes of its uploaded file (quota_upload_mb), 0 for paths */
     int closed;                  /* close requested: no new jobs; freed when the FIFO drains */
     /* The session brush (brush_state.h), loop thread only: workers never read it. */
@@ -148,6 +154,15 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh);
  * DF_ELIMIT when full; the session is not created). On error the mesh is freed. */
 int df_session_create(df_server *srv, df_mesh *mesh, const char *name, df_session **out,
                       df_error *err);
+
+/* df_session_create for principal `owner` (may be ""; longer than DF_PRINCIPAL_MAX - 1 is
+ * cut): the session's owner and its access policy (membership.h: mode session_access and
+ * observers session_observers of the config; in key mode a fresh random join key that nobody
+ * learns until the owner rotates it) are set before the store writes the session, so they
+ * are durable with it. Errors: as df_session_create, and DF_EINTERNAL when no key could be
+ * made. */
+int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const char *owner,
+                         df_session **out, df_error *err);
 
 /* Finds a live (not closed) session by id / by name; NULL when absent. */
 df_session *df_session_find(df_server *srv, uint64_t id);
@@ -183,10 +198,25 @@ void df_stroke_free(df_stroke *st);
 /* Unlinks and frees the stroke of `conn_id` (no-op when none). */
 void df_session_drop_stroke(df_session *s, uint64_t conn_id);
 
-/* Commits s->cur as a new undo step (loop thread) within the history budget: the smaller of
+/* Commits s->cur as a new (XOR) undo step (loop thread) within the history budget: the smaller of
  * history_max_mb and what the memory budget has left; the oldest steps are dropped to fit
  * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
 int df_session_history_commit(df_session *s, df_error *err);
+
+/* As df_session_history_commit, with the recipe `blob` (len bytes, stroke_recipe.h) that
+ * should turn the history's current state into s->cur: replayed on the calling thread, a
+ * RECIPE step when it reproduces s->cur bitwise, else an XOR step (history.h). For restore. */
+int df_session_history_commit_recipe(df_session *s, const uint8_t *blob, size_t len,
+                                     df_error *err);
+
+/* Installs a history plan a job's work made (df_history_plan_commit / _move, target s->cur,
+ * already swapped in), then bounds the history to its budget as df_session_history_commit.
+ * Loop thread. Errors: df_history_install's DF_ESTATE (a stale plan: history unchanged). */
+int df_session_history_install(df_session *s, df_history_plan *plan, df_error *err);
+
+/* After a plan that failed with a replay mismatch: drops the unreachable steps
+ * (df_history_repair), logs it and recharges. No-op for other plans. Loop thread. */
+void df_session_history_repair(df_session *s, const df_history_plan *plan);
 
 /* Charges `bytes` of `kind` to the memory budget (df_mem_charge). When only the total
  * (memory_max_mb) is short, the undo history of idle sessions (no running job) gives way first:
@@ -194,6 +224,14 @@ int df_session_history_commit(df_session *s, df_error *err);
  * step is left. Errors: df_mem_charge's DF_ELIMIT (nothing charged). Loop thread. */
 int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, const char *what,
                           df_error *err);
+
+/* Records the frames of version `version` (just broadcast) in the session's resync ring
+ * (resync.h) within its budget: the smaller of resync_ring_mb and what the memory budget has
+ * left (counting what the ring holds); the oldest versions are dropped to fit, and
+ * resync_ring_mb 0 keeps nothing. The ring's bytes are charged as DF_MEM_RESYNC. Never fails:
+ * out of memory empties the ring (a later resync from before gets a snapshot). Loop thread. */
+struct df_frames;
+void df_session_resync_record(df_session *s, uint64_t version, const struct df_frames *frames);
 
 /* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
  * Errors: DF_ENOMEM (history unchanged). */

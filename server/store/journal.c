@@ -81,6 +81,34 @@ static int put_blob(df_store *st, uint64_t id, const char *name, const void *p, 
                what, err);
 }
 
+/* The session's access row (store.h) holding owner s->owner and policy `acc`. */
+static int write_access(df_store *st, const df_session *s, const df_membership *acc,
+                        df_error *err)
+{
+    char *members = NULL;
+    int rc = df_membership_members_join(acc, &members, err);
+    if (rc != DF_OK) return rc;
+    const void *p[6] = {NULL, s->owner, NULL, NULL, acc->key_hash, members};
+    int64_t v[6] = {(int64_t)s->id, 0, acc->mode, acc->observers, DF_JOIN_HASH_BYTES, 0};
+    char types[] = "itiibt";
+    if (!acc->has_key) types[4] = 'n';
+    rc = run(st, "INSERT OR REPLACE INTO access(session, owner, mode, observers, key_hash,"
+             " members) VALUES(?,?,?,?,?,?)", types, p, v, "saving the session's access", err);
+    free(members);
+    return rc;
+}
+
+static int access_saved(df_server *srv, const df_session *s, const df_membership *next,
+                        df_error *err)
+{
+    df_store *st = srv->store;
+    int rc = begin(st, err);
+    if (rc != DF_OK) return rc;
+    rc = finish(st, write_access(st, s, next, err), err);
+    if (rc != DF_OK) srv->stats.store_errors++;
+    return rc;
+}
+
 static int session_created(df_server *srv, const df_session *s, df_error *err)
 {
     df_store *st = srv->store;
@@ -108,6 +136,7 @@ static int session_created(df_server *srv, const df_session *s, df_error *err)
         rc = run(st, "UPDATE meta SET value = max(value, ?) WHERE key = 'next_session_id'", "i",
                  NULL, id, "saving the session id", err);
     }
+    if (rc == DF_OK) rc = write_access(st, s, &s->acc, err);
     rc = finish(st, rc, err);
     if (rc != DF_OK) srv->stats.store_errors++;
     return rc;
@@ -124,6 +153,9 @@ static int session_closing(df_server *srv, const df_session *s, df_error *err)
     if (rc == DF_OK)
         rc = run(st, "DELETE FROM blobs WHERE session = ?", "i", NULL, id,
                  "deleting the session's mesh", err);
+    if (rc == DF_OK)
+        rc = run(st, "DELETE FROM access WHERE session = ?", "i", NULL, id,
+                 "deleting the session's access", err);
     if (rc == DF_OK)
         rc = run(st, "DELETE FROM sessions WHERE id = ?", "i", NULL, id, "deleting the session",
                  err);
@@ -371,4 +403,5 @@ static int brush(df_server *srv, const df_session *s, const df_brush_state *next
 const df_store_ops df_store_journal_ops = {.session_created = session_created,
                                            .session_closing = session_closing,
                                            .change = change,
-                                           .brush = brush};
+                                           .brush = brush,
+                                           .access = access_saved};

@@ -13,7 +13,10 @@
  *                    version and log counters and the blob 'handles', in one transaction (the
  *                    session row holds no large value: SQLite rewrites a whole row on UPDATE);
  *   brush            df_brush_state_apply, before the state changes: a change-log row (kind
- *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush.
+ *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush;
+ *   access           SESSION_ACCESS / JOIN, before the policy changes: the session's access
+ *                    row (owner, mode, observers, join key hash, members; also written by
+ *                    session_created and deleted by session_closing).
  * A change with only an undo-history step (a stroke's end, a move's final commit) is a row
  * without delta: its DF_JOURNAL_HIST lets the restore rebuild the undo/redo history.
  * Rest shape: flag DF_JOURNAL_REST_FROM_CUR (the rest shape becomes the positions after this

@@ -56,6 +56,31 @@ static int blob_exact(df_store *st, uint64_t id, const char *name, size_t want, 
     return rc;
 }
 
+/* The access columns 11..15 of restore_all's query (NULL: no access row, a session of a
+ * schema 1 store: the configured mode, no owner) into s. */
+static int restore_access(df_server *srv, df_session *s, sqlite3_stmt *q, df_error *err)
+{
+    if (sqlite3_column_type(q, 11) == SQLITE_NULL) return DF_OK; /* as df_session_create */
+    snprintf(s->owner, sizeof s->owner, "%s", (const char *)sqlite3_column_text(q, 11));
+    int mode = sqlite3_column_int(q, 12), obs = sqlite3_column_int(q, 13);
+    if (mode < DF_ACCESS_MODE_OPEN || mode > DF_ACCESS_MODE_OWNER || obs < 0 || obs > 1)
+        return df_error_set(err, DF_EFORMAT, "access row: mode %d observers %d", mode, obs);
+    df_membership_free(&s->acc);
+    df_membership_init(&s->acc, mode, obs);
+    if (sqlite3_column_type(q, 14) != SQLITE_NULL) {
+        if (sqlite3_column_bytes(q, 14) != DF_JOIN_HASH_BYTES)
+            return df_error_set(err, DF_EFORMAT, "access row: join key hash of %d bytes",
+                                sqlite3_column_bytes(q, 14));
+        memcpy(s->acc.key_hash, sqlite3_column_blob(q, 14), DF_JOIN_HASH_BYTES);
+        s->acc.has_key = 1;
+    }
+    const char *members = (const char *)sqlite3_column_text(q, 15);
+    (void)srv;
+    return members ? df_membership_members_parse(&s->acc, members,
+                                                 (size_t)sqlite3_column_bytes(q, 15), err)
+                   : DF_OK;
+}
+
 /* One session row (the columns of restore_all's query) restored into srv. */
 static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *err)
 {
@@ -112,6 +137,7 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         if (rc == DF_OK && snap) memcpy(k ? s->rest : s->cur, snap, pb);
         free(snap);
     }
+    if (rc == DF_OK) rc = restore_access(srv, s, q, &e);
     if (rc == DF_OK) rc = df_session_history_reset(s, &e); /* undo starts at the snapshot */
     df_replay_result rr;
     memset(&rr, 0, sizeof rr);
@@ -188,8 +214,9 @@ static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
     if (sqlite3_step(q) == SQLITE_ROW) next = (uint64_t)sqlite3_column_int64(q, 0);
     sqlite3_finalize(q);
     if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, version, brush,"
-                           " brush_seq, snap_version FROM sessions"
-                           " ORDER BY id",
+                           " brush_seq, snap_version, a.owner, a.mode, a.observers, a.key_hash,"
+                           " a.members FROM sessions LEFT JOIN access a ON a.session ="
+                           " sessions.id ORDER BY id",
                            -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the sessions", err);
     int rc = DF_OK, step;
@@ -223,9 +250,6 @@ int df_store_start(df_server *srv, df_error *err)
     int rc = df_store_open(path, srv->cfg.durability, srv->cfg.store_max_mb, def, &st, &checked,
                            err);
     if (rc != DF_OK) return rc;
-    if (df_store_migrated_from(st))
-        df_log(DF_LOG_INFO, "store %s: schema version %d migrated to %d", path,
-               df_store_migrated_from(st), DF_STORE_SCHEMA);
     int count = 0;
     srv->store = st; /* store_ops stay NULL until restored (only a stroke left open writes) */
     if ((rc = restore_all(srv, st, &count, err)) != DF_OK) {

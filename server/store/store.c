@@ -10,6 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "server/log.h"
+
 struct df_store {
     sqlite3 *db;
     char *path;
@@ -18,6 +20,12 @@ struct df_store {
     uint64_t snapshot_replay_ns;
     int migrated_from;
 };
+
+/* Schema 2 added the access table (per-session access policy, membership.h). */
+#define DF_STORE_ACCESS_TABLE                                                                 \
+    "CREATE TABLE access(session INTEGER PRIMARY KEY, owner TEXT NOT NULL,"                  \
+    " mode INTEGER NOT NULL, observers INTEGER NOT NULL, key_hash BLOB,"                     \
+    " members TEXT NOT NULL DEFAULT '');"
 
 static const char k_schema[] =
     "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
@@ -32,16 +40,17 @@ static const char k_schema[] =
     " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
     " flags INTEGER NOT NULL, delta BLOB, aux BLOB, recipe BLOB);"
     "CREATE INDEX changes_session ON changes(session, id);"
+    DF_STORE_ACCESS_TABLE
     "INSERT INTO meta VALUES('next_session_id', 0);";
 
-/* Schema 1 -> 2 (store.h): the session rows' large blobs move to `blobs` (SQLite rewrites a
+/* Schema 2 -> 3 (store.h): the session rows' large blobs move to `blobs` (SQLite rewrites a
  * whole row on UPDATE: a per-change version update rewrote the mesh and snapshot, ~100 MB at 1M
  * vertices), the recipe column, the snapshot's version and the replay cost since it. A
- * version-1 log holds deltas only, and every stroke begun after the migration starts at or after
+ * version-2 log holds deltas only, and every stroke begun after the migration starts at or after
  * the version the store holds now: that version stands for the snapshot's. */
 #define MOVE_BLOB(col) "INSERT INTO blobs SELECT id, '" col "', " col " FROM sessions WHERE " \
                        col " IS NOT NULL;ALTER TABLE sessions DROP COLUMN " col ";"
-static const char k_migrate_1_2[] =
+static const char k_migrate_2_3[] =
     "CREATE TABLE blobs(session INTEGER NOT NULL, name TEXT NOT NULL, data BLOB NOT NULL,"
     " PRIMARY KEY(session, name));"
     MOVE_BLOB("base") MOVE_BLOB("elems") MOVE_BLOB("faces") MOVE_BLOB("handles")
@@ -180,13 +189,15 @@ static int check_schema(df_store *st, int *fresh, int64_t *ver_out, df_error *er
 }
 
 /* Brings a store of an older schema version (checked: 1 .. DF_STORE_SCHEMA - 1) to the current
- * one in one transaction: all or nothing. */
+ * one in one transaction, all or nothing: 1 -> 2 adds the access table (its sessions have no
+ * row there: restore gives them the configured mode and no owner, admins own them), 2 -> 3
+ * moves the large values to `blobs` and adds the recipe columns (k_migrate_2_3). */
 static int migrate(df_store *st, int64_t ver, df_error *err)
 {
     if (ver == DF_STORE_SCHEMA) return DF_OK;
-    char sql[sizeof k_migrate_1_2 + 96];
-    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;%sPRAGMA user_version=%d;COMMIT", k_migrate_1_2,
-             DF_STORE_SCHEMA);
+    char sql[sizeof k_migrate_2_3 + sizeof DF_STORE_ACCESS_TABLE + 96];
+    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;%s%sPRAGMA user_version=%d;COMMIT",
+             ver < 2 ? DF_STORE_ACCESS_TABLE : "", k_migrate_2_3, DF_STORE_SCHEMA);
     char what[96];
     snprintf(what, sizeof what, "migrating schema version %lld to %d", (long long)ver,
              DF_STORE_SCHEMA);
@@ -196,6 +207,9 @@ static int migrate(df_store *st, int64_t ver, df_error *err)
         return rc;
     }
     st->migrated_from = (int)ver;
+    df_log(DF_LOG_INFO, "store %s: schema %lld migrated to %d (%sstroke recipe records, large "
+           "values in their own rows)", st->path, (long long)ver, DF_STORE_SCHEMA,
+           ver < 2 ? "per-session access, " : "");
     return DF_OK;
 }
 

@@ -28,17 +28,23 @@
  *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux, recipe)
  *                                                   the change log, in commit order (journal.h;
  *                                                   recipe: record.h)
- * Versions: 1 (the large values in sessions' own columns base, elems, faces, handles, cur,
- * rest; no recipe records, snap_version, replay_ns) is migrated to 2 at open, in one
- * transaction (snap_version = the stored version); 2 is current. Any other version is refused,
- * the file untouched.
+ *   access(session INTEGER PRIMARY KEY, owner, mode, observers, key_hash, members)
+ *                                                   each session's owner and access policy
+ *                                                   (membership.h): mode 1..3, observers 0/1,
+ *                                                   the join key's SHA-256 (NULL: none) and
+ *                                                   the members, each principal ended by '\n'
+ * Versions: 1 (no access table; the large values in the session rows' own columns base, elems,
+ * faces, handles, cur, rest; no recipe column, snap_version, replay_ns) and 2 (1 + the access
+ * table) are migrated to 3 at open, in one transaction: a session without an access row gets
+ * the configured mode and no owner (admins own it), snap_version = the stored version. 3 is
+ * current. Any other version is refused, the file untouched.
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
  *
  * Checks at open (df_store_open): an existing empty file, a file that is not SQLite (a text
  * file), an SQLite database of another application (foreign application_id, or tables without
- * ours), a schema version this build does not know, or an integrity failure refuse the open with
- * a message naming the file; nothing is written to such a file. Integrity: PRAGMA
- * integrity_check for files up to DF_STORE_FULL_CHECK_BYTES, PRAGMA quick_check (no index
+ * ours), a schema version this build does not know (older ones are migrated), or an integrity
+ * failure refuse the open with a message naming the file; nothing is written to such a file.
+ * Integrity: PRAGMA integrity_check for files up to DF_STORE_FULL_CHECK_BYTES, PRAGMA quick_check (no index
  * content cross-check) above. The store takes an exclusive lock (locking_mode EXCLUSIVE): a
  * second daemon on the same file is refused ("in use").
  *
@@ -57,7 +63,7 @@
 #include "core/common/df_error.h"
 
 #define DF_STORE_APP_ID 0x44665244            /* "DfRD" */
-#define DF_STORE_SCHEMA 2
+#define DF_STORE_SCHEMA 3                     /* 1, 2 are migrated at open */
 #define DF_STORE_FULL_CHECK_BYTES ((int64_t)256 << 20) /* integrity_check up to 256 MiB */
 #define DF_STORE_SNAPSHOT_MIN ((uint64_t)1 << 20) /* journal.h: snapshot once the log since the
                                                    * last one exceeds max(this, 2 x 24 x nv) */

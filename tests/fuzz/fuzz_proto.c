@@ -46,6 +46,8 @@ static const uint16_t kinds[][2] = {
     /* devices (HID) */
     {DF_MSG_DEVICE_STATE, DF_FLAG_EVENT}, {DF_MSG_DEVICES_LIST, DF_FLAG_REPLY},
     {DF_MSG_DEVICE_BIND, 0}, {DF_MSG_DEVICE_VIEW, 0},
+    /* per-session access */
+    {DF_MSG_SESSION_ACCESS, 0}, {DF_MSG_JOIN, 0}, {DF_MSG_SESSION_ACCESS, DF_FLAG_REPLY},
 };
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

@@ -194,35 +194,44 @@ def test_shm_rings_are_sized_to_the_session_and_capped_in_total(make_daemon):
 
 
 def test_history_budget_drops_the_oldest_steps_and_undo_stays_exact(make_daemon):
-    """Item 12: with history_max_mb = 1 a 10,000-vertex session (240 KB per position copy, each
-    whole-mesh stroke a 240 KB step) keeps its 3 newest strokes (the current state + 3 steps fit,
-    4 do not): undo_depth 3 after 6 strokes, 3 steps dropped (stats), history bytes within the
-    budget; undo and redo restore the published positions exactly."""
-    d = make_daemon("history_max_mb = 1\n")
+    """Item 12: with history_max_mb = 1 a 10,000-vertex session (240 KB per position copy) drops
+    its oldest undo steps to stay within the budget. Strokes are kept as recipes (a few hundred
+    bytes); history_replay_ms = 0 makes every stroke a checkpoint, so each one also holds a
+    packed link to the previous state (every vertex moves a little: tens of KB) beside the
+    current state and the anchor (2 x 240 KB): 12 strokes do not fit, the oldest are dropped
+    (stats), the held ones are recipes with one checkpoint per state, and undo and redo restore
+    the published positions exactly over the whole depth."""
+    d = make_daemon("history_max_mb = 1\nhistory_replay_ms = 0\n")
+    strokes = 12
     with d.unix_client() as c:
         sid = c.load_mesh(grid_obj(100, 100), fmt=".obj", name="hist").session_id
         shots = [c.get_mesh(sid).positions.tobytes()]
-        for k in range(1, 7):
+        for k in range(1, strokes + 1):
             c.stroke(sid, Brush(center=(0.5, 0.5, 0.0), move=(0.001 * k, -0.002, 0.003 * k),
                                 radius=5.0, nu=0.4))
             shots.append(c.get_mesh(sid).positions.tobytes())
         s = c.stats(sid)
-        assert s["undo_depth"] == 3, s
-        assert s["history_steps_dropped"] == 3
-        assert 4 * 240000 <= s["history_bytes"] <= MiB
+        depth = int(s["undo_depth"])
+        assert 1 <= depth < strokes, s
+        assert s["history_steps_dropped"] == strokes - depth
+        assert 2 * 240000 < s["history_bytes"] <= MiB
+        assert s["history_undo_bytes"] == s["history_bytes"] - 240000
+        assert s["history_recipe_steps"] == depth and s["history_xor_steps"] == 0
+        assert s["history_checkpoints"] == depth + 1
         g = c.stats()
-        assert g["history.steps_dropped"] == 3 and g["history.limit_bytes"] == MiB
+        assert g["history.steps_dropped"] == strokes - depth and g["history.limit_bytes"] == MiB
         assert g["memory.history_bytes"] == s["history_bytes"]
-        for k in (5, 4, 3):
+        for k in range(strokes - 1, strokes - 1 - depth, -1):
             c.undo(sid)
             assert c.get_mesh(sid).positions.tobytes() == shots[k]
         with pytest.raises(DeformdError) as ei:
             c.undo(sid)
         assert ei.value.code == E.ESTATE
-        for k in (4, 5, 6):
+        for k in range(strokes - depth + 1, strokes + 1):
             c.redo(sid)
             assert c.get_mesh(sid).positions.tobytes() == shots[k]
-        assert c.stats(sid)["redo_depth"] == 0
+        s = c.stats(sid)
+        assert s["redo_depth"] == 0 and s["history_replay_mismatches"] == 0
 
 
 def test_history_shrinks_to_the_memory_budget_and_gives_way_to_sessions(make_daemon):
@@ -230,16 +239,22 @@ def test_history_shrinks_to_the_memory_budget_and_gives_way_to_sessions(make_dae
     commit: the history drops its oldest steps to stay within what the budget has left, the
     total stays within memory_max_bytes, and undo/redo stay exact. A new session that only fits
     without that history gets the room (old undo steps of idle sessions give way first); one that
-    does not fit even then is refused and nothing changes."""
-    d = make_daemon("memory_max_mb = 16\nhistory_max_mb = 1024\n")
-    strokes = 12
+    does not fit even then is refused and nothing changes. Strokes are kept as recipes;
+    history_replay_ms = 0 gives each a checkpoint link (tens of KB), so strokes go on until the
+    budget bites (within 60 strokes, below the 64-state depth cap), then two more."""
+    d = make_daemon("memory_max_mb = 16\nhistory_max_mb = 1024\nhistory_replay_ms = 0\n")
     with d.unix_client() as c:
         sid = c.load_mesh(grid_obj(200, 200), fmt=".obj", name="tight").session_id
         shots = [c.get_mesh(sid).positions.tobytes()]
-        for k in range(1, strokes + 1):
+        extra, strokes = 2, 0
+        while extra > 0 and strokes < 60:
+            strokes += 1
+            k = strokes
             c.stroke(sid, Brush(center=(0.5, 0.5, 0.0), move=(0.001 * k, 0.002, -0.001 * k),
                                 radius=5.0, nu=0.4))
             shots.append(c.get_mesh(sid).positions.tobytes())
+            if c.stats(sid)["history_steps_dropped"] >= 1:
+                extra -= 1
         s, g = c.stats(sid), c.stats()
         assert g["memory_used_bytes"] <= g["memory_max_bytes"] == 16 * MiB
         assert s["history_steps_dropped"] >= 1 and s["undo_depth"] >= 1, s

@@ -245,6 +245,8 @@ ENUM_FIELDS = [
     ("4.30", "backend", "DevBackend", False, ()),
     ("4.30", "state", "DevState", False, ()),
     ("4.3 auth", "method", "AuthMethod", False, ()),
+    ("4.36", "mode", "AccessMode", False, ()),
+    ("4.35", "flags", "AccessFlag", True, ()),
 ]
 
 

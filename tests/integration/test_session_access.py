@@ -4,8 +4,8 @@ is the admin key. The creator of a session owns it: only the owner or an admin m
 reset its rest shape; with session_access = owner the others may only observe. A refusal is
 EPERM naming the missing right and changes nothing. Quotas (quota_sessions, quota_upload_mb,
 quota_memory_mb) refuse a load with ELIMIT naming the quota and the principal, and closing a
-session releases its share. DEVICE_BIND needs the edit right; session_access and the quotas
-change on SIGHUP."""
+session releases its share. DEVICE_BIND needs the edit right; session_access (of sessions
+loaded afterwards) and the quotas change on SIGHUP."""
 import json
 import os
 import secrets
@@ -190,18 +190,20 @@ def test_deformctl_with_a_named_key_gets_eperm(make_daemon, keys):
         assert u.list_sessions() == []
 
 
-def test_sighup_switches_session_access_and_quotas_live(make_daemon, keys):
+def test_sighup_switches_session_access_of_new_sessions_and_quotas_live(make_daemon, keys):
     d = start(make_daemon, keys)
     with tcp(d, keys["alice"]) as a, tcp(d, keys["bob"]) as b:
         sid = a.load_mesh(grid_obj(5, 5), name="spot").session_id
         stroke(b, sid)                                      # open: bob edits
         keys_cfg = ("key_file = %s\npeer_key = alice %s\npeer_key = bob %s\n"
                     % (keys["admin"], keys["alice"], keys["bob"]))
-        rewrite_and_hup(d, keys_cfg + "session_access = owner\nquota_sessions = 1\n",
-                        "session_access owner, quota_sessions 1")
-        refused(lambda: stroke(b, sid), "edit")
+        rewrite_and_hup(d, keys_cfg + "session_access = owner\nquota_sessions = 2\n",
+                        "session_access owner, session_observers on, quota_sessions 2")
+        stroke(b, sid)               # a session keeps the mode it was loaded with
+        sid2 = a.load_mesh(grid_obj(4, 4), name="two").session_id
+        refused(lambda: stroke(b, sid2), "edit")            # a new one takes the new mode
         with pytest.raises(DeformdError) as ei:
-            a.load_mesh(grid_obj(4, 4), name="two")
+            a.load_mesh(grid_obj(4, 4), name="three")
         assert ei.value.code == E.ErrorCode.ELIMIT and "quota_sessions" in str(ei.value)
 
 

@@ -14,7 +14,7 @@ import pytest
 from conftest import DEFORMD, MESHES, Daemon, check_stopped
 from deformd_client import Brush, DeformdError
 from deformd_client import errors as E
-from helpers import grid_obj
+from helpers import downgrade_store, grid_obj
 
 
 def start(tmp_path, store, run, extra=""):
@@ -345,43 +345,8 @@ def test_undo_redo_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tm
     assert not os.path.exists(sock)
 
 
-_SESSIONS_V1 = (
-    "CREATE TABLE sessions_v1(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
-    " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
-    " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
-    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
-    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0)")
-
-
-def _downgrade_to_v1(store):
-    """Rewrites a (recipe-free) version-2 store as the version-1 layout deformd wrote before
-    recipe records (store.h): the large values back in the session rows' own columns, no
-    blobs table, no recipe / snap_version / replay_ns columns."""
-    def blob(name):
-        return "(SELECT data FROM blobs WHERE session = s.id AND name = '%s')" % name
-    db = sqlite3.connect(store)
-    try:
-        assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() \
-            == (0,)
-        db.execute(_SESSIONS_V1)
-        db.execute("INSERT INTO sessions_v1 SELECT s.id, s.name, s.kind, s.planar, s.nv, s.ne, "
-                   "s.nf, %s, %s, %s, s.version, s.brush, s.brush_seq, %s, %s, %s, s.log_bytes "
-                   "FROM sessions s" % tuple(blob(n) for n in ("base", "elems", "faces",
-                                                               "handles", "cur", "rest")))
-        db.execute("DROP TABLE sessions")
-        db.execute("ALTER TABLE sessions_v1 RENAME TO sessions")
-        db.execute("DROP TABLE blobs")
-        db.execute("ALTER TABLE changes DROP COLUMN recipe")
-        db.execute("PRAGMA user_version = 1")
-        db.commit()
-        assert db.execute("SELECT count(*) FROM sessions WHERE handles IS NOT NULL").fetchone() \
-            == (1,)
-    finally:
-        db.close()
-
-
 def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
-    """A store of schema version 1 (no recipe records) opens: migrated to 2 at start, every
+    """A store of schema version 1 (no recipe records) opens: migrated to 3 at start, every
     session restored as it was, then strokes are logged as recipes. A store of a version this
     deformd does not know (a newer one) refuses start-up with a message naming it, untouched."""
     store = str(tmp_path / "old.db")
@@ -395,10 +360,10 @@ def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
         c.redo(sid)
         before = state(c, sid)
     check_stopped(d, d.stop())
-    _downgrade_to_v1(store)
+    downgrade_store(store, 1)
     d = start(tmp_path, store, 2)
     try:
-        assert "schema version 1 migrated to 2" in d.log()
+        assert "schema 1 migrated to 3" in d.log()
         with d.unix_client() as c:
             assert state(c, sid) == before
             assert list(c.get_handles(sid).handles) == [0, 5, 55]
@@ -408,9 +373,9 @@ def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
     finally:
         check_stopped(d, d.stop())
     db = sqlite3.connect(store)
-    assert db.execute("PRAGMA user_version").fetchone() == (2,)
+    assert db.execute("PRAGMA user_version").fetchone() == (3,)
     assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() == (2,)
-    db.execute("PRAGMA user_version = 3")                    # as a newer deformd would write
+    db.execute("PRAGMA user_version = 4")                    # as a newer deformd would write
     db.commit()
     db.close()
     with open(store, "rb") as f:
@@ -419,13 +384,13 @@ def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
     r = subprocess.run([DEFORMD, "--foreground", "--socket", sock, "--store", store],
                        stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=30)
     assert r.returncode == 1, r.stderr
-    assert store in r.stderr and "schema version 3" in r.stderr and "newer deformd" in r.stderr, \
+    assert store in r.stderr and "schema version 4" in r.stderr and "newer deformd" in r.stderr, \
         r.stderr
     assert not os.path.exists(sock)
     with open(store, "rb") as f:
         assert f.read() == newer
-    db = sqlite3.connect(store)                              # back to 2: restored after all
-    db.execute("PRAGMA user_version = 2")
+    db = sqlite3.connect(store)                              # back to 3: restored after all
+    db.execute("PRAGMA user_version = 3")
     db.commit()
     db.close()
     d = start(tmp_path, store, 3)

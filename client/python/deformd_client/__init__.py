@@ -8,6 +8,7 @@
 
 Errors from the daemon raise DeformdError(code, name, message).
 """
+from .access import AccessInfo
 from .auth import AuthError
 from .brush_state import BrushCursor, BrushState, BrushValues
 from .client import Client, MeshData, SessionClosed, ShmLost
@@ -25,8 +26,8 @@ from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
 
 __all__ = [
-    "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError", "ErrorCode",
-    "error_name",
+    "AccessInfo", "Client", "MeshData", "SessionClosed", "ConnectionClosed", "DeformdError",
+    "ErrorCode", "error_name",
     "Frame", "FrameDecoder", "FrameError", "encode_frame", "encode_header", "MeshState",
     "OutOfSync", "AffineSet", "Brush", "HandleParams", "HandleSet", "Disp", "LoadReport",
     "MoveResult",

@@ -8,6 +8,7 @@ import struct
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Sequence, Tuple
 
+from . import access as ac
 from . import brush_state as bs
 from . import devices as dv
 from . import messages as m
@@ -76,6 +77,15 @@ def _fixed(fmt: str, what: str) -> Callable[[bytes], tuple]:
 
 
 # ------------------------------------------------------------------ decoders a client lacks
+def decode_subscribe(p: bytes) -> tuple:
+    """(session_id, flags[, from_version]): from_version only with flag FROM_VERSION."""
+    r = Reader(p, "subscribe")
+    sid, flags = r.take("QI")
+    if flags & m.SUBSCRIBE_FROM_VERSION:
+        return _end(r, (sid, flags, r.take("Q")))
+    return _end(r, (sid, flags))
+
+
 def decode_empty(p: bytes) -> None:
     if len(p):
         raise ProtocolError("empty body: %d trailing bytes" % len(p))
@@ -238,7 +248,7 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
         x.options, x.file_name)),
     "session_ref": (m.decode_session_ref, m.encode_session_ref),
     "open_session": (decode_open_session, lambda x: m.encode_open_session(*x)),
-    "subscribe": (_fixed("QI", "subscribe"), lambda x: m.encode_subscribe(*x)),
+    "subscribe": (decode_subscribe, lambda x: m.encode_subscribe(*x)),
     "session_info": (m.decode_session_info, encode_session_info),
     "load_reply": (m.decode_load_reply, encode_load_reply),
     "session_list": (m.decode_session_list, encode_session_list),
@@ -270,6 +280,11 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "device_bind": (dv.decode_device_bind, lambda x: dv.encode_device_bind(*x)),
     "device_view": (dv.decode_device_view, lambda x: dv.encode_device_view(
         x.device_id, x.session_id, x.view_proj, x.viewport)),
+    # per-session access
+    "session_access": (ac.decode_session_access, lambda x: ac.encode_session_access(
+        x.session_id, x.mode, x.observers, x.flags)),
+    "join": (ac.decode_join, lambda x: ac.encode_join(*x)),
+    "access_info": (ac.decode_access_info, ac.encode_access_info),
 }
 
 

@@ -26,6 +26,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
 
+from . import access as ac
 from . import auth
 from . import brush_state as bs
 from . import devices as dv
@@ -531,11 +532,21 @@ class Client:
     def close_session(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.CLOSE_SESSION, m.encode_session_ref(session_id)))
 
-    def subscribe(self, session_id: int, snapshot: bool = False) -> m.SessionInfo:
+    def subscribe(self, session_id: int, snapshot: bool = False,
+                  from_version: Optional[int] = None) -> m.SessionInfo:
         """Subscribes to the displacement stream; with snapshot=True a dense snapshot event of
-        the current version comes first."""
-        return m.decode_session_info(self._one(
-            m.SUBSCRIBE, m.encode_subscribe(session_id, m.SUBSCRIBE_SNAPSHOT if snapshot else 0)))
+        the current version comes first. With from_version=V (the version whose displacements
+        the caller holds, e.g. a MeshState's .version after a reconnect; PROTOCOL.md 6.2) the
+        events that come first bring it to the returned SessionInfo.version: the versions
+        V+1 .. that version exactly as they were broadcast (none when V is current), or, when
+        the daemon no longer keeps them or V is ahead of the session, one dense snapshot of
+        that version (kind CHANGE_SNAPSHOT). MeshState.apply takes either."""
+        if from_version is not None and snapshot:
+            raise ValueError("subscribe: snapshot and from_version are exclusive")
+        body = (m.encode_subscribe(session_id, m.SUBSCRIBE_FROM_VERSION, from_version)
+                if from_version is not None else
+                m.encode_subscribe(session_id, m.SUBSCRIBE_SNAPSHOT if snapshot else 0))
+        return m.decode_session_info(self._one(m.SUBSCRIBE, body))
 
     def unsubscribe(self, session_id: int) -> m.Ack:
         """Leaves the session's stream; this also ends its shared-memory stream, whose mapping
@@ -676,6 +687,28 @@ class Client:
     def stats(self, session_id: int = 0) -> Dict[str, float]:
         """Daemon-wide (0) or one session's counters, key -> value."""
         return m.decode_stats(self._one(m.STATS, m.encode_stats_req(session_id)))
+
+    # ------------------------------------------------------------------ per-session access
+    def session_access(self, session_id: int, mode: Optional[str] = None,
+                       observers: Optional[bool] = None,
+                       new_key: bool = False) -> ac.AccessInfo:
+        """The session's access policy (PROTOCOL.md 4.34): with no change given, reads it (any
+        principal that may observe); mode "open" / "key" / "owner", observers True / False or
+        new_key=True change it (owner or admin only: EPERM otherwise). A new join key (new_key,
+        or a switch to key mode without one) comes back in .key (32 bytes) to the owner only."""
+        if mode is not None and mode not in ac.MODES:
+            raise ValueError("mode %r: open, key or owner" % (mode,))
+        payload = ac.encode_session_access(session_id, int(ac.MODES[mode]) if mode else 0,
+                                           ac.OBSERVERS[observers],
+                                           int(schema.AccessFlag.NEW_KEY) if new_key else 0)
+        return ac.decode_access_info(self._one(m.SESSION_ACCESS, payload))
+
+    def join(self, session_id: int, key: Union[bytes, str]) -> ac.AccessInfo:
+        """Becomes a member of a key-mode session with its join key (32 bytes, or 64 hex
+        digits); membership belongs to this connection's principal and outlasts it. A wrong key
+        is EPERM (and rate-limited per peer: ELIMIT)."""
+        raw = bytes.fromhex(key) if isinstance(key, str) else bytes(key)
+        return ac.decode_access_info(self._one(m.JOIN, ac.encode_join(session_id, raw)))
 
     # ------------------------------------------------------------------ devices (HID)
     def devices_list(self) -> List[dv.DeviceInfo]:

@@ -47,6 +47,7 @@ MOVE_STATUS_NAMES = {int(k): k.name.lower() for k in MoveStatus}
 globals().update({"SECTION_" + k.name: k for k in MeshSection})
 GET_MESH_REST, GET_MESH_BASE = GetMeshFlag.REST, GetMeshFlag.BASE
 SUBSCRIBE_SNAPSHOT = SubscribeFlag.SNAPSHOT
+SUBSCRIBE_FROM_VERSION = SubscribeFlag.FROM_VERSION
 ELEM_SIZE = {MeshKind.POLYLINE: 2, MeshKind.TRIANGLE: 3, MeshKind.TET: 4}
 
 
@@ -136,7 +137,12 @@ def encode_open_session(session_id: int = 0, name: str = "") -> bytes:
     return struct.pack("<Q", session_id) + pack_str(name)
 
 
-def encode_subscribe(session_id: int, flags: int = 0) -> bytes:
+def encode_subscribe(session_id: int, flags: int = 0, from_version: int = 0) -> bytes:
+    """flags SUBSCRIBE_FROM_VERSION appends the u64 from_version (PROTOCOL.md 4.8)."""
+    if flags & SUBSCRIBE_FROM_VERSION:
+        return struct.pack("<QIQ", session_id, flags, from_version)
+    if from_version:
+        raise ValueError("from_version without flag SUBSCRIBE_FROM_VERSION")
     return struct.pack("<QI", session_id, flags)
 
 

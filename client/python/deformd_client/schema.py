@@ -67,6 +67,8 @@ class MsgType(IntEnum):
     SUBSCRIBE = 0x0014
     UNSUBSCRIBE = 0x0015
     STREAM_SHM = 0x0016
+    SESSION_ACCESS = 0x0017    # per-session access
+    JOIN = 0x0018
     BRUSH_BEGIN = 0x0020
     BRUSH_UPDATE = 0x0021
     BRUSH_END = 0x0022
@@ -115,6 +117,8 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.SUBSCRIBE: Bodies("subscribe", "session_info", None),
     MsgType.UNSUBSCRIBE: Bodies("session_ref", "ack", None),
     MsgType.STREAM_SHM: Bodies("session_ref", "shm_info", None),
+    MsgType.SESSION_ACCESS: Bodies("session_access", "access_info", None),
+    MsgType.JOIN: Bodies("join", "access_info", None),
     MsgType.BRUSH_BEGIN: Bodies("brush", "ack", None),
     MsgType.BRUSH_UPDATE: Bodies("brush_update", "ack", None),
     MsgType.BRUSH_END: Bodies("session_ref", "ack", None),
@@ -273,6 +277,7 @@ class GetMeshFlag(IntFlag):
 
 class SubscribeFlag(IntFlag):
     SNAPSHOT = 1 << 0
+    FROM_VERSION = 1 << 1  # resync: a u64 from_version follows (PROTOCOL.md 6.2)
 
 
 class BrushStateField(IntFlag):
@@ -325,6 +330,21 @@ class AuthMethod(IntEnum):
     """auth `method` (PROTOCOL.md 4.3): the two steps of the HMAC-SHA256 exchange."""
     HMAC_CHALLENGE = 1
     HMAC_PROOF = 2
+
+
+class AccessMode(IntEnum):
+    """access_info `mode` (PROTOCOL.md 4.34, 4.36)."""
+    OPEN = 1
+    KEY = 2
+    OWNER = 3
+
+
+class AccessFlag(IntFlag):
+    """session_access `flags` (PROTOCOL.md 4.35)."""
+    NEW_KEY = 1 << 0
+
+
+JOIN_KEY_BYTES = 32      # DF_JOIN_KEY_BYTES: a session's join key
 
 
 # The AUTH exchange's sizes and MAC contexts (DF_AUTH_* of wire_schema.h; auth.py uses them).

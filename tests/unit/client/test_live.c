@@ -3,7 +3,9 @@
  * four connections keep df_client_replica copies from the displacement stream (two of them
  * through the shared-memory ring, df_client_stream_shm); every replica must end byte-identical
  * to the daemon's positions, and a stale replica must resync by snapshot. A replica reading too
- * slowly for a small ring sees the lost frames as a gap and resyncs. */
+ * slowly for a small ring sees the lost frames as a gap and resyncs. A replica that reconnects
+ * resyncs from the version it holds (df_client_subscribe_from): the missed versions replayed, or a
+ * snapshot from a version the session never reached. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -252,12 +254,101 @@ static void test_shm_subscriber_too_slow_for_the_ring_resyncs(void **state)
     live_daemon_stop(&d);
 }
 
+/* One stroke of `n` updates by `w` (its own begin / end); returns the end's version. */
+static uint64_t one_stroke(df_client *w, uint64_t sid, int n)
+{
+    df_msg_brush b;
+    df_msg_brush_defaults(&b);
+    b.session_id = sid;
+    b.radius = 0.3;
+    b.nu = 0.4;
+    b.center[0] = b.center[1] = 0.5;
+    df_error e;
+    df_msg_ack ack;
+    assert_int_equal(df_client_brush_begin(w, &b, NULL, &e), DF_OK);
+    for (int i = 0; i < n; i++) stroke_update(w, sid, 0, i);
+    assert_int_equal(df_client_brush_end(w, sid, &ack, &e), DF_OK);
+    return ack.version;
+}
+
+/* Connects a reader feeding `rep`, resyncs it from `from` and pumps until it holds the version
+ * the reply names; returns the complete versions applied meanwhile. */
+static uint64_t resync_from(const live_daemon *d, df_client_replica *rep, uint64_t from)
+{
+    df_client *r;
+    df_error e;
+    assert_int_equal(df_client_connect_unix(d->sock, "resync", &r, &e), DF_OK);
+    df_client_set_event_callback(r, on_event, rep);
+    uint64_t applied = rep->versions_applied;
+    df_msg_session_info info;
+    assert_int_equal(df_client_subscribe_from(r, rep->session_id, from, &info, &e), DF_OK);
+    for (int t = 0; t < LIVE_WAIT_MS / 10 && (rep->version != info.version || rep->building);
+         t++)
+        assert_true(df_client_pump(r, 10, NULL) >= 0);
+    assert_int_equal(rep->version, info.version);
+    assert_int_equal(rep->stale, 0);
+    df_client_mesh m;
+    assert_int_equal(df_client_get_mesh(r, rep->session_id, 0, &m, &e), DF_OK);
+    assert_int_equal(m.version, info.version);
+    float *pos = malloc((size_t)m.nv * 3 * sizeof(float));
+    df_client_replica_positions(rep, pos);
+    assert_memory_equal(pos, m.positions, (size_t)m.nv * 3 * sizeof(float));
+    free(pos);
+    df_client_mesh_free(&m);
+    df_client_close(r);
+    return rep->versions_applied - applied;
+}
+
+static void test_replica_resyncs_from_the_version_it_holds(void **state)
+{
+    (void)state;
+    char exe[PATH_MAX];
+    daemon_or_skip(exe, sizeof exe);
+    live_daemon d;
+    assert_int_equal(live_daemon_start(&d, exe, "resync"), 0);
+    df_client *w;
+    df_error e;
+    assert_int_equal(df_client_connect_unix(d.sock, "writer", &w, &e), DF_OK);
+    size_t len;
+    char *off = grid_off(20, &len);
+    df_msg_session_info info;
+    assert_int_equal(df_client_load_mesh_bytes(w, "resync", DF_FMT_OFF, off, len, 0, &info, &e),
+                     DF_OK);
+    free(off);
+    uint64_t sid = info.session_id;
+    df_client_mesh m;
+    assert_int_equal(df_client_get_mesh(w, sid, DF_GET_MESH_BASE, &m, &e), DF_OK);
+    df_client_replica rep, ahead;
+    assert_int_equal(df_client_replica_init(&rep, sid, m.nv, m.base, NULL, 0, &e), DF_OK);
+    df_client_mesh_free(&m);
+    uint64_t v = one_stroke(w, sid, 3);
+    assert_int_equal(resync_from(&d, &rep, 0), v); /* every version so far, replayed */
+    /* the reader is gone; the writer goes on: a stroke and an undo */
+    one_stroke(w, sid, 4);
+    df_msg_ack ack;
+    assert_int_equal(df_client_undo(w, sid, &ack, &e), DF_OK);
+    assert_true(ack.version == v + 5);
+    assert_int_equal(resync_from(&d, &rep, rep.version), ack.version - v); /* the missed ones */
+    /* a version the session never reached: one snapshot, whatever the replica held */
+    assert_int_equal(df_client_replica_init(&ahead, sid, rep.nv, rep.base, NULL, 0, &e), DF_OK);
+    assert_int_equal(resync_from(&d, &ahead, ack.version + 100), 1);
+    df_msg_stats st;
+    assert_int_equal(df_client_stats(w, 0, &st, &e), DF_OK);
+    assert_true(stat_of(&st, "resync_replays") == 2 && stat_of(&st, "resync_snapshots") == 1);
+    df_msg_stats_free(&st);
+    df_client_replica_free(&ahead);
+    df_client_replica_free(&rep);
+    df_client_close(w);
+    live_daemon_stop(&d);
+}
+
 int main(void)
 {
     signal(SIGPIPE, SIG_IGN);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_replicas_match_the_daemon),
         cmocka_unit_test(test_shm_subscriber_too_slow_for_the_ring_resyncs),
+        cmocka_unit_test(test_replica_resyncs_from_the_version_it_holds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,7 +16,8 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
+enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
+       N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -144,7 +145,7 @@ static inline void build_samples(sample *s)
     ADD("session_ref", DF_MSG_UNDO, 0, df_msg_session_ref_encode(&ref, out, &e));
     df_msg_open_session os = {0, "bunny"};
     ADD("open_session", DF_MSG_OPEN_SESSION, 0, df_msg_open_session_encode(&os, out, &e));
-    df_msg_subscribe sub = {5, DF_SUBSCRIBE_SNAPSHOT};
+    df_msg_subscribe sub = {5, DF_SUBSCRIBE_SNAPSHOT, 0};
     ADD("subscribe", DF_MSG_SUBSCRIBE, 0, df_msg_subscribe_encode(&sub, out, &e));
     df_msg_session_info si = {5, 99, 3, 0, 2, 5433, 34055, 4, 1, "bunny"};
     ADD("session_info", DF_MSG_OPEN_SESSION, DF_FLAG_REPLY, df_msg_session_info_encode(&si, out, &e));
@@ -262,6 +263,28 @@ static inline void build_samples(sample *s)
     dv.view_proj[11] = -0.5;
     ADD("device_view", DF_MSG_DEVICE_VIEW, 0, df_msg_device_view_encode(&dv, out, &e));
     ADD("devices_list", DF_MSG_DEVICES_LIST, 0, ((void)out, DF_OK)); /* empty request */
+    /* resync (issue 12): subscribe with the optional trailing from_version */
+    df_msg_subscribe subv = {5, DF_SUBSCRIBE_FROM_VERSION, 0x0102030405060708ull};
+    ADD("subscribe_from", DF_MSG_SUBSCRIBE, 0, df_msg_subscribe_encode(&subv, out, &e));
+    /* per-session access: a policy change, a join, the policy with and without a new key */
+    df_msg_session_access sa = {5, DF_ACCESS_MODE_KEY, 1, DF_ACCESS_NEW_KEY};
+    ADD("session_access", DF_MSG_SESSION_ACCESS, 0, df_msg_session_access_encode(&sa, out, &e));
+    static df_msg_join jn;
+    jn.session_id = 5;
+    for (int i = 0; i < (int)DF_JOIN_KEY_BYTES; i++) jn.key[i] = (uint8_t)(0xA0 + i);
+    ADD("join", DF_MSG_JOIN, 0, df_msg_join_encode(&jn, out, &e));
+    static df_msg_access_info ai;
+    memset(&ai, 0, sizeof ai);
+    ai = (df_msg_access_info){.session_id = 5, .mode = DF_ACCESS_MODE_KEY, .observers = 0,
+                              .members = 2, .has_key = 1};
+    snprintf(ai.owner, sizeof ai.owner, "key:alice");
+    memcpy(ai.key, jn.key, sizeof ai.key);
+    ADD("access_info_key", DF_MSG_SESSION_ACCESS, DF_FLAG_REPLY,
+        df_msg_access_info_encode(&ai, out, &e));
+    ai.has_key = 0;
+    ai.mode = DF_ACCESS_MODE_OPEN;
+    ai.observers = 1;
+    ADD("access_info", DF_MSG_JOIN, DF_FLAG_REPLY, df_msg_access_info_encode(&ai, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

@@ -204,7 +204,10 @@ static void test_session_bodies(void **state)
     u64("handles_get", 0, 0, DF_EINVAL, "session_id 0");
     u64("open_session", 0, 5, DF_EINVAL, "not both");
     u16("open_session", 8, 0, DF_EPROTO_TRAILING, NULL);
-    u32("subscribe", 8, 2, DF_EINVAL, "flag");
+    u32("subscribe", 8, 4, DF_EINVAL, "flag");
+    u32("subscribe", 8, 2, DF_EPROTO_TRUNCATED, "from_version"); /* flag without its field */
+    u32("subscribe_from", 8, 3, DF_EINVAL, "exclusive");
+    u32("subscribe_from", 8, 0, DF_EPROTO_TRAILING, NULL); /* field without its flag */
     u64("subscribe", 0, 0, DF_EINVAL, "session_id");
     u8("session_info", 16, 4, DF_EINVAL, "kind 4");
     u8("session_info", 16, 0, DF_EINVAL, "kind 0");
@@ -549,12 +552,32 @@ static void test_device_bodies(void **state)
     f64("device_view", 144 + 24, -1, DF_EINVAL, "height");
 }
 
+/* per-session access: session_access, join, access_info (PROTOCOL.md 4.35, 4.36) */
+static void test_access_bodies(void **state)
+{
+    (void)state;
+    u64("session_access", 0, 0, DF_EINVAL, "session_id 0");
+    u8("session_access", 8, 4, DF_EINVAL, "mode 4");
+    u8("session_access", 9, 3, DF_EINVAL, "observers 3");
+    u8("session_access", 10, 2, DF_EINVAL, "unknown flag bits");
+    u8("session_access", 11, 1, DF_EPROTO_RESERVED, NULL);
+    u8("session_access", 8, 0, DF_OK, NULL);                   /* 0 = keep */
+    u64("join", 0, 0, DF_EINVAL, "session_id 0");
+    u64("access_info", 0, 0, DF_EINVAL, "session_id 0");
+    u8("access_info", 8, 0, DF_EINVAL, "mode 0");
+    u8("access_info", 9, 2, DF_EINVAL, "observers");
+    u16("access_info", 10, 1, DF_EPROTO_RESERVED, NULL);
+    u16("access_info_key", 16 + 2 + 9, 31, DF_EINVAL, "key_len");
+    u16("access_info_key", 16 + 2 + 9, 0, DF_EPROTO_TRAILING, NULL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_handshake_bodies),
         cmocka_unit_test(test_load_mesh_bodies),
         cmocka_unit_test(test_session_bodies),
+        cmocka_unit_test(test_access_bodies),
         cmocka_unit_test(test_brush_bodies),
         cmocka_unit_test(test_brush_state_bodies),
         cmocka_unit_test(test_handle_bodies),

@@ -399,7 +399,7 @@ static void test_body_kind_table(void **state)
     int known = 0;
     for (unsigned t = 0; t <= 0xFFFF; t++)
         known += df_msg_type_valid((uint16_t)t);
-    assert_int_equal(known, 33 + 4); /* + the device (HID) types */
+    assert_int_equal(known, 33 + 4 + 2); /* + the device (HID) and access types */
     /* shared-memory stream: a session ref in, shm_info back; SHM_REF only as an event */
     assert_int_equal(df_msg_body_kind(DF_MSG_STREAM_SHM, 0, &k, &e), DF_OK);
     assert_int_equal(k, DF_BODY_SESSION_REF);

@@ -59,6 +59,7 @@ static void setup_fixture(fixture *f, int mode)
     df_access_config_defaults(&f->srv.cfg.access);
     f->srv.cfg.access.session_access = mode;
     f->s.srv = &f->srv;
+    df_membership_init(&f->s.acc, mode, 1); /* as df_session_create_as with observers on */
     snprintf(f->s.name, sizeof f->s.name, "spot");
     snprintf(f->s.owner, sizeof f->s.owner, "key:alice");
     snprintf(f->owner.principal, sizeof f->owner.principal, "key:alice");
@@ -95,7 +96,8 @@ static void test_rights(void **state)
     df_req r = {.srv = &f.srv, .c = &f.other, .type = DF_MSG_BRUSH_BEGIN, .id = 1};
     assert_int_equal(df_access_check(&r, &f.s, &e), DF_EPERM);
     assert_string_equal(e.msg, "brush_begin: session 'spot' needs the edit right (you are "
-                               "key:bob, an observer; owner key:alice)");
+                               "key:bob, an observer; owner key:alice; owner mode): the session "
+                               "is owner-only: its owner may switch it to key mode");
     r.type = DF_MSG_GET_MESH;
     assert_int_equal(df_access_check(&r, &f.s, &e), DF_OK);
     r.c = NULL; /* a device's internal request */

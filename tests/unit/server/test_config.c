@@ -42,6 +42,7 @@ static void test_defaults(void **state)
     assert_int_equal(c.uploads_max_mb, DF_CONFIG_DEFAULT_UPLOADS_MB);
     assert_in_range(c.history_max_mb, DF_CONFIG_HISTORY_MIN_DEFAULT_MB,
                     DF_CONFIG_HISTORY_MAX_DEFAULT_MB);
+    assert_int_equal(c.resync_ring_mb, 32); /* issue 12: resync ring per session */
     assert_true(c.memory_max_mb >= DF_CONFIG_MEMORY_MIN_DEFAULT_MB);
     assert_true((uint64_t)c.memory_max_mb << 20 <= df_mem_physical_bytes() ||
                 c.memory_max_mb == DF_CONFIG_MEMORY_MIN_DEFAULT_MB);
@@ -100,11 +101,12 @@ static void test_parse_file_text(void **state)
     assert_int_equal(df_config_set(&c, "shm_ring_bytes", "4g", &e), DF_OK);
     assert_true(c.shm_ring_bytes == (uint64_t)4 << 30);
     const char mem[] = "max_upload_mb = 8\nuploads_max_mb = 16\nhistory_max_mb = 0\n"
-                       "memory_max_mb = 512\nshm_total_bytes = 3m\n";
+                       "memory_max_mb = 512\nshm_total_bytes = 3m\nresync_ring_mb = 0\n";
     assert_int_equal(df_config_parse(&c, mem, sizeof mem - 1, "mem.conf", &e), DF_OK);
     assert_int_equal(c.max_upload_mb, 8);
     assert_int_equal(c.uploads_max_mb, 16);
     assert_int_equal(c.history_max_mb, 0);
+    assert_int_equal(c.resync_ring_mb, 0);
     assert_int_equal(c.memory_max_mb, 512);
     assert_true(c.shm_total_bytes == (uint64_t)3 << 20);
     /* IPv6 brackets and disabling. */
@@ -133,6 +135,7 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "shm_ring_bytes = -1\n",     "shm_ring_bytes = big\n",
         "max_upload_mb = 0\n",       "max_upload_mb = 1025\n",   "uploads_max_mb = 0\n",
         "history_max_mb = -1\n",     "history_max_mb = 2000000\n", "memory_max_mb = 15\n",
+        "resync_ring_mb = -1\n",     "resync_ring_mb = 2000000\n", "resync_ring_mb = 32m\n",
         "memory_max_mb = lots\n",    "shm_total_bytes = 1k\n",   "shm_total_bytes = 2t\n",
         "tcp_insecure = maybe\n",    "tcp_insecure =\n",         "socket_mode = 0778\n",
         "socket_mode = 1777\n",      "socket_mode = rw\n",       "socket_mode = -1\n",
