@@ -188,7 +188,15 @@ typedef struct log_state {
     uint64_t prev_version, prev_base, prev_ns; /* ... of this version, base and cost */
 } log_state;
 
-static int read_log_state(df_store *st, uint64_t id, log_state *ls, df_error *err)
+/* The estimated restore time of a recipe record whose field took field_ns live on an nv-vertex
+ * session: the field again plus the per-vertex work around it (store.h). */
+static uint64_t restore_cost(uint64_t field_ns, int32_t nv)
+{
+    return field_ns + DF_STORE_REPLAY_VERTEX_NS * (uint64_t)nv;
+}
+
+static int read_log_state(df_store *st, uint64_t id, int32_t s_nv, log_state *ls,
+                          df_error *err)
 {
     memset(ls, 0, sizeof *ls);
     sqlite3 *db = df_store_db(st);
@@ -215,7 +223,7 @@ static int read_log_state(df_store *st, uint64_t id, log_state *ls, df_error *er
             ls->prev_recipe = 1;
             ls->prev_version = (uint64_t)sqlite3_column_int64(q, 0);
             ls->prev_base = r.base_version;
-            ls->prev_ns = r.replay_ns;
+            ls->prev_ns = restore_cost(r.replay_ns, s_nv);
         }
     }
     sqlite3_finalize(q);
@@ -310,7 +318,7 @@ static int recipe_record(const df_session *s, const df_change *c, const log_stat
     rec.recipe_len = blen;
     rc = df_record_encode(&rec, out, len, err);
     free(blob);
-    if (rc == DF_OK && !ending) *ns = rec.replay_ns;
+    if (rc == DF_OK && !ending) *ns = restore_cost(rec.replay_ns, s->nv);
     return rc;
 }
 
@@ -330,7 +338,7 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
         count(srv, rc, 0, 0);
         return rc;
     }
-    rc = read_log_state(st, s->id, &ls, err);
+    rc = read_log_state(st, s->id, s->nv, &ls, err);
     if (rc == DF_OK) rc = recipe_record(s, c, &ls, &rec, &rlen, &flags, &ns, err);
     if (rc == DF_OK && c->pos && !(flags & DF_JOURNAL_RECIPE))
         rc = df_codec_delta_encode(s->cur, c->pos, s->nv, &delta, &dlen, err);

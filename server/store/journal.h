@@ -45,8 +45,9 @@
  * the checksum of the state it commits (no flag: its positions are unchanged), so the undo
  * history can keep the stroke as a recipe. Everything else (rebased or cancelled strokes,
  * handle moves, undo / redo results, loads, reset-rest) keeps the packed delta below.
- * Snapshot by replay cost too: sessions.replay_ns sums the live-measured field-evaluation time
- * of the recipe records the restore will replay (a brush version immediately superseded by the
+ * Snapshot by replay cost too: sessions.replay_ns sums the estimated restore time of the
+ * recipe records the restore will replay (the live-measured field time plus
+ * DF_STORE_REPLAY_VERTEX_NS per vertex) (a brush version immediately superseded by the
  * next one of the same stroke is not replayed, restore.h, and stops counting); past
  * df_store_snapshot_replay_ns (DF_STORE_SNAPSHOT_REPLAY_NS, 1 s) the change's transaction
  * writes a snapshot as below once no stroke stays open after it (a snapshot inside a stroke

@@ -70,6 +70,10 @@
 #define DF_STORE_SNAPSHOT_REPLAY_NS ((uint64_t)1000000000) /* journal.h: snapshot also once the
                                                    * log's recipe records would take longer
                                                    * than this to replay at restart (1 s) */
+#define DF_STORE_REPLAY_VERTEX_NS 20              /* journal.h: a replayed recipe's restore time
+                                                   * beyond its field, per vertex (checksum, base
+                                                   * state copy, undo step: measured ~20 ns at 1M
+                                                   * vertices by bench_store_delta) */
 #define DF_STORE_SNAPSHOT_REPLAY_FORCE 4          /* ... taken between strokes, inside one only
                                                    * past this many times that */
 

@@ -230,6 +230,8 @@ static int run(int n, int order, const char *dir)
     double log_bytes = (double)srv.stats.store_log_bytes;
     uint64_t rows = srv.stats.store_changes, recipes = srv.stats.store_recipe_records;
     int64_t rows_kept = query(&srv, "SELECT count(*) FROM changes");
+    int64_t snap_bytes = query(&srv, "SELECT sum(length(data)) FROM blobs WHERE name IN ('cur',"
+                                     " 'rest')");
     memcpy(before, s->cur, nd * sizeof(double)); /* the live state, for the restart */
     uint64_t id = s->id;
     while (srv.sessions) df_session_destroy(srv.sessions);
@@ -256,10 +258,11 @@ static int run(int n, int order, const char *dir)
            "(target <= %.1f x): %s\n", log_bytes, (unsigned long long)rows,
            (unsigned long long)recipes, log_bytes / pos_bytes, TARGET_X_POS,
            log_bytes <= TARGET_X_POS * pos_bytes ? "ok" : "MISS");
-    printf("    snapshots by replay cost (> %.1f s since the last): %lld, each %.0f MB (positions "
-           "and rest shape); %lld log rows after the last; store file %.1f MB (mesh, snapshot, "
-           "log)\n", (double)DF_STORE_SNAPSHOT_REPLAY_NS / 1e9, (long long)snapshots,
-           2 * pos_bytes / 1048576.0, (long long)rows_kept, mb);
+    printf("    snapshots by replay cost (> %.1f s of estimated restore since the last): %lld, "
+           "each %.0f MB (the positions; the rest shape is still the base); %lld log rows after "
+           "the last; store file %.1f MB (mesh, snapshot, log)\n",
+           (double)DF_STORE_SNAPSHOT_REPLAY_NS / 1e9, (long long)snapshots,
+           (double)(snap_bytes > 0 ? snap_bytes : 0) / 1048576.0, (long long)rows_kept, mb);
     printf("    for comparison, packed deltas (codec.h) of each stroke's net change: %.0f bytes = "
            "%.2f x position bytes (the delta journal wrote one per version: more)\n", delta_bytes,
            delta_bytes / pos_bytes);
