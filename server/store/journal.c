@@ -318,7 +318,7 @@ static int recipe_record(const df_session *s, const df_change *c, const log_stat
     rec.recipe_len = blen;
     rc = df_record_encode(&rec, out, len, err);
     free(blob);
-    if (rc == DF_OK && !ending) *ns = restore_cost(rec.replay_ns, s->nv);
+    if (rc == DF_OK) *ns = restore_cost(rec.replay_ns, s->nv);
     return rc;
 }
 
@@ -344,6 +344,14 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
         rc = df_codec_delta_encode(s->cur, c->pos, s->nv, &delta, &dlen, err);
     if (rc == DF_OK && c->hs) rc = df_codec_handles_encode(c->hs, &hs, &hlen, err);
     if (hs) flags |= DF_JOURNAL_HANDLES;
+    /* a stroke's end whose undo step was a RECIPE live (history.h): the restore commits it
+     * with the record's recipe, one more replay; any other end replays nothing */
+    if (rec && !(flags & DF_JOURNAL_RECIPE)) {
+        if (c->hplan.valid && !c->hplan.nochange && c->hplan.step.kind == DF_HISTORY_RECIPE)
+            flags |= DF_JOURNAL_HIST_RECIPE;
+        else
+            ns = 0;
+    }
     /* a brush version right after the previous one of the same stroke supersedes it: the
      * restore does not replay that one (restore.h), so its cost no longer counts */
     if ((flags & DF_JOURNAL_RECIPE) && ls.prev_recipe && ls.prev_version + 1 == version &&

@@ -43,7 +43,10 @@
  * and the checksum of its positions, flag DF_JOURNAL_RECIPE, no delta. A BRUSH_END right
  * after its stroke's last publish (no other version in between) carries the same recipe with
  * the checksum of the state it commits (no flag: its positions are unchanged), so the undo
- * history can keep the stroke as a recipe. Everything else (rebased or cancelled strokes,
+ * history can keep the stroke as a recipe: when the live undo step was a RECIPE (the END's
+ * history plan, history.h) the row has DF_JOURNAL_HIST_RECIPE and the restore commits it with
+ * df_session_history_commit_recipe (replayed, kept as a RECIPE step when it reproduces the
+ * state), so the restored undo history holds recipes where the live one did. Everything else (rebased or cancelled strokes,
  * handle moves, undo / redo results, loads, reset-rest) keeps the packed delta below.
  * Snapshot by replay cost too: sessions.replay_ns sums the estimated restore time of the
  * recipe records the restore will replay (the live-measured field time plus
@@ -73,7 +76,9 @@
 #include "server/session/session.h"
 
 enum { DF_JOURNAL_REST_FROM_CUR = 1, DF_JOURNAL_HANDLES = 2, DF_JOURNAL_BRUSH = 4,
-       DF_JOURNAL_RECIPE = 8 /* the positions after the row are its recipe's replay */ };
+       DF_JOURNAL_RECIPE = 8, /* the positions after the row are its recipe's replay */
+       DF_JOURNAL_HIST_RECIPE = 128 /* a stroke's end whose undo step was a RECIPE (history.h):
+                                     * the restore commits it with the row's recipe */ };
 /* flags bits 4..6: the change's undo-history step (commit.h DF_HIST_*), replayed at restore */
 #define DF_JOURNAL_HIST_SHIFT 4
 #define DF_JOURNAL_HIST(flags) (((flags) >> DF_JOURNAL_HIST_SHIFT) & 7)

@@ -167,11 +167,14 @@ static int save_bases(ctx *c, uint64_t version, df_error *err)
     return DF_OK;
 }
 
-/* The row's undo-history step, as commit.c's apply_history. */
-static int history_step(df_session *s, int hist, df_error *err)
+/* The row's undo-history step, as commit.c's apply_history (rec: the row's recipe record, a
+ * RECIPE step when the row says it was one live, else NULL). */
+static int history_step(df_session *s, int hist, const df_recipe_record *rec, df_error *err)
 {
     switch (hist) {
-    case DF_HIST_COMMIT: return df_session_history_commit(s, err);
+    case DF_HIST_COMMIT:
+        return rec ? df_session_history_commit_recipe(s, rec->recipe, rec->recipe_len, err)
+                   : df_session_history_commit(s, err);
     case DF_HIST_RESET: return df_session_history_reset(s, err);
     case DF_HIST_UNDO:
     case DF_HIST_REDO: {
@@ -223,8 +226,8 @@ static int apply_row(ctx *c, sqlite3_stmt *q, uint64_t row, df_error *err)
         c->state_version = version;
     }
     if (flags & DF_JOURNAL_REST_FROM_CUR) memcpy(s->rest, s->cur, c->n * sizeof(double));
+    df_recipe_record rec;
     if (rb) { /* a stroke's end: the state it commits is the one its recipe recorded */
-        df_recipe_record rec;
         if ((rc = df_record_decode(rb, rlen, &rec, err)) != DF_OK) return rc;
         uint64_t sum = df_positions_checksum(s->cur, c->n);
         if (sum != rec.checksum) {
@@ -234,7 +237,9 @@ static int apply_row(ctx *c, sqlite3_stmt *q, uint64_t row, df_error *err)
             return mismatch(c, version, row, why);
         }
     }
-    return history_step(s, DF_JOURNAL_HIST(flags), err);
+    if (rb && (flags & DF_JOURNAL_HIST_RECIPE)) c->out->history_recipes++;
+    return history_step(s, DF_JOURNAL_HIST(flags),
+                        rb && (flags & DF_JOURNAL_HIST_RECIPE) ? &rec : NULL, err);
 }
 
 int df_store_replay(df_store *st, df_session *s, uint64_t snap_version, int threads,

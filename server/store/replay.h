@@ -3,7 +3,8 @@
  * Rows are applied in commit order onto the session's positions (the last snapshot or the
  * base): a delta sets the changed vertices' exact doubles, REST_FROM_CUR copies the positions
  * into the rest shape, a history step goes to s->hist (as commit.c applies it: state, then
- * history; today's XOR history: a stroke's end commits the replayed state).
+ * history: a stroke's end marked DF_JOURNAL_HIST_RECIPE commits with its recipe,
+ * df_session_history_commit_recipe: a RECIPE undo step as it was live; others an XOR step).
  * A recipe record (DF_JOURNAL_RECIPE, record.h) is recomputed with df_stroke_recipe_replay from
  * the state of its base_version and verified against its checksum. States of base versions are
  * kept (one copy of the positions each) from just before the first row past that version up to
@@ -31,6 +32,8 @@ typedef struct df_replay_result {
     uint64_t recipes_replayed;  /* recipe records recomputed and verified */
     uint64_t recipes_skipped;   /* recipe records superseded before anything read them */
     uint64_t bases_kept_max;    /* most base states held at once */
+    uint64_t history_recipes;   /* stroke ends committed with their recipe (RECIPE undo steps
+                                 * when the replay reproduces them) */
     int mismatch;               /* 1: stopped at the row below */
     uint64_t verified_version;  /* mismatch: the version the session's positions are of */
     uint64_t bad_version;       /* mismatch: the version of the row that did not verify */

@@ -176,7 +176,8 @@ static df_stroke *publish(df_session *s, df_stroke *st, const df_stroke_recipe *
     return st;
 }
 
-/* BRUSH_END of the stroke: one undo step, the stroke dropped. */
+/* BRUSH_END of the stroke: one undo step planned as h_brush.c's end_work does (a RECIPE step
+ * when its last publish is replayable from the history's state), the stroke dropped. */
 static void end(df_session *s)
 {
     df_change c;
@@ -185,6 +186,19 @@ static void end(df_session *s)
     df_change_init(&c, &q, &e);
     c.hist = DF_HIST_COMMIT;
     c.drop_stroke = 1;
+    const df_stroke *st = s->strokes;
+    size_t n = 3 * (size_t)s->nv;
+    uint8_t *blob = NULL;
+    size_t len = 0;
+    if (st && st->last_replayable && memcmp(st->base, s->hist.state, n * sizeof(double)) == 0) {
+        df_stroke_recipe r = {.brush = st->last_brush, .strength = st->last_strength,
+                              .n_pins = st->n_pins, .pin_flags = st->pin_flags,
+                              .pins = st->pins};
+        memcpy(r.load, st->last_load, sizeof r.load);
+        assert_int_equal(df_stroke_recipe_encode(&r, &blob, &len, &e), DF_OK);
+    }
+    assert_int_equal(df_history_plan_commit(&s->hist, s->cur, blob, len, &c.hplan, &e), DF_OK);
+    free(blob);
     assert_int_equal(df_session_commit(s, &c), DF_OK);
     df_change_clear(s->srv, &c);
 }
@@ -273,6 +287,9 @@ static void test_records_and_restore(void **state)
     memcpy(cur, s->cur, pb);
     memcpy(rest, s->rest, pb);
     int depth = df_history_can_undo(&s->hist);
+    int recipes = df_history_steps_of(&s->hist, DF_HISTORY_RECIPE);
+    assert_int_equal(recipes, 3);         /* the unrebased strokes' ends */
+    assert_int_equal(query(&srv, "SELECT count(*) FROM changes WHERE flags & 128"), 3);
     uint64_t version = atomic_load(&s->version);
     assert_int_equal(version, 12);
     server_close(&srv);
@@ -284,6 +301,7 @@ static void test_records_and_restore(void **state)
     assert_memory_equal(s->cur, cur, pb);
     assert_memory_equal(s->rest, rest, pb);
     assert_int_equal(df_history_can_undo(&s->hist), depth);
+    assert_int_equal(df_history_steps_of(&s->hist, DF_HISTORY_RECIPE), recipes);
     double *r1 = undo_state(s);
     assert_non_null(r1);
     assert_memory_equal(r1, u1, pb);
@@ -356,17 +374,18 @@ static void test_snapshot_by_replay_cost(void **state)
     server_open(&srv, "c.db");
     df_session *s = grid_session(&srv, "grid");
     /* the estimated restore time of a replayed record: its field time (1000 ns here) and the
-     * per-vertex work around it (journal.h) */
+     * per-vertex work around it (journal.h); a stroke costs two: its last version, and its end
+     * (a RECIPE undo step, replayed again by the history) */
     int64_t cost = 1000 + DF_STORE_REPLAY_VERTEX_NS * (int64_t)s->nv;
-    df_store_set_snapshot_replay_ns(srv.store, (uint64_t)(5 * cost / 2));
+    df_store_set_snapshot_replay_ns(srv.store, (uint64_t)(9 * cost / 2));
     uint64_t id = s->id;
     size_t pb = 24 * (size_t)s->nv;
     stroke(s, 30, 3, 0, 1000);
-    assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), cost);
-    stroke(s, 60, 2, 0, 1000);
     assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), 2 * cost);
+    stroke(s, 60, 2, 0, 1000);
+    assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), 4 * cost);
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 0);
-    stroke(s, 90, 2, 0, 1000);           /* its begin (version 6) passes 2.5 x cost ... */
+    stroke(s, 90, 2, 0, 1000);           /* its begin (version 6) passes 4.5 x cost ... */
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 7); /* ... its end */
     assert_int_equal(query(&srv, "SELECT count(*) FROM changes"), 0);
     assert_int_equal(query(&srv, "SELECT length(data) FROM blobs WHERE name = 'cur'"), (int64_t)pb);
@@ -374,7 +393,7 @@ static void test_snapshot_by_replay_cost(void **state)
     /* inside a stroke only past DF_STORE_SNAPSHOT_REPLAY_FORCE x the threshold: the stroke
      * began at version 7, before that snapshot (of version 8): its version 9 and its end are no
      * recipe any more (the log cannot rebuild version 7), a delta and a plain end */
-    stroke(s, 120, 2, 0, (uint64_t)(DF_STORE_SNAPSHOT_REPLAY_FORCE * 5 * cost / 2));
+    stroke(s, 120, 2, 0, (uint64_t)(DF_STORE_SNAPSHOT_REPLAY_FORCE * 9 * cost / 2));
     assert_int_equal(query(&srv, "SELECT snap_version FROM sessions"), 8);
     assert_int_equal(query(&srv, "SELECT replay_ns FROM sessions"), 0);
     assert_int_equal(query(&srv, "SELECT count(*) FROM changes"), 2);
