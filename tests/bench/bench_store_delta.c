@@ -147,6 +147,8 @@ static int publish(df_session *s, df_stroke **st, const df_stroke_recipe *r, dou
     return 0;
 }
 
+/* BRUSH_END: the undo step planned as h_brush.c's end_work does (a RECIPE step: the stroke
+ * began from the history's state), committed, the stroke dropped. */
 static int end_stroke(df_session *s)
 {
     df_change c;
@@ -155,6 +157,19 @@ static int end_stroke(df_session *s)
     df_change_init(&c, &q, &e);
     c.hist = DF_HIST_COMMIT;
     c.drop_stroke = 1;
+    const df_stroke *st = s->strokes;
+    uint8_t *blob = NULL;
+    size_t len = 0;
+    if (st && st->last_replayable &&
+        memcmp(st->base, s->hist.state, 3 * (size_t)s->nv * sizeof(double)) == 0) {
+        df_stroke_recipe r = {.brush = st->last_brush, .strength = st->last_strength};
+        memcpy(r.load, st->last_load, sizeof r.load);
+        if (df_stroke_recipe_encode(&r, &blob, &len, &e) != DF_OK)
+            return fprintf(stderr, "recipe: %s\n", e.msg), 1;
+    }
+    if (df_history_plan_commit(&s->hist, s->cur, blob, len, &c.hplan, &e) != DF_OK)
+        return fprintf(stderr, "history: %s\n", e.msg), 1;
+    free(blob);
     int rc = df_session_commit(s, &c);
     df_change_clear(s->srv, &c);
     if (rc != DF_OK) return fprintf(stderr, "end: %s\n", e.msg), 1;
@@ -230,6 +245,7 @@ static int run(int n, int order, const char *dir)
     double log_bytes = (double)srv.stats.store_log_bytes;
     uint64_t rows = srv.stats.store_changes, recipes = srv.stats.store_recipe_records;
     int64_t rows_kept = query(&srv, "SELECT count(*) FROM changes");
+    int live_rec = df_history_steps_of(&s->hist, DF_HISTORY_RECIPE);
     int64_t snap_bytes = query(&srv, "SELECT sum(length(data)) FROM blobs WHERE name IN ('cur',"
                                      " 'rest')");
     memcpy(before, s->cur, nd * sizeof(double)); /* the live state, for the restart */
@@ -250,6 +266,8 @@ static int run(int n, int order, const char *dir)
     double t2 = now();
     df_session *r2 = df_session_find(&srv2, id);
     int same = r2 && memcmp(r2->cur, before, nd * sizeof(double)) == 0;
+    int hrec = r2 ? df_history_steps_of(&r2->hist, DF_HISTORY_RECIPE) : 0;
+    int hsteps = r2 ? df_history_can_undo(&r2->hist) : 0;
 
     int nver = STROKES * UPDATES;
     printf("  order %d: %d vertices, %d strokes of %d versions and an end\n", order, n * n,
@@ -266,15 +284,17 @@ static int run(int n, int order, const char *dir)
     printf("    for comparison, packed deltas (codec.h) of each stroke's net change: %.0f bytes = "
            "%.2f x position bytes (the delta journal wrote one per version: more)\n", delta_bytes,
            delta_bytes / pos_bytes);
-    printf("    per version: field %.1f ms, commit (checksum + journal write) %.2f ms (medians)\n",
-           1e3 * median(field, nver), 1e3 * median(commit, nver));
+    printf("    per version: field %.1f ms, commit (checksum + journal write) %.2f ms (medians); "
+           "live undo history: %d recipe steps\n", 1e3 * median(field, nver),
+           1e3 * median(commit, nver), live_rec);
     printf("    restart: open + %s %.0f ms, restore %.0f ms (%llu recipes recomputed and "
-           "verified, %llu superseded, %llu mismatches): %s\n",
+           "verified, %llu superseded, %llu mismatches; undo history %d steps, %d of them "
+           "recipes): %s\n",
            mb * 1048576.0 <= (double)DF_STORE_FULL_CHECK_BYTES ? "integrity_check"
                                                              : "quick_check",
            1e3 * (t1 - t0), 1e3 * (t2 - t1), (unsigned long long)srv2.stats.store_recipes_replayed,
            (unsigned long long)srv2.stats.store_recipes_skipped,
-           (unsigned long long)srv2.stats.store_replay_mismatches,
+           (unsigned long long)srv2.stats.store_replay_mismatches, hsteps, hrec,
            same ? "bit-identical to the live session" : "DIFFERS from the live session");
     while (srv2.sessions) df_session_destroy(srv2.sessions);
     df_store_stop(&srv2);
