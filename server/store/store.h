@@ -44,8 +44,8 @@
  * file), an SQLite database of another application (foreign application_id, or tables without
  * ours), a schema version this build does not know (older ones are migrated), or an integrity
  * failure refuse the open with a message naming the file; nothing is written to such a file.
- * Integrity: PRAGMA integrity_check for files up to DF_STORE_FULL_CHECK_BYTES, PRAGMA quick_check (no index
- * content cross-check) above. The store takes an exclusive lock (locking_mode EXCLUSIVE): a
+ * Integrity: PRAGMA integrity_check for files up to DF_STORE_FULL_CHECK_BYTES, PRAGMA
+ * quick_check (no index content cross-check) above. The store takes an exclusive lock (locking_mode EXCLUSIVE): a
  * second daemon on the same file is refused ("in use").
  *
  * Durability (config `durability`): full = PRAGMA synchronous FULL (the WAL is fsynced at every

@@ -18,7 +18,9 @@
  * file's size, for comparison the packed delta (codec.h) of each stroke's net change (a lower
  * bound of what the delta journal wrote: it logged one per version), the field and commit time
  * per version, and the restart: opening and checking the file, then restoring the session (its
- * recipe records recomputed and verified), which must be bit-identical to the live one. */
+ * recipe records recomputed and verified), which must be bit-identical to the live one. A
+ * third run keeps the whole journal (no snapshot by replay cost): the restart then replays all
+ * 200 strokes. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -195,16 +197,19 @@ static double file_mb(const char *path)
     return b / 1048576.0;
 }
 
-static int run(int n, int order, const char *dir)
+/* budget_ns: the store's replay-cost snapshot threshold (0: the default). */
+static int run(int n, int order, const char *dir, uint64_t budget_ns)
 {
     static df_server srv, srv2;
     memset(&srv, 0, sizeof srv);
     df_config_defaults(&srv.cfg, NULL);
-    snprintf(srv.cfg.store_path, sizeof srv.cfg.store_path, "%s/order%d.db", dir, order);
+    snprintf(srv.cfg.store_path, sizeof srv.cfg.store_path, "%s/order%d-%llu.db", dir, order,
+             (unsigned long long)budget_ns);
     df_error e;
     df_mesh m;
     df_session *s;
     if (df_store_start(&srv, &e) != DF_OK) return fprintf(stderr, "store: %s\n", e.msg), 1;
+    if (budget_ns) df_store_set_snapshot_replay_ns(srv.store, budget_ns);
     if (grid_mesh(n, &m) || df_session_create(&srv, &m, "grid", &s, &e) != DF_OK)
         return fprintf(stderr, "session: %s\n", e.msg), 1;
     size_t nd = 3 * (size_t)s->nv;
@@ -270,8 +275,8 @@ static int run(int n, int order, const char *dir)
     int hsteps = r2 ? df_history_can_undo(&r2->hist) : 0;
 
     int nver = STROKES * UPDATES;
-    printf("  order %d: %d vertices, %d strokes of %d versions and an end\n", order, n * n,
-           STROKES, UPDATES);
+    printf("  order %d: %d vertices, %d strokes of %d versions and an end%s\n", order, n * n,
+           STROKES, UPDATES, budget_ns == UINT64_MAX ? " (no snapshot by replay cost)" : "");
     printf("    journal %.0f bytes in %llu rows (%llu recipe records) = %.4f x position bytes "
            "(target <= %.1f x): %s\n", log_bytes, (unsigned long long)rows,
            (unsigned long long)recipes, log_bytes / pos_bytes, TARGET_X_POS,
@@ -279,7 +284,8 @@ static int run(int n, int order, const char *dir)
     printf("    snapshots by replay cost (> %.1f s of estimated restore since the last): %lld, "
            "each %.0f MB (the positions; the rest shape is still the base); %lld log rows after "
            "the last; store file %.1f MB (mesh, snapshot, log)\n",
-           (double)DF_STORE_SNAPSHOT_REPLAY_NS / 1e9, (long long)snapshots,
+           (double)(budget_ns ? budget_ns : DF_STORE_SNAPSHOT_REPLAY_NS) / 1e9,
+           (long long)snapshots,
            (double)(snap_bytes > 0 ? snap_bytes : 0) / 1048576.0, (long long)rows_kept, mb);
     printf("    for comparison, packed deltas (codec.h) of each stroke's net change: %.0f bytes = "
            "%.2f x position bytes (the delta journal wrote one per version: more)\n", delta_bytes,
@@ -289,12 +295,14 @@ static int run(int n, int order, const char *dir)
            1e3 * median(commit, nver), live_rec);
     printf("    restart: open + %s %.0f ms, restore %.0f ms (%llu recipes recomputed and "
            "verified, %llu superseded, %llu mismatches; undo history %d steps, %d of them "
-           "recipes): %s\n",
+           "recipes; %.1f ms per restored stroke): %s\n",
            mb * 1048576.0 <= (double)DF_STORE_FULL_CHECK_BYTES ? "integrity_check"
                                                              : "quick_check",
            1e3 * (t1 - t0), 1e3 * (t2 - t1), (unsigned long long)srv2.stats.store_recipes_replayed,
            (unsigned long long)srv2.stats.store_recipes_skipped,
            (unsigned long long)srv2.stats.store_replay_mismatches, hsteps, hrec,
+           srv2.stats.store_recipes_replayed
+               ? 1e3 * (t2 - t1) / (double)srv2.stats.store_recipes_replayed : 0.0,
            same ? "bit-identical to the live session" : "DIFFERS from the live session");
     while (srv2.sessions) df_session_destroy(srv2.sessions);
     df_store_stop(&srv2);
@@ -313,7 +321,9 @@ int main(void)
     if (!mkdtemp(dir)) return perror("mkdtemp"), 1;
     printf("store journal of local grab strokes on a %d x %d grid (server/store/, durability "
            "full)\n", n, n);
-    int rc = run(n, 1, dir) || run(n, 3, dir);
+    /* the default policy for both falloffs, then the whole journal kept (no snapshot by replay
+     * cost: what a restart would replay without it) */
+    int rc = run(n, 1, dir, 0) || run(n, 3, dir, 0) || run(n, 3, dir, UINT64_MAX);
     char cmd[64];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);

@@ -269,8 +269,8 @@ static void test_migrates_versions_1_and_2(void **state)
         snprintf(sql, sizeof sql, "PRAGMA application_id=%d; PRAGMA user_version=%d; %s%s"
                  "INSERT INTO sessions(id, name, kind, planar, nv, ne, nf, base, version) VALUES(3,"
                  " 'old', 1, 0, 1, 0, 0, zeroblob(24), 17);"
-                 "INSERT INTO changes(session, version, kind, who, flags, delta) VALUES(3, 17, 0, 0,"
-                 " 0, x'0000000001000000');%s", DF_STORE_APP_ID, ver, k_schema_v1,
+                 "INSERT INTO changes(session, version, kind, who, flags, delta) VALUES(3, 17, 0,"
+                 " 0, 0, x'0000000001000000');%s", DF_STORE_APP_ID, ver, k_schema_v1,
                  ver == 2 ? k_access_v2 : "",
                  ver == 2 ? "INSERT INTO access VALUES(3, 'alice', 2, 1, NULL, '');" : "");
         make_db(p, sql);
