@@ -36,37 +36,34 @@
  * version, and deletes the session's log rows: a session holds at
  * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
  * at most that (restore.h). The deleted rows' kind / who are not kept.
- * Recipe records (schema 2, record.h): a brush version (BRUSH_BEGIN / BRUSH_UPDATE) whose
- * stroke is replayable (df_stroke_recipe: the change's recipe_replayable, no rebase) and began
- * at a version the log can rebuild (base_version >= the session's snap_version) is written as
- * its recipe (brush, strength, cumulative load, pins: ~300 bytes + 24 per pin), base_version
- * and the checksum of its positions, flag DF_JOURNAL_RECIPE, no delta. A BRUSH_END right
- * after its stroke's last publish (no other version in between) carries the same recipe with
- * the checksum of the state it commits (no flag: its positions are unchanged), so the undo
- * history can keep the stroke as a recipe: when the live undo step was a RECIPE (the END's
- * history plan, history.h) the row has DF_JOURNAL_HIST_RECIPE and the restore commits it with
- * df_session_history_commit_recipe (replayed, kept as a RECIPE step when it reproduces the
- * state), so the restored undo history holds recipes where the live one did. Everything else (rebased or cancelled strokes,
- * handle moves, undo / redo results, loads, reset-rest) keeps the packed delta below.
- * Snapshot by replay cost too: sessions.replay_ns sums the estimated restore time of the
- * recipe records the restore will replay (the live-measured field time plus
- * DF_STORE_REPLAY_VERTEX_NS per vertex) (a brush version immediately superseded by the
- * next one of the same stroke is not replayed, restore.h, and stops counting); past
- * df_store_snapshot_replay_ns (DF_STORE_SNAPSHOT_REPLAY_NS, 1 s) the change's transaction
- * writes a snapshot as below once no stroke stays open after it (a snapshot inside a stroke
- * would leave the stroke's later versions without their base state: deltas), or inside one
- * past DF_STORE_SNAPSHOT_REPLAY_FORCE times the threshold, so a restart replays at most about
- * that much per session.
- * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a
- * brush version's raw delta is dense: 24 bytes per vertex + 8. The codec writes it packed
- * (codec.h: XOR against the previous state, byte planes, zstd) when smaller: measured by
- * tests/bench/bench_store_delta.c on a 1M-vertex grid, 200 local grab strokes, ~1.3 bytes per
- * vertex per change for a tri-scale brush (~17x less than raw) and ~5.9 for the single-scale
- * default (~4x; its 1/r far field moves every vertex by more than float32 resolution). That is
- * still above the issue's target (200 strokes within 2 x the position bytes, 0.24 bytes per
- * vertex per stroke): the low mantissa bits of the far-field motion are incompressible, and
- * only recording a stroke as its request plus checkpoints would reach it. The snapshot rule
- * below bounds the log either way; recipe records above avoid it for unrebased strokes. srv->store counts the bytes written (df_store_log_bytes).
+ * Recipe records (schema 3, record.h): a brush version (BRUSH_BEGIN / BRUSH_UPDATE) whose stroke is
+ * replayable (the change's recipe_replayable, no rebase) and began at a version the log can rebuild
+ * (base_version >= the session's snap_version) is written as its recipe (brush, strength,
+ * cumulative load, pins: 272 bytes + 24 per pin, in a 32-byte record), base_version and the
+ * checksum of its positions, flag DF_JOURNAL_RECIPE, no delta. A BRUSH_END right after its stroke's
+ * last publish (no other version in between) carries the same recipe with the checksum of the state
+ * it commits (no flag: its positions are unchanged); when the live undo step was a RECIPE (the
+ * END's history plan, history.h) the row also has DF_JOURNAL_HIST_RECIPE and the restore commits it
+ * with df_session_history_commit_recipe (replayed, a RECIPE step when it reproduces the state), so
+ * the restored undo history holds recipes where the live one did. Everything else (rebased or
+ * cancelled strokes, handle moves, undo / redo results, loads, reset-rest) keeps the packed delta
+ * (codec.h).
+ * Snapshot by replay cost too: sessions.replay_ns sums the estimated restore time of what the
+ * restore will replay (per record: the live-measured field time plus DF_STORE_REPLAY_VERTEX_NS per
+ * vertex; a brush version immediately superseded by the next one of the same stroke is not
+ * replayed, replay.h, and stops counting; a RECIPE end counts once more); past
+ * df_store_snapshot_replay_ns (DF_STORE_SNAPSHOT_REPLAY_NS, 1 s) the change's transaction writes a
+ * snapshot as above once no stroke stays open after it (a snapshot inside a stroke would leave the
+ * stroke's later versions without their base state: deltas), or inside one past
+ * DF_STORE_SNAPSHOT_REPLAY_FORCE times the threshold, so a restart replays about that much per
+ * session at most.
+ * Cost (tests/bench/bench_store_delta.c: a real session and store, 1M-vertex grid, 200 local grab
+ * strokes of 4 versions and an end each, durability full): the journal holds 304,000 bytes (1000
+ * recipe records, 0.013 x the position bytes; the issue's target is 2 x) for either falloff, where
+ * packed deltas of each stroke's net change alone would be 49 x (single-scale) or 11 x (tri-scale):
+ * a Kelvinlet stroke moves every vertex by a little, and the low mantissa bits of that motion do
+ * not compress. A brush version's commit (checksum of the positions and the transaction) takes
+ * ~6-12 ms at 1M vertices. srv->store counts the bytes written (df_store_log_bytes).
  *
  * Loop thread. */
 #ifndef DF_SERVER_STORE_JOURNAL_H

@@ -1,4 +1,4 @@
-/* record.h — the change log's recipe record (store.h schema 2: changes.recipe): a brush version
+/* record.h — the change log's recipe record (store.h schema 3: changes.recipe): a brush version
  * or a stroke's end kept as the stroke's request instead of a position delta (journal.h).
  *
  * Layout (native-endian, packed): u32 magic DF_RECORD_MAGIC ('DJR1'), u32 recipe_len, u64

@@ -70,10 +70,13 @@
 #define DF_STORE_SNAPSHOT_REPLAY_NS ((uint64_t)1000000000) /* journal.h: snapshot also once the
                                                    * log's recipe records would take longer
                                                    * than this to replay at restart (1 s) */
-#define DF_STORE_REPLAY_VERTEX_NS 20              /* journal.h: a replayed recipe's restore time
-                                                   * beyond its field, per vertex (checksum, base
-                                                   * state copy, undo step: measured ~20 ns at 1M
-                                                   * vertices by bench_store_delta) */
+#define DF_STORE_REPLAY_VERTEX_NS 30              /* journal.h: a replayed recipe's restore time
+                                                   * beyond its field, per vertex (checksums,
+                                                   * base state copy, the undo history's
+                                                   * checkpoints: bench_store_delta measured
+                                                   * 51 ms per restored stroke, two replays of a
+                                                   * 15 ms field, at 1M vertices; 2-3x that on
+                                                   * a loaded machine, the field too) */
 #define DF_STORE_SNAPSHOT_REPLAY_FORCE 4          /* ... taken between strokes, inside one only
                                                    * past this many times that */
 
