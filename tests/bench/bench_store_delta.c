@@ -21,6 +21,7 @@
  * recipe records recomputed and verified), which must be bit-identical to the live one. A
  * third run keeps the whole journal (no snapshot by replay cost): the restart then replays all
  * 200 strokes. */
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -284,7 +285,8 @@ static int run(int n, int order, const char *dir, uint64_t budget_ns)
     printf("    snapshots by replay cost (> %.1f s of estimated restore since the last): %lld, "
            "each %.0f MB (the positions; the rest shape is still the base); %lld log rows after "
            "the last; store file %.1f MB (mesh, snapshot, log)\n",
-           (double)(budget_ns ? budget_ns : DF_STORE_SNAPSHOT_REPLAY_NS) / 1e9,
+           budget_ns == UINT64_MAX ? INFINITY
+                                   : (double)(budget_ns ? budget_ns : DF_STORE_SNAPSHOT_REPLAY_NS) / 1e9,
            (long long)snapshots,
            (double)(snap_bytes > 0 ? snap_bytes : 0) / 1048576.0, (long long)rows_kept, mb);
     printf("    for comparison, packed deltas (codec.h) of each stroke's net change: %.0f bytes = "
