@@ -41,6 +41,11 @@ typedef struct df_stats {
     uint64_t store_changes;      /* change-log rows written to the durable store (journal.h) */
     uint64_t store_log_bytes;    /* their blob bytes (position deltas, handle sets, brushes) */
     uint64_t store_errors;       /* store writes that failed (the request failed with them) */
+    uint64_t store_recipe_records; /* of store_changes: rows with a stroke recipe (journal.h) */
+    uint64_t store_recipes_replayed; /* restore: recipe records replayed and verified ... */
+    uint64_t store_recipes_skipped;  /* ... and not replayed (superseded, restore.h) */
+    uint64_t store_replay_mismatches; /* restore: sessions stopped at a recipe whose replay did
+                                       * not reproduce its checksum (restore.h) */
     uint64_t brush_cursor_events; /* BRUSH_CURSOR events broadcast (after rate limiting) */
 } df_stats;
 

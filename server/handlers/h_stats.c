@@ -83,6 +83,10 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "store_changes", (double)x->store_changes);
         put(&st, "store_log_bytes", (double)x->store_log_bytes);
         put(&st, "store_errors", (double)x->store_errors);
+        put(&st, "store_recipe_records", (double)x->store_recipe_records);
+        put(&st, "store_recipes_replayed", (double)x->store_recipes_replayed);
+        put(&st, "store_recipes_skipped", (double)x->store_recipes_skipped);
+        put(&st, "store_replay_mismatches", (double)x->store_replay_mismatches);
         put(&st, "brush_cursor_events", (double)x->brush_cursor_events);
         put(&st, "cursor_hz", srv->cfg.cursor_hz);
         put(&st, "shm_ring_bytes", (double)srv->cfg.shm_ring_bytes);

@@ -3,7 +3,9 @@
  * Pure: any thread.
  *
  * delta (changes.delta): the position delta layout of server/session/delta.h (raw or packed;
- *   the undo history's checkpoint links use it too).
+ *   the undo history's checkpoint links use it too). Brush versions of unrebased strokes are
+ *   journaled as their recipe instead (record.h, journal.h): recomputed and checksum-verified
+ *   at restore; deltas remain for everything else.
  * brush (sessions.brush, changes.aux of a brush change): u8 type, falloff, integrator,
  *   has_mirror, u16 steps, then f64 radius, nu, strength, ratio, mirror_point[3],
  *   mirror_normal[3] (86 bytes).

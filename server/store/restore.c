@@ -12,86 +12,72 @@
 #include "server/session/session.h"
 #include "server/store/codec.h"
 #include "server/store/journal.h"
+#include "server/store/replay.h"
 #include "server/store/store.h"
 
-/* Replays session s's change log onto its positions and rest shape (the last snapshot or the
- * base), with each row's undo-history step on s->hist, in the commit's order (state, then
- * history). */
-static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *err)
+/* Below this many vertices a replayed field is evaluated by one thread (as h_brush.c). */
+#define REPLAY_PARALLEL_MIN_VERTICES 32768
+
+/* A copy of session id's large value `name` (store.h: blobs) into *out (malloc'd; NULL when
+ * absent), *len its bytes (0 when absent). Errors: DF_EIO (reading), DF_ENOMEM. */
+static int blob_read(df_store *st, uint64_t id, const char *name, void **out, size_t *len,
+                     df_error *err)
 {
+    *out = NULL;
+    *len = 0;
     sqlite3_stmt *q = NULL;
-    if (sqlite3_prepare_v2(df_store_db(st), "SELECT flags, delta FROM changes WHERE session = ?"
-                           " ORDER BY id", -1, &q, NULL) != SQLITE_OK)
-        return df_store_fail(st, DF_EIO, "reading the change log", err);
-    sqlite3_bind_int64(q, 1, (sqlite3_int64)s->id);
-    int rc = DF_OK, step;
-    *n_changes = 0;
-    while (rc == DF_OK && (step = sqlite3_step(q)) == SQLITE_ROW) {
-        int flags = sqlite3_column_int(q, 0);
-        const uint8_t *d = sqlite3_column_blob(q, 1);
-        size_t len = (size_t)sqlite3_column_bytes(q, 1);
-        if (d) rc = df_codec_delta_apply(d, len, s->cur, s->nv, NULL, err);
-        if (rc == DF_OK && (flags & DF_JOURNAL_REST_FROM_CUR))
-            memcpy(s->rest, s->cur, 3 * (size_t)s->nv * sizeof(double));
-        if (rc == DF_OK) {
-            switch (DF_JOURNAL_HIST(flags)) { /* as commit.c's apply_history */
-            case DF_HIST_COMMIT: rc = df_session_history_commit(s, err); break;
-            case DF_HIST_RESET: rc = df_session_history_reset(s, err); break;
-            case DF_HIST_UNDO:
-            case DF_HIST_REDO: {
-                /* The step it moved to may predate the snapshot the history starts at (an undo
-                 * of a change the snapshot folded in): the history then restarts at the
-                 * positions the row produced, so later undo steps revert to them, as live. */
-                const double *at = DF_JOURNAL_HIST(flags) == DF_HIST_UNDO
-                                       ? df_history_undo(&s->hist, NULL)
-                                       : df_history_redo(&s->hist, NULL);
-                if (!at || memcmp(at, s->cur, 3 * (size_t)s->nv * sizeof(double)))
-                    rc = df_session_history_reset(s, err);
-                break;
-            }
-            default: break;
-            }
-        }
-        (*n_changes)++;
+    if (sqlite3_prepare_v2(df_store_db(st), "SELECT data FROM blobs WHERE session = ? AND"
+                           " name = ?", -1, &q, NULL) != SQLITE_OK)
+        return df_store_fail(st, DF_EIO, "reading a session's mesh", err);
+    sqlite3_bind_int64(q, 1, (sqlite3_int64)id);
+    sqlite3_bind_text(q, 2, name, -1, SQLITE_STATIC);
+    int rc = DF_OK, step = sqlite3_step(q);
+    if (step == SQLITE_ROW && (*len = (size_t)sqlite3_column_bytes(q, 0)) > 0) {
+        if (!(*out = malloc(*len))) rc = df_error_set(err, DF_ENOMEM, "out of memory");
+        else memcpy(*out, sqlite3_column_blob(q, 0), *len);
+    } else if (step != SQLITE_ROW && step != SQLITE_DONE) {
+        rc = df_store_fail(st, DF_EIO, "reading a session's mesh", err);
     }
-    if (rc == DF_OK && step != SQLITE_DONE) rc = df_store_fail(st, DF_EIO, "reading the log", err);
     sqlite3_finalize(q);
     return rc;
 }
 
-/* A copy of column `col` (exactly `len` bytes, NULL allowed when len is 0). */
-static int column_copy(sqlite3_stmt *q, int col, size_t len, void **out)
+/* blob_read of exactly `want` bytes (absent counts as 0): DF_EFORMAT otherwise. */
+static int blob_exact(df_store *st, uint64_t id, const char *name, size_t want, void **out,
+                      df_error *err)
 {
-    *out = NULL;
-    if ((size_t)sqlite3_column_bytes(q, col) != len) return DF_EFORMAT;
-    if (!len) return DF_OK;
-    if (!(*out = malloc(len))) return DF_ENOMEM;
-    memcpy(*out, sqlite3_column_blob(q, col), len);
-    return DF_OK;
+    size_t len;
+    int rc = blob_read(st, id, name, out, &len, err);
+    if (rc == DF_OK && len != want) {
+        free(*out);
+        *out = NULL;
+        rc = df_error_set(err, DF_EFORMAT, "%s of %zu bytes, %zu expected", name, len, want);
+    }
+    return rc;
 }
 
-/* The access columns 16..20 of restore_all's query (NULL: no access row, a session of a
+/* The access columns 11..15 of restore_all's query (NULL: no access row, a session of a
  * schema 1 store: the configured mode, no owner) into s. */
 static int restore_access(df_server *srv, df_session *s, sqlite3_stmt *q, df_error *err)
 {
-    if (sqlite3_column_type(q, 16) == SQLITE_NULL) return DF_OK; /* as df_session_create */
-    snprintf(s->owner, sizeof s->owner, "%s", (const char *)sqlite3_column_text(q, 16));
-    int mode = sqlite3_column_int(q, 17), obs = sqlite3_column_int(q, 18);
+    if (sqlite3_column_type(q, 11) == SQLITE_NULL) return DF_OK; /* as df_session_create */
+    snprintf(s->owner, sizeof s->owner, "%s", (const char *)sqlite3_column_text(q, 11));
+    int mode = sqlite3_column_int(q, 12), obs = sqlite3_column_int(q, 13);
     if (mode < DF_ACCESS_MODE_OPEN || mode > DF_ACCESS_MODE_OWNER || obs < 0 || obs > 1)
         return df_error_set(err, DF_EFORMAT, "access row: mode %d observers %d", mode, obs);
     df_membership_free(&s->acc);
     df_membership_init(&s->acc, mode, obs);
-    if (sqlite3_column_type(q, 19) != SQLITE_NULL) {
-        if (sqlite3_column_bytes(q, 19) != DF_JOIN_HASH_BYTES)
+    if (sqlite3_column_type(q, 14) != SQLITE_NULL) {
+        if (sqlite3_column_bytes(q, 14) != DF_JOIN_HASH_BYTES)
             return df_error_set(err, DF_EFORMAT, "access row: join key hash of %d bytes",
-                                sqlite3_column_bytes(q, 19));
-        memcpy(s->acc.key_hash, sqlite3_column_blob(q, 19), DF_JOIN_HASH_BYTES);
+                                sqlite3_column_bytes(q, 14));
+        memcpy(s->acc.key_hash, sqlite3_column_blob(q, 14), DF_JOIN_HASH_BYTES);
         s->acc.has_key = 1;
     }
-    const char *members = (const char *)sqlite3_column_text(q, 20);
+    const char *members = (const char *)sqlite3_column_text(q, 15);
     (void)srv;
     return members ? df_membership_members_parse(&s->acc, members,
-                                                 (size_t)sqlite3_column_bytes(q, 20), err)
+                                                 (size_t)sqlite3_column_bytes(q, 15), err)
                    : DF_OK;
 }
 
@@ -109,50 +95,76 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
             nf = sqlite3_column_int64(q, 6);
     int es = df_mesh_elem_size(m.kind);
     int rc = DF_EFORMAT;
+    df_error e;
+    df_error_set(&e, DF_EFORMAT, "sizes: kind %d, %lld vertices, %lld elements, %lld faces",
+                 (int)m.kind, (long long)nv, (long long)ne, (long long)nf);
     if (es && nv >= 1 && nv <= INT32_MAX / 3 && ne >= 0 && ne <= INT32_MAX / 4 && nf >= 0 &&
         nf <= INT32_MAX / 3) {
         m.nv = (int32_t)nv;
         m.ne = (int32_t)ne;
         m.nf = (int32_t)nf;
         void *V = NULL, *E = NULL, *F = NULL;
-        rc = column_copy(q, 7, 24 * (size_t)nv, &V);
+        rc = blob_exact(st, id, "base", 24 * (size_t)nv, &V, &e);
         m.V = V;
-        if (rc == DF_OK) rc = column_copy(q, 8, 4 * (size_t)es * (size_t)ne, &E);
+        if (rc == DF_OK) rc = blob_exact(st, id, "elems", 4 * (size_t)es * (size_t)ne, &E, &e);
         m.E = E;
-        if (rc == DF_OK) rc = column_copy(q, 9, 12 * (size_t)nf, &F);
+        if (rc == DF_OK) rc = blob_exact(st, id, "faces", 12 * (size_t)nf, &F, &e);
         m.F = F;
         for (size_t i = 0; rc == DF_OK && i < (size_t)es * (size_t)ne; i++)
-            if (m.E[i] < 0 || m.E[i] >= m.nv) rc = DF_EFORMAT;
+            if (m.E[i] < 0 || m.E[i] >= m.nv) rc = df_error_set(&e, DF_EFORMAT, "elems: index");
         for (size_t i = 0; rc == DF_OK && i < 3 * (size_t)nf; i++)
-            if (m.F[i] < 0 || m.F[i] >= m.nv) rc = DF_EFORMAT;
+            if (m.F[i] < 0 || m.F[i] >= m.nv) rc = df_error_set(&e, DF_EFORMAT, "faces: index");
     }
     if (rc != DF_OK) {
         df_mesh_free(&m);
-        return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
-                            (unsigned long long)id, name,
-                            rc == DF_ENOMEM ? "out of memory" : "malformed mesh row");
+        return df_error_set(err, rc, "store %s: session %llu '%s': malformed mesh row (%s)",
+                            df_store_path(st), (unsigned long long)id, name, e.msg);
     }
     df_session *s;
     srv->next_session_id = id - 1; /* df_session_create gives it back its id */
-    df_error e;
     if ((rc = df_session_create(srv, &m, name, &s, &e)) != DF_OK)
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
                             (unsigned long long)id, name, e.msg);
-    atomic_store(&s->version, (uint64_t)sqlite3_column_int64(q, 10)); /* before any write */
+    atomic_store(&s->version, (uint64_t)sqlite3_column_int64(q, 7)); /* before any write */
     uint64_t n_changes = 0;
     size_t pb = 24 * (size_t)s->nv;
-    for (int col = 14; col <= 15; col++) { /* the last snapshot (NULL: the base) */
-        if (sqlite3_column_type(q, col) == SQLITE_NULL) continue;
-        if ((size_t)sqlite3_column_bytes(q, col) != pb) {
-            rc = df_error_set(&e, DF_EFORMAT, "snapshot of %d bytes, %zu expected",
-                              sqlite3_column_bytes(q, col), pb);
-            break;
-        }
-        memcpy(col == 14 ? s->cur : s->rest, sqlite3_column_blob(q, col), pb);
+    for (int k = 0; k < 2 && rc == DF_OK; k++) { /* the last snapshot (absent: the base) */
+        void *snap = NULL;
+        size_t len;
+        rc = blob_read(st, id, k ? "rest" : "cur", &snap, &len, &e);
+        if (rc == DF_OK && snap && len != pb)
+            rc = df_error_set(&e, DF_EFORMAT, "snapshot of %zu bytes, %zu expected", len, pb);
+        if (rc == DF_OK && snap) memcpy(k ? s->rest : s->cur, snap, pb);
+        free(snap);
     }
     if (rc == DF_OK) rc = restore_access(srv, s, q, &e);
     if (rc == DF_OK) rc = df_session_history_reset(s, &e); /* undo starts at the snapshot */
-    if (rc == DF_OK) rc = replay(st, s, &n_changes, &e);
+    df_replay_result rr;
+    memset(&rr, 0, sizeof rr);
+    if (rc == DF_OK)
+        rc = df_store_replay(st, s, (uint64_t)sqlite3_column_int64(q, 10),
+                             s->nv < REPLAY_PARALLEL_MIN_VERTICES ? 1 : srv->cfg.threads, &rr,
+                             &e);
+    n_changes = rr.rows;
+    srv->stats.store_recipes_replayed += rr.recipes_replayed;
+    srv->stats.store_recipes_skipped += rr.recipes_skipped;
+    if (rc == DF_OK && rr.mismatch) {
+        /* never a wrong mesh: the session stays at the last verified version's positions,
+         * published as a new version (no version number names two meshes), folded into a
+         * snapshot so that the next start does not replay the dropped rows onto them */
+        uint64_t stored = atomic_load(&s->version), next = stored + 1;
+        srv->stats.store_replay_mismatches++;
+        df_log(DF_LOG_ERROR, "store %s: session %llu '%s': the change of version %llu does not "
+               "replay to what was recorded (%s): restored at version %llu's positions, the "
+               "last verified, as version %llu; %llu logged change(s) from version %llu on are "
+               "lost", df_store_path(st), (unsigned long long)id, name,
+               (unsigned long long)rr.bad_version, rr.why,
+               (unsigned long long)rr.verified_version, (unsigned long long)next,
+               (unsigned long long)rr.rows_dropped, (unsigned long long)rr.bad_version);
+        atomic_store(&s->version, next);
+        rc = df_session_history_reset(s, &e);
+        if (rc == DF_OK) rc = df_store_replay_cut(st, s, next, &e);
+    }
     if (rc == DF_OK && memcmp(s->hist.state, s->cur, 3 * (size_t)s->nv * sizeof(double)) != 0) {
         /* the log ends inside a stroke or move (the daemon died before its end): it ends now,
          * as a disconnect ends a stroke: the positions become an undo step, logged first so
@@ -166,13 +178,15 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         df_log(DF_LOG_INFO, "session %llu: the stroke or move open when the daemon stopped "
                "ends here (one undo step)", (unsigned long long)id);
     }
-    const uint8_t *b = sqlite3_column_blob(q, 11);
+    const uint8_t *b = sqlite3_column_blob(q, 8);
     if (rc == DF_OK && b)
-        rc = df_codec_brush_unpack(b, (size_t)sqlite3_column_bytes(q, 11), &s->brush, &e);
-    s->brush_seq = (uint64_t)sqlite3_column_int64(q, 12);
-    const uint8_t *h = sqlite3_column_blob(q, 13);
-    if (rc == DF_OK && h)
-        rc = df_codec_handles_decode(h, (size_t)sqlite3_column_bytes(q, 13), s->nv, &s->hs, &e);
+        rc = df_codec_brush_unpack(b, (size_t)sqlite3_column_bytes(q, 8), &s->brush, &e);
+    s->brush_seq = (uint64_t)sqlite3_column_int64(q, 9);
+    void *h = NULL;
+    size_t hlen = 0;
+    if (rc == DF_OK) rc = blob_read(st, id, "handles", &h, &hlen, &e);
+    if (rc == DF_OK && h) rc = df_codec_handles_decode(h, hlen, s->nv, &s->hs, &e);
+    free(h);
     if (rc != DF_OK) {
         df_session_destroy(s);
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
@@ -180,9 +194,11 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     }
     for (size_t i = 0; i < 3 * (size_t)s->nv; i++)
         s->uf[i] = (float)(s->cur[i] - s->mesh.V[i]);
-    df_log(DF_LOG_INFO, "session %llu '%s' restored at version %llu (%llu logged changes)",
+    df_log(DF_LOG_INFO, "session %llu '%s' restored at version %llu (%llu logged changes; "
+           "%llu stroke recipe(s) replayed and verified, %llu superseded)",
            (unsigned long long)id, s->name, (unsigned long long)atomic_load(&s->version),
-           (unsigned long long)n_changes);
+           (unsigned long long)n_changes, (unsigned long long)rr.recipes_replayed,
+           (unsigned long long)rr.recipes_skipped);
     return DF_OK;
 }
 
@@ -197,10 +213,10 @@ static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
         return df_store_fail(st, DF_EIO, "reading meta", err);
     if (sqlite3_step(q) == SQLITE_ROW) next = (uint64_t)sqlite3_column_int64(q, 0);
     sqlite3_finalize(q);
-    if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, base, elems, faces,"
-                           " version, brush, brush_seq, handles, cur, rest, a.owner, a.mode,"
-                           " a.observers, a.key_hash, a.members FROM sessions"
-                           " LEFT JOIN access a ON a.session = sessions.id ORDER BY id",
+    if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, version, brush,"
+                           " brush_seq, snap_version, a.owner, a.mode, a.observers, a.key_hash,"
+                           " a.members FROM sessions LEFT JOIN access a ON a.session ="
+                           " sessions.id ORDER BY id",
                            -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the sessions", err);
     int rc = DF_OK, step;

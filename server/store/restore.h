@@ -3,17 +3,22 @@
  *
  * Restore, per session row (ascending id): the mesh from its topology and exact base positions,
  * then the change log replayed onto the last snapshot (journal.h; the base when none) in commit
- * order (each delta sets the changed vertices' exact doubles, REST_FROM_CUR copies the
- * positions into the rest shape): positions and rest shape are bit-identical to those of the
- * last acknowledged change. The session keeps its id, name and version, its brush (and brush
- * seq) and its handle set (the ADMM solver and the Kelvinlet pin factorization are rebuilt
- * lazily on first use). Published displacements are recomputed as fl32(cur - base)
- * (stream.h). The undo/redo history is rebuilt from the rows' history steps since the last
- * snapshot (earlier steps are not kept: undo stops at the snapshot). A log that ends inside a
- * stroke or handle move (the daemon died before its end) ends it at restore, as a disconnect
- * would: the positions become one more undo step (a history-only row is appended first). Not restored: open
- * strokes, subscribers. New sessions get ids above every id the store ever gave
- * (meta.next_session_id). Loop thread. */
+ * order (replay.h: each delta sets the changed vertices' exact doubles, a recipe record is
+ * recomputed from the state of its base version and verified by its checksum, REST_FROM_CUR copies
+ * the positions into the rest shape): positions and rest shape are bit-identical to those of the
+ * last acknowledged change. A recipe record that does not reproduce its checksum stops that
+ * session's replay at the last verified version (replay.h): the session gets those positions as a
+ * new version (stored version + 1), the log is folded into a snapshot of them, an error names the
+ * session, versions and rows lost, and STATS store_replay_mismatches counts it; other sessions
+ * restore normally. STATS store_recipes_replayed / _skipped count the recipe records recomputed /
+ * superseded at this start. The session keeps its id, name and version, its brush (and brush seq)
+ * and its handle set (the ADMM solver and the Kelvinlet pin factorization are rebuilt lazily on
+ * first use). Published displacements are recomputed as fl32(cur - base) (stream.h). The undo/redo
+ * history is rebuilt from the rows' history steps since the last snapshot (earlier steps are not
+ * kept: undo stops at the snapshot). A log that ends inside a stroke or handle move (the daemon
+ * died before its end) ends it at restore, as a disconnect would: the positions become one more
+ * undo step (a history-only row is appended first). Not restored: open strokes, subscribers. New
+ * sessions get ids above every id the store ever gave (meta.next_session_id). Loop thread. */
 #ifndef DF_SERVER_STORE_RESTORE_H
 #define DF_SERVER_STORE_RESTORE_H
 

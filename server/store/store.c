@@ -17,6 +17,8 @@ struct df_store {
     char *path;
     uint64_t log_bytes, log_changes;
     uint64_t snapshot_min;
+    uint64_t snapshot_replay_ns;
+    int migrated_from;
 };
 
 /* Schema 2 added the access table (per-session access policy, membership.h). */
@@ -29,15 +31,34 @@ static const char k_schema[] =
     "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
     "CREATE TABLE sessions(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
     " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
-    " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
-    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
-    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0);"
+    " version INTEGER NOT NULL, brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0,"
+    " log_bytes INTEGER NOT NULL DEFAULT 0, snap_version INTEGER NOT NULL DEFAULT 0,"
+    " replay_ns INTEGER NOT NULL DEFAULT 0);"
+    "CREATE TABLE blobs(session INTEGER NOT NULL, name TEXT NOT NULL, data BLOB NOT NULL,"
+    " PRIMARY KEY(session, name));"
     "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL,"
     " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
-    " flags INTEGER NOT NULL, delta BLOB, aux BLOB);"
+    " flags INTEGER NOT NULL, delta BLOB, aux BLOB, recipe BLOB);"
     "CREATE INDEX changes_session ON changes(session, id);"
     DF_STORE_ACCESS_TABLE
     "INSERT INTO meta VALUES('next_session_id', 0);";
+
+/* Schema 2 -> 3 (store.h): the session rows' large blobs move to `blobs` (SQLite rewrites a
+ * whole row on UPDATE: a per-change version update rewrote the mesh and snapshot, ~100 MB at 1M
+ * vertices), the recipe column, the snapshot's version and the replay cost since it. A
+ * version-2 log holds deltas only, and every stroke begun after the migration starts at or after
+ * the version the store holds now: that version stands for the snapshot's. */
+#define MOVE_BLOB(col) "INSERT INTO blobs SELECT id, '" col "', " col " FROM sessions WHERE " \
+                       col " IS NOT NULL;ALTER TABLE sessions DROP COLUMN " col ";"
+static const char k_migrate_2_3[] =
+    "CREATE TABLE blobs(session INTEGER NOT NULL, name TEXT NOT NULL, data BLOB NOT NULL,"
+    " PRIMARY KEY(session, name));"
+    MOVE_BLOB("base") MOVE_BLOB("elems") MOVE_BLOB("faces") MOVE_BLOB("handles")
+    MOVE_BLOB("cur") MOVE_BLOB("rest")
+    "ALTER TABLE changes ADD COLUMN recipe BLOB;"
+    "ALTER TABLE sessions ADD COLUMN snap_version INTEGER NOT NULL DEFAULT 0;"
+    "ALTER TABLE sessions ADD COLUMN replay_ns INTEGER NOT NULL DEFAULT 0;"
+    "UPDATE sessions SET snap_version = version;";
 
 int df_store_resolve_path(const char *cfg, const char *state_directory,
                           const char *xdg_state_home, const char *home, char *out, size_t cap,
@@ -140,8 +161,8 @@ static int check_integrity(df_store *st, int64_t size, const char **checked, df_
 }
 
 /* The schema check of an existing database; *fresh = 1 when it holds nothing (new file),
- * *old = its schema version when it is an older one this build migrates (else 0). */
-static int check_schema(df_store *st, int *fresh, int *old, df_error *err)
+ * *ver its schema version. */
+static int check_schema(df_store *st, int *fresh, int64_t *ver_out, df_error *err)
 {
     int64_t app, ver, tables;
     int rc;
@@ -150,39 +171,45 @@ static int check_schema(df_store *st, int *fresh, int *old, df_error *err)
         (rc = query_int(st, "SELECT count(*) FROM sqlite_master", &tables, err)) != DF_OK)
         return rc;
     *fresh = app == 0 && ver == 0 && tables == 0;
-    *old = 0;
+    *ver_out = ver;
     if (*fresh) return DF_OK;
     if (app != DF_STORE_APP_ID)
         return df_error_set(err, DF_EFORMAT, "store %s: not a deformd store (an SQLite database "
                             "of another application: application_id 0x%llx, %lld table(s)); "
                             "set another store path", st->path, (unsigned long long)app,
                             (long long)tables);
-    if (ver == 1 && app == DF_STORE_APP_ID) { /* migrated by df_store_open (migrate) */
-        *old = 1;
-        return DF_OK;
-    }
-    if (ver != DF_STORE_SCHEMA)
+    if (ver < 1 || ver > DF_STORE_SCHEMA)
         return df_error_set(err, DF_EFORMAT, "store %s: schema version %lld, this deformd "
-                            "knows versions 1 (migrated) and %d only", st->path, (long long)ver,
-                            DF_STORE_SCHEMA);
+                            "knows versions 1 to %d (%s); the file is left untouched", st->path,
+                            (long long)ver, DF_STORE_SCHEMA,
+                            ver > DF_STORE_SCHEMA ? "written by a newer deformd: run that one, "
+                                                    "or move the file away"
+                                                  : "not a version deformd ever wrote");
     return DF_OK;
 }
 
-/* Brings a schema `old` store to DF_STORE_SCHEMA in one transaction (nothing changes when it
- * fails): 1 -> 2 adds the access table; its sessions have no row there (restore gives them
- * the configured mode and no owner: admins own them). */
-static int migrate(df_store *st, int old, df_error *err)
+/* Brings a store of an older schema version (checked: 1 .. DF_STORE_SCHEMA - 1) to the current
+ * one in one transaction, all or nothing: 1 -> 2 adds the access table (its sessions have no
+ * row there: restore gives them the configured mode and no owner, admins own them), 2 -> 3
+ * moves the large values to `blobs` and adds the recipe columns (k_migrate_2_3). */
+static int migrate(df_store *st, int64_t ver, df_error *err)
 {
-    char sql[512];
-    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;%sPRAGMA user_version=%d;COMMIT",
-             DF_STORE_ACCESS_TABLE, DF_STORE_SCHEMA);
-    int rc = df_store_exec(st, sql, "migrating the schema", err);
+    if (ver == DF_STORE_SCHEMA) return DF_OK;
+    char sql[sizeof k_migrate_2_3 + sizeof DF_STORE_ACCESS_TABLE + 96];
+    snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;%s%sPRAGMA user_version=%d;COMMIT",
+             ver < 2 ? DF_STORE_ACCESS_TABLE : "", k_migrate_2_3, DF_STORE_SCHEMA);
+    char what[96];
+    snprintf(what, sizeof what, "migrating schema version %lld to %d", (long long)ver,
+             DF_STORE_SCHEMA);
+    int rc = df_store_exec(st, sql, what, err);
     if (rc != DF_OK) {
         sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
         return rc;
     }
-    df_log(DF_LOG_INFO, "store %s: schema %d migrated to %d (per-session access)", st->path,
-           old, DF_STORE_SCHEMA);
+    st->migrated_from = (int)ver;
+    df_log(DF_LOG_INFO, "store %s: schema %lld migrated to %d (%sstroke recipe records, large "
+           "values in their own rows)", st->path, (long long)ver, DF_STORE_SCHEMA,
+           ver < 2 ? "per-session access, " : "");
     return DF_OK;
 }
 
@@ -254,7 +281,10 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
         return df_error_set(err, DF_EIO, "store %s: %s", path, strerror(errno));
     }
     df_store *st = calloc(1, sizeof *st);
-    if (st) st->snapshot_min = DF_STORE_SNAPSHOT_MIN;
+    if (st) {
+        st->snapshot_min = DF_STORE_SNAPSHOT_MIN;
+        st->snapshot_replay_ns = DF_STORE_SNAPSHOT_REPLAY_NS;
+    }
     if (!st || !(st->path = strdup(path))) {
         free(st);
         return df_error_set(err, DF_ENOMEM, "store %s: out of memory", path);
@@ -266,11 +296,12 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
     } else {
         sqlite3_extended_result_codes(st->db, 0);
         sqlite3_busy_timeout(st->db, 0);
-        int fresh = 0, old = 0;
+        int fresh = 0;
+        int64_t ver = 0;
         /* read-only checks first (the first read fails on a text file: SQLITE_NOTADB); a
          * refused file is never written to */
         if ((rc = df_store_exec(st, "PRAGMA locking_mode=EXCLUSIVE", "locking", err)) == DF_OK &&
-            (rc = check_schema(st, &fresh, &old, err)) == DF_OK &&
+            (rc = check_schema(st, &fresh, &ver, err)) == DF_OK &&
             (fresh || (rc = check_integrity(st, size, checked, err)) == DF_OK) &&
             (rc = configure(st, durability, max_mb, err)) == DF_OK) {
             if (fresh) {
@@ -280,8 +311,8 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
                          DF_STORE_SCHEMA);
                 rc = df_store_exec(st, sql, "creating the schema", err);
                 if (rc != DF_OK) sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
-            } else if (old) {
-                rc = migrate(st, old, err);
+            } else {
+                rc = migrate(st, ver, err);
             }
         }
         /* take the exclusive lock now: a second daemon on this file is refused at start */
@@ -310,6 +341,9 @@ struct sqlite3 *df_store_db(df_store *st) { return st->db; }
 uint64_t df_store_log_bytes(const df_store *st) { return st->log_bytes; }
 uint64_t df_store_snapshot_min(const df_store *st) { return st->snapshot_min; }
 void df_store_set_snapshot_min(df_store *st, uint64_t bytes) { st->snapshot_min = bytes; }
+uint64_t df_store_snapshot_replay_ns(const df_store *st) { return st->snapshot_replay_ns; }
+void df_store_set_snapshot_replay_ns(df_store *st, uint64_t ns) { st->snapshot_replay_ns = ns; }
+int df_store_migrated_from(const df_store *st) { return st->migrated_from; }
 uint64_t df_store_log_changes(const df_store *st) { return st->log_changes; }
 
 void df_store_count_change(df_store *st, uint64_t bytes)

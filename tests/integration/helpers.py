@@ -161,3 +161,41 @@ def grid_session(daemon, n: int):
                 c.close_session(info.session_id)
             except DeformdError:
                 pass
+
+
+_SESSIONS_V1 = (
+    "CREATE TABLE sessions_v1(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
+    " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
+    " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
+    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
+    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0)")
+
+
+def downgrade_store(store: str, version: int) -> None:
+    """Rewrites a (recipe-free) current store file (server/store/store.h, schema 3) as the
+    layout deformd wrote at schema `version` 1 or 2: the large values back in the session
+    rows' own columns, no blobs table, no recipe / snap_version / replay_ns columns; version 1
+    also without the access table. The daemon must be stopped."""
+    import sqlite3
+
+    def blob(name):
+        return "(SELECT data FROM blobs WHERE session = s.id AND name = '%s')" % name
+    db = sqlite3.connect(store)
+    try:
+        assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() \
+            == (0,), "recipe records have no version-%d form" % version
+        db.execute(_SESSIONS_V1)
+        db.execute("INSERT INTO sessions_v1 SELECT s.id, s.name, s.kind, s.planar, s.nv, s.ne, "
+                   "s.nf, %s, %s, %s, s.version, s.brush, s.brush_seq, %s, %s, %s, s.log_bytes "
+                   "FROM sessions s" % tuple(blob(n) for n in ("base", "elems", "faces",
+                                                               "handles", "cur", "rest")))
+        db.execute("DROP TABLE sessions")
+        db.execute("ALTER TABLE sessions_v1 RENAME TO sessions")
+        db.execute("DROP TABLE blobs")
+        db.execute("ALTER TABLE changes DROP COLUMN recipe")
+        if version == 1:
+            db.execute("DROP TABLE access")
+        db.execute("PRAGMA user_version = %d" % version)
+        db.commit()
+    finally:
+        db.close()

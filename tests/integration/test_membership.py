@@ -17,7 +17,7 @@ import pytest
 
 from conftest import DEFORMCTL, Daemon, check_stopped
 from deformd_client import Brush, Client, DeformdError, errors as E
-from helpers import grid_obj
+from helpers import downgrade_store, grid_obj
 
 WHO = ("admin", "alice", "bob", "carol")
 
@@ -245,14 +245,14 @@ def test_a_schema_1_store_is_migrated(run, tmp_path):
     d = run(1, "", store)
     with tcp(d, "alice") as a:
         sid = a.load_mesh(grid_obj(4, 4), name="old").session_id
-        stroke(a, sid)
+        a.set_handles(sid, [0, 5, 10], max_iters=5)     # an edit a schema 1 store can hold (a
+        X = a.get_mesh(sid).positions                   # stroke is a recipe record since 3)
+        a.move_handles(sid, [X[0:3], X[15:18], (X[30], X[31] + 0.1, X[32])], max_iters=5)
         v = a.open_session(sid).version
     check_stopped(d, d.stop())
-    db = sqlite3.connect(store)      # what a schema 1 store holds: no access table
-    db.executescript("DROP TABLE access; PRAGMA user_version = 1;")
-    db.close()
+    downgrade_store(store, 1)        # what a schema 1 store holds: no access table (store.h)
     d2 = run(2, "session_access = owner\n", store)
-    assert "schema 1 migrated to 2" in d2.log()
+    assert "schema 1 migrated to 3" in d2.log()
     with tcp(d2, "alice") as a, tcp(d2, "admin") as adm:
         pol = a.session_access(sid)
         assert (pol.mode_name, pol.owner) == ("owner", "")   # the config's mode, no owner
@@ -261,7 +261,7 @@ def test_a_schema_1_store_is_migrated(run, tmp_path):
         adm.close_session(sid)                                # admins own it
     check_stopped(d2, d2.stop())     # the daemon holds the store's lock until it stops
     db = sqlite3.connect(store)
-    assert db.execute("PRAGMA user_version").fetchone()[0] == 2
+    assert db.execute("PRAGMA user_version").fetchone()[0] == 3
     db.close()
 
 

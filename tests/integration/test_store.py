@@ -14,7 +14,7 @@ import pytest
 from conftest import DEFORMD, MESHES, Daemon, check_stopped
 from deformd_client import Brush, DeformdError
 from deformd_client import errors as E
-from helpers import grid_obj
+from helpers import downgrade_store, grid_obj
 
 
 def start(tmp_path, store, run, extra=""):
@@ -46,7 +46,7 @@ def edit_two_sessions(d):
         s2 = b.load_mesh(data=grid_obj(12, 12), fmt=".obj", name="grid").session_id
         X1 = a.get_mesh(s1).positions
         X2 = b.get_mesh(s2).positions
-        for k in range(BUNNY_STROKES):  # past a snapshot (1 MB of log; packed deltas, codec.h)
+        for k in range(BUNNY_STROKES):  # recipe records (journal.h), not deltas
             a.stroke(s1, Brush(type="grab", center=X1[3 * k:3 * k + 3], move=(0, 0, 0.01 * (k + 1)),
                                radius=0.05))
             if k < 3:
@@ -80,11 +80,13 @@ def test_kill9_restart_restores_every_session(tmp_path):
     try:
         log = d.log()
         assert "2 session(s) restored" in log
-        # the bunny's log was folded into a snapshot on the way (journal.h): fewer rows replayed
-        # than its strokes, handle set, move, undo and redo
+        # the bunny's strokes are logged as recipes (journal.h): each one recomputed at the
+        # restart and verified against its checksum (replay.h), every row of its log replayed
         assert "session %d 'bunny' restored at version %d (" % (s1, before[s1][1]) in log
-        replayed = int(log.split("session %d 'bunny' restored" % s1)[1].split("(")[1].split()[0])
-        assert replayed < BUNNY_STROKES, log
+        line = log.split("session %d 'bunny' restored" % s1)[1].split("\n")[0]
+        replayed = int(line.split("(")[1].split()[0])
+        recipes = int(line.split("; ")[1].split()[0])
+        assert recipes == BUNNY_STROKES and replayed > BUNNY_STROKES, line
         with d.unix_client() as c:
             infos = {i.session_id: i for i in c.list_sessions()}
             assert sorted(infos) == sorted([s1, s2])
@@ -121,8 +123,9 @@ def test_kill9_restart_restores_every_session(tmp_path):
 
 
 def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
-    """store_max_mb = 1: a bunny (3485 vertices, 170 kB of mesh) fits, its stroke deltas (84 kB
-    each raw, about a third of that packed: codec.h) soon do not. The edit that does not fit is refused with the store's message,
+    """store_max_mb = 1: a bunny (3485 vertices, 170 kB of mesh) fits, a stroke too (two recipe
+    records: journal.h), the undo of one (a delta of 84 kB raw, about a third of that packed:
+    codec.h) soon does not. The edit that does not fit is refused with the store's message,
     not applied, not broadcast; after kill -9 the last acknowledged state is back."""
     store = str(tmp_path / "small.db")
     d = start(tmp_path, store, 1, "store_max_mb = 1\n")
@@ -138,22 +141,25 @@ def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
         rows = s1["store_changes"] - s0["store_changes"]
         size = s1["store_log_bytes"] - s0["store_log_bytes"]
         assert rows == 2                       # begin's version; end's undo step (no delta)
-        dense = 8 + 24 * nv                    # codec.h: a header, then every vertex's doubles
-        assert 8 < size <= dense, size         # raw, or packed when smaller (codec.h)
-        print("store: a Kelvinlet stroke on %d vertices logs %d bytes (%.1f per vertex)"
+        assert s1["store_recipe_records"] - s0["store_recipe_records"] == 2
+        # both rows are recipe records (record.h: a 32-byte header and the stroke's request)
+        assert size == 2 * (32 + 272), size
+        print("store: a Kelvinlet stroke on %d vertices logs %d bytes (%.2f per vertex)"
               % (nv, size, size / nv))
         acked = state(c, sid)
         err = None
-        for k in range(100):    # begin (a version) and end (an undo step) may each fail
-            try:
+        for k in range(100):    # begin (a version), end (an undo step) and the undo (a packed
+            try:                # delta: codec.h) may each fail
                 c.brush_begin(sid, Brush(type="grab", center=X[0:3],
                                          move=(0, 0, 0.001 * (k + 1)), radius=0.05))
                 acked = state(c, sid)
                 c.brush_end(sid)
+                c.undo(sid)
+                acked = state(c, sid)
             except DeformdError as e:
                 err = e
                 break
-        assert err is not None, "100 strokes fit in 1 MiB"
+        assert err is not None, "100 strokes and undos fit in 1 MiB"
         assert err.code == E.ELIMIT and "full" in str(err) and store in str(err), err
         assert state(c, sid) == acked          # nothing of the refused edit applied
         # a handle move: its first iterate does not fit either; the move fails, nothing moves
@@ -295,21 +301,23 @@ def _packed_rows(store):
     return [(i, bytes(b)) for i, b in rows if bytes(b[:4]) == b"\xff\xff\xff\xff"]
 
 
-def test_strokes_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tmp_path):
+def test_undo_redo_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tmp_path):
     store = str(tmp_path / "packed.db")
     d = start(tmp_path, store, 1)
     try:
         with d.unix_client() as c:
             sid = c.load_mesh(data=grid_obj(40, 40), fmt=".obj", name="packed").session_id
             X = c.get_mesh(sid).positions
-            for k in range(3):
+            for k in range(3):  # a stroke is a recipe record; its undo and redo are deltas
                 c.stroke(sid, Brush(type="grab", center=X[123 * k:123 * k + 3],
                                     move=(0, 0, 0.02), radius=0.1))
+                c.undo(sid)
+                c.redo(sid)
             acked = state(c, sid)
     finally:
         check_stopped(d, d.stop())
     packed = _packed_rows(store)
-    assert packed, "no stroke was logged packed"
+    assert len(packed) == 6, "undo and redo of 3 strokes: %d packed rows" % len(packed)
     for _, blob in packed:              # smaller than the raw layout of the same change
         nv = int.from_bytes(blob[4:8], "little", signed=True)
         count = int.from_bytes(blob[8:12], "little")
@@ -335,3 +343,103 @@ def test_strokes_are_logged_packed_and_a_corrupt_packed_delta_refuses_start(tmp_
     assert r.returncode == 1, r.stderr
     assert store in r.stderr and "compressed change delta is corrupt" in r.stderr, r.stderr
     assert not os.path.exists(sock)
+
+
+def test_a_version_1_store_is_migrated_and_a_newer_one_refused(tmp_path):
+    """A store of schema version 1 (no recipe records) opens: migrated to 3 at start, every
+    session restored as it was, then strokes are logged as recipes. A store of a version this
+    deformd does not know (a newer one) refuses start-up with a message naming it, untouched."""
+    store = str(tmp_path / "old.db")
+    d = start(tmp_path, store, 1)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data=grid_obj(10, 10), fmt=".obj", name="old").session_id
+        X = c.get_mesh(sid).positions
+        c.set_handles(sid, [0, 5, 55], max_iters=10)     # deltas only: no stroke
+        c.move_handles(sid, [X[0:3], X[15:18], (X[165], X[166] + 0.05, X[167])], max_iters=10)
+        c.undo(sid)
+        c.redo(sid)
+        before = state(c, sid)
+    check_stopped(d, d.stop())
+    downgrade_store(store, 1)
+    d = start(tmp_path, store, 2)
+    try:
+        assert "schema 1 migrated to 3" in d.log()
+        with d.unix_client() as c:
+            assert state(c, sid) == before
+            assert list(c.get_handles(sid).handles) == [0, 5, 55]
+            c.stroke(sid, Brush(type="grab", center=X[30:33], move=(0, 0, 0.05), radius=0.3))
+            after = state(c, sid)
+            assert c.stats()["store_recipe_records"] == 2     # the begin's version and the end
+    finally:
+        check_stopped(d, d.stop())
+    db = sqlite3.connect(store)
+    assert db.execute("PRAGMA user_version").fetchone() == (3,)
+    assert db.execute("SELECT count(*) FROM changes WHERE recipe IS NOT NULL").fetchone() == (2,)
+    db.execute("PRAGMA user_version = 4")                    # as a newer deformd would write
+    db.commit()
+    db.close()
+    with open(store, "rb") as f:
+        newer = f.read()
+    sock = str(tmp_path / "d.sock")
+    r = subprocess.run([DEFORMD, "--foreground", "--socket", sock, "--store", store],
+                       stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=30)
+    assert r.returncode == 1, r.stderr
+    assert store in r.stderr and "schema version 4" in r.stderr and "newer deformd" in r.stderr, \
+        r.stderr
+    assert not os.path.exists(sock)
+    with open(store, "rb") as f:
+        assert f.read() == newer
+    db = sqlite3.connect(store)                              # back to 3: restored after all
+    db.execute("PRAGMA user_version = 3")
+    db.commit()
+    db.close()
+    d = start(tmp_path, store, 3)
+    try:
+        with d.unix_client() as c:
+            assert state(c, sid) == after
+    finally:
+        check_stopped(d, d.stop())
+
+
+def test_a_recipe_that_does_not_replay_stops_at_the_last_verified_version(tmp_path):
+    """Strokes are journaled as recipe records with the checksum of the positions they made
+    (server/store/journal.h). A record whose recomputation does not reproduce its checksum (here
+    the checksum is damaged in the file) stops that session's restore at the last verified
+    version: its positions come back as a new version, the error is logged and counted
+    (STATS store_replay_mismatches), never a different mesh under the old version number."""
+    store = str(tmp_path / "mismatch.db")
+    d = start(tmp_path, store, 1)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data=grid_obj(12, 12), fmt=".obj", name="m").session_id
+        X = c.get_mesh(sid).positions
+        c.stroke(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1), radius=0.3))
+        verified = state(c, sid)
+        c.stroke(sid, Brush(type="grab", center=X[60:63], move=(0.05, 0, 0), radius=0.3))
+        last = state(c, sid)
+    check_stopped(d, d.stop())
+    db = sqlite3.connect(store)
+    rows = db.execute("SELECT id, recipe FROM changes WHERE flags & 8 AND version = ?",
+                      (last[0],)).fetchall()
+    assert len(rows) == 1
+    row, rec = rows[0][0], bytearray(rows[0][1])
+    rec[16] ^= 1                        # record.h: the checksum is bytes 16..23
+    db.execute("UPDATE changes SET recipe = ? WHERE id = ?", (bytes(rec), row))
+    db.commit()
+    db.close()
+    d = start(tmp_path, store, 2)
+    try:
+        log = d.log()
+        assert "does not replay to what was recorded" in log and "session %d" % sid in log, log
+        with d.unix_client() as c:
+            assert c.stats()["store_replay_mismatches"] == 1
+            now = state(c, sid)
+            assert now[0] == last[0] + 1 and now[1:] == verified[1:]
+    finally:
+        check_stopped(d, d.stop())
+    d = start(tmp_path, store, 3)       # folded into a snapshot: the same, nothing to report
+    try:
+        with d.unix_client() as c:
+            assert c.stats()["store_replay_mismatches"] == 0
+            assert state(c, sid) == now
+    finally:
+        check_stopped(d, d.stop())

@@ -249,7 +249,8 @@ static void test_snapshots(void **state)
         if (rows > max_rows) max_rows = rows;
     }
     assert_true(max_rows <= 5);                /* 144 / 36: trimmed after at most 5 rows */
-    assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), 72);
+    assert_int_equal(query(&srv, "SELECT length(data) FROM blobs WHERE name = 'cur'"), 72);
+    assert_int_equal(query(&srv, "SELECT length(data) FROM blobs WHERE name = 'rest'"), 72); /* reset at k = 7 */
     double cur[9], rest[9];
     memcpy(cur, s->cur, sizeof cur);
     memcpy(rest, s->rest, sizeof rest);
@@ -327,8 +328,8 @@ static void test_bad_rows_refuse_start(void **state)
     assert_int_equal(df_session_create(&srv, &m, "cut", &s, &e), DF_OK);
     uint64_t id = s->id;
     char sql[160];
-    snprintf(sql, sizeof sql, "UPDATE sessions SET base = substr(base, 1, 40) WHERE id = %llu",
-             (unsigned long long)id);
+    snprintf(sql, sizeof sql, "UPDATE blobs SET data = substr(data, 1, 40) WHERE session = %llu"
+             " AND name = 'base'", (unsigned long long)id);
     assert_int_equal(df_store_exec(srv.store, sql, "test", &e), DF_OK);
     server_close(&srv);
     memset(&srv, 0, sizeof srv);
@@ -339,6 +340,7 @@ static void test_bad_rows_refuse_start(void **state)
     snprintf(want, sizeof want, "session %llu 'cut'", (unsigned long long)id);
     if (!strstr(e.msg, want) || !strstr(e.msg, srv.cfg.store_path))
         fail_msg("message '%s' lacks '%s' or the path", e.msg, want);
+    assert_non_null(strstr(e.msg, "base of 40 bytes, 72 expected"));
     assert_null(srv.sessions);
     assert_null(srv.store);
     assert_null(srv.store_ops);

@@ -206,33 +206,7 @@ static void test_refuses_foreign_and_unknown_version(void **state)
              "t(a);", DF_STORE_APP_ID, DF_STORE_SCHEMA + 1);
     make_db(p, sql);
     assert_refused(p, DF_EFORMAT, "schema version");
-}
-
-/* A schema 1 store (the tables before the access table) is migrated to DF_STORE_SCHEMA at open:
- * the access table appears and the other tables keep their rows; a second open finds
- * schema 2 and changes nothing. */
-static void test_migrates_schema_1(void **state)
-{
-    (void)state;
-    char p[128];
-    path_of(p, sizeof p, "v1.db");
-    char sql[1024];
-    snprintf(sql, sizeof sql, "PRAGMA application_id=%d; PRAGMA user_version=1;"
-             "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
-             "CREATE TABLE sessions(id INTEGER PRIMARY KEY, name TEXT NOT NULL);"
-             "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL);"
-             "INSERT INTO meta VALUES('next_session_id', 7);", DF_STORE_APP_ID);
-    make_db(p, sql);
-    df_store *st;
-    df_error e;
-    assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_OK);
-    assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA);
-    assert_int_equal(pragma(st, "SELECT count(*) FROM access"), 0);
-    assert_int_equal(pragma(st, "SELECT value FROM meta WHERE key = 'next_session_id'"), 7);
-    df_store_close(st);
-    assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_OK);
-    assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA); /* stays */
-    df_store_close(st);
+    assert_refused(p, DF_EFORMAT, "newer deformd");
 }
 
 static void test_refuses_corrupt(void **state)
@@ -258,6 +232,95 @@ static void test_refuses_corrupt(void **state)
     write_file(p, b, n);
     free(b);
     assert_refused(p, DF_EFORMAT, "corrupt");
+}
+
+/* Schema version 1 (before recipe records): the layout deformd wrote then, verbatim. */
+static const char k_schema_v1[] =
+    "CREATE TABLE meta(key TEXT PRIMARY KEY, value INTEGER NOT NULL);"
+    "CREATE TABLE sessions(id INTEGER PRIMARY KEY, name TEXT NOT NULL, kind INTEGER NOT NULL,"
+    " planar INTEGER NOT NULL, nv INTEGER NOT NULL, ne INTEGER NOT NULL, nf INTEGER NOT NULL,"
+    " base BLOB NOT NULL, elems BLOB, faces BLOB, version INTEGER NOT NULL,"
+    " brush BLOB, brush_seq INTEGER NOT NULL DEFAULT 0, handles BLOB,"
+    " cur BLOB, rest BLOB, log_bytes INTEGER NOT NULL DEFAULT 0);"
+    "CREATE TABLE changes(id INTEGER PRIMARY KEY, session INTEGER NOT NULL,"
+    " version INTEGER NOT NULL, kind INTEGER NOT NULL, who INTEGER NOT NULL,"
+    " flags INTEGER NOT NULL, delta BLOB, aux BLOB);"
+    "CREATE INDEX changes_session ON changes(session, id);"
+    "INSERT INTO meta VALUES('next_session_id', 3);";
+
+/* Schema 2 added the access table to version 1, verbatim. */
+static const char k_access_v2[] =
+    "CREATE TABLE access(session INTEGER PRIMARY KEY, owner TEXT NOT NULL,"
+    " mode INTEGER NOT NULL, observers INTEGER NOT NULL, key_hash BLOB,"
+    " members TEXT NOT NULL DEFAULT '');";
+
+/* Version-1 and version-2 stores are migrated at open: their rows stay, the access table (1)
+ * and the new columns appear, the large values move to blobs, the snapshot version of a
+ * session is its stored version; a second open changes nothing; a version-1 file whose
+ * migration fails (its change log table is missing) is refused with the step named and left
+ * at version 1; version 0 with our application id is refused as a version deformd never
+ * wrote. */
+static void test_migrates_versions_1_and_2(void **state)
+{
+    (void)state;
+    for (int ver = 1; ver <= 2; ver++) {
+        char p[128], sql[2048];
+        path_of(p, sizeof p, ver == 1 ? "v1.db" : "v2.db");
+        snprintf(sql, sizeof sql, "PRAGMA application_id=%d; PRAGMA user_version=%d; %s%s"
+                 "INSERT INTO sessions(id, name, kind, planar, nv, ne, nf, base, version) VALUES(3,"
+                 " 'old', 1, 0, 1, 0, 0, zeroblob(24), 17);"
+                 "INSERT INTO changes(session, version, kind, who, flags, delta) VALUES(3, 17, 0,"
+                 " 0, 0, x'0000000001000000');%s", DF_STORE_APP_ID, ver, k_schema_v1,
+                 ver == 2 ? k_access_v2 : "",
+                 ver == 2 ? "INSERT INTO access VALUES(3, 'alice', 2, 1, NULL, '');" : "");
+        make_db(p, sql);
+        df_store *st;
+        df_error e;
+        assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_OK);
+        assert_int_equal(df_store_migrated_from(st), ver);
+        assert_int_equal(pragma(st, "SELECT count(*) FROM access"), ver == 2);
+        assert_int_equal(pragma(st, "SELECT value FROM meta WHERE key = 'next_session_id'"), 3);
+        assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA);
+        assert_int_equal(pragma(st, "SELECT snap_version FROM sessions WHERE id = 3"), 17);
+        /* the large values moved to blobs, their columns gone */
+        assert_int_equal(pragma(st, "SELECT length(data) FROM blobs WHERE session = 3 AND name ="
+                                    " 'base'"), 24);
+        assert_int_equal(pragma(st, "SELECT count(*) FROM blobs"), 1);
+        assert_int_equal(pragma(st, "SELECT count(*) FROM pragma_table_info('sessions') WHERE name"
+                                    " IN ('base', 'elems', 'faces', 'handles', 'cur', 'rest')"), 0);
+        assert_int_equal(pragma(st, "SELECT replay_ns FROM sessions WHERE id = 3"), 0);
+        assert_int_equal(pragma(st, "SELECT count(*) FROM changes WHERE recipe IS NULL AND "
+                                    "length(delta) = 8"), 1);
+        df_store_close(st);
+        assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_OK);
+        assert_int_equal(df_store_migrated_from(st), 0); /* already current */
+        assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA);
+        df_store_close(st);
+    }
+    char p[128], sql[512];
+    df_store *st;
+    df_error e;
+
+    path_of(p, sizeof p, "v1-broken.db");
+    snprintf(sql, sizeof sql, "PRAGMA application_id=%d; PRAGMA user_version=1; CREATE TABLE "
+             "sessions(id INTEGER PRIMARY KEY, version INTEGER);", DF_STORE_APP_ID);
+    make_db(p, sql);
+    assert_int_equal(df_store_open(p, DF_DURABILITY_FULL, 0, 0, &st, NULL, &e), DF_EIO);
+    assert_non_null(strstr(e.msg, p));
+    assert_non_null(strstr(e.msg, "migrating schema version 1 to 3"));
+    sqlite3 *db;
+    assert_int_equal(sqlite3_open(p, &db), SQLITE_OK);
+    sqlite3_stmt *q;
+    assert_int_equal(sqlite3_prepare_v2(db, "PRAGMA user_version", -1, &q, NULL), SQLITE_OK);
+    assert_int_equal(sqlite3_step(q), SQLITE_ROW);
+    assert_int_equal(sqlite3_column_int(q, 0), 1);  /* rolled back: untouched */
+    sqlite3_finalize(q);
+    sqlite3_close(db);
+
+    path_of(p, sizeof p, "v0.db");
+    snprintf(sql, sizeof sql, "PRAGMA application_id=%d; CREATE TABLE t(a);", DF_STORE_APP_ID);
+    make_db(p, sql);
+    assert_refused(p, DF_EFORMAT, "not a version deformd ever wrote");
 }
 
 /* The config keys and option: store, durability, store_max_mb, --store. */
@@ -299,7 +362,7 @@ int main(void)
         cmocka_unit_test(test_refuses_empty_and_text),
         cmocka_unit_test(test_refuses_foreign_and_unknown_version),
         cmocka_unit_test(test_refuses_corrupt),
-        cmocka_unit_test(test_migrates_schema_1),
+        cmocka_unit_test(test_migrates_versions_1_and_2),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
