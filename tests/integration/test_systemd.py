@@ -493,7 +493,10 @@ def test_socket_activation_with_systemd_socket_activate(tmp_path):
     assert exec_start[1:3] == ["--foreground", "--config"], exec_start
     log_path = tmp_path / "deformd.log"
     with open(log_path, "wb") as log:
-        proc = subprocess.Popen([tool, "-l", sock, "-E", "NOTIFY_SOCKET=" + notify_path, DEFORMD,
+        # the store in this test's own directory (systemd-socket-activate passes on only the
+        # -E variables: without it deformd would open the user's default store)
+        proc = subprocess.Popen([tool, "-l", sock, "-E", "NOTIFY_SOCKET=" + notify_path,
+                                 "-E", "XDG_STATE_HOME=" + str(tmp_path / "state"), DEFORMD,
                                  "--foreground", "--config", str(conf), "--socket", "none"],
                                 stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
     try:
