@@ -105,33 +105,32 @@ static int session_closing(df_server *srv, const df_session *s, df_error *err)
     if (rc == DF_OK)
         rc = run(st, "DELETE FROM sessions WHERE id = ?", "i", NULL, id, "deleting the session",
                  err);
-    return finish(st, rc, err);
+    rc = finish(st, rc, err);
+    if (rc == DF_OK) df_store_forget_session(st, s->id);
+    return rc;
 }
 
-/* In the change's transaction: once the session's log since its last snapshot exceeds
- * max(snapshot_min, 2 x its position bytes), the positions and rest shape after this change
- * become the session row's snapshot and the log rows before it are deleted. */
-static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c, df_error *err)
+/* In the change's transaction: once the session's log since its last snapshot, `logged` bytes
+ * with this change, exceeds max(snapshot_min, 2 x its position bytes), the positions and rest
+ * shape after this change and its version become the session row's snapshot and the log rows
+ * are deleted (*snap = 1). The only per-change write to the session row (journal.h). */
+static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c, uint64_t version,
+                          uint64_t logged, int *snap, df_error *err)
 {
     uint64_t pos_bytes = 24 * (uint64_t)s->nv, min = df_store_snapshot_min(st);
     uint64_t threshold = 2 * pos_bytes > min ? 2 * pos_bytes : min;
-    sqlite3_stmt *q = NULL;
-    if (sqlite3_prepare_v2(df_store_db(st), "SELECT log_bytes FROM sessions WHERE id = ?", -1,
-                           &q, NULL) != SQLITE_OK)
-        return df_store_fail(st, DF_EIO, "reading the log size", err);
-    sqlite3_bind_int64(q, 1, (sqlite3_int64)s->id);
-    int64_t logged = sqlite3_step(q) == SQLITE_ROW ? sqlite3_column_int64(q, 0) : 0;
-    sqlite3_finalize(q);
-    if ((uint64_t)logged <= threshold) return DF_OK;
+    *snap = 0;
+    if (logged <= threshold) return DF_OK;
     const double *cur = c->pos ? c->pos : s->cur;
     const double *rest = c->rest_from_cur ? cur : s->rest;
-    const void *p[3] = {cur, rest};
-    int64_t v[3] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)s->id};
-    int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, log_bytes = 0 WHERE id = ?", "bbi",
-                 p, v, "writing a snapshot", err);
+    const void *p[4] = {cur, rest};
+    int64_t v[4] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)version, (int64_t)s->id};
+    int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, version = ?, log_bytes = 0"
+                 " WHERE id = ?", "bbii", p, v, "writing a snapshot", err);
     if (rc == DF_OK)
-        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 2,
+        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 3,
                  "trimming the log after a snapshot", err);
+    *snap = rc == DF_OK;
     return rc;
 }
 
@@ -140,9 +139,11 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
     if (!c->pos && !c->version && !c->rest_from_cur && !c->hs && !c->hist)
         return DF_OK; /* nothing kept */
     df_store *st = srv->store;
+    uint64_t *logged = df_store_session_log(st, s->id);
+    if (!logged) return df_error_set(err, DF_ENOMEM, "store: out of memory");
     uint8_t *delta = NULL, *hs = NULL;
     size_t dlen = 0, hlen = 0;
-    int rc = DF_OK;
+    int rc = DF_OK, snap = 0;
     if (c->pos) rc = df_codec_delta_encode(s->cur, c->pos, s->nv, &delta, &dlen, err);
     if (rc == DF_OK && c->hs) rc = df_codec_handles_encode(c->hs, &hs, &hlen, err);
     if (rc != DF_OK) {
@@ -162,20 +163,17 @@ static int change(df_server *srv, const df_session *s, const df_change *c, df_er
     if ((rc = begin(st, err)) == DF_OK) {
         rc = run(st, "INSERT INTO changes(session, version, kind, who, flags, delta, aux)"
                  " VALUES(?,?,?,?,?,?,?)", types, p, v, "appending the change", err);
-        if (rc == DF_OK) {
-            const void *p2[4] = {NULL, NULL, hs, NULL};
-            int64_t v2[4] = {(int64_t)version, (int64_t)(dlen + hlen), (int64_t)hlen,
-                             (int64_t)s->id};
-            rc = hs ? run(st, "UPDATE sessions SET version = ?, log_bytes = log_bytes + ?,"
-                          " handles = ? WHERE id = ?", "iibi", p2, v2, "saving the handle set",
-                          err)
-                    : run(st, "UPDATE sessions SET version = ?, log_bytes = log_bytes + ?"
-                          " WHERE id = ?", "iii", NULL, (int64_t[]){v2[0], v2[1], v2[3]},
-                          "saving the version", err);
+        if (rc == DF_OK && hs) { /* a new handle set (rare): the row keeps the current one */
+            const void *p2[2] = {hs};
+            int64_t v2[2] = {(int64_t)hlen, (int64_t)s->id};
+            rc = run(st, "UPDATE sessions SET handles = ? WHERE id = ?", "bi", p2, v2,
+                     "saving the handle set", err);
         }
-        if (rc == DF_OK) rc = maybe_snapshot(st, s, c, err);
+        if (rc == DF_OK)
+            rc = maybe_snapshot(st, s, c, version, *logged + dlen + hlen, &snap, err);
         rc = finish(st, rc, err);
     }
+    if (rc == DF_OK) *logged = snap ? 0 : *logged + dlen + hlen;
     count(srv, rc, dlen + hlen);
     free(delta);
     free(hs);

@@ -8,8 +8,12 @@
  *   change           df_session_commit, BEFORE step 1 (commit.h): one change-log row (version,
  *                    kind = the request's message type, who = the request's origin: connection
  *                    or device id, flags, the position delta from s->cur to c->pos (codec.h),
- *                    the handle set it installs) and the session row's version / handles, in
- *                    one transaction;
+ *                    the handle set it installs) and, for a new handle set, the session
+ *                    row's handles, in one transaction. The session row is NOT updated
+ *                    otherwise: SQLite rewrites the whole row (its mesh blobs too) on any
+ *                    UPDATE, which cost ~25 pages a change on a 1k-vertex mesh (bench_load);
+ *                    the current version is the last row's (store.h) and the log's size since
+ *                    the snapshot is kept in memory (df_store_session_log);
  *   brush            df_brush_state_apply, before the state changes: a change-log row (kind
  *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush.
  * A change with only an undo-history step (a stroke's end, a move's final commit) is a row
@@ -25,8 +29,9 @@
  * rollback of the applied state would. Durability: the transaction's COMMIT returns once the
  * WAL holds it (and, with durability = full, fsynced), before the ack and the broadcast.
  * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
- * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), the change's transaction also writes the positions and rest shape after
- * it into the session row (cur, rest) and deletes the session's log rows: a session holds at
+ * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), the change's transaction also
+ * writes the positions and rest shape after it and its version into the session row (cur, rest,
+ * version) and deletes the session's log rows: a session holds at
  * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
  * at most that (restore.h). The deleted rows' kind / who are not kept.
  * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a

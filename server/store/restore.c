@@ -14,14 +14,33 @@
 #include "server/store/journal.h"
 #include "server/store/store.h"
 
+/* The highest version in session `id`'s change log, 0 when it has no rows (store.h: the
+ * current version is the larger of this and the session row's). */
+static int last_logged_version(df_store *st, uint64_t id, uint64_t *out, df_error *err)
+{
+    sqlite3_stmt *q = NULL;
+    if (sqlite3_prepare_v2(df_store_db(st), "SELECT max(version) FROM changes WHERE session = ?",
+                           -1, &q, NULL) != SQLITE_OK)
+        return df_store_fail(st, DF_EIO, "reading the change log", err);
+    sqlite3_bind_int64(q, 1, (sqlite3_int64)id);
+    int step = sqlite3_step(q);
+    *out = step == SQLITE_ROW ? (uint64_t)sqlite3_column_int64(q, 0) : 0;
+    sqlite3_finalize(q);
+    return step == SQLITE_ROW ? DF_OK : df_store_fail(st, DF_EIO, "reading the change log", err);
+}
+
 /* Replays session s's change log onto its positions and rest shape (the last snapshot or the
  * base), with each row's undo-history step on s->hist, in the commit's order (state, then
- * history). */
+ * history), and sets the log's size since the snapshot (df_store_session_log: the delta and
+ * aux bytes of the rows other than brush rows, as journal.c counts them). */
 static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *err)
 {
     sqlite3_stmt *q = NULL;
-    if (sqlite3_prepare_v2(df_store_db(st), "SELECT flags, delta FROM changes WHERE session = ?"
-                           " ORDER BY id", -1, &q, NULL) != SQLITE_OK)
+    uint64_t *logged = df_store_session_log(st, s->id);
+    if (!logged) return df_error_set(err, DF_ENOMEM, "out of memory");
+    *logged = 0;
+    if (sqlite3_prepare_v2(df_store_db(st), "SELECT flags, delta, length(aux) FROM changes"
+                           " WHERE session = ? ORDER BY id", -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the change log", err);
     sqlite3_bind_int64(q, 1, (sqlite3_int64)s->id);
     int rc = DF_OK, step;
@@ -30,6 +49,7 @@ static int replay(df_store *st, df_session *s, uint64_t *n_changes, df_error *er
         int flags = sqlite3_column_int(q, 0);
         const uint8_t *d = sqlite3_column_blob(q, 1);
         size_t len = (size_t)sqlite3_column_bytes(q, 1);
+        if (!(flags & DF_JOURNAL_BRUSH)) *logged += len + (uint64_t)sqlite3_column_int64(q, 2);
         if (d) rc = df_codec_delta_apply(d, len, s->cur, s->nv, NULL, err);
         if (rc == DF_OK && (flags & DF_JOURNAL_REST_FROM_CUR))
             memcpy(s->rest, s->cur, 3 * (size_t)s->nv * sizeof(double));
@@ -113,7 +133,10 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     if ((rc = df_session_create(srv, &m, name, &s, &e)) != DF_OK)
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
                             (unsigned long long)id, name, e.msg);
-    atomic_store(&s->version, (uint64_t)sqlite3_column_int64(q, 10)); /* before any write */
+    uint64_t version = (uint64_t)sqlite3_column_int64(q, 10), logged_version = 0;
+    rc = last_logged_version(st, id, &logged_version, &e);
+    if (logged_version > version) version = logged_version;
+    atomic_store(&s->version, version); /* before any write */
     uint64_t n_changes = 0;
     size_t pb = 24 * (size_t)s->nv;
     for (int col = 14; col <= 15; col++) { /* the last snapshot (NULL: the base) */

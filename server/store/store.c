@@ -10,11 +10,18 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+typedef struct log_size { /* one session's change log since its last snapshot */
+    uint64_t id, bytes;
+} log_size;
+
 struct df_store {
     sqlite3 *db;
     char *path;
     uint64_t log_bytes, log_changes;
     uint64_t snapshot_min;
+    log_size *logs;           /* df_store_session_log; a few dozen sessions: a linear search */
+    size_t n_logs, cap_logs;
+    int upgrade;              /* the file has schema DF_STORE_SCHEMA_V1: marked current at open */
 };
 
 static const char k_schema[] =
@@ -146,9 +153,11 @@ static int check_schema(df_store *st, int *fresh, df_error *err)
                             "of another application: application_id 0x%llx, %lld table(s)); "
                             "set another store path", st->path, (unsigned long long)app,
                             (long long)tables);
-    if (ver != DF_STORE_SCHEMA)
+    if (ver != DF_STORE_SCHEMA && ver != DF_STORE_SCHEMA_V1)
         return df_error_set(err, DF_EFORMAT, "store %s: schema version %lld, this deformd "
-                            "knows version %d only", st->path, (long long)ver, DF_STORE_SCHEMA);
+                            "knows versions %d and %d only", st->path, (long long)ver,
+                            DF_STORE_SCHEMA_V1, DF_STORE_SCHEMA);
+    st->upgrade = ver == DF_STORE_SCHEMA_V1;
     return DF_OK;
 }
 
@@ -246,6 +255,10 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
                          DF_STORE_SCHEMA);
                 rc = df_store_exec(st, sql, "creating the schema", err);
                 if (rc != DF_OK) sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
+            } else if (st->upgrade) { /* version 1 rows read as they are (store.h) */
+                char sql[64];
+                snprintf(sql, sizeof sql, "PRAGMA user_version=%d", DF_STORE_SCHEMA);
+                rc = df_store_exec(st, sql, "marking the schema version", err);
             }
         }
         /* take the exclusive lock now: a second daemon on this file is refused at start */
@@ -265,6 +278,7 @@ void df_store_close(df_store *st)
 {
     if (!st) return;
     if (st->db) sqlite3_close_v2(st->db);
+    free(st->logs);
     free(st->path);
     free(st);
 }
@@ -280,4 +294,28 @@ void df_store_count_change(df_store *st, uint64_t bytes)
 {
     st->log_bytes += bytes;
     st->log_changes++;
+}
+
+uint64_t *df_store_session_log(df_store *st, uint64_t id)
+{
+    for (size_t i = 0; i < st->n_logs; i++)
+        if (st->logs[i].id == id) return &st->logs[i].bytes;
+    if (st->n_logs == st->cap_logs) {
+        size_t cap = st->cap_logs ? 2 * st->cap_logs : 16;
+        log_size *n = realloc(st->logs, cap * sizeof *n);
+        if (!n) return NULL;
+        st->logs = n;
+        st->cap_logs = cap;
+    }
+    st->logs[st->n_logs] = (log_size){id, 0};
+    return &st->logs[st->n_logs++].bytes;
+}
+
+void df_store_forget_session(df_store *st, uint64_t id)
+{
+    for (size_t i = 0; i < st->n_logs; i++)
+        if (st->logs[i].id == id) {
+            st->logs[i] = st->logs[--st->n_logs];
+            return;
+        }
 }

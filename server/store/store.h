@@ -11,13 +11,18 @@
  *   sessions(id, name, kind, planar, nv, ne, nf, base, elems, faces, version, brush, brush_seq,
  *            handles, cur, rest, log_bytes)        one row per live session: topology and the
  *                                                   exact double BASE positions (load-time), the
- *                                                   last acknowledged version, the session brush
- *                                                   and the handle set (codec.h: blob layouts),
- *                                                   the last snapshot of the positions and rest
- *                                                   shape (3 x nv doubles; NULL: the base) and
- *                                                   the log's bytes since (journal.h)
+ *                                                   version at creation or at the last snapshot,
+ *                                                   the session brush and the handle set (codec.h:
+ *                                                   blob layouts), the last snapshot of the
+ *                                                   positions and rest shape (3 x nv doubles;
+ *                                                   NULL: the base); log_bytes is 0 (unused)
  *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux)
  *                                                   the change log, in commit order (journal.h)
+ * A session's current version is the larger of its row's and its last change row's. Schema 2
+ * stopped updating the session row at every change (SQLite rewrites a whole row, mesh blobs
+ * included, on any UPDATE: ~100 KB a change on a 1k-vertex mesh, ~100 MB on 1M vertices); a
+ * version 1 file (whose row also held the current version and log_bytes) reads the same way and
+ * is marked version 2 when opened.
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
  *
  * Checks at open (df_store_open): an existing empty file, a file that is not SQLite (a text
@@ -43,7 +48,8 @@
 #include "core/common/df_error.h"
 
 #define DF_STORE_APP_ID 0x44665244            /* "DfRD" */
-#define DF_STORE_SCHEMA 1
+#define DF_STORE_SCHEMA 2
+#define DF_STORE_SCHEMA_V1 1 /* still opened (and marked 2): its rows mean the same (below) */
 #define DF_STORE_FULL_CHECK_BYTES ((int64_t)256 << 20) /* integrity_check up to 256 MiB */
 #define DF_STORE_SNAPSHOT_MIN ((uint64_t)1 << 20) /* journal.h: snapshot once the log since the
                                                    * last one exceeds max(this, 2 x 24 x nv) */
@@ -93,6 +99,13 @@ int df_store_exec(df_store *st, const char *sql, const char *what, df_error *err
 uint64_t df_store_log_bytes(const df_store *st);
 uint64_t df_store_log_changes(const df_store *st);
 void df_store_count_change(df_store *st, uint64_t bytes);
+
+/* The bytes of session `id`'s change log since its last snapshot (journal.h keeps it, the
+ * restore sets it from the rows it replays), created at 0 on first use: a pointer into st,
+ * valid until the next call of either function; NULL when out of memory.
+ * df_store_forget_session drops the entry (a closed session). */
+uint64_t *df_store_session_log(df_store *st, uint64_t id);
+void df_store_forget_session(df_store *st, uint64_t id);
 
 /* The lower bound of the snapshot threshold (journal.h; default DF_STORE_SNAPSHOT_MIN): tests
  * lower it to snapshot small meshes. */

@@ -119,6 +119,14 @@ static int64_t pragma(df_store *st, const char *sql)
     return v;
 }
 
+static void make_db(const char *p, const char *sql)
+{
+    sqlite3 *db;
+    assert_int_equal(sqlite3_open(p, &db), SQLITE_OK);
+    assert_int_equal(sqlite3_exec(db, sql, NULL, NULL, NULL), SQLITE_OK);
+    sqlite3_close(db);
+}
+
 static void test_create_and_reopen(void **state)
 {
     (void)state;
@@ -161,6 +169,13 @@ static void test_create_and_reopen(void **state)
     assert_int_equal(df_store_open(p, DF_DURABILITY_OFF, 0, 0, &st, &checked, &e), DF_OK);
     assert_int_equal(pragma(st, "PRAGMA synchronous"), 0); /* OFF */
     df_store_close(st);
+    /* a schema version 1 file (same tables; its session rows also held the current version)
+     * opens and is marked version 2, the version this build writes (store.h) */
+    make_db(p, "PRAGMA user_version=1");
+    assert_int_equal(df_store_open(p, DF_DURABILITY_OFF, 0, 0, &st, &checked, &e), DF_OK);
+    assert_int_equal(pragma(st, "PRAGMA user_version"), DF_STORE_SCHEMA);
+    assert_int_equal(DF_STORE_SCHEMA, DF_STORE_SCHEMA_V1 + 1);
+    df_store_close(st);
 }
 
 static void test_refuses_empty_and_text(void **state)
@@ -182,14 +197,6 @@ static void test_refuses_empty_and_text(void **state)
 }
 
 /* Creates an SQLite database at p with `sql` run in it. */
-static void make_db(const char *p, const char *sql)
-{
-    sqlite3 *db;
-    assert_int_equal(sqlite3_open(p, &db), SQLITE_OK);
-    assert_int_equal(sqlite3_exec(db, sql, NULL, NULL, NULL), SQLITE_OK);
-    sqlite3_close(db);
-}
-
 static void test_refuses_foreign_and_unknown_version(void **state)
 {
     (void)state;
