@@ -123,12 +123,16 @@ static int maybe_snapshot(df_store *st, const df_session *s, const df_change *c,
     if (logged <= threshold) return DF_OK;
     const double *cur = c->pos ? c->pos : s->cur;
     const double *rest = c->rest_from_cur ? cur : s->rest;
-    const void *p[4] = {cur, rest};
-    int64_t v[4] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)version, (int64_t)s->id};
-    int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, version = ?, log_bytes = 0"
-                 " WHERE id = ?", "bbii", p, v, "writing a snapshot", err);
+    uint8_t brush[DF_CODEC_BRUSH_BYTES];
+    df_codec_brush_pack(&s->brush, brush);
+    const void *p[6] = {cur, rest, NULL, brush};
+    int64_t v[6] = {(int64_t)pos_bytes, (int64_t)pos_bytes, (int64_t)version,
+                    DF_CODEC_BRUSH_BYTES, (int64_t)s->brush_seq, (int64_t)s->id};
+    int rc = run(st, "UPDATE sessions SET cur = ?, rest = ?, version = ?, brush = ?,"
+                 " brush_seq = ?, log_bytes = 0 WHERE id = ?", "bbibii", p, v,
+                 "writing a snapshot", err);
     if (rc == DF_OK)
-        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 3,
+        rc = run(st, "DELETE FROM changes WHERE session = ?", "i", NULL, v + 5,
                  "trimming the log after a snapshot", err);
     *snap = rc == DF_OK;
     return rc;
@@ -194,13 +198,7 @@ static int brush(df_server *srv, const df_session *s, const df_brush_state *next
     if (rc != DF_OK) return rc;
     rc = run(st, "INSERT INTO changes(session, version, kind, who, flags, aux)"
              " VALUES(?,?,?,?,?,?)", "iiiiib", p, v, "appending the brush change", err);
-    if (rc == DF_OK) {
-        const void *p2[3] = {b};
-        int64_t v2[3] = {DF_CODEC_BRUSH_BYTES, (int64_t)s->id};
-        rc = run(st, "UPDATE sessions SET brush = ?, brush_seq = brush_seq + 1 WHERE id = ?",
-                 "bi", p2, v2, "saving the brush", err);
-    }
-    rc = finish(st, rc, err);
+    rc = finish(st, rc, err); /* the session row takes the brush at the next snapshot */
     count(srv, rc, DF_CODEC_BRUSH_BYTES);
     return rc;
 }

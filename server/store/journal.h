@@ -15,7 +15,9 @@
  *                    the current version is the last row's (store.h) and the log's size since
  *                    the snapshot is kept in memory (df_store_session_log);
  *   brush            df_brush_state_apply, before the state changes: a change-log row (kind
- *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush) and the session row's brush.
+ *                    DF_MSG_BRUSH_STATE_SET, aux = the new brush, flag DF_JOURNAL_BRUSH); the
+ *                    session row's brush and brush_seq are written with the next snapshot, and
+ *                    the restore takes the last brush row and counts the brush rows since.
  * A change with only an undo-history step (a stroke's end, a move's final commit) is a row
  * without delta: its DF_JOURNAL_HIST lets the restore rebuild the undo/redo history.
  * Rest shape: flag DF_JOURNAL_REST_FROM_CUR (the rest shape becomes the positions after this
@@ -30,8 +32,8 @@
  * WAL holds it (and, with durability = full, fsynced), before the ack and the broadcast.
  * Snapshots: once a session's log since its last snapshot exceeds max(DF_STORE_SNAPSHOT_MIN,
  * 2 x 24 x nv bytes) (the blobs' stored, i.e. packed, sizes), the change's transaction also
- * writes the positions and rest shape after it and its version into the session row (cur, rest,
- * version) and deletes the session's log rows: a session holds at
+ * writes the positions and rest shape after it, its version and the session brush into the
+ * session row (cur, rest, version, brush, brush_seq) and deletes the session's log rows: a session holds at
  * most its mesh, one snapshot and about twice its position bytes of log, and a restart replays
  * at most that (restore.h). The deleted rows' kind / who are not kept.
  * Cost: a Kelvinlet stroke moves every vertex slightly (the field is never exactly zero), so a

@@ -29,6 +29,33 @@ static int last_logged_version(df_store *st, uint64_t id, uint64_t *out, df_erro
     return step == SQLITE_ROW ? DF_OK : df_store_fail(st, DF_EIO, "reading the change log", err);
 }
 
+/* The session brush after the log: the last brush row's (DF_JOURNAL_BRUSH, aux) when there is
+ * one, else the session row's `row` (row_len bytes; NULL: the defaults stay); brush_seq = the
+ * row's `row_seq` + the brush rows since (store.h). */
+static int restore_brush(df_store *st, df_session *s, const uint8_t *row, size_t row_len,
+                         uint64_t row_seq, df_error *err)
+{
+    sqlite3_stmt *q = NULL;
+    if (sqlite3_prepare_v2(df_store_db(st), "SELECT aux, (SELECT count(*) FROM changes WHERE"
+                           " session = ?1 AND flags & ?2) FROM changes WHERE session = ?1 AND"
+                           " flags & ?2 ORDER BY id DESC LIMIT 1", -1, &q, NULL) != SQLITE_OK)
+        return df_store_fail(st, DF_EIO, "reading the brush rows", err);
+    sqlite3_bind_int64(q, 1, (sqlite3_int64)s->id);
+    sqlite3_bind_int(q, 2, DF_JOURNAL_BRUSH);
+    int step = sqlite3_step(q), rc = DF_OK;
+    if (step == SQLITE_ROW) {
+        row = sqlite3_column_blob(q, 0);
+        row_len = (size_t)sqlite3_column_bytes(q, 0);
+        row_seq += (uint64_t)sqlite3_column_int64(q, 1);
+    } else if (step != SQLITE_DONE) {
+        rc = df_store_fail(st, DF_EIO, "reading the brush rows", err);
+    }
+    if (rc == DF_OK && row) rc = df_codec_brush_unpack(row, row_len, &s->brush, err);
+    if (rc == DF_OK) s->brush_seq = row_seq;
+    sqlite3_finalize(q);
+    return rc;
+}
+
 /* Replays session s's change log onto its positions and rest shape (the last snapshot or the
  * base), with each row's undo-history step on s->hist, in the commit's order (state, then
  * history), and sets the log's size since the snapshot (df_store_session_log: the delta and
@@ -137,6 +164,9 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     rc = last_logged_version(st, id, &logged_version, &e);
     if (logged_version > version) version = logged_version;
     atomic_store(&s->version, version); /* before any write */
+    if (rc == DF_OK) /* the brush too: a snapshot written below takes it */
+        rc = restore_brush(st, s, sqlite3_column_blob(q, 11), (size_t)sqlite3_column_bytes(q, 11),
+                           (uint64_t)sqlite3_column_int64(q, 12), &e);
     uint64_t n_changes = 0;
     size_t pb = 24 * (size_t)s->nv;
     for (int col = 14; col <= 15; col++) { /* the last snapshot (NULL: the base) */
@@ -163,10 +193,7 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         df_log(DF_LOG_INFO, "session %llu: the stroke or move open when the daemon stopped "
                "ends here (one undo step)", (unsigned long long)id);
     }
-    const uint8_t *b = sqlite3_column_blob(q, 11);
-    if (rc == DF_OK && b)
-        rc = df_codec_brush_unpack(b, (size_t)sqlite3_column_bytes(q, 11), &s->brush, &e);
-    s->brush_seq = (uint64_t)sqlite3_column_int64(q, 12);
+
     const uint8_t *h = sqlite3_column_blob(q, 13);
     if (rc == DF_OK && h)
         rc = df_codec_handles_decode(h, (size_t)sqlite3_column_bytes(q, 13), s->nv, &s->hs, &e);

@@ -10,6 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "server/store/journal.h" /* DF_JOURNAL_BRUSH, for the version 1 migration */
+
 typedef struct log_size { /* one session's change log since its last snapshot */
     uint64_t id, bytes;
 } log_size;
@@ -255,10 +257,14 @@ int df_store_open(const char *path, int durability, int max_mb, int mkdir_parent
                          DF_STORE_SCHEMA);
                 rc = df_store_exec(st, sql, "creating the schema", err);
                 if (rc != DF_OK) sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
-            } else if (st->upgrade) { /* version 1 rows read as they are (store.h) */
-                char sql[64];
-                snprintf(sql, sizeof sql, "PRAGMA user_version=%d", DF_STORE_SCHEMA);
-                rc = df_store_exec(st, sql, "marking the schema version", err);
+            } else if (st->upgrade) { /* version 1: brush_seq as of the snapshot (store.h) */
+                char sql[256];
+                snprintf(sql, sizeof sql, "BEGIN IMMEDIATE;UPDATE sessions SET brush_seq ="
+                         " brush_seq - (SELECT count(*) FROM changes WHERE session = sessions.id"
+                         " AND flags & %d);PRAGMA user_version=%d;COMMIT", DF_JOURNAL_BRUSH,
+                         DF_STORE_SCHEMA);
+                rc = df_store_exec(st, sql, "migrating the store to schema version 2", err);
+                if (rc != DF_OK) sqlite3_exec(st->db, "ROLLBACK", NULL, NULL, NULL);
             }
         }
         /* take the exclusive lock now: a second daemon on this file is refused at start */

@@ -11,18 +11,21 @@
  *   sessions(id, name, kind, planar, nv, ne, nf, base, elems, faces, version, brush, brush_seq,
  *            handles, cur, rest, log_bytes)        one row per live session: topology and the
  *                                                   exact double BASE positions (load-time), the
- *                                                   version at creation or at the last snapshot,
- *                                                   the session brush and the handle set (codec.h:
- *                                                   blob layouts), the last snapshot of the
+ *                                                   version, session brush and brush_seq at
+ *                                                   creation or at the last snapshot, the handle
+ *                                                   set (codec.h: blob layouts), the last snapshot
+ *                                                   of the
  *                                                   positions and rest shape (3 x nv doubles;
  *                                                   NULL: the base); log_bytes is 0 (unused)
  *   changes(id INTEGER PRIMARY KEY, session, version, kind, who, flags, delta, aux)
  *                                                   the change log, in commit order (journal.h)
- * A session's current version is the larger of its row's and its last change row's. Schema 2
- * stopped updating the session row at every change (SQLite rewrites a whole row, mesh blobs
- * included, on any UPDATE: ~100 KB a change on a 1k-vertex mesh, ~100 MB on 1M vertices); a
- * version 1 file (whose row also held the current version and log_bytes) reads the same way and
- * is marked version 2 when opened.
+ * A session's current version is the larger of its row's and its last change row's; its brush
+ * is the last brush row's (else the row's), brush_seq the row's plus the brush rows since.
+ * Schema 2 stopped updating the session row at every change and brush change (SQLite rewrites a
+ * whole row, mesh blobs included, when its size changes, and reads the blobs' overflow pages to
+ * reach a column after them or to compare them on an in-place UPDATE); a version 1 file (whose
+ * row held the current version, brush, brush_seq and log_bytes) is migrated when opened: its
+ * rows' brush_seq lose the brush rows since their snapshot, and it is marked version 2.
  * Blobs hold native-endian values: a store moves between machines of the same byte order only.
  *
  * Checks at open (df_store_open): an existing empty file, a file that is not SQLite (a text

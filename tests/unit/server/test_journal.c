@@ -136,7 +136,8 @@ static void test_journal_and_restore(void **state)
     df_brush_state b = s->brush;
     b.radius = 0.7071067811865476;
     assert_int_equal(df_brush_state_apply(s, DF_BS_RADIUS, &b, NULL, &e), DF_OK);
-    assert_int_equal(query(&srv, "SELECT brush_seq FROM sessions"), 1);
+    assert_int_equal(query(&srv, "SELECT count(*) FROM changes WHERE flags & 4"), 1);
+    assert_int_equal(query(&srv, "SELECT brush_seq FROM sessions"), 0); /* until a snapshot */
 
     /* store errors: the change fails, nothing of it is applied or kept */
     double cur0[9], rest0[9];
@@ -248,7 +249,15 @@ static void test_snapshots(void **state)
         assert_int_equal(commit(s, pos, (uint64_t)k, k == 7, NULL, &r, &e), DF_OK);
         int64_t rows = query(&srv, "SELECT count(*) FROM changes");
         if (rows > max_rows) max_rows = rows;
+        if (k % 3 == 0) { /* brush changes before and after snapshots (brush rows: no bytes) */
+            df_brush_state b = s->brush;
+            b.radius = 1.0 / k;
+            assert_int_equal(df_brush_state_apply(s, DF_BS_RADIUS, &b, NULL, &e), DF_OK);
+        }
     }
+    double radius = s->brush.radius;
+    uint64_t seq = s->brush_seq;
+    assert_int_equal(seq, 6);
     assert_true(max_rows <= 5);                /* 144 / 36: trimmed after at most 5 rows */
     assert_int_equal(query(&srv, "SELECT length(cur) FROM sessions"), 72);
     double cur[9], rest[9];
@@ -263,6 +272,8 @@ static void test_snapshots(void **state)
     assert_int_equal(atomic_load(&s->version), 20);
     assert_memory_equal(s->cur, cur, sizeof cur);
     assert_memory_equal(s->rest, rest, sizeof rest);
+    assert_true(s->brush.radius == radius);
+    assert_int_equal(s->brush_seq, seq);
     server_close(&srv2);
 }
 
@@ -353,6 +364,17 @@ static void test_change_leaves_the_session_row_alone(void **state)
                      (long long)row_pages);
     }
     free(pos);
+    for (int k = 1; k <= 3; k++) { /* brush state changes (knob turns) likewise */
+        int written, high;
+        sqlite3_db_status(db, SQLITE_DBSTATUS_CACHE_WRITE, &written, &high, 1);
+        df_brush_state b = s->brush;
+        b.radius = 0.25 * k;
+        assert_int_equal(df_brush_state_apply(s, DF_BS_RADIUS, &b, NULL, &e), DF_OK);
+        sqlite3_db_status(db, SQLITE_DBSTATUS_CACHE_WRITE, &written, &high, 0);
+        if (written <= 0 || written >= row_pages / 4)
+            fail_msg("brush change %d wrote %d pages (the session row has %lld)", k, written,
+                     (long long)row_pages);
+    }
     uint64_t id = s->id;
     double cur[6];
     memcpy(cur, s->cur + 3, sizeof cur);
@@ -362,6 +384,40 @@ static void test_change_leaves_the_session_row_alone(void **state)
     assert_non_null(s);
     assert_int_equal(atomic_load(&s->version), 5);
     assert_memory_equal(s->cur + 3, cur, sizeof cur);
+    assert_true(s->brush.radius == 0.75);
+    assert_int_equal(s->brush_seq, 3);
+    server_close(&srv2);
+}
+
+/* A schema version 1 store (its session row kept the current brush_seq, brush and version
+ * besides the log rows) restores the same values after the migration at open. */
+static void test_schema_1_store_migrates(void **state)
+{
+    (void)state;
+    static df_server srv, srv2;
+    server_open(&srv, "v1.db");
+    df_mesh m = tiny_mesh();
+    df_session *s;
+    df_error e;
+    assert_int_equal(df_session_create(&srv, &m, "old", &s, &e), DF_OK);
+    df_brush_state b = s->brush;
+    b.radius = 0.5;
+    assert_int_equal(df_brush_state_apply(s, DF_BS_RADIUS, &b, NULL, &e), DF_OK);
+    uint64_t id = s->id;
+    server_close(&srv);
+    sqlite3 *db; /* what a version 1 daemon left: the row's brush_seq counts the brush row */
+    char path[128];
+    snprintf(path, sizeof path, "%s/v1.db", g_dir);
+    assert_int_equal(sqlite3_open(path, &db), SQLITE_OK);
+    assert_int_equal(sqlite3_exec(db, "UPDATE sessions SET brush_seq = brush_seq + 1;"
+                                  "PRAGMA user_version = 1", NULL, NULL, NULL), SQLITE_OK);
+    sqlite3_close(db);
+    server_open(&srv2, "v1.db");
+    s = df_session_find(&srv2, id);
+    assert_non_null(s);
+    assert_int_equal(s->brush_seq, 1);
+    assert_true(s->brush.radius == 0.5);
+    assert_int_equal(query(&srv2, "PRAGMA user_version"), DF_STORE_SCHEMA);
     server_close(&srv2);
 }
 
@@ -463,6 +519,7 @@ int main(void)
         cmocka_unit_test(test_snapshots),
         cmocka_unit_test(test_undo_across_a_snapshot),
         cmocka_unit_test(test_change_leaves_the_session_row_alone),
+        cmocka_unit_test(test_schema_1_store_migrates),
         cmocka_unit_test(test_bad_rows_refuse_start),
         cmocka_unit_test(test_codecs),
     };
