@@ -27,10 +27,12 @@
  * well-behaved client's mean pause between strokes, 0.5x..1.5x at random; default 0, closed
  * loop), DF_BENCH_LOAD_VERBOSE=1 (a line per second: strokes, latencies, handshakes, RSS),
  * DEFORMD_BIN. The daemon's config: max_clients = all of the above + 100, output_queue_limit as
- * above, handshake_timeout_s 10 (runs under 40 s: a quarter of the run, at least 1 s), the rest
- * default. Descriptors: this process raises its soft RLIMIT_NOFILE to the hard limit and stops
- * with a message when the hard limit is below what it needs (the connections + 64); deformd
- * raises its own to max_clients + 64 (server/net/guard.h), so `ulimit -Hn` >= ~1,300 suffices.
+ * above, handshake_timeout_s 10 (runs under 40 s: a quarter of the run, at least 1 s;
+ * DF_BENCH_LOAD_HANDSHAKE_S sets it), the rest default. Descriptors: this process raises its
+ * soft RLIMIT_NOFILE to the hard limit and stops with a message when the hard limit is below
+ * what the daemon needs (max_clients + 64; this process needs a few less); deformd raises its
+ * own soft limit to that (server/net/guard.h), so `ulimit -Hn` >= 1,264 suffices (the default
+ * 1,000 + 2 x 50 clients).
  * Exit status 0 when everything ran and the daemon survived (targets are reported, not
  * enforced), 1 otherwise. The connections' state machines are in bench_load_conn.h. */
 #include <limits.h>
@@ -197,7 +199,8 @@ static void print_figures(double secs, int ngood, int nab, double changes, doubl
     double p50 = pct(&G.lat_stroke, 0.5) * 1e3, p99 = pct(&G.lat_stroke, 0.99) * 1e3;
     double mx = pct(&G.lat_stroke, 1.0) * 1e3;
     char pace[64] = "closed loop";
-    if (G.think_s > 0) snprintf(pace, sizeof pace, "%.0f ms mean pause between strokes", G.think_s * 1e3);
+    if (G.think_s > 0)
+        snprintf(pace, sizeof pace, "%.0f ms mean pause between strokes", G.think_s * 1e3);
     printf("load: %d well-behaved TCP clients (%s; begin + update + end on %d sessions of %d "
            "vertices, reconnecting every %d strokes), %d slowloris, %d non-readers, %.0f s, store "
            "on (durability %s, output_queue_limit %s)\n", ngood, pace, N_SESSIONS,
@@ -254,7 +257,8 @@ int main(int argc, char **argv)
     G.durability = getenv("DF_BENCH_LOAD_DURABILITY") ? getenv("DF_BENCH_LOAD_DURABILITY") : "full";
     G.verbose = env_int("DF_BENCH_LOAD_VERBOSE", 0, 0, 1);
     G.think_s = env_int("DF_BENCH_LOAD_THINK_MS", 0, 0, 600000) * 1e-3;
-    G.hs_timeout_s = secs >= 40 ? 10 : secs >= 8 ? secs / 4 : 1;
+    int hs_default = secs >= 40 ? 10 : secs >= 8 ? secs / 4 : 1;
+    G.hs_timeout_s = env_int("DF_BENCH_LOAD_HANDSHAKE_S", hs_default, 1, 3600);
     int total = ngood + 2 * nab;
     if (raise_nofile(total + CLIENT_SLACK + FD_MARGIN) != 0) return 1;
     char exe[PATH_MAX + 32], self[PATH_MAX];
@@ -265,7 +269,8 @@ int main(int argc, char **argv)
     snprintf(exe, sizeof exe, "%s/../bin/deformd", sl > 0 ? self : ".");
     if (getenv("DEFORMD_BIN")) snprintf(exe, sizeof exe, "%s", getenv("DEFORMD_BIN"));
     if (access(exe, X_OK) != 0) {
-        fprintf(stderr, "%s: deformd not found at %s (build it, or set DEFORMD_BIN)\n", argv[0], exe);
+        fprintf(stderr, "%s: deformd not found at %s (build it, or set DEFORMD_BIN)\n", argv[0],
+                exe);
         return 1;
     }
     char dir[64] = "/tmp/deformd-load-XXXXXX";
@@ -346,7 +351,8 @@ int main(int argc, char **argv)
         kill(pid, SIGTERM);
         waitpid(pid, &status, 0);
         alive = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-        if (!alive) fprintf(stderr, "bench_load: deformd did not exit cleanly (status 0x%x)\n", status);
+        if (!alive)
+            fprintf(stderr, "bench_load: deformd did not exit cleanly (status 0x%x)\n", status);
     }
     if (alive) {
         static const char *const files[] = {"deformd.conf", "deformd.log", "deformd.db",

@@ -190,8 +190,14 @@ static int enc_update(const void *m, df_buf *o, df_error *e)
 {
     return df_msg_brush_update_encode(m, o, e);
 }
-static int enc_ref(const void *m, df_buf *o, df_error *e) { return df_msg_session_ref_encode(m, o, e); }
-static int enc_sub(const void *m, df_buf *o, df_error *e) { return df_msg_subscribe_encode(m, o, e); }
+static int enc_ref(const void *m, df_buf *o, df_error *e)
+{
+    return df_msg_session_ref_encode(m, o, e);
+}
+static int enc_sub(const void *m, df_buf *o, df_error *e)
+{
+    return df_msg_subscribe_encode(m, o, e);
+}
 
 static int send_hello(lconn *c)
 {
