@@ -256,6 +256,11 @@ static int good_next(lconn *c, int ok)
         sample_add(&G.lat_hs, t - c->t_open);
         if (G.verbose) sample_add(&G.win_hs, t - c->t_open);
         G.handshakes++;
+        if (G.think_s > 0 && G.running) { /* paced: start at a random moment, not all at once */
+            c->state = S_THINK;
+            c->t_next = t + G.think_s * rnd(c);
+            return 0;
+        }
         return next_stroke(c);
     }
     sample_add(&G.lat_req, t - c->t_req);
