@@ -193,6 +193,19 @@ static int daemon_alive(pid_t pid, int *status)
     return 0;
 }
 
+/* Lines of the daemon's log (G.dir/deformd.log) that contain `needle`; -1 when unreadable. */
+static long log_count(const char *needle)
+{
+    char path[160], line[1024];
+    snprintf(path, sizeof path, "%s/deformd.log", G.dir);
+    FILE *f = fopen(path, "r");
+    long n = f ? 0 : -1;
+    while (f && fgets(line, sizeof line, f))
+        n += strstr(line, needle) != NULL;
+    if (f) fclose(f);
+    return n;
+}
+
 static void print_figures(double secs, int ngood, int nab, double changes, double log_bytes,
                           long db_bytes, long hwm_kb, df_client *ctl, int alive)
 {
@@ -223,8 +236,9 @@ static void print_figures(double secs, int ngood, int nab, double changes, doubl
            "s; handshake_timeout_s %.0f)%s%s\n", G.slow_closed, G.slow_closed_error,
            G.slow_closed ? G.slow_life_sum / G.slow_closed : 0.0, G.hs_timeout_s,
            G.slow_why[0] ? ": " : "", G.slow_why);
-    printf("  non-readers: %ld subscribed, %ld closed by the server while not reading\n",
-           G.deaf_subscribed, G.deaf_closed);
+    printf("  non-readers: %ld subscribed, %ld closed by the server while not reading (the "
+           "daemon's log: %ld clients dropped with 'output queue full')\n", G.deaf_subscribed,
+           G.deaf_closed, log_count("output queue full"));
     if (ctl) {
         static const char *const keys[] = {"clients_dropped", "clients_handshake_timeout",
                                            "clients_idle_timeout", "clients_refused",
