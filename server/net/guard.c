@@ -116,6 +116,18 @@ static int out_of_fds(df_server *srv)
     return errno == EMFILE || errno == ENFILE;
 }
 
+/* Connections that count against max_clients: open ones, less those closing or refused and
+ * those waiting for their admission (each is counted when it is decided). */
+static int live_conns(const df_server *srv)
+{
+    return srv->n_conns - srv->n_refusing - srv->n_closing - srv->n_admit_waiting;
+}
+
+int df_guard_over_limit(const df_conn *c)
+{
+    return live_conns(c->srv) > c->srv->cfg.max_clients;
+}
+
 int df_guard_admit(df_conn *c)
 {
     df_server *srv = c->srv;
@@ -123,13 +135,13 @@ int df_guard_admit(df_conn *c)
     if (out_of_fds(srv)) {
         srv->stats.clients_refused_fds++;
         snprintf(msg, sizeof msg, "server busy: out of file descriptors (%d connections open); "
-                 "try again later", srv->n_conns - srv->n_refusing);
+                 "try again later", live_conns(srv));
         log_refusal(srv, "refused client %llu: out of file descriptors (%d connections open)",
-                    (unsigned long long)c->id, srv->n_conns - srv->n_refusing);
+                    (unsigned long long)c->id, live_conns(srv));
         refuse(c, msg);
         return 1;
     }
-    if (srv->n_conns - srv->n_refusing > srv->cfg.max_clients) {
+    if (df_guard_over_limit(c)) {
         srv->stats.clients_refused++;
         snprintf(msg, sizeof msg, "server full: max_clients (%d) connections are open; try again "
                  "later", srv->cfg.max_clients);

@@ -48,8 +48,16 @@ int df_guard_init(df_server *srv, df_error *err);
 void df_guard_free(df_server *srv);
 
 /* Admission of a connection just accepted into `c` (counted in srv->n_conns): returns 0 when it
- * may proceed, 1 when it was refused (ERROR event queued, closing after the flush). */
+ * may proceed, 1 when it was refused (ERROR event queued, closing after the flush). "Open"
+ * excludes connections already closing (their peer hung up) and refused ones. */
 int df_guard_admit(df_conn *c);
+
+/* 1 when admitting `c` now would exceed max_clients. conn.c then defers the decision to the end
+ * of the loop iteration (df_conn_admit_waiting): libuv accepts every pending connection in one
+ * go, often before it reads the hang-ups that arrived with them, so clients that reconnect
+ * (close, then connect) at max_clients were refused for slots already free (bench_load: 87 of
+ * 1,000). */
+int df_guard_over_limit(const df_conn *c);
 
 /* Called when accepting on `listener` failed with `status` (`kind`: "unix"/"tcp"): for
  * UV_EMFILE/UV_ENFILE uses the reserve descriptor to refuse the waiting connections; every
