@@ -31,7 +31,7 @@
 
 #define N_SESSIONS 10
 #define GRID_N 32              /* 1,024-vertex sessions */
-#define RECONNECT 20           /* strokes per connection before it reconnects */
+#define RECONNECT 5            /* strokes per connection before it reconnects */
 
 enum kind { K_GOOD, K_SLOW, K_DEAF };
 enum state { S_IDLE, S_CONNECTING, S_HELLO, S_SUB, S_BEGIN, S_UPDATE, S_END, S_THINK, S_TRICKLE,
