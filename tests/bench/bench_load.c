@@ -194,6 +194,17 @@ static int daemon_alive(pid_t pid, int *status)
     return 0;
 }
 
+/* The 1-minute load average from /proc/loadavg into `out` (16 bytes), "?" when unreadable. */
+static const char *loadavg(char out[16])
+{
+    FILE *f = fopen("/proc/loadavg", "r");
+    double l;
+    if (f && fscanf(f, "%lf", &l) == 1) snprintf(out, 16, "%.1f", l);
+    else snprintf(out, 16, "?");
+    if (f) fclose(f);
+    return out;
+}
+
 /* Lines of the daemon's log (G.dir/deformd.log) that contain `needle`; -1 when unreadable. */
 static long log_count(const char *needle)
 {
@@ -227,7 +238,9 @@ static void print_figures(double secs, int ngood, int nab, double changes, doubl
            "one request p50 %.2f ms, p99 %.2f ms; handshake (connect -> HELLO reply) p50 %.2f "
            "ms, p99 %.2f ms\n", p50, p99, mx, pct(&G.lat_req, 0.5) * 1e3,
            pct(&G.lat_req, 0.99) * 1e3, pct(&G.lat_hs, 0.5) * 1e3, pct(&G.lat_hs, 0.99) * 1e3);
-    printf("  daemon peak RSS (VmHWM) %.1f MiB\n", hwm_kb / 1024.0);
+    printf("  daemon peak RSS (VmHWM) %.1f MiB; machine load average at the start / end %s / %s "
+           "(%ld CPUs: the figures scale with what else runs)\n", hwm_kb / 1024.0, G.load0,
+           loadavg(G.load1), sysconf(_SC_NPROCESSORS_ONLN));
     if (changes > 0)
         printf("  store: %.0f changes, %.0f blob bytes = %.0f bytes per change (STATS "
                "store_log_bytes / store_changes); database files %.1f MiB = %.0f bytes per "
@@ -322,6 +335,7 @@ int main(int argc, char **argv)
         cs[i].fd = -1;
         if (conn_open(&cs[i]) != 0) fail = 1;
     }
+    loadavg(G.load0);
     double t0 = now_s(), t_end = t0 + secs, t_drain = 0, t_check = t0;
     double interval = 2.0 * G.hs_timeout_s / (DF_FRAME_HEADER_SIZE - 1);
     int alive = 1;

@@ -73,6 +73,7 @@ static struct {
     samples win_stroke, win_hs; /* this second's (DF_BENCH_LOAD_VERBOSE) */
     int verbose;
     const char *dir;           /* the daemon's temporary directory */
+    char load0[16], load1[16]; /* the machine's load average at the start / end (bench_load.c) */
 } G;
 
 static double now_s(void)
