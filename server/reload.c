@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "server/log.h"
+#include "server/net/guard.h"
 
 #define DF_RELOAD_POLL_MS 10 /* period of the wait for no running job */
 
@@ -85,6 +86,7 @@ static void apply(df_server *srv, const df_server_config *n)
     c->access.quota_upload_mb = n->access.quota_upload_mb;
     c->access.quota_memory_mb = n->access.quota_memory_mb;
     df_log_set_level(c->log_level);
+    df_guard_fd_limit(c->max_clients); /* a raised max_clients needs its descriptors */
     df_log(DF_LOG_INFO, "configuration reloaded: log_level %d, max_clients %d, max_sessions %d, "
            "handshake_timeout_s %d, idle_timeout_s %d, cursor_hz %d, output_queue_limit %zu, "
            "%d allow_paths, session_access %s, session_observers %s, quota_sessions %d, quota_upload_mb %d, "

@@ -28,6 +28,7 @@ static void on_check(uv_check_t *h)
 {
     df_server *srv = h->data;
     srv->inline_spent_ns = 0; /* a new loop iteration: a new inline budget (job.h) */
+    df_conn_admit_waiting(srv); /* accepted at max_clients (guard.h) */
     df_conn_flush_all(srv, 0);
 }
 

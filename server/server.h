@@ -88,6 +88,8 @@ typedef struct df_conn {
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */
+    int admit_waiting;       /* accepted at max_clients: admitted or refused at the end of the
+                              * loop iteration (guard.h), not reading until then */
     uint64_t accepted_ms;    /* uv_now() at accept (handshake timeout) */
     uint64_t last_rx_ms;     /* uv_now() when bytes last arrived (idle timeout) */
     uint64_t sub_epoch;      /* == srv->sweep_epoch: subscribed somewhere at the last sweep */
@@ -143,6 +145,9 @@ typedef struct df_server {
     uint64_t lru_clock;
     int reserve_fd;          /* spare descriptor (guard.h), -1 when none */
     int n_refusing;          /* refused connections still flushing their ERROR frame */
+    int n_closing;           /* connections closed (c->closing) but not yet released, refused
+                              * ones aside: no longer counted against max_clients */
+    int n_admit_waiting;     /* connections with admit_waiting set */
     int refuse_logged;       /* a refusal was logged at refuse_log_ms */
     uint64_t refuse_log_ms, refuse_suppressed; /* refusal log rate limit (guard.h) */
     uint64_t sweep_epoch;

@@ -15,6 +15,7 @@
 
 static void kick_write(df_conn *c);
 static void on_fanout_idle(uv_idle_t *h);
+static void conn_start(df_conn *c);
 
 void df_conn_ref(df_conn *c) { c->refs++; }
 
@@ -38,6 +39,8 @@ static void on_closed(uv_handle_t *h)
     if (c->next) c->next->prev = c->prev;
     srv->n_conns--;
     if (c->refused) srv->n_refusing--;
+    else srv->n_closing--;
+    if (c->admit_waiting) srv->n_admit_waiting--;
     df_outq_clear(&c->outq);
     df_conn_unref(c);
 }
@@ -46,6 +49,7 @@ void df_conn_close(df_conn *c, const char *why, int warn)
 {
     if (c->closing) return;
     c->closing = 1;
+    if (!c->refused) c->srv->n_closing++; /* its slot is free for max_clients (guard.h) */
     /* refused connections are logged by guard.c's rate limit, not one line each */
     df_log(c->refused ? DF_LOG_DEBUG : warn ? DF_LOG_WARN : DF_LOG_INFO, "client %llu closed: %s",
            (unsigned long long)c->id, why ? why : "closed");
@@ -433,6 +437,30 @@ void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp)
         df_conn_close(c, "server shutting down", 0);
         return;
     }
+    if (df_guard_over_limit(c)) { /* decided at the end of this iteration (df_conn_admit_waiting) */
+        c->admit_waiting = 1;
+        srv->n_admit_waiting++;
+        return;
+    }
+    conn_start(c);
+}
+
+void df_conn_admit_waiting(df_server *srv)
+{
+    for (df_conn *c = srv->conns, *next; c && srv->n_admit_waiting > 0; c = next) {
+        next = c->next;
+        if (!c->admit_waiting) continue;
+        c->admit_waiting = 0;
+        srv->n_admit_waiting--;
+        if (!c->closing) conn_start(c);
+    }
+}
+
+/* The rest of accepting c: admission (guard.h), socket options, peer check, TLS, reading. */
+static void conn_start(df_conn *c)
+{
+    df_server *srv = c->srv;
+    int is_tcp = c->is_tcp, rc;
     if (df_guard_admit(c)) return; /* max_clients, out of descriptors: ERROR frame, close */
     if (is_tcp) {
         uv_tcp_nodelay(&c->h.tcp, 1);

@@ -17,6 +17,10 @@
  * or no file descriptor is left (guard.h). */
 void df_conn_accept(df_server *srv, uv_stream_t *listener, int is_tcp);
 
+/* Admits or refuses (guard.h) the connections accepted at max_clients during this loop
+ * iteration, now that the closes read in it count: run from the server's uv_check handle. */
+void df_conn_admit_waiting(df_server *srv);
+
 /* Subscriber-only stream output (DISPLACEMENT, PROGRESS, SHM_REF events) is corked for up to
  * this long so that consecutive versions go out in one writev per subscriber instead of one
  * write per version. Replies and control events are not corked (conn.c, corked_frame). */

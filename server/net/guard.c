@@ -3,9 +3,11 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -15,8 +17,32 @@
 #include "server/log.h"
 #include "server/net/reply.h"
 
+long df_guard_fd_limit(int max_clients)
+{
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) != 0) return -1;
+    rlim_t need = (rlim_t)(max_clients > 0 ? max_clients : 0) + DF_GUARD_FD_RESERVE;
+    if (rl.rlim_cur != RLIM_INFINITY && rl.rlim_cur < need) {
+        rlim_t old = rl.rlim_cur;
+        rl.rlim_cur = rl.rlim_max != RLIM_INFINITY && rl.rlim_max < need ? rl.rlim_max : need;
+        if (rl.rlim_cur > old && setrlimit(RLIMIT_NOFILE, &rl) == 0)
+            df_log(DF_LOG_INFO, "file descriptor limit raised from %llu to %llu for max_clients "
+                   "%d", (unsigned long long)old, (unsigned long long)rl.rlim_cur, max_clients);
+        if (getrlimit(RLIMIT_NOFILE, &rl) != 0) return -1;
+        if (rl.rlim_cur < need)
+            df_log(DF_LOG_WARN, "max_clients %d needs %llu file descriptors but the limit is %llu "
+                   "(hard limit %llu): connections beyond it are refused; raise LimitNOFILE= "
+                   "(systemd) or `ulimit -Hn`, or lower max_clients", max_clients,
+                   (unsigned long long)need, (unsigned long long)rl.rlim_cur,
+                   (unsigned long long)rl.rlim_max);
+    }
+    return rl.rlim_cur == RLIM_INFINITY || rl.rlim_cur > (rlim_t)LONG_MAX ? LONG_MAX
+                                                                          : (long)rl.rlim_cur;
+}
+
 int df_guard_init(df_server *srv, df_error *err)
 {
+    df_guard_fd_limit(srv->cfg.max_clients);
     srv->reserve_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
     if (srv->reserve_fd < 0)
         return df_error_set(err, DF_EIO, "cannot open the reserve descriptor: %s",
@@ -90,6 +116,18 @@ static int out_of_fds(df_server *srv)
     return errno == EMFILE || errno == ENFILE;
 }
 
+/* Connections that count against max_clients: open ones, less those closing or refused and
+ * those waiting for their admission (each is counted when it is decided). */
+static int live_conns(const df_server *srv)
+{
+    return srv->n_conns - srv->n_refusing - srv->n_closing - srv->n_admit_waiting;
+}
+
+int df_guard_over_limit(const df_conn *c)
+{
+    return live_conns(c->srv) > c->srv->cfg.max_clients;
+}
+
 int df_guard_admit(df_conn *c)
 {
     df_server *srv = c->srv;
@@ -97,13 +135,13 @@ int df_guard_admit(df_conn *c)
     if (out_of_fds(srv)) {
         srv->stats.clients_refused_fds++;
         snprintf(msg, sizeof msg, "server busy: out of file descriptors (%d connections open); "
-                 "try again later", srv->n_conns - srv->n_refusing);
+                 "try again later", live_conns(srv));
         log_refusal(srv, "refused client %llu: out of file descriptors (%d connections open)",
-                    (unsigned long long)c->id, srv->n_conns - srv->n_refusing);
+                    (unsigned long long)c->id, live_conns(srv));
         refuse(c, msg);
         return 1;
     }
-    if (srv->n_conns - srv->n_refusing > srv->cfg.max_clients) {
+    if (df_guard_over_limit(c)) {
         srv->stats.clients_refused++;
         snprintf(msg, sizeof msg, "server full: max_clients (%d) connections are open; try again "
                  "later", srv->cfg.max_clients);

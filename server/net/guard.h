@@ -25,15 +25,39 @@
 
 #define DF_GUARD_LOG_MS 1000 /* at most one refusal log line per second */
 
-/* Opens the reserve descriptor (/dev/null). Errors: DF_EIO (naming the reason). */
+/* Descriptors the daemon needs besides one per connection: listeners, the store (database, WAL,
+ * its shared memory), the pool's and libuv's eventfds and epoll, the log, HID devices, shared-
+ * memory rings, the reserve. */
+#define DF_GUARD_FD_RESERVE 64
+
+/* Makes room for `max_clients` connections: raises the soft RLIMIT_NOFILE of the process to
+ * max_clients + DF_GUARD_FD_RESERVE when it is lower, capped at the hard limit (never lowers
+ * it: the soft limit systemd and most shells give is 1024, while the hard one is far higher).
+ * Logs at info when it raised the limit and a warning, naming the hard limit and LimitNOFILE /
+ * `ulimit -Hn`, when the hard limit is below what max_clients needs (the connections beyond it
+ * are refused as out of file descriptors, see above). Returns the soft limit in force afterwards
+ * (RLIM_INFINITY as LONG_MAX), or -1 when getrlimit fails. Any thread; called by df_guard_init
+ * and on reload. */
+long df_guard_fd_limit(int max_clients);
+
+/* Raises the descriptor limit for cfg.max_clients (df_guard_fd_limit), then opens the reserve
+ * descriptor (/dev/null). Errors: DF_EIO (naming the reason). */
 int df_guard_init(df_server *srv, df_error *err);
 
 /* Closes the reserve descriptor. Idempotent. */
 void df_guard_free(df_server *srv);
 
 /* Admission of a connection just accepted into `c` (counted in srv->n_conns): returns 0 when it
- * may proceed, 1 when it was refused (ERROR event queued, closing after the flush). */
+ * may proceed, 1 when it was refused (ERROR event queued, closing after the flush). "Open"
+ * excludes connections already closing (their peer hung up) and refused ones. */
 int df_guard_admit(df_conn *c);
+
+/* 1 when admitting `c` now would exceed max_clients. conn.c then defers the decision to the end
+ * of the loop iteration (df_conn_admit_waiting): libuv accepts every pending connection in one
+ * go, often before it reads the hang-ups that arrived with them, so clients that reconnect
+ * (close, then connect) at max_clients were refused for slots already free (bench_load: 87 of
+ * 1,000). */
+int df_guard_over_limit(const df_conn *c);
 
 /* Called when accepting on `listener` failed with `status` (`kind`: "unix"/"tcp"): for
  * UV_EMFILE/UV_ENFILE uses the reserve descriptor to refuse the waiting connections; every

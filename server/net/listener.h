@@ -5,7 +5,14 @@
 
 #include "server/server.h"
 
-#define DF_LISTEN_BACKLOG 128
+#include <sys/socket.h>
+
+/* listen() backlog: SOMAXCONN (4096; the kernel caps it at net.core.somaxconn). With 128, a burst
+ * of connections larger than that arriving while the loop thread is busy (every client
+ * reconnecting after a restart) overflowed the accept queue: the dropped SYNs were retried by the
+ * clients' kernels after 1 s, 3 s, ... (bench_load measured handshakes of up to 2.7 s). Also
+ * applied to socket-activated listeners, whose Backlog= it would otherwise shrink. */
+#define DF_LISTEN_BACKLOG SOMAXCONN
 
 /* Opens the listeners described by srv->cfg (after adopting LISTEN_FDS sockets: a socket-activated
  * Unix or TCP socket replaces the configured one of the same family, and keeps the mode and
