@@ -190,19 +190,22 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
         }
     }
     double anorm = LAPACKE_dlange(LAPACK_COL_MAJOR, '1', t->m, t->m, t->lu, t->m);
+    dfk_blas_serial_begin();      /* no OpenBLAS pool against the OpenMP team (kelvinlet_blas.c) */
     lapack_int info = LAPACKE_dgetrf(LAPACK_COL_MAJOR, t->m, t->m, t->lu, t->m, t->ipiv);
     t->nfact++;
+    double rcond = 0.0;
+    lapack_int cinfo = info == 0 ? LAPACKE_dgecon(LAPACK_COL_MAJOR, '1', t->m, t->lu, t->m, anorm,
+                                                  &rcond) : 0;
+    dfk_blas_serial_end();
     if (info > 0)
         return df_error_set(err, DF_ESINGULAR, "kelvinlet constraints: K_pp is singular "
                             "(zero pivot %d of %d)", (int)info, t->m);
     if (info < 0)
         return df_error_set(err, DF_EINTERNAL, "kelvinlet constraints: dgetrf argument %d",
                             (int)-info);
-    double rcond = 0.0;
-    info = LAPACKE_dgecon(LAPACK_COL_MAJOR, '1', t->m, t->lu, t->m, anorm, &rcond);
-    if (info != 0)
+    if (cinfo != 0)
         return df_error_set(err, DF_EINTERNAL, "kelvinlet constraints: dgecon failed (%d)",
-                            (int)info);
+                            (int)cinfo);
     if (!(rcond >= RCOND_MIN))
         return df_error_set(err, DF_ESINGULAR, "kelvinlet constraints: K_pp is numerically "
                             "singular (rcond %.3g): pins too close for radius %g", rcond,

@@ -63,4 +63,9 @@ int dfk_moving_substeps(const df_kelvinlet_prepared *p, df_kelvinlet_prepared **
  * OpenMP threads). */
 int dfk_points_ok_f(const float *xyz, size_t n, int nthreads, size_t *bad);
 
+/* OpenBLAS on the calling thread between begin and end (nestable, thread-safe; the previous
+ * process-wide OpenBLAS thread count is restored by the outermost end). */
+void dfk_blas_serial_begin(void);
+void dfk_blas_serial_end(void);
+
 #endif
