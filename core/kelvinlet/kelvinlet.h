@@ -66,6 +66,10 @@ typedef struct df_kelvinlet_brush {
     int moving;              /* 1: moving brush (section 9): substep k uses the centre advected
                                 by k/N of the stroke and the force of the last shift (tip/N or
                                 gradient/N), i.e. N small clicks; 0: stationary brush          */
+    int surface;             /* 1: surface-aware, the field is attenuated by the distance along
+                                the mesh from the centre (kelvinlet_surface.h). The field
+                                functions of this header ignore it: the caller holding the
+                                mesh applies the weights; 0: plain field                      */
 } df_kelvinlet_brush;
 
 /* The multi-scale kernel of one brush: radii eps[i] = radius * ratio^i and weights w[i]
@@ -105,7 +109,7 @@ typedef struct df_kelvinlet_prepared {
 } df_kelvinlet_prepared;
 
 /* Fills `b` with defaults: GRAB, dim 3, order 1, ratio 1.1, radius 1, nu 0.5, everything else 0,
- * no mirror, Euler with 1 step, stationary. */
+ * no mirror, Euler with 1 step, stationary, not surface-aware. */
 void df_kelvinlet_brush_defaults(df_kelvinlet_brush *b);
 
 /* Multi-scale radii and weights. In: order in [1, MAX_ORDER], ratio > 1, radius > 0.
