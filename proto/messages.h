@@ -298,6 +298,9 @@ typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet pa
     uint8_t use_session_field;         /* decode: 1 when the body carried the u16 (even 0);
                                         * encode: write it when use_session != 0 or this is 1.
                                         * 0 with use_session 0 is the original 253 + 24n layout */
+    uint8_t surface;                   /* 1: surface-aware (attenuated by the distance along the
+                                        * mesh from the centre), 0: plain; optional trailing u8
+                                        * after use_session (which is then sent too), absent = 0 */
 } df_msg_brush;
 
 typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */

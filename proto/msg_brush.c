@@ -5,6 +5,7 @@
  *   n_pinned x f64[3]   (253 + 24 n_pinned bytes)
  *   [u16 use_session]   optional trailing field (DF_BS_* bits); absent = 0, so bodies of
  *                       clients that predate it decode unchanged (+2 bytes when present)
+ *   [u8 surface]        optional, after use_session (0/1, absent = 0: +3 bytes in all)
  * brush_update: u64 session_id, f64 move[3], twist[3], scale, matrix[9]   (136 bytes)
  * brush_param: u64 session_id, u8 param, f64 value                        (17 bytes) */
 #include <math.h>
@@ -86,6 +87,8 @@ static int brush_check(const df_msg_brush *m, df_error *err)
     if (m->use_session_field > 1)
         return df_error_set(err, DF_EINVAL, "%s: use_session_field %u not 0/1", M,
                             m->use_session_field);
+    if (m->surface > 1)
+        return df_error_set(err, DF_EINVAL, "%s: surface %u not 0 or 1", M, m->surface);
     return df_check_finite(m->pinned, 3 * (size_t)m->n_pinned, M, "pinned", err);
 }
 
@@ -104,8 +107,8 @@ static void get_f64s(df_rd *r, double *v, size_t n, const char *field)
 int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
 {
     int rc = brush_check(m, err);
-    int trailer = m->use_session != 0 || m->use_session_field;
-    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0);
+    int trailer2 = m->surface != 0, trailer = trailer2 || m->use_session != 0 || m->use_session_field;
+    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0) + (trailer2 ? 1 : 0);
     if (rc || (rc = df_enc_reserve(out, size, "brush", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
@@ -132,6 +135,8 @@ int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
     put_f64s(out, m->pinned, 3 * (size_t)m->n_pinned);
     if (trailer)
         df_buf_put_u16(out, m->use_session);
+    if (trailer2)
+        df_buf_put_u8(out, m->surface);
     return DF_OK;
 }
 
@@ -172,6 +177,7 @@ int df_msg_brush_decode(const uint8_t *p, size_t n, df_msg_brush *m, df_error *e
     t.use_session_field = !r.rc && r.off < r.n; /* the optional trailer (else: old layout) */
     if (t.use_session_field)
         t.use_session = df_rd_u16(&r, "use_session");
+    t.surface = !r.rc && r.off < r.n ? df_rd_u8(&r, "surface") : 0;  /* the second trailer */
     int rc = df_rd_end(&r);
     if (rc || (rc = brush_check(&t, err))) {
         free(t.pinned);

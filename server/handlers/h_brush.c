@@ -34,6 +34,7 @@
 #include "server/net/reply.h"
 #include "server/session/stream.h"
 #include "server/session/stroke_recipe.h"
+#include "server/session/surface_cache.h"
 
 /* Below this many vertices a brush field is evaluated by the worker thread alone: waking an
  * OpenMP team costs more than it saves. Above it, on the `threads` setting (config.h) at most:
@@ -92,6 +93,9 @@ static int stroke_field(const df_session *s, const df_stroke *st, const double *
     prep.threads = threads;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
+    if (rc == DF_OK && st->surf_dist) /* surface-aware: the replay's very mask (stroke_recipe.h) */
+        rc = df_stroke_surface_mask(&b, st->startf, s->nv, st->surf_dist, st->surf_src, disp,
+                                    err);
     if (rc == DF_OK && s->mesh.planar) /* 2D session: z stays 0 (planar_check), verified */
         for (int32_t i = 0; i < s->nv; i++)
             if (disp[3 * (size_t)i + 2] != 0.0f)
@@ -300,6 +304,11 @@ static void begin_work_inner(df_job *j)
      * checked by the first update) */
     if ((j->rc = stroke_params_check(st, "brush_begin", &j->err)) != DF_OK) return;
     if ((j->rc = planar_check(s, &st->brush, st, r->load, "brush_begin", &j->err)) != DF_OK)
+        return;
+    if (b->surface && /* distances from the centre's vertex over startf, cached per session */
+        (j->rc = df_surface_cache_dist(&((df_session *)s)->surf, &s->mesh, st->startf, s->nv,
+                                       b->centre, &st->surf_src, &st->surf_dist, &j->err))
+            != DF_OK)
         return;
     if (load_is_zero(r->load)) return;
     j->rc = stroke_field(s, st, r->load, disp, &j->change, &j->err);

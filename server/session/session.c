@@ -9,6 +9,7 @@
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/session/meshload.h"
+#include "server/session/surface_cache.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
 
@@ -171,6 +172,7 @@ void df_stroke_free(df_stroke *st)
     free(st->base);
     free(st->startf);
     free(st->applied);
+    free(st->surf_dist);
     free(st);
 }
 
@@ -205,6 +207,7 @@ void df_session_destroy(df_session *s)
     }
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
+    df_surface_cache_free(s->surf);
     df_history_free(&s->hist);
     df_membudget *mb = df_server_mem(srv);
     df_mem_release(mb, DF_MEM_HISTORY, s->hist_charged);

@@ -64,6 +64,9 @@ typedef struct df_stroke {
     uint64_t base_version;       /* session version whose positions are `base` unless
                                   * rebased (the version at begin) */
     int rebased;                 /* 1: base was rebased once (another change landed) */
+    double *surf_dist;           /* brush.surface: edge-graph distances over startf from
+                                  * vertex surf_src (surface_cache.h), nv; else NULL */
+    int32_t surf_src;
     struct df_stroke *next;
 } df_stroke;
 
@@ -111,6 +114,7 @@ typedef struct df_session {
     df_stroke *strokes;
     df_handleset *hs;
     df_kelvinlet_constraints *kc;/* cached K_pp LU of the last pinned set; NULL when none */
+    struct df_surface_cache *surf;/* surface-brush adjacency and distances (running job only) */
     size_t kc_bytes;
     uint64_t kc_lru;
     /* Scratch of the running job (allocated on first use, reused: no per-version allocation). */

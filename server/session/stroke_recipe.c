@@ -43,18 +43,33 @@ static double *widen(const float *x0, size_t n)
     return x;
 }
 
-int df_stroke_surface_dist(const df_mesh_sparse *adj, const float *x0, int32_t nv,
-                           const double *c, int32_t *src, double *dist, df_error *err)
+int32_t df_stroke_surface_src(const float *x0, int32_t nv, const double *c)
 {
-    if (!adj || !x0 || !c || !src || !dist || nv <= 0 || adj->n_rows != nv)
+    if (!x0 || !c || nv <= 0) return -1;
+    int32_t best = 0;
+    double bd = INFINITY;
+    for (int32_t i = 0; i < nv; i++) { /* df_mesh_nearest_vertex over (double)x0 */
+        const float *p = x0 + 3 * (size_t)i;
+        double dx = (double)p[0] - c[0], dy = (double)p[1] - c[1], dz = (double)p[2] - c[2];
+        double d = dx * dx + dy * dy + dz * dz;
+        if (d < bd) {
+            bd = d;
+            best = i;
+        }
+    }
+    return best;
+}
+
+int df_stroke_surface_dist(const df_mesh_sparse *adj, const double *rest, const float *x0,
+                           int32_t nv, const double *c, int32_t *src, double *dist,
+                           df_error *err)
+{
+    if (!adj || !rest || !x0 || !c || !src || !dist || nv <= 0 || adj->n_rows != nv)
         return df_error_set(err, DF_EINVAL, "surface brush: bad arguments (adjacency of %d "
-                            "rows for %d vertices)", adj ? adj->n_rows : -1, nv);
-    double *x = widen(x0, 3 * (size_t)nv);
-    if (!x) return df_error_set(err, DF_ENOMEM, "surface brush: out of memory");
-    *src = df_mesh_nearest_vertex(x, nv, c);
-    int rc = df_mesh_geodesic_from(adj, x, *src, dist, err);
-    free(x);
-    return rc;
+                            "rows for %d vertices, rest %s)", adj ? adj->n_rows : -1, nv,
+                            rest ? "given" : "missing");
+    *src = df_stroke_surface_src(x0, nv, c);
+    return df_mesh_geodesic_from(adj, rest, *src, dist, err);
 }
 
 int df_stroke_surface_mask(const df_kelvinlet_brush *b, const float *x0, int32_t nv,
@@ -77,9 +92,10 @@ int df_stroke_surface_mask(const df_kelvinlet_brush *b, const float *x0, int32_t
 /* The field of the loaded recipe at x0 into d (n = 3 nv floats), masked for surface-aware
  * recipes (adj: the mesh adjacency). */
 static int field(const df_stroke_recipe *r, const float *x0, int32_t nv,
-                 const df_mesh_sparse *adj, int planar, int threads, float *d, df_error *err)
+                 const df_mesh_sparse *adj, const double *rest, int planar, int threads,
+                 float *d, df_error *err)
 {
-    if (r->brush.surface && !adj)
+    if (r->brush.surface && (!adj || !rest))
         return df_error_set(err, DF_EINVAL, "stroke replay: a surface-aware stroke needs the "
                             "mesh adjacency (df_stroke_recipe_replay_mesh)");
     df_kelvinlet_brush b;
@@ -105,7 +121,7 @@ static int field(const df_stroke_recipe *r, const float *x0, int32_t nv,
     if (rc == DF_OK && r->brush.surface) {
         double *dist = malloc((size_t)nv * sizeof *dist);
         int32_t src = 0;
-        rc = dist ? df_stroke_surface_dist(adj, x0, nv, r->brush.centre, &src, dist, err)
+        rc = dist ? df_stroke_surface_dist(adj, rest, x0, nv, r->brush.centre, &src, dist, err)
                   : df_error_set(err, DF_ENOMEM, "stroke replay: out of memory");
         if (rc == DF_OK) rc = df_stroke_surface_mask(&b, x0, nv, dist, src, d, err);
         free(dist);
@@ -121,12 +137,12 @@ static int field(const df_stroke_recipe *r, const float *x0, int32_t nv,
 int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32_t nv,
                             int planar, int threads, double *to, df_error *err)
 {
-    return df_stroke_recipe_replay_mesh(r, from, nv, NULL, planar, threads, to, err);
+    return df_stroke_recipe_replay_mesh(r, from, nv, NULL, NULL, planar, threads, to, err);
 }
 
 int df_stroke_recipe_replay_mesh(const df_stroke_recipe *r, const double *from, int32_t nv,
-                                 const df_mesh_sparse *adj, int planar, int threads, double *to,
-                                 df_error *err)
+                                 const df_mesh_sparse *adj, const double *rest, int planar,
+                                 int threads, double *to, df_error *err)
 {
     if (!r || !from || !to || nv <= 0 || (adj && adj->n_rows != nv))
         return df_error_set(err, DF_EINVAL, "stroke replay: bad arguments");
@@ -138,7 +154,7 @@ int df_stroke_recipe_replay_mesh(const df_stroke_recipe *r, const double *from, 
         return df_error_set(err, DF_ENOMEM, "stroke replay: out of memory (%d vertices)", nv);
     }
     for (size_t i = 0; i < n; i++) x0[i] = (float)from[i];
-    int rc = field(r, x0, nv, adj, planar, threads, d, err);
+    int rc = field(r, x0, nv, adj, rest, planar, threads, d, err);
     if (rc == DF_OK) df_stroke_motion(x0, d, from, to, n);
     free(x0);
     free(d);

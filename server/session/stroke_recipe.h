@@ -51,21 +51,27 @@ void df_stroke_motion(const float *x0, float *d, const double *base, double *pos
 int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32_t nv,
                             int planar, int threads, double *to, df_error *err);
 
-/* The same with the mesh's vertex adjacency `adj` (df_mesh_vertex_adjacency of the session
- * mesh, n_rows = nv; may be NULL for a recipe whose brush.surface is 0): a surface-aware
- * recipe's field is masked by df_stroke_surface_mask with the distances of
- * df_stroke_surface_dist at x0, exactly as the live stroke. df_stroke_recipe_replay refuses a
- * surface-aware recipe (DF_EINVAL: it needs the adjacency). Same errors, plus DF_EINVAL for an
- * adjacency of another size. */
+/* The same with the session mesh: `adj` its vertex adjacency (df_mesh_vertex_adjacency,
+ * n_rows = nv) and `rest` its load-time positions (df_mesh.V, nv x 3); both may be NULL for a
+ * recipe whose brush.surface is 0. A surface-aware recipe's field is masked by
+ * df_stroke_surface_mask with the distances of df_stroke_surface_dist, exactly as the live
+ * stroke. df_stroke_recipe_replay refuses a surface-aware recipe (DF_EINVAL: it needs the
+ * mesh). Same errors, plus DF_EINVAL for an adjacency of another size. */
 int df_stroke_recipe_replay_mesh(const df_stroke_recipe *r, const double *from, int32_t nv,
-                                 const df_mesh_sparse *adj, int planar, int threads, double *to,
-                                 df_error *err);
+                                 const df_mesh_sparse *adj, const double *rest, int planar,
+                                 int threads, double *to, df_error *err);
 
 /* Surface-aware strokes, step 1 (once per stroke start): the vertex *src nearest to the brush
- * centre c[3] and the edge-graph distances dist[nv] from it, both over the stroke-start points
- * x0 (nv x 3 float32, widened to double). Errors: DF_EINVAL, DF_ENOMEM (core/mesh/geodesic.h). */
-int df_stroke_surface_dist(const df_mesh_sparse *adj, const float *x0, int32_t nv,
-                           const double *c, int32_t *src, double *dist, df_error *err);
+ * centre c[3] among the stroke-start points x0 (nv x 3 float32, widened to double), and the
+ * edge-graph distances dist[nv] from it over the mesh at rest (`rest`, nv x 3: distances along
+ * the surface as loaded, so they depend on the centre vertex only and are cached per session
+ * and vertex). Errors: DF_EINVAL, DF_ENOMEM (core/mesh/geodesic.h). */
+int df_stroke_surface_dist(const df_mesh_sparse *adj, const double *rest, const float *x0,
+                           int32_t nv, const double *c, int32_t *src, double *dist,
+                           df_error *err);
+
+/* The vertex of x0 (nv x 3 float32, widened to double) nearest to c[3]: step 1's *src. */
+int32_t df_stroke_surface_src(const float *x0, int32_t nv, const double *c);
 
 /* Step 2 (each publish): multiplies the field d (nv x 3 float32, in place) by the weights of
  * core/kelvinlet/kelvinlet_surface.h for brush b (its centre, radius and order) at the points

@@ -134,11 +134,14 @@ def decode_brush(p: bytes) -> BrushBegin:
     use_session = r.take("H") if r.off < len(p) else None   # optional trailing field
     if use_session is not None and use_session & ~sum(schema.BrushStateField):
         raise ProtocolError("brush: use_session bits 0x%x not defined" % use_session)
+    surface = r.take("B") if r.off < len(p) else None        # optional second trailer
+    if surface is not None and surface > 1:
+        raise ProtocolError("brush: surface %d not 0 or 1" % surface)
     b = m.Brush(type=names[btype], center=list(center), move=list(move), twist=list(twist),
                 scale=scale, matrix=list(matrix), radius=radius, nu=nu, strength=strength,
                 falloff=falloff, ratio=ratio, dim=dim, integrator=integs[integ], steps=steps,
                 moving=bool(moving), mirror=list(mirror) if has_mirror else None,
-                pinned=pinned, pin_flags=pin_flags, use_session=use_session)
+                pinned=pinned, pin_flags=pin_flags, use_session=use_session, surface=surface)
     return _end(r, BrushBegin(sid, b))
 
 

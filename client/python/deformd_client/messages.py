@@ -244,6 +244,9 @@ class Brush:
     # BrushStateField bits: take these fields from the session brush (brush_state_set) instead
     # of the values above. None: the field is not sent (the original layout, old daemons).
     use_session: Optional[int] = None
+    # 1: surface-aware (attenuated by the distance along the mesh; disconnected parts stay at
+    # rest). None: not sent (old daemons); sending it also sends use_session (0 when None).
+    surface: Optional[int] = None
 
 
 PIN_DISPLACEMENT, PIN_GRADIENT = PinFlag.DISPLACEMENT, PinFlag.GRADIENT
@@ -265,6 +268,8 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
         *vec(b.center, 3, "center"), *vec(b.move, 3, "move"), *vec(b.twist, 3, "twist"),
         float(b.scale), *vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
     tail = b"" if b.use_session is None else struct.pack("<H", int(b.use_session))
+    if b.surface is not None:
+        tail = struct.pack("<HB", int(b.use_session or 0), int(b.surface))
     return head + f64_rows(b.pinned, "pinned point") + tail
 
 

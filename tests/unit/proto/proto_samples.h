@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
+enum { N_SAMPLES_BASE = 42, N_SAMPLES_DEVICES = 5, N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -211,6 +211,10 @@ static inline void build_samples(sample *s)
     df_msg_brush bus = sample_brush();
     bus.use_session = DF_BS_RADIUS | DF_BS_NU;
     ADD("brush_use_session", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bus, out, &e));
+    /* a surface-aware begin (issue 14: the second optional trailer, after use_session 0) */
+    df_msg_brush bsf = sample_brush();
+    bsf.surface = 1;
+    ADD("brush_surface", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bsf, out, &e));
     df_msg_session_ref bg = {42};
     ADD("brush_state_get", DF_MSG_BRUSH_STATE_GET, 0, df_msg_session_ref_encode(&bg, out, &e));
     df_msg_brush_state_set bss = {42, DF_BS_RADIUS | DF_BS_INTEGRATOR | DF_BS_MIRROR,

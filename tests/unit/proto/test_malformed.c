@@ -341,6 +341,10 @@ static void test_brush_state_bodies(void **state)
     u16("brush_use_session", trailer, 0x100, DF_EPROTO_RESERVED, "use_session");
     u16("brush_use_session", trailer, 0, DF_OK, NULL);       /* explicit 0 = absent */
     u16("brush_use_session", trailer, 0xFF, DF_OK, NULL);    /* every field */
+    /* the surface byte after use_session (issue 14): 0/1, anything else EINVAL */
+    u8("brush_surface", trailer + 2, 2, DF_EINVAL, "surface");
+    u8("brush_surface", trailer + 2, 0, DF_OK, NULL);
+    u8("brush_surface", trailer + 2, 1, DF_OK, NULL);
     /* brush_state_set: mask at 8, values at 10 (sample mask RADIUS | INTEGRATOR | MIRROR) */
     u64("brush_state_set", 0, 0, DF_EINVAL, "session_id");
     u16("brush_state_set", 8, 0, DF_EINVAL, "mask 0");

@@ -201,10 +201,11 @@ static void live_surface(const df_stroke_recipe *r, const df_mesh_sparse *A, con
 {
     size_t n = 3 * N * N;
     float *x0 = malloc(n * sizeof *x0), *d = malloc(n * sizeof *d), *w = malloc(N * N * 4);
-    double *xd = malloc(n * 8), *dist = malloc(N * N * 8);
+    double *xd = malloc(n * 8), *dist = malloc(N * N * 8), *x0d = malloc(n * 8);
     for (size_t i = 0; i < n; i++) {
         x0[i] = (float)from[i];
-        xd[i] = x0[i];
+        x0d[i] = x0[i];
+        xd[i] = from[i];          /* the rest shape: `from` itself in this test */
     }
     df_kelvinlet_brush b = r->brush;
     for (int i = 0; i < 3; i++) b.tip[i] = r->strength * r->load[i];
@@ -212,9 +213,9 @@ static void live_surface(const df_stroke_recipe *r, const df_mesh_sparse *A, con
     assert_int_equal(df_kelvinlet_prepare(&b, &prep, NULL), DF_OK);
     prep.threads = 1;
     assert_int_equal(df_kelvinlet_displacements(&prep, x0, N * N, d, NULL), DF_OK);
-    int32_t src = df_mesh_nearest_vertex(xd, N * N, b.centre);
+    int32_t src = df_mesh_nearest_vertex(x0d, N * N, b.centre);
     assert_int_equal(df_mesh_geodesic_from(A, xd, src, dist, NULL), DF_OK);
-    assert_int_equal(df_kelvinlet_surface_weights(xd, N * N, dist, src, b.centre, b.radius,
+    assert_int_equal(df_kelvinlet_surface_weights(x0d, N * N, dist, src, b.centre, b.radius,
                                                   b.order, w, NULL), DF_OK);
     for (size_t v = 0; v < N * N; v++)
         for (int k = 0; k < 3; k++) d[3 * v + k] = w[v] == 0.0f ? 0.0f : d[3 * v + k] * w[v];
@@ -227,6 +228,7 @@ static void live_surface(const df_stroke_recipe *r, const df_mesh_sparse *A, con
     free(d);
     free(w);
     free(xd);
+    free(x0d);
     free(dist);
 }
 
@@ -242,9 +244,11 @@ static void test_surface_replay(void **st)
     df_error e;
     assert_int_equal(df_stroke_recipe_replay(&r, from, N * N, 0, 1, b, &e), DF_EINVAL);
     live_surface(&r, &A, from, a);
-    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, 0, 1, b, &e), DF_OK);
+    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, from, 0, 1, b, &e),
+                     DF_OK);
     assert_memory_equal(a, b, 3 * N * N * 8);
-    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, 0, 2, b, &e), DF_OK);
+    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, from, 0, 2, b, &e),
+                     DF_OK);
     assert_memory_equal(a, b, 3 * N * N * 8);
     size_t other_moved = 0, own_moved = 0;
     for (int j = 0; j < N; j++)
@@ -256,7 +260,8 @@ static void test_surface_replay(void **st)
             }
     assert_true(own_moved > 100);
     r.brush.surface = 0;            /* without the mask the other sheet moves */
-    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, 0, 1, b, &e), DF_OK);
+    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, from, 0, 1, b, &e),
+                     DF_OK);
     for (int j = 0; j < N; j++)
         for (int i = N / 2; i < N; i++) other_moved += b[3 * (j * N + i)] != from[3 * (j * N + i)];
     assert_true(other_moved > 100);
