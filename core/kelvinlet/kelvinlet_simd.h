@@ -61,8 +61,8 @@ DFK_AI double rsqd(double x)
 }
 
 /* ln(x) for a positive normal double, within ~1 ulp: x = m 2^e with m in [sqrt(1/2), sqrt(2)),
- * ln m = 2 atanh(t), t = (m - 1)/(m + 1), |t| <= 0.1716, by its odd series to t^23 (next term
- * < 1e-18 relative) arranged as in fdlibm's log; e ln 2 in two parts (ln2_hi has 11 trailing zero bits: e * ln2_hi is
+ * ln m = 2 atanh(t), t = (m - 1)/(m + 1), |t| <= 0.1716, as in fdlibm's log (its degree-14
+ * minimax polynomial); e ln 2 in two parts (ln2_hi has 11 trailing zero bits: e * ln2_hi is
  * exact). The exponent becomes a double through the 2^52 trick (integer ops only). */
 DFK_AI double vlog(double x)
 {
@@ -77,21 +77,17 @@ DFK_AI double vlog(double x)
     memcpy(&m, &mb, sizeof m);
     memcpy(&e, &eb, sizeof e);
     e -= 4503599627370496.0 + 1023.0;                          /* the unbiased exponent */
-    /* fdlibm's split: ln(1 + f) = f - f^2/2 + t (f^2/2 + R), t = f / (2 + f), R = 2 t^2/3 +
+    /* fdlibm's split: ln(1 + f) = f - f^2/2 + t (f^2/2 + R), t = f / (2 + f), R ~ 2 t^2/3 +
      * 2 t^4/5 + ...: f and f^2/2 carry the result, the rounded division only the small rest. */
     double f = m - 1.0, hf = 0.5 * f * f, t = f / (2.0 + f), z = t * t;
-    double R = 2.0 / 23.0;
-    R = R * z + 2.0 / 21.0;
-    R = R * z + 2.0 / 19.0;
-    R = R * z + 2.0 / 17.0;
-    R = R * z + 2.0 / 15.0;
-    R = R * z + 2.0 / 13.0;
-    R = R * z + 2.0 / 11.0;
-    R = R * z + 2.0 / 9.0;
-    R = R * z + 2.0 / 7.0;
-    R = R * z + 2.0 / 5.0;
-    R = R * z + 2.0 / 3.0;
-    R *= z;
+    /* fdlibm's minimax coefficients (e_log.c Lg1..Lg7): |error| < 2^-58.45 on this range */
+    double R = z * (6.666666666666735130e-01 +
+               z * (3.999999999940941908e-01 +
+               z * (2.857142874366239149e-01 +
+               z * (2.222219843214978396e-01 +
+               z * (1.818357216161805012e-01 +
+               z * (1.531383769920937332e-01 +
+               z * 1.479819860511658591e-01))))));
     const double ln2_hi = 6.93147180369123816490e-01, ln2_lo = 1.90821492927058770002e-10;
     return e * ln2_hi - ((hf - (t * (hf + R) + e * ln2_lo)) - f);
 }
