@@ -193,11 +193,11 @@ typedef struct df_kelvinlet_pins {
  * header is reentrant and may run concurrently on different data. */
 typedef struct df_kelvinlet_constraints df_kelvinlet_constraints;
 
-/* Builds K_pp (3n, 9n or 12n square; 8n / 11n at nu = 0.5) on pins->threads OpenMP threads
- * and caches its LU (LAPACKE dgetrf, condition checked with dgecon), computed with OpenBLAS on
- * the calling thread (its process-wide thread count is lowered to 1 for the call and restored:
- * OpenBLAS's pool and the OpenMP team no longer compete, and the LU is the same bits for
- * every thread setting).
+/* Builds K_pp (3n, 9n or 12n square; 8n / 11n at nu = 0.5) and caches its LU (blocked, in
+ * dgetrf's layout; condition checked with dgecon), both on pins->threads OpenMP threads: the
+ * LU's trailing updates are shared by the same team, OpenBLAS runs on one thread meanwhile
+ * (its process-wide thread count is lowered to 1 for the call and restored), so its pool and
+ * the OpenMP team no longer compete, and the factors are the same bits on any thread count.
  * Errors: DF_EINVAL (bad numbers, n = 0, flags 0), DF_ELIMIT (n > MAX_PINS), DF_ENOMEM,
  * DF_ESINGULAR (duplicated / coincident pins or numerically singular K_pp); *out untouched. */
 int df_kelvinlet_constraints_create(const df_kelvinlet_pins *pins, df_kelvinlet_constraints **out,

@@ -1,10 +1,11 @@
-/* kelvinlet_blas.c — OpenBLAS on one thread around the pin system's dense factorization.
+/* kelvinlet_blas.c — OpenBLAS on one thread around the pin system's dense factorization
+ * (kelvinlet_lu.c shares the work over the kernel's own OpenMP team instead).
  *
  * The K_pp assembly runs on an OpenMP team; OpenBLAS (the pthreads build Debian ships) keeps
  * its own worker threads. Right after a parallel region the OpenMP workers still spin (libgomp's
  * default wait policy) while OpenBLAS's threads start dgetrf, and on a 2-core machine the two
  * pools fought: pin set-up on 2 threads took 3x its 1-thread time (OMP_WAIT_POLICY=passive hid
- * it). A 480-1760 DoF LU is small for BLAS threading anyway, so it runs on the calling thread.
+ * it).
  * The OpenBLAS thread count is process-wide: a depth counter under a mutex lowers it once for
  * overlapping callers and restores the saved value when the last one leaves (other BLAS users
  * of the process run single-threaded for that window, never with a wrong result). */

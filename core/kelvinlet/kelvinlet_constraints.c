@@ -178,7 +178,6 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
     memcpy(t->pts, pins->points, 3 * pins->n * sizeof *t->pts);
     /* Column-major: column (pin q, dof c) holds the functionals at every pin p. */
     const int nt = assembly_threads(pins);
-    (void)nt; /* only the pragma reads it: unused without OpenMP */
 #pragma omp parallel for schedule(dynamic, 4) if (pins->n >= 32 && nt > 1) num_threads(nt)
     for (size_t col = 0; col < m; col++) {
         df_kelvinlet_source s;
@@ -190,10 +189,11 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
         }
     }
     double anorm = LAPACKE_dlange(LAPACK_COL_MAJOR, '1', t->m, t->m, t->lu, t->m);
-    dfk_blas_serial_begin();      /* no OpenBLAS pool against the OpenMP team (kelvinlet_blas.c) */
-    lapack_int info = LAPACKE_dgetrf(LAPACK_COL_MAJOR, t->m, t->m, t->lu, t->m, t->ipiv);
+    /* the LU on the assembly's team, OpenBLAS on one thread (kelvinlet_lu.c) */
+    lapack_int info = dfk_lu_factor(t->m, t->lu, t->ipiv, nt);
     t->nfact++;
     double rcond = 0.0;
+    dfk_blas_serial_begin();
     lapack_int cinfo = info == 0 ? LAPACKE_dgecon(LAPACK_COL_MAJOR, '1', t->m, t->lu, t->m, anorm,
                                                   &rcond) : 0;
     dfk_blas_serial_end();

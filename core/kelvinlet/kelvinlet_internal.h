@@ -68,4 +68,10 @@ int dfk_points_ok_f(const float *xyz, size_t n, int nthreads, size_t *bad);
 void dfk_blas_serial_begin(void);
 void dfk_blas_serial_end(void);
 
+/* LU with partial pivoting of the m x m column-major matrix a (overwritten by L and U) into
+ * ipiv[m] (1-based, LAPACK dgetrf's layout and meaning), on up to nthreads OpenMP threads with
+ * OpenBLAS on one thread (kelvinlet_lu.c); the same bits for any nthreads. Returns 0, or i > 0
+ * when U(i, i) is exactly zero (as dgetrf: the factorization is completed). */
+int dfk_lu_factor(int m, double *a, int *ipiv, int nthreads);
+
 #endif
