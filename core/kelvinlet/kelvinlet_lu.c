@@ -17,6 +17,8 @@ _Static_assert(sizeof(lapack_int) == sizeof(int), "LAPACK with 32-bit integers (
 
 #define DFK_LU_BLOCK 64    /* panel width */
 #define DFK_LU_CHUNK 128   /* columns per task of the trailing update */
+#define DFK_LU_PAR_MIN 1024 /* below this order the LU (< 0.7 GFlop, a few ms) stays on the
+                             * calling thread: one team wake-up per block column costs more */
 
 int dfk_lu_factor(int m, double *a, int *ipiv, int nthreads)
 {
@@ -37,8 +39,8 @@ int dfk_lu_factor(int m, double *a, int *ipiv, int nthreads)
             continue;
         int nchunks = (rest + DFK_LU_CHUNK - 1) / DFK_LU_CHUNK;
         (void)nthreads; /* only the pragma reads it: unused without OpenMP */
-#pragma omp parallel for schedule(dynamic, 1) if (nthreads > 1 && nchunks > 1) \
-    num_threads(nthreads)
+#pragma omp parallel for schedule(dynamic, 1) \
+    if (nthreads > 1 && m >= DFK_LU_PAR_MIN && nchunks > 1) num_threads(nthreads)
         for (int c = 0; c < nchunks; c++) {
             int c0 = k + nb + c * DFK_LU_CHUNK;
             int nc = m - c0 < DFK_LU_CHUNK ? m - c0 : DFK_LU_CHUNK;

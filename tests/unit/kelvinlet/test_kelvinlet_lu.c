@@ -1,5 +1,6 @@
 /* Unit tests for the pin system's blocked LU (core/kelvinlet/kelvinlet_lu.c, issue 14 item 6):
- * on random matrices of sizes around the block and chunk widths it solves A x = b to a small
+ * on random matrices of sizes around the block and chunk widths (and one above the size where
+ * the trailing updates are threaded) it solves A x = b to a small
  * backward error through LAPACK's dgetrs (so its factors are in dgetrf's layout), gives the
  * same bits on 1, 2 and 3 threads, restores OpenBLAS's thread count, and reports an exactly
  * singular column like dgetrf. */
@@ -31,7 +32,7 @@ static double *random_matrix(int m, uint64_t seed)
 static void test_solves_and_same_bits(void **state)
 {
     (void)state;
-    const int sizes[] = {1, 7, 64, 65, 130, 300, 481};
+    const int sizes[] = {1, 7, 64, 65, 130, 300, 481, 1100};   /* 1100: the threaded path */
     openblas_set_num_threads(2);
     int nb = openblas_get_num_threads();
     for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
