@@ -21,7 +21,10 @@
  * arrives; the stroke keeps them (a later brush state change does not alter an open stroke). A client that disconnects with an open
  * stroke has it ended (committed as an undo step). Pinned points use the
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
- * change. */
+ * change. A surface-aware begin (wire `surface` 1) takes, once, the edge-graph distances over the
+ * rest mesh from the vertex nearest its centre (server/session/surface_cache.h: cached per session
+ * and vertex) and every publish multiplies the field by their weights (stroke_recipe.h
+ * df_stroke_surface_mask, what a replay runs): vertices not connected to it never move. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
