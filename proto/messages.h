@@ -318,6 +318,9 @@ typedef struct df_msg_brush {          /* brush stroke begin: every Kelvinlet pa
                                         * points' LU for this stroke); optional trailing u32
                                         * after use_session (which is then always written) */
     uint8_t options_field;             /* as use_session_field, for `options` */
+    uint8_t surface;                   /* 1: surface-aware (attenuated by the distance along the
+                                        * mesh from the centre), 0: plain; optional trailing u8
+                                        * after options (which are then sent too), absent = 0 */
 } df_msg_brush;
 
 typedef struct df_msg_brush_update {   /* cumulative load since the stroke began */

@@ -6,6 +6,7 @@
  *   [u16 use_session]   optional trailing field (DF_BS_* bits); absent = 0, so bodies of
  *                       clients that predate it decode unchanged (+2 bytes when present)
  *   [u32 options]       optional, only after use_session: DF_WORK_OPT_* bits (+4 bytes)
+ *   [u8 surface]        optional, only after options: 0/1 (absent = 0; +7 bytes in all)
  * brush_update: u64 session_id, f64 move[3], twist[3], scale, matrix[9]   (136 bytes)
  * brush_param: u64 session_id, u8 param, f64 value                        (17 bytes) */
 #include <math.h>
@@ -92,6 +93,8 @@ static int brush_check(const df_msg_brush *m, df_error *err)
                             (unsigned)m->options, (unsigned)(m->options & ~DF_WORK_OPTS_ALL));
     if (m->options_field > 1)
         return df_error_set(err, DF_EINVAL, "%s: options_field %u not 0/1", M, m->options_field);
+    if (m->surface > 1)
+        return df_error_set(err, DF_EINVAL, "%s: surface %u not 0 or 1", M, m->surface);
     return df_check_finite(m->pinned, 3 * (size_t)m->n_pinned, M, "pinned", err);
 }
 
@@ -110,9 +113,10 @@ static void get_f64s(df_rd *r, double *v, size_t n, const char *field)
 int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
 {
     int rc = brush_check(m, err);
-    int opts = m->options != 0 || m->options_field;
+    int surf = m->surface != 0, opts = surf || m->options != 0 || m->options_field;
     int trailer = m->use_session != 0 || m->use_session_field || opts;
-    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0) + (opts ? 4 : 0);
+    size_t size = BRUSH_FIXED + 24 * (size_t)m->n_pinned + (trailer ? 2 : 0) + (opts ? 4 : 0) +
+                  (surf ? 1 : 0);
     if (rc || (rc = df_enc_reserve(out, size, "brush", err)))
         return rc;
     df_buf_put_u64(out, m->session_id);
@@ -141,6 +145,8 @@ int df_msg_brush_encode(const df_msg_brush *m, df_buf *out, df_error *err)
         df_buf_put_u16(out, m->use_session);
     if (opts)
         df_buf_put_u32(out, m->options);
+    if (surf)
+        df_buf_put_u8(out, m->surface);
     return DF_OK;
 }
 
@@ -182,9 +188,10 @@ int df_msg_brush_decode(const uint8_t *p, size_t n, df_msg_brush *m, df_error *e
     if (t.use_session_field)
         t.use_session = df_rd_u16(&r, "use_session");
     t.options = 0;
-    t.options_field = !r.rc && t.use_session_field && r.off < r.n && r.n - r.off <= 4;
-    if (t.options_field) /* 1..3 bytes: a cut field (truncated); more than 4: trailing */
+    t.options_field = !r.rc && t.use_session_field && r.off < r.n && r.n - r.off <= 5;
+    if (t.options_field) /* 1..3 bytes: a cut field (truncated); more than 5: trailing */
         t.options = df_rd_u32(&r, "options");
+    t.surface = !r.rc && t.options_field && r.off < r.n ? df_rd_u8(&r, "surface") : 0;
     int rc = df_rd_end(&r);
     if (rc || (rc = brush_check(&t, err))) {
         free(t.pinned);

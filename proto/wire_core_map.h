@@ -102,6 +102,7 @@ static inline int df_wire_brush_to_core(const df_msg_brush *m, df_kelvinlet_brus
     memcpy(b->mirror_normal, m->mirror_normal, sizeof b->mirror_normal);
     b->steps = m->steps;
     b->moving = m->moving;
+    b->surface = m->surface;
     return DF_OK;
 }
 

@@ -19,7 +19,7 @@
 enum {
     O_TYPE = CTL_NGLOBAL, O_CENTER, O_MOVE, O_TWIST, O_SCALE, O_MATRIX, O_RADIUS, O_NU,
     O_FALLOFF, O_RATIO, O_DIM, O_INTEGRATOR, O_STEPS, O_MIRROR, O_PIN, O_PIN_MODE, O_STRENGTH,
-    O_MOVING, O_USE_SESSION, O_COUNT
+    O_MOVING, O_USE_SESSION, O_SURFACE, O_COUNT
 };
 
 static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
@@ -54,6 +54,9 @@ static const dc_cli_opt BRUSH_OPTS[O_COUNT] = {
                        "\n                     radius, nu, strength, falloff, ratio, integrator"
                        " (with steps),\n                     mirror, or all (not with the "
                        "same option given here)"},
+    {"surface", 0, "--surface          surface-aware: attenuate by the distance along the mesh "
+                   "from the centre\n                     (parts not connected to it stay at "
+                   "rest)"},
 };
 
 /* deformctl's default Poisson ratio: below 0.5 so that every brush type works (the scale brush
@@ -201,6 +204,7 @@ static int build(const dc_cli_args *a, df_msg_brush *b, df_msg_brush_update *u, 
         b->pin_flags = (uint8_t)(k + 1); /* 1 displacement, 2 gradient, 3 both */
     }
     b->moving = a->val[O_MOVING] ? 1 : 0;
+    b->surface = a->val[O_SURFACE] ? 1 : 0;
     if (a->val[O_USE_SESSION] && (rc = use_session(a, b, e)))
         return rc;
     return DF_OK; /* the begin keeps zero loads: the update carries the whole load */
@@ -278,7 +282,7 @@ const ctl_cmd ctl_cmds_brush[] = {
      "       [--twist WX,WY,WZ] [--scale S] [--matrix M00,M01,...,M22] [--radius R] [--nu NU]\n"
      "       [--falloff N] [--ratio Q] [--dim 2|3] [--integrator euler|rk4] [--steps N]\n"
      "       [--mirror PX,PY,PZ,NX,NY,NZ] [--pin FILE [--pin-mode MODE]] [--strength S]\n"
-     "       [--moving] [--use-session FIELD,...|all]",
+     "       [--moving] [--use-session FIELD,...|all] [--surface]",
      "Apply one whole Kelvinlet brush stroke (begin, update, end) as one new version.",
      BRUSH_OPTS, O_COUNT, 1, run_brush},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},

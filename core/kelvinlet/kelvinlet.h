@@ -66,6 +66,10 @@ typedef struct df_kelvinlet_brush {
     int moving;              /* 1: moving brush (section 9): substep k uses the centre advected
                                 by k/N of the stroke and the force of the last shift (tip/N or
                                 gradient/N), i.e. N small clicks; 0: stationary brush          */
+    int surface;             /* 1: surface-aware, the field is attenuated by the distance along
+                                the mesh from the centre (kelvinlet_surface.h). The field
+                                functions of this header ignore it: the caller holding the
+                                mesh applies the weights; 0: plain field                      */
 } df_kelvinlet_brush;
 
 /* The multi-scale kernel of one brush: radii eps[i] = radius * ratio^i and weights w[i]
@@ -105,7 +109,7 @@ typedef struct df_kelvinlet_prepared {
 } df_kelvinlet_prepared;
 
 /* Fills `b` with defaults: GRAB, dim 3, order 1, ratio 1.1, radius 1, nu 0.5, everything else 0,
- * no mirror, Euler with 1 step, stationary. */
+ * no mirror, Euler with 1 step, stationary, not surface-aware. */
 void df_kelvinlet_brush_defaults(df_kelvinlet_brush *b);
 
 /* Multi-scale radii and weights. In: order in [1, MAX_ORDER], ratio > 1, radius > 0.
@@ -189,8 +193,11 @@ typedef struct df_kelvinlet_pins {
  * header is reentrant and may run concurrently on different data. */
 typedef struct df_kelvinlet_constraints df_kelvinlet_constraints;
 
-/* Builds K_pp (3n, 9n or 12n square; 8n / 11n at nu = 0.5) and caches its LU (LAPACKE
- * dgetrf, condition checked with dgecon).
+/* Builds K_pp (3n, 9n or 12n square; 8n / 11n at nu = 0.5) and caches its LU (blocked, in
+ * dgetrf's layout; condition checked with dgecon), both on pins->threads OpenMP threads: the
+ * LU's trailing updates are shared by the same team, OpenBLAS runs on one thread meanwhile
+ * (its process-wide thread count is lowered to 1 for the call and restored), so its pool and
+ * the OpenMP team no longer compete, and the factors are the same bits on any thread count.
  * Errors: DF_EINVAL (bad numbers, n = 0, flags 0), DF_ELIMIT (n > MAX_PINS), DF_ENOMEM,
  * DF_ESINGULAR (duplicated / coincident pins or numerically singular K_pp); *out untouched. */
 int df_kelvinlet_constraints_create(const df_kelvinlet_pins *pins, df_kelvinlet_constraints **out,

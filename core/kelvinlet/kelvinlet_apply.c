@@ -1,6 +1,6 @@
 /* kelvinlet_apply.c — the float32 evaluation path: SoA blocks of BLOCK points, one fused
- * SIMD loop per load (orders 1-3 specialized at compile time so the scale loop unrolls),
- * Euler / RK4 per block, OpenMP over blocks when more than one thread may run (a parallel
+ * SIMD loop per load (every order 1-8, 3D and 2D, specialized at compile time so the scale
+ * loop unrolls and vectorizes; the loop bodies live in kelvinlet_simd.h), Euler / RK4 per block, OpenMP over blocks when more than one thread may run (a parallel
  * region costs microseconds even with one thread: small meshes on a 1-thread caller skip it).
  *
  * SIMD: the block integrator carries __attribute__((target_clones("arch=x86-64-v4",
@@ -11,7 +11,8 @@
  * (sanitizer builds: the ifunc resolver runs before the ThreadSanitizer runtime is up).
  * Threads: p->threads (kelvinlet.h); built without OpenMP (_OPENMP undefined) everything is serial.
  * 1/sqrt is computed as the bit-level estimate plus three Newton steps (relative error at
- * float rounding level): plain C that vectorizes, where sqrtf would not (errno semantics). */
+ * float rounding level) and the 2D logarithm by bit-level range reduction and a series:
+ * plain C that vectorizes, where sqrtf / log would not (errno semantics). */
 #include <math.h>
 #ifdef _OPENMP
 #include <omp.h>
@@ -21,10 +22,9 @@
 #include <string.h>
 
 #include "core/kelvinlet/kelvinlet_internal.h"
+#include "core/kelvinlet/kelvinlet_simd.h"
 
-#define BLOCK 256                 /* points per SoA block (fits L1 with all temporaries) */
 #define PAR_MIN_BLOCKS 4          /* below this many blocks run on one thread            */
-#define MO DF_KELVINLET_MAX_ORDER
 
 #ifdef DF_NO_TARGET_CLONES
 #define DF_SIMD_CLONES
@@ -42,21 +42,6 @@ static int eval_threads(const df_kelvinlet_prepared *p)
     return 1;
 #endif
 }
-
-typedef struct fsrc {
-    int dim, order, affine;
-    float c[3], f[3];      /* centre and grab force (times the step h)                  */
-    float e2[MO];          /* eps_i^2                                                   */
-    float del[MO];         /* eps_i^2 - eps_1^2                                         */
-    float w[MO], wd[MO];   /* w_i and w_i (eps_i^2 - eps_1^2)                           */
-    float ie2, eh[MO];     /* tri-scale: 1 / eps_1^2 and eps_i^2 / eps_1^2              */
-    float W3, ie1, ie3, ie5; /* (eps_2^2 - eps_1^2)(eps_3^2 - eps_1^2) / eps_1^4, eps_1^-k */
-    float kA1, kA3, kB;    /* grab:   A = kA1 sum w ir + kA3 sum w x ir^3, B = kB sum w ir^3 */
-    float K[9], D[9], t;   /* affine F split: skew K, symmetric traceless D, trace/dim t */
-    float kK, kD1, kD2, kDq, kT; /* affine coefficients (see affine3 / load2)          */
-    float lcoef;           /* 2D: (b - a) sum_i w_i ln(s + eps_i^2)                     */
-    double dx[MO], ddel[MO], dw[MO], dwd[MO]; /* 2D (scalar path): the same in double     */
-} fsrc;
 
 typedef struct fplan {
     size_t n;
@@ -141,21 +126,6 @@ static int build_plan(const df_kelvinlet_prepared *p, double h, fplan *pl, df_er
 
 /* ---- SIMD kernels ---------------------------------------------------------------------- */
 
-static inline __attribute__((always_inline)) float rsq(float x)
-{
-    int32_t i;
-    float y, hx = 0.5f * x;
-    memcpy(&i, &x, sizeof i);
-    i = 0x5f375a86 - (i >> 1);
-    memcpy(&y, &i, sizeof y);
-    y = y * (1.5f - hx * y * y);
-    y = y * (1.5f - hx * y * y);
-    y = y * (1.5f - hx * y * y);
-    return y;
-}
-
-typedef float blk[BLOCK];
-
 /* Tri-scale sums in closed form. With q_i = (s + eps_i^2)^-1/2 the tri-scale weights make
  * sum_i w_i q_i^m = (x2 - x1)(x3 - x1) q^m[x1, x2, x3] (second divided difference in
  * x = s + eps^2), and for q^m = x^(-m/2) that divided difference is
@@ -187,15 +157,6 @@ static inline __attribute__((always_inline)) void tri_sums(const fsrc *S, const 
     }
 }
 
-/* 1/sqrt(x) in double: the float estimate plus two double Newton steps (vectorizes). */
-static inline __attribute__((always_inline)) double rsqd(double x)
-{
-    double y = (double)rsq((float)x);
-    y = y * (1.5 - 0.5 * x * y * y);
-    y = y * (1.5 - 0.5 * x * y * y);
-    return y;
-}
-
 /* Orders >= 4: the same difference sums as below, taken in double. Their weights grow like
  * (ratio^2 - 1)^-(n-1) and cancel down to the O(1) result (at ratio 1.1, order 8: ~1e4-fold),
  * which float sums turned into 2e-4 relative errors at the brush centre (issue 9 item 19);
@@ -208,6 +169,7 @@ static inline __attribute__((always_inline)) void sums_wide(const fsrc *S, const
     double sd = s, x1 = S->dx[0], s1p = sd + x1;
     double i1 = rsqd(s1p), i1s = i1 * i1, i13 = i1s * i1, rho1 = s1p * i1;
     double s1 = 0.0, s3 = 0.0, s5 = 0.0, t3 = 0.0, t5 = 0.0;
+#pragma GCC unroll 8
     for (int i = 1; i < order; i++) {
         double sp = sd + S->dx[i];
         double ii = rsqd(sp), iis = ii * ii, ii3 = iis * ii;
@@ -341,60 +303,6 @@ static inline __attribute__((always_inline)) void affine3(const fsrc *S, const i
     }
 }
 
-/* 2D loads (z untouched): a scalar loop (the log term needs log1p) whose multi-scale sums are
- * taken in double, so the multi-scale cancellation costs no float digits; with q_i = 1/(s +
- * eps_i^2) the differences q_i - q_1 = -del_i q_i q_1 are exact in form, as in 3D. */
-static inline __attribute__((always_inline)) void load2(const fsrc *S, blk *restrict p,
-                                                        blk *restrict u)
-{
-    const float cx = S->c[0], cy = S->c[1];
-    const double x1 = S->dx[0];
-    const int order = S->order;
-    for (int j = 0; j < BLOCK; j++) {
-        float rx = p[0][j] - cx, ry = p[1][j] - cy;
-        double s = (double)rx * rx + (double)ry * ry;
-        double q1 = 1.0 / (s + x1), sq, sq2, xq, xq2, lg = 0.0;
-        if (order == 1) {
-            sq = q1;
-            sq2 = q1 * q1;
-            xq = x1 * q1;
-            xq2 = x1 * sq2;
-            lg = log(s + x1);
-        } else {
-            double a1 = 0.0, a2 = 0.0, t1 = 0.0, t2 = 0.0;
-            for (int i = 1; i < order; i++) {
-                double qi = 1.0 / (s + S->dx[i]);
-                double d1 = -S->ddel[i] * qi * q1, d2 = d1 * (qi + q1);
-                a1 += S->dw[i] * d1;
-                a2 += S->dw[i] * d2;
-                t1 += S->dwd[i] * (order >= 3 ? d1 : qi);
-                t2 += S->dwd[i] * (order >= 3 ? d2 : qi * qi);
-                lg += S->dw[i] * log1p(S->ddel[i] * q1);
-            }
-            sq = a1;
-            sq2 = a2;
-            xq = x1 * a1 + t1;
-            xq2 = x1 * a2 + t2;
-        }
-        if (!S->affine) {
-            float A = (float)(S->lcoef * lg + S->kA3 * xq);
-            float rf = (float)(S->kB * sq) * (rx * S->f[0] + ry * S->f[1]);
-            u[0][j] += A * S->f[0] + rf * rx;
-            u[1][j] += A * S->f[1] + rf * ry;
-        } else {
-            const float *K = S->K, *D = S->D;
-            double base = sq + xq2;
-            float cK = (float)(S->kK * base), cT = (float)(S->kT * base * S->t);
-            float cD = (float)(S->kD1 * sq + S->kD2 * xq2), cQ = (float)(S->kDq * sq2);
-            float Krx = K[0] * rx + K[1] * ry, Kry = K[3] * rx + K[4] * ry;
-            float Drx = D[0] * rx + D[1] * ry, Dry = D[3] * rx + D[4] * ry;
-            float q = cT + cQ * (rx * Drx + ry * Dry);
-            u[0][j] += cK * Krx + cD * Drx + q * rx;
-            u[1][j] += cK * Kry + cD * Dry + q * ry;
-        }
-    }
-}
-
 static inline __attribute__((always_inline)) void eval_block(const fplan *pl, blk *restrict p,
                                                              blk *restrict u)
 {
@@ -403,7 +311,29 @@ static inline __attribute__((always_inline)) void eval_block(const fplan *pl, bl
     for (size_t k = 0; k < pl->n; k++) {
         const fsrc *S = &pl->s[k];
         if (S->dim == 2) {
-            load2(S, p, u);
+            if (!S->affine) {
+                switch (S->order) {
+                case 1: grab2(S, 1, p, u); break;
+                case 2: grab2(S, 2, p, u); break;
+                case 3: grab2(S, 3, p, u); break;
+                case 4: grab2(S, 4, p, u); break;
+                case 5: grab2(S, 5, p, u); break;
+                case 6: grab2(S, 6, p, u); break;
+                case 7: grab2(S, 7, p, u); break;
+                default: grab2(S, 8, p, u); break;
+                }
+            } else {
+                switch (S->order) {
+                case 1: affine2(S, 1, p, u); break;
+                case 2: affine2(S, 2, p, u); break;
+                case 3: affine2(S, 3, p, u); break;
+                case 4: affine2(S, 4, p, u); break;
+                case 5: affine2(S, 5, p, u); break;
+                case 6: affine2(S, 6, p, u); break;
+                case 7: affine2(S, 7, p, u); break;
+                default: affine2(S, 8, p, u); break;
+                }
+            }
             continue;
         }
         if (!S->affine) {
@@ -411,14 +341,22 @@ static inline __attribute__((always_inline)) void eval_block(const fplan *pl, bl
             case 1: grab3(S, 1, p, u); break;
             case 2: grab3(S, 2, p, u); break;
             case 3: grab3(S, 3, p, u); break;
-            default: grab3(S, S->order, p, u); break;
+            case 4: grab3(S, 4, p, u); break;
+            case 5: grab3(S, 5, p, u); break;
+            case 6: grab3(S, 6, p, u); break;
+            case 7: grab3(S, 7, p, u); break;
+            default: grab3(S, 8, p, u); break;
             }
         } else {
             switch (S->order) {
             case 1: affine3(S, 1, p, u); break;
             case 2: affine3(S, 2, p, u); break;
             case 3: affine3(S, 3, p, u); break;
-            default: affine3(S, S->order, p, u); break;
+            case 4: affine3(S, 4, p, u); break;
+            case 5: affine3(S, 5, p, u); break;
+            case 6: affine3(S, 6, p, u); break;
+            case 7: affine3(S, 7, p, u); break;
+            default: affine3(S, 8, p, u); break;
             }
         }
     }

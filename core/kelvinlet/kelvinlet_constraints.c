@@ -178,7 +178,6 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
     memcpy(t->pts, pins->points, 3 * pins->n * sizeof *t->pts);
     /* Column-major: column (pin q, dof c) holds the functionals at every pin p. */
     const int nt = assembly_threads(pins);
-    (void)nt; /* only the pragma reads it: unused without OpenMP */
 #pragma omp parallel for schedule(dynamic, 4) if (pins->n >= 32 && nt > 1) num_threads(nt)
     for (size_t col = 0; col < m; col++) {
         df_kelvinlet_source s;
@@ -190,19 +189,23 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
         }
     }
     double anorm = LAPACKE_dlange(LAPACK_COL_MAJOR, '1', t->m, t->m, t->lu, t->m);
-    lapack_int info = LAPACKE_dgetrf(LAPACK_COL_MAJOR, t->m, t->m, t->lu, t->m, t->ipiv);
+    /* the LU on the assembly's team, OpenBLAS on one thread (kelvinlet_lu.c) */
+    lapack_int info = dfk_lu_factor(t->m, t->lu, t->ipiv, nt);
     t->nfact++;
+    double rcond = 0.0;
+    dfk_blas_serial_begin();
+    lapack_int cinfo = info == 0 ? LAPACKE_dgecon(LAPACK_COL_MAJOR, '1', t->m, t->lu, t->m, anorm,
+                                                  &rcond) : 0;
+    dfk_blas_serial_end();
     if (info > 0)
         return df_error_set(err, DF_ESINGULAR, "kelvinlet constraints: K_pp is singular "
                             "(zero pivot %d of %d)", (int)info, t->m);
     if (info < 0)
         return df_error_set(err, DF_EINTERNAL, "kelvinlet constraints: dgetrf argument %d",
                             (int)-info);
-    double rcond = 0.0;
-    info = LAPACKE_dgecon(LAPACK_COL_MAJOR, '1', t->m, t->lu, t->m, anorm, &rcond);
-    if (info != 0)
+    if (cinfo != 0)
         return df_error_set(err, DF_EINTERNAL, "kelvinlet constraints: dgecon failed (%d)",
-                            (int)info);
+                            (int)cinfo);
     if (!(rcond >= RCOND_MIN))
         return df_error_set(err, DF_ESINGULAR, "kelvinlet constraints: K_pp is numerically "
                             "singular (rcond %.3g): pins too close for radius %g", rcond,

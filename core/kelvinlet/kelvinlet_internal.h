@@ -63,4 +63,15 @@ int dfk_moving_substeps(const df_kelvinlet_prepared *p, df_kelvinlet_prepared **
  * OpenMP threads). */
 int dfk_points_ok_f(const float *xyz, size_t n, int nthreads, size_t *bad);
 
+/* OpenBLAS on the calling thread between begin and end (nestable, thread-safe; the previous
+ * process-wide OpenBLAS thread count is restored by the outermost end). */
+void dfk_blas_serial_begin(void);
+void dfk_blas_serial_end(void);
+
+/* LU with partial pivoting of the m x m column-major matrix a (overwritten by L and U) into
+ * ipiv[m] (1-based, LAPACK dgetrf's layout and meaning), on up to nthreads OpenMP threads with
+ * OpenBLAS on one thread (kelvinlet_lu.c); the same bits for any nthreads. Returns 0, or i > 0
+ * when U(i, i) is exactly zero (as dgetrf: the factorization is completed). */
+int dfk_lu_factor(int m, double *a, int *ipiv, int nthreads);
+
 #endif

@@ -65,6 +65,9 @@ static int validate(const df_kelvinlet_brush *b, df_error *err)
         return df_error_set(err, DF_EINVAL, "kelvinlet mirror flag %d must be 0 or 1", b->mirror);
     if (b->moving != 0 && b->moving != 1)
         return df_error_set(err, DF_EINVAL, "kelvinlet moving flag %d must be 0 or 1", b->moving);
+    if (b->surface != 0 && b->surface != 1)
+        return df_error_set(err, DF_EINVAL, "kelvinlet surface flag %d must be 0 or 1",
+                            b->surface);
     if (b->integrator != DF_KELVINLET_EULER && b->integrator != DF_KELVINLET_RK4)
         return df_error_set(err, DF_EINVAL, "kelvinlet integrator %d unknown", (int)b->integrator);
     if (b->steps < 1 || b->steps > DF_KELVINLET_MAX_STEPS)

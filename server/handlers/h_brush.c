@@ -21,7 +21,10 @@
  * arrives; the stroke keeps them (a later brush state change does not alter an open stroke). A client that disconnects with an open
  * stroke has it ended (committed as an undo step). Pinned points use the
  * session's cached K_pp LU (df_kelvinlet_constraints), refactorized only when pins or kernel
- * change. */
+ * change. A surface-aware begin (wire `surface` 1) takes, once, the edge-graph distances over the
+ * rest mesh from the vertex nearest its centre (server/session/surface_cache.h: cached per session
+ * and vertex) and every publish multiplies the field by their weights (stroke_recipe.h
+ * df_stroke_surface_mask, what a replay runs): vertices not connected to it never move. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,6 +38,7 @@
 #include "server/net/reply.h"
 #include "server/session/stream.h"
 #include "server/session/stroke_recipe.h"
+#include "server/session/surface_cache.h"
 
 /* Below this many vertices a brush field is evaluated by the worker thread alone: waking an
  * OpenMP team costs more than it saves. Above it, on the `threads` setting (config.h) at most:
@@ -97,6 +101,9 @@ static int stroke_field(const df_session *s, const df_stroke *st, const double *
     prep.threads = threads;
     rc = df_kelvinlet_displacements(&prep, st->startf, (size_t)s->nv, disp, err);
     df_kelvinlet_prepared_free(&prep);
+    if (rc == DF_OK && st->surf_dist) /* surface-aware: the replay's very mask (stroke_recipe.h) */
+        rc = df_stroke_surface_mask(&b, st->startf, s->nv, st->surf_dist, st->surf_src, disp,
+                                    err);
     if (rc == DF_OK && s->mesh.planar) /* 2D session: z stays 0 (planar_check), verified */
         for (int32_t i = 0; i < s->nv; i++)
             if (disp[3 * (size_t)i + 2] != 0.0f)
@@ -306,6 +313,11 @@ static void begin_work_inner(df_job *j)
      * checked by the first update) */
     if ((j->rc = stroke_params_check(st, "brush_begin", &j->err)) != DF_OK) return;
     if ((j->rc = planar_check(s, &st->brush, st, r->load, "brush_begin", &j->err)) != DF_OK)
+        return;
+    if (b->surface && /* distances from the centre's vertex over startf, cached per session */
+        (j->rc = df_surface_cache_dist(&((df_session *)s)->surf, &s->mesh, st->startf, s->nv,
+                                       b->centre, &st->surf_src, &st->surf_dist, &j->err))
+            != DF_OK)
         return;
     if (load_is_zero(r->load)) return;
     df_work w;

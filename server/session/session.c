@@ -10,6 +10,7 @@
 #include "server/log.h"
 #include "server/session/meshload.h"
 #include "server/session/stroke_recipe.h"
+#include "server/session/surface_cache.h"
 #include "server/net/reply.h"
 #include "server/net/shm.h"
 #include "server/session/stream.h"
@@ -22,17 +23,29 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh)
            (uint64_t)(mesh->nf > 0 ? mesh->nf : 0) * 3 * sizeof(int32_t) + sizeof(df_session);
 }
 
+int df_session_replay_recipe(df_session *s, const df_stroke_recipe *r, const double *from,
+                             int threads, double *to, df_error *err)
+{
+    if (!r->brush.surface)
+        return df_stroke_recipe_replay(r, from, s->nv, s->mesh.planar, threads, to, err);
+    const df_mesh_sparse *adj;
+    int rc = df_surface_cache_adjacency(&s->surf, &s->mesh, &adj, err);
+    if (rc != DF_OK) return rc;
+    return df_stroke_recipe_replay_mesh(r, from, s->nv, adj, s->mesh.V, s->mesh.planar, threads,
+                                        to, err);
+}
+
 /* The history's replay of a RECIPE step (history.h): a stroke recipe (stroke_recipe.h)
- * recomputed on this session's mesh, with the server's thread count. Any thread: reads only
- * fields fixed at creation. */
+ * recomputed on this session's mesh, with the server's thread count. Runs as the session's job
+ * (its surface cache is the running job's). */
 static int replay_recipe(void *ctx, const uint8_t *blob, size_t len, const double *from,
                          double *to, df_error *err)
 {
-    const df_session *s = ctx;
+    df_session *s = ctx;
     df_stroke_recipe r;
     int rc = df_stroke_recipe_decode(blob, len, &r, err);
     if (rc != DF_OK) return rc;
-    rc = df_stroke_recipe_replay(&r, from, s->nv, s->mesh.planar, s->srv->cfg.threads, to, err);
+    rc = df_session_replay_recipe(s, &r, from, s->srv->cfg.threads, to, err);
     df_stroke_recipe_free(&r);
     return rc;
 }
@@ -232,6 +245,7 @@ void df_stroke_free(df_stroke *st)
     free(st->base);
     free(st->startf);
     free(st->applied);
+    free(st->surf_dist);
     free(st);
 }
 
@@ -266,6 +280,7 @@ void df_session_destroy(df_session *s)
     }
     df_handleset_free(srv, s->hs);
     df_cache_drop_kelvinlet(srv, s);
+    df_surface_cache_free(s->surf);
     df_history_free(&s->hist);
     df_resync_free(&s->resync);
     df_membership_free(&s->acc);

@@ -68,6 +68,9 @@ typedef struct df_stroke {
     uint64_t base_version;       /* session version whose positions are `base` unless
                                   * rebased (the version at begin) */
     int rebased;                 /* 1: base was rebased once (another change landed) */
+    double *surf_dist;           /* brush.surface: edge-graph distances over startf from
+                                  * vertex surf_src (surface_cache.h), nv; else NULL */
+    int32_t surf_src;
     struct df_stroke *next;
 } df_stroke;
 
@@ -115,6 +118,7 @@ typedef struct df_session {
     df_stroke *strokes;
     df_handleset *hs;
     df_kelvinlet_constraints *kc;/* cached K_pp LU of the last pinned set; NULL when none */
+    struct df_surface_cache *surf;/* surface-brush adjacency and distances (running job only) */
     size_t kc_bytes;
     uint64_t kc_lru;
     /* Scratch of the running job (allocated on first use, reused: no per-version allocation). */
@@ -204,6 +208,14 @@ void df_session_drop_stroke(df_session *s, uint64_t conn_id);
  * history_max_mb and what the memory budget has left; the oldest steps are dropped to fit
  * (srv->history_dropped counts them) instead of failing. Errors: df_history_commit's. */
 int df_session_history_commit(df_session *s, df_error *err);
+
+/* Recomputes stroke recipe `r` (stroke_recipe.h) from `from` into `to` (3 nv doubles each) on
+ * this session's mesh: a surface-aware recipe with the session's vertex adjacency (its surface
+ * cache, built on first use) and the mesh as loaded. Call from the session's running job (or
+ * at restore, before the loop runs). Errors: those of df_stroke_recipe_replay(_mesh). */
+struct df_stroke_recipe;
+int df_session_replay_recipe(df_session *s, const struct df_stroke_recipe *r, const double *from,
+                             int threads, double *to, df_error *err);
 
 /* As df_session_history_commit, with the recipe `blob` (len bytes, stroke_recipe.h) that
  * should turn the history's current state into s->cur: replayed on the calling thread, a

@@ -5,7 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define RECIPE_MAGIC 0x31525344u /* "DSR1" */
+#include "core/kelvinlet/kelvinlet_surface.h"
+#include "core/mesh/geodesic.h"
+
+#define RECIPE_MAGIC_V1 0x31525344u /* "DSR1" */
+#define RECIPE_MAGIC 0x32525344u    /* "DSR2": + i32 surface */
 
 void df_stroke_loaded_brush(const df_kelvinlet_brush *b, double strength,
                             const double load[DF_STROKE_LOAD_N], df_kelvinlet_brush *out)
@@ -30,10 +34,70 @@ void df_stroke_motion(const float *x0, float *d, const double *base, double *pos
     }
 }
 
-/* The field of the loaded recipe at x0 into d (n = 3 nv floats). */
-static int field(const df_stroke_recipe *r, const float *x0, int32_t nv, int planar,
-                 int threads, float *d, df_error *err)
+/* x0 (n floats) widened to a new double array, or NULL (out of memory). */
+static double *widen(const float *x0, size_t n)
 {
+    double *x = malloc(n * sizeof *x);
+    if (x)
+        for (size_t i = 0; i < n; i++) x[i] = (double)x0[i];
+    return x;
+}
+
+int32_t df_stroke_surface_src(const float *x0, int32_t nv, const double *c)
+{
+    if (!x0 || !c || nv <= 0) return -1;
+    int32_t best = 0;
+    double bd = INFINITY;
+    for (int32_t i = 0; i < nv; i++) { /* df_mesh_nearest_vertex over (double)x0 */
+        const float *p = x0 + 3 * (size_t)i;
+        double dx = (double)p[0] - c[0], dy = (double)p[1] - c[1], dz = (double)p[2] - c[2];
+        double d = dx * dx + dy * dy + dz * dz;
+        if (d < bd) {
+            bd = d;
+            best = i;
+        }
+    }
+    return best;
+}
+
+int df_stroke_surface_dist(const df_mesh_sparse *adj, const double *rest, const float *x0,
+                           int32_t nv, const double *c, int32_t *src, double *dist,
+                           df_error *err)
+{
+    if (!adj || !rest || !x0 || !c || !src || !dist || nv <= 0 || adj->n_rows != nv)
+        return df_error_set(err, DF_EINVAL, "surface brush: bad arguments (adjacency of %d "
+                            "rows for %d vertices, rest %s)", adj ? adj->n_rows : -1, nv,
+                            rest ? "given" : "missing");
+    *src = df_stroke_surface_src(x0, nv, c);
+    return df_mesh_geodesic_from(adj, rest, *src, dist, err);
+}
+
+int df_stroke_surface_mask(const df_kelvinlet_brush *b, const float *x0, int32_t nv,
+                           const double *dist, int32_t src, float *d, df_error *err)
+{
+    if (!b || !x0 || !dist || !d || nv <= 0)
+        return df_error_set(err, DF_EINVAL, "surface brush: bad arguments");
+    double *x = widen(x0, 3 * (size_t)nv);
+    float *w = malloc((size_t)nv * sizeof *w);
+    int rc = x && w ? DF_OK : df_error_set(err, DF_ENOMEM, "surface brush: out of memory");
+    if (rc == DF_OK)
+        rc = df_kelvinlet_surface_weights(x, nv, dist, src, b->centre, b->radius, b->order, w,
+                                          err);
+    if (rc == DF_OK) df_kelvinlet_surface_mask(d, w, (size_t)nv);
+    free(x);
+    free(w);
+    return rc;
+}
+
+/* The field of the loaded recipe at x0 into d (n = 3 nv floats), masked for surface-aware
+ * recipes (adj: the mesh adjacency). */
+static int field(const df_stroke_recipe *r, const float *x0, int32_t nv,
+                 const df_mesh_sparse *adj, const double *rest, int planar, int threads,
+                 float *d, df_error *err)
+{
+    if (r->brush.surface && (!adj || !rest))
+        return df_error_set(err, DF_EINVAL, "stroke replay: a surface-aware stroke needs the "
+                            "mesh adjacency (df_stroke_recipe_replay_mesh)");
     df_kelvinlet_brush b;
     df_stroke_loaded_brush(&r->brush, r->strength, r->load, &b);
     df_kelvinlet_prepared prep;
@@ -54,6 +118,14 @@ static int field(const df_stroke_recipe *r, const float *x0, int32_t nv, int pla
         df_kelvinlet_prepared_free(&prep);
     }
     df_kelvinlet_constraints_free(kc);
+    if (rc == DF_OK && r->brush.surface) {
+        double *dist = malloc((size_t)nv * sizeof *dist);
+        int32_t src = 0;
+        rc = dist ? df_stroke_surface_dist(adj, rest, x0, nv, r->brush.centre, &src, dist, err)
+                  : df_error_set(err, DF_ENOMEM, "stroke replay: out of memory");
+        if (rc == DF_OK) rc = df_stroke_surface_mask(&b, x0, nv, dist, src, d, err);
+        free(dist);
+    }
     if (rc == DF_OK && planar)
         for (int32_t i = 0; i < nv; i++)
             if (d[3 * (size_t)i + 2] != 0.0f)
@@ -65,7 +137,14 @@ static int field(const df_stroke_recipe *r, const float *x0, int32_t nv, int pla
 int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32_t nv,
                             int planar, int threads, double *to, df_error *err)
 {
-    if (!r || !from || !to || nv <= 0)
+    return df_stroke_recipe_replay_mesh(r, from, nv, NULL, NULL, planar, threads, to, err);
+}
+
+int df_stroke_recipe_replay_mesh(const df_stroke_recipe *r, const double *from, int32_t nv,
+                                 const df_mesh_sparse *adj, const double *rest, int planar,
+                                 int threads, double *to, df_error *err)
+{
+    if (!r || !from || !to || nv <= 0 || (adj && adj->n_rows != nv))
         return df_error_set(err, DF_EINVAL, "stroke replay: bad arguments");
     size_t n = 3 * (size_t)nv;
     float *x0 = malloc(n * sizeof *x0), *d = malloc(n * sizeof *d);
@@ -75,7 +154,7 @@ int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32
         return df_error_set(err, DF_ENOMEM, "stroke replay: out of memory (%d vertices)", nv);
     }
     for (size_t i = 0; i < n; i++) x0[i] = (float)from[i];
-    int rc = field(r, x0, nv, planar, threads, d, err);
+    int rc = field(r, x0, nv, adj, rest, planar, threads, d, err);
     if (rc == DF_OK) df_stroke_motion(x0, d, from, to, n);
     free(x0);
     free(d);
@@ -133,6 +212,7 @@ int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *le
     put_i32(&c, k->steps);
     put_i32(&c, k->mirror);
     put_i32(&c, k->moving);
+    put_i32(&c, k->surface);
     put(&c, &k->ratio, 8);
     put(&c, &k->radius, 8);
     put(&c, &k->nu, 8);
@@ -164,15 +244,17 @@ int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, d
     uint32_t magic = 0;
     int type = 0, integrator = 0;
     df_kelvinlet_brush *k = &r->brush;
-    int ok = get(&c, &magic, 4) && magic == RECIPE_MAGIC && get_i32(&c, &type) &&
+    int ok = get(&c, &magic, 4) && (magic == RECIPE_MAGIC || magic == RECIPE_MAGIC_V1) &&
+             get_i32(&c, &type) &&
              get_i32(&c, &k->dim) && get_i32(&c, &k->order) && get_i32(&c, &integrator) &&
              get_i32(&c, &k->steps) && get_i32(&c, &k->mirror) && get_i32(&c, &k->moving) &&
-             get(&c, &k->ratio, 8) && get(&c, &k->radius, 8) && get(&c, &k->nu, 8) &&
+             (magic == RECIPE_MAGIC_V1 || get_i32(&c, &k->surface)) && get(&c, &k->ratio, 8) && get(&c, &k->radius, 8) && get(&c, &k->nu, 8) &&
              get(&c, k->centre, 24) && get(&c, k->mirror_point, 24) &&
              get(&c, k->mirror_normal, 24) && get(&c, &r->strength, 8) &&
              get(&c, r->load, 8 * DF_STROKE_LOAD_N) && get(&c, &r->n_pins, 4) &&
              get_i32(&c, &r->pin_flags);
-    if (!ok || r->n_pins > DF_KELVINLET_MAX_PINS || c.left != 24 * (size_t)r->n_pins) {
+    if (!ok || r->n_pins > DF_KELVINLET_MAX_PINS || c.left != 24 * (size_t)r->n_pins ||
+        (k->surface != 0 && k->surface != 1)) {
         memset(r, 0, sizeof *r);
         return df_error_set(err, DF_EFORMAT, "stroke recipe: malformed (%zu bytes)", len);
     }

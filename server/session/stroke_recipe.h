@@ -18,12 +18,14 @@
 
 #include "core/common/df_error.h"
 #include "core/kelvinlet/kelvinlet.h"
+#include "core/mesh/operators.h"
 
 #define DF_STROKE_LOAD_N 16 /* move[3] twist[3] scale matrix[9] */
 
 typedef struct df_stroke_recipe {
     df_kelvinlet_brush brush;     /* as evaluated (knob overrides applied); its tip, omega, s and
-                                   * grad are ignored: the load sets them */
+                                   * grad are ignored: the load sets them; brush.surface = 1: a
+                                   * surface-aware stroke (replay needs the mesh adjacency) */
     double strength;              /* multiplies the load */
     double load[DF_STROKE_LOAD_N];/* the cumulative load of the stroke's last begin/update */
     uint32_t n_pins;              /* pinned points, 0..DF_KELVINLET_MAX_PINS */
@@ -49,18 +51,50 @@ void df_stroke_motion(const float *x0, float *d, const double *base, double *pos
 int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32_t nv,
                             int planar, int threads, double *to, df_error *err);
 
-/* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR1', i32 type,
- * dim, order, integrator, steps, mirror, moving, f64 ratio, radius, nu, centre[3],
+/* The same with the session mesh: `adj` its vertex adjacency (df_mesh_vertex_adjacency,
+ * n_rows = nv) and `rest` its load-time positions (df_mesh.V, nv x 3); both may be NULL for a
+ * recipe whose brush.surface is 0. A surface-aware recipe's field is masked by
+ * df_stroke_surface_mask with the distances of df_stroke_surface_dist, exactly as the live
+ * stroke. df_stroke_recipe_replay refuses a surface-aware recipe (DF_EINVAL: it needs the
+ * mesh). Same errors, plus DF_EINVAL for an adjacency of another size. */
+int df_stroke_recipe_replay_mesh(const df_stroke_recipe *r, const double *from, int32_t nv,
+                                 const df_mesh_sparse *adj, const double *rest, int planar,
+                                 int threads, double *to, df_error *err);
+
+/* Surface-aware strokes, step 1 (once per stroke start): the vertex *src nearest to the brush
+ * centre c[3] among the stroke-start points x0 (nv x 3 float32, widened to double), and the
+ * edge-graph distances dist[nv] from it over the mesh at rest (`rest`, nv x 3: distances along
+ * the surface as loaded, so they depend on the centre vertex only and are cached per session
+ * and vertex). Errors: DF_EINVAL, DF_ENOMEM (core/mesh/geodesic.h). */
+int df_stroke_surface_dist(const df_mesh_sparse *adj, const double *rest, const float *x0,
+                           int32_t nv, const double *c, int32_t *src, double *dist,
+                           df_error *err);
+
+/* The vertex of x0 (nv x 3 float32, widened to double) nearest to c[3]: step 1's *src. */
+int32_t df_stroke_surface_src(const float *x0, int32_t nv, const double *c);
+
+/* Step 2 (each publish): multiplies the field d (nv x 3 float32, in place) by the weights of
+ * core/kelvinlet/kelvinlet_surface.h for brush b (its centre, radius and order) at the points
+ * x0 with the distances of step 1. Parts not connected to src get exactly 0. Errors:
+ * DF_EINVAL, DF_ENOMEM; d untouched on error. */
+int df_stroke_surface_mask(const df_kelvinlet_brush *b, const float *x0, int32_t nv,
+                           const double *dist, int32_t src, float *d, df_error *err);
+
+/* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR2', i32 type,
+ * dim, order, integrator, steps, mirror, moving, surface, f64 ratio, radius, nu, centre[3],
  * mirror_point[3], mirror_normal[3], strength, load[16], u32 n_pins, i32 pin_flags, then
  * 3 x n_pins f64 pins; native-endian, packed (DF_STROKE_RECIPE_FIXED + 24 n_pins bytes).
+ * Version 1 ('DSR1', DF_STROKE_RECIPE_FIXED_V1 + 24 n_pins bytes) is the same without
+ * `surface`; decode still reads it (surface 0).
  * Errors: DF_EINVAL (n_pins over the maximum, pins NULL with n_pins > 0), DF_ENOMEM. */
-#define DF_STROKE_RECIPE_FIXED 272
+#define DF_STROKE_RECIPE_FIXED 276
+#define DF_STROKE_RECIPE_FIXED_V1 272
 int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *len,
                             df_error *err);
 
-/* Parses a blob of df_stroke_recipe_encode into *r (pins malloc'd; free with
- * df_stroke_recipe_free). Errors: DF_EFORMAT (wrong magic or length, n_pins over the maximum,
- * a non-finite number), DF_ENOMEM; *r zeroed on error. */
+/* Parses a blob of df_stroke_recipe_encode (version 2, or version 1) into *r (pins malloc'd;
+ * free with df_stroke_recipe_free). Errors: DF_EFORMAT (wrong magic or length, n_pins over the
+ * maximum, surface not 0/1, a non-finite number), DF_ENOMEM; *r zeroed on error. */
 int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, df_error *err);
 
 /* Frees the recipe's pins and zeroes it. NULL-safe. */

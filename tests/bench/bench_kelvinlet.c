@@ -5,7 +5,12 @@
  * for single-scale grab (Euler), tri-scale grab (RK4, 1 step), tri-scale twist (RK4, 1 step).
  * Targets: tri-scale RK4 grab <= 10 ms and >= 20x the reference.
  * Then the constrained case of the paper's eyeball example: 160 pinned points, set-up (K_pp
- * build + LU) and per-update (new tip) / per-move (new live centre) solve times. */
+ * build + LU) and per-update (new tip) / per-move (new live centre) solve times.
+ * Issue 14 item 6 table, each line `value (target) ok|MISS`: per-point time of a grab (Euler,
+ * 1 step, displacements) for falloff orders 1-8 in 3D and 2D, as CPU time on one thread (the
+ * targets: order n >= 4 within ORDER_SLOPE x (n - 1)/2 of order 3, whose cost it extends scale
+ * by scale; 2D within 1.5x of 3D of the same order) and as wall time on all threads, then the 160-pin brush applied to 1M points (target
+ * 5 ms) and its set-up on 1 and 2 threads (target: 2 threads no slower than 1). */
 #include <math.h>
 #ifdef _OPENMP
 #include <omp.h>
@@ -25,6 +30,9 @@
 #define REPS 5
 #define TARGET_MS 10.0
 #define TARGET_SPEEDUP 20.0
+#define ORDER_SLOPE 2.0          /* order n >= 4: <= ORDER_SLOPE (n - 1)/2 x order 3 per point */
+#define TARGET_2D 1.5            /* 2D <= 1.5x 3D per point, same order */
+#define TARGET_PIN_APPLY_MS 5.0  /* 160 pins on 1M points */
 
 static double now(void)
 {
@@ -47,6 +55,79 @@ static df_kelvinlet_brush brush(df_kelvinlet_type t, int order, df_kelvinlet_int
     b.integrator = integ;
     b.steps = 1;
     return b;
+}
+
+/* Process CPU time, s (the per-point table's single-thread figures: robust to other processes
+ * sharing the machine, which wall time on all cores is not). */
+static double cpu_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Best-of-REPS displacements time of a grab of `order` in `dim`, ns per point: wall time on all
+ * threads (threads 0) or CPU time on one thread (threads 1). */
+static double grab_ns(const float *x0, float *out, int dim, int order, int threads)
+{
+    df_kelvinlet_brush b = brush(DF_KELVINLET_GRAB, order, DF_KELVINLET_EULER);
+    b.dim = dim;
+    if (dim == 2)
+        b.centre[2] = b.tip[2] = 0.0;
+    df_kelvinlet_prepared p;
+    df_error e;
+    if (df_kelvinlet_prepare(&b, &p, &e) != DF_OK) {
+        fprintf(stderr, "prepare: %s\n", e.msg);
+        exit(1);
+    }
+    p.threads = threads;
+    double best = 1e30;
+    for (int r = 0; r < REPS; r++) {
+        double t0 = threads == 1 ? cpu_now() : now();
+        if (df_kelvinlet_displacements(&p, x0, NPTS, out, &e) != DF_OK) {
+            fprintf(stderr, "displacements: %s\n", e.msg);
+            exit(1);
+        }
+        best = fmin(best, (threads == 1 ? cpu_now() : now()) - t0);
+    }
+    return best * 1e9 / NPTS;
+}
+
+static const char *verdict(int ok)
+{
+    return ok ? "ok" : "MISS";
+}
+
+/* The per-point table of issue 14 item 6; returns 1 when every target is met. */
+static int order_table(const float *x0, float *out)
+{
+    double t3[DF_KELVINLET_MAX_ORDER + 1], t2[DF_KELVINLET_MAX_ORDER + 1];
+    double w3[DF_KELVINLET_MAX_ORDER + 1], w2[DF_KELVINLET_MAX_ORDER + 1];
+    for (int o = 1; o <= DF_KELVINLET_MAX_ORDER; o++) {
+        t3[o] = grab_ns(x0, out, 3, o, 1);
+        t2[o] = grab_ns(x0, out, 2, o, 1);
+        w3[o] = grab_ns(x0, out, 3, o, 0);
+        w2[o] = grab_ns(x0, out, 2, o, 0);
+    }
+    int all = 1;
+    printf("  per-point grab (Euler, 1 step), CPU ns/pt on 1 thread (targets on these) and wall "
+           "ns/pt on %d threads:\n  order  3D 1 thread (target)     2D 1 thread (target 1.5x "
+           "3D)   3D / 2D on %d threads\n", MAX_THREADS(), MAX_THREADS());
+    for (int o = 1; o <= DF_KELVINLET_MAX_ORDER; o++) {
+        char tgt[32] = "-";
+        int ok3 = 1;
+        if (o >= 4) {
+            double lim = ORDER_SLOPE * (o - 1) / 2.0 * t3[3];
+            ok3 = t3[o] <= lim;
+            snprintf(tgt, sizeof tgt, "%.2f", lim);
+        }
+        int ok2 = t2[o] <= TARGET_2D * t3[o];
+        printf("    %d   %6.2f (%6s) %-4s      %6.2f (%6.2f) %-4s       %6.2f / %6.2f\n", o,
+               t3[o], tgt, o >= 4 ? verdict(ok3) : "", t2[o], TARGET_2D * t3[o], verdict(ok2),
+               w3[o], w2[o]);
+        all = all && ok3 && ok2;
+    }
+    return all;
 }
 
 int main(void)
@@ -122,6 +203,8 @@ int main(void)
         }
     }
 
+    ok = order_table(x0, x) && ok;
+
     /* constrained: 160 pins on a sphere (eyeball-like), live grab outside it */
     enum { NPIN = 160 };
     double pts[3 * NPIN];
@@ -133,9 +216,22 @@ int main(void)
     }
     for (int fl = 1; fl <= 3; fl++) {
         df_kelvinlet_pins pins = {NPIN, pts, fl, 0.05, 1.1, 0.5, 1, 0};
-        double tset = 1e30, tupd = 1e30, tmove = 1e30;
+        double tset = 1e30, tupd = 1e30, tmove = 1e30, tth[3] = {0, 1e30, 1e30};
         df_kelvinlet_constraints *cs = NULL;
         df_error e;
+        for (int th = 1; th <= 2; th++) { /* set-up on 1 and on 2 threads (pins.threads) */
+            pins.threads = th;
+            for (int r = 0; r < REPS; r++) {
+                double t0 = now();
+                if (df_kelvinlet_constraints_create(&pins, &cs, &e) != DF_OK) {
+                    fprintf(stderr, "constraints: %s\n", e.msg);
+                    return 1;
+                }
+                tth[th] = fmin(tth[th], now() - t0);
+                df_kelvinlet_constraints_free(cs);
+            }
+        }
+        pins.threads = 0;
         for (int r = 0; r < REPS; r++) {
             double t0 = now();
             if (df_kelvinlet_constraints_create(&pins, &cs, &e) != DF_OK) {
@@ -177,16 +273,24 @@ int main(void)
             for (int k = 0; k < 9; k++)
                 maxgrad = fmax(maxgrad, fabs(g[k]));
         }
-        memcpy(x, x0, 3 * (size_t)NPTS * sizeof *x);
-        double t0 = now();
-        df_kelvinlet_apply(&f, x, NPTS, &e);
-        double tap = now() - t0;
+        double tap = 1e30;
+        for (int r = 0; r < REPS; r++) {
+            memcpy(x, x0, 3 * (size_t)NPTS * sizeof *x);
+            double t0 = now();
+            df_kelvinlet_apply(&f, x, NPTS, &e);
+            tap = fmin(tap, now() - t0);
+        }
         printf("  constrained, 160 pins (%s, %d DoF): set-up (K_pp + LU) %.2f ms, update (new tip) "
                "%.1f us, move (new centre) %.2f ms, apply 1M pts %.0f ms, max|u(pin)| %.1e, "
                "max|grad u(pin)| %.1e, factorizations %lu\n",
                fl == 1 ? "displacement" : fl == 2 ? "gradient" : "displacement+gradient",
                NPIN * (fl == 1 ? 3 : fl == 2 ? 8 : 11), tset * 1e3, tupd * 1e6, tmove * 1e3,
                tap * 1e3, maxpin, maxgrad, df_kelvinlet_constraints_factorizations(cs));
+        int oka = tap * 1e3 <= TARGET_PIN_APPLY_MS, oks = tth[2] <= tth[1];
+        printf("    160 pins apply 1M pts, %d threads: %.1f ms (%.0f) %s; set-up 1 thread %.2f ms, "
+               "2 threads %.2f ms (<= 1 thread) %s\n", MAX_THREADS(), tap * 1e3,
+               TARGET_PIN_APPLY_MS, verdict(oka), tth[1] * 1e3, tth[2] * 1e3, verdict(oks));
+        ok = ok && oka && oks;
         df_kelvinlet_prepared_free(&f);
         df_kelvinlet_constraints_free(cs);
     }

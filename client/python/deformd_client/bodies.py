@@ -147,15 +147,19 @@ def decode_brush(p: bytes) -> BrushBegin:
     if use_session is not None and use_session & ~sum(schema.BrushStateField):
         raise ProtocolError("brush: use_session bits 0x%x not defined" % use_session)
     options = None    # optional, after use_session (4.12)
-    if use_session is not None and 0 < len(p) - r.off <= 4:
+    if use_session is not None and 0 < len(p) - r.off <= 5:
         options = r.take("I")
         if options & ~sum(schema.WorkOpt):
             raise ProtocolError("brush: options 0x%x has unknown bits" % options)
+    surface = r.take("B") if options is not None and r.off < len(p) else None
+    if surface is not None and surface > 1:
+        raise ProtocolError("brush: surface %d not 0 or 1" % surface)
     b = m.Brush(type=names[btype], center=list(center), move=list(move), twist=list(twist),
                 scale=scale, matrix=list(matrix), radius=radius, nu=nu, strength=strength,
                 falloff=falloff, ratio=ratio, dim=dim, integrator=integs[integ], steps=steps,
                 moving=bool(moving), mirror=list(mirror) if has_mirror else None,
-                pinned=pinned, pin_flags=pin_flags, use_session=use_session, options=options)
+                pinned=pinned, pin_flags=pin_flags, use_session=use_session, options=options,
+                surface=surface)
     return _end(r, BrushBegin(sid, b))
 
 

@@ -254,6 +254,9 @@ class Brush:
     # WorkOpt bits (PROGRESS: WORK_PROGRESS of the pinned points' LU), sent after use_session
     # (then written as 0 when None). None: not sent. Client.brush_begin(progress=) sets it.
     options: Optional[int] = None
+    # 1: surface-aware (attenuated by the distance along the mesh; disconnected parts stay at
+    # rest). None: not sent (old daemons); sending it also sends use_session and options (0 when None).
+    surface: Optional[int] = None
 
 
 PIN_DISPLACEMENT, PIN_GRADIENT = PinFlag.DISPLACEMENT, PinFlag.GRADIENT
@@ -274,10 +277,13 @@ def encode_brush(session_id: int, b: Brush) -> bytes:
         float(b.radius), float(b.ratio), float(b.nu), float(b.strength),
         *vec(b.center, 3, "center"), *vec(b.move, 3, "move"), *vec(b.twist, 3, "twist"),
         float(b.scale), *vec(b.matrix, 9, "matrix"), *mirror, len(b.pinned), pin_flags)
-    tail = b"" if b.use_session is None and b.options is None else \
+    opts = b.options is not None or b.surface is not None
+    tail = b"" if b.use_session is None and not opts else \
         struct.pack("<H", int(b.use_session or 0))
-    if b.options is not None:
-        tail += struct.pack("<I", int(b.options))
+    if opts:
+        tail += struct.pack("<I", int(b.options or 0))
+    if b.surface is not None:
+        tail += struct.pack("<B", int(b.surface))
     return head + f64_rows(b.pinned, "pinned point") + tail
 
 

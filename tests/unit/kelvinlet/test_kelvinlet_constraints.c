@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
+#include <cblas.h>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -279,7 +280,8 @@ static void test_singular_and_unsupported(void **state)
 }
 
 /* pins.threads: the K_pp assembly on 1 thread (and on 2) gives the loads of the default team bit
- * for bit, and the call leaves the process's OpenMP setting alone. */
+ * for bit, and the call leaves the process's OpenMP setting and OpenBLAS thread count alone
+ * (the LU runs with OpenBLAS on one thread and restores the count, also on a refused set). */
 static void test_pin_threads_do_not_change_bits(void **state)
 {
     (void)state;
@@ -295,6 +297,8 @@ static void test_pin_threads_do_not_change_bits(void **state)
 #ifdef _OPENMP
     int nt = omp_get_max_threads();
 #endif
+    openblas_set_num_threads(2);
+    int nb = openblas_get_num_threads();
     for (int threads = 1; threads <= 2; threads++) {
         pins.threads = threads;
         assert_int_equal(df_kelvinlet_constraints_create(&pins, &cs, NULL), DF_OK);
@@ -304,9 +308,13 @@ static void test_pin_threads_do_not_change_bits(void **state)
 #ifdef _OPENMP
         assert_int_equal(omp_get_max_threads(), nt);
 #endif
+        assert_int_equal(openblas_get_num_threads(), nb);
         df_kelvinlet_prepared_free(&f);
         df_kelvinlet_constraints_free(cs);
     }
+    memcpy(pts + 3, pts, 3 * sizeof *pts);                /* two coincident pins */
+    assert_int_equal(df_kelvinlet_constraints_create(&pins, &cs, NULL), DF_ESINGULAR);
+    assert_int_equal(openblas_get_num_threads(), nb);
     df_kelvinlet_prepared_free(&ref);
     free(pts);
 }

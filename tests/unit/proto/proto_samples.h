@@ -16,7 +16,7 @@ typedef struct sample {
     df_buf payload;
 } sample;
 
-enum { N_SAMPLES_BASE = 41, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
+enum { N_SAMPLES_BASE = 42, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
        N_SAMPLES_WORK = 4,
        N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS +
                    N_SAMPLES_WORK };
@@ -214,6 +214,10 @@ static inline void build_samples(sample *s)
     df_msg_brush bus = sample_brush();
     bus.use_session = DF_BS_RADIUS | DF_BS_NU;
     ADD("brush_use_session", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bus, out, &e));
+    /* a surface-aware begin (issue 14: the last optional trailer, after use_session and options 0) */
+    df_msg_brush bsf = sample_brush();
+    bsf.surface = 1;
+    ADD("brush_surface", DF_MSG_BRUSH_BEGIN, 0, df_msg_brush_encode(&bsf, out, &e));
     df_msg_session_ref bg = {42};
     ADD("brush_state_get", DF_MSG_BRUSH_STATE_GET, 0, df_msg_session_ref_encode(&bg, out, &e));
     df_msg_brush_state_set bss = {42, DF_BS_RADIUS | DF_BS_INTEGRATOR | DF_BS_MIRROR,

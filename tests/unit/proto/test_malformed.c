@@ -350,6 +350,10 @@ static void test_brush_state_bodies(void **state)
     /* options after use_session (PROTOCOL.md 4.12): bit 0 PROGRESS, the others reserved */
     u32("brush_progress", trailer + 2, 2, DF_EPROTO_RESERVED, "unknown bits 0x2");
     u32("brush_progress", trailer + 2, 0, DF_OK, NULL);
+    /* the surface byte after options (issue 14): 0/1, anything else EINVAL */
+    u8("brush_surface", trailer + 6, 2, DF_EINVAL, "surface");
+    u8("brush_surface", trailer + 6, 0, DF_OK, NULL);
+    u8("brush_surface", trailer + 6, 1, DF_OK, NULL);
     /* brush_state_set: mask at 8, values at 10 (sample mask RADIUS | INTEGRATOR | MIRROR) */
     u64("brush_state_set", 0, 0, DF_EINVAL, "session_id");
     u16("brush_state_set", 8, 0, DF_EINVAL, "mask 0");

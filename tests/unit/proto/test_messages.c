@@ -68,6 +68,10 @@ static void test_truncation_at_every_offset(void **state)
                 continue; /* options are optional: without them, the original layout */
             if (!strcmp(s[i].name, "brush_progress") && n == s[i].payload.len - 6)
                 continue; /* ... and so is use_session before them */
+            if (!strcmp(s[i].name, "brush_surface") &&
+                (n == s[i].payload.len - 1 || n == s[i].payload.len - 5 ||
+                 n == s[i].payload.len - 7))
+                continue; /* surface, options and use_session optional: older layouts */
             df_msg_any m;
             df_error e = {0, ""};
             int rc = decode_copy(&s[i], n, &m, &e);
@@ -101,6 +105,8 @@ static void test_trailing_byte_is_rejected(void **state)
              !strcmp(s[i].name, "handles_reply") || !strcmp(s[i].name, "brush_use_session")) &&
             rc == DF_EPROTO_TRUNCATED && strstr(e.msg, "options"))
             continue; /* one byte after the body: the start of a cut optional options */
+        if (!strcmp(s[i].name, "brush_progress") && rc == DF_OK)
+            continue; /* one byte after options: the optional surface (0) */
         if (rc != DF_EPROTO_TRAILING)
             fail_msg("%s + 1 byte: rc %d (%s)", s[i].name, rc, e.msg);
     }

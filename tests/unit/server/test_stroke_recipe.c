@@ -1,8 +1,10 @@
 /* test_stroke_recipe — a stroke kept as its request (server/session/stroke_recipe.h): a replay
  * reproduces the live stroke's arithmetic bit for bit (computed here independently from the
  * Kelvinlet engine, the way h_brush.c publishes), does not depend on the thread count, covers
- * pinned and moving brushes; the blob round-trips and malformed blobs are refused; the checksum
- * sees every bit. */
+ * pinned and moving brushes and surface-aware strokes (issue 14 item 7: the part not connected
+ * to the brush stays exactly at rest, the replay matches a longhand masked live stroke on 1 and
+ * 2 threads); the blob round-trips (version 2 carries `surface`, version 1 blobs still decode)
+ * and malformed blobs are refused; the checksum sees every bit. */
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -12,6 +14,9 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "core/kelvinlet/kelvinlet_surface.h"
+#include "core/mesh/geodesic.h"
+#include "core/mesh/mesh.h"
 #include "server/session/stroke_recipe.h"
 
 #define N 40 /* grid side: 1600 vertices */
@@ -163,6 +168,137 @@ static void test_blob_round_trip(void **st)
     free(b);
 }
 
+/* The grid as two sheets: columns i < N/2 and i >= N/2 share no triangle (disconnected, 1/39
+ * apart). Returns the vertex adjacency. */
+static df_mesh_sparse split_adjacency(double *from)
+{
+    df_mesh m;
+    memset(&m, 0, sizeof m);
+    m.kind = DF_MESH_TRIANGLE;
+    m.nv = N * N;
+    m.V = from;
+    m.E = malloc(6 * (size_t)N * N * sizeof *m.E);
+    int32_t t = 0;
+    for (int j = 0; j + 1 < N; j++)
+        for (int i = 0; i + 1 < N; i++) {
+            if (i + 1 == N / 2) continue; /* the gap between the sheets */
+            int32_t a = j * N + i, b = a + 1, c = a + N, d = c + 1;
+            int32_t tri[6] = {a, b, d, a, d, c};
+            memcpy(m.E + 3 * (size_t)t, tri, sizeof tri);
+            t += 2;
+        }
+    m.ne = t;
+    df_mesh_sparse A;
+    assert_int_equal(df_mesh_vertex_adjacency(&m, &A, NULL), DF_OK);
+    free(m.E);
+    return A;
+}
+
+/* The masked live stroke, longhand from the core functions: field at x0, weights from the
+ * edge-graph distances over (double)x0 from the vertex nearest the centre, d *= w, motion. */
+static void live_surface(const df_stroke_recipe *r, const df_mesh_sparse *A, const double *from,
+                         double *to)
+{
+    size_t n = 3 * N * N;
+    float *x0 = malloc(n * sizeof *x0), *d = malloc(n * sizeof *d), *w = malloc(N * N * 4);
+    double *xd = malloc(n * 8), *dist = malloc(N * N * 8), *x0d = malloc(n * 8);
+    for (size_t i = 0; i < n; i++) {
+        x0[i] = (float)from[i];
+        x0d[i] = x0[i];
+        xd[i] = from[i];          /* the rest shape: `from` itself in this test */
+    }
+    df_kelvinlet_brush b = r->brush;
+    for (int i = 0; i < 3; i++) b.tip[i] = r->strength * r->load[i];
+    df_kelvinlet_prepared prep;
+    assert_int_equal(df_kelvinlet_prepare(&b, &prep, NULL), DF_OK);
+    prep.threads = 1;
+    assert_int_equal(df_kelvinlet_displacements(&prep, x0, N * N, d, NULL), DF_OK);
+    int32_t src = df_mesh_nearest_vertex(x0d, N * N, b.centre);
+    assert_int_equal(df_mesh_geodesic_from(A, xd, src, dist, NULL), DF_OK);
+    assert_int_equal(df_kelvinlet_surface_weights(x0d, N * N, dist, src, b.centre, b.radius,
+                                                  b.order, w, NULL), DF_OK);
+    for (size_t v = 0; v < N * N; v++)
+        for (int k = 0; k < 3; k++) d[3 * v + k] = w[v] == 0.0f ? 0.0f : d[3 * v + k] * w[v];
+    for (size_t i = 0; i < n; i++) {
+        volatile float s = x0[i] + d[i];
+        float m = s - x0[i];
+        to[i] = from[i] + (double)m;
+    }
+    free(x0);
+    free(d);
+    free(w);
+    free(xd);
+    free(x0d);
+    free(dist);
+}
+
+static void test_surface_replay(void **st)
+{
+    (void)st;
+    double *from = grid(), *a = malloc(3 * N * N * 8), *b = malloc(3 * N * N * 8);
+    df_mesh_sparse A = split_adjacency(from);
+    df_stroke_recipe r = grab_recipe();
+    r.brush.radius = 0.3;           /* reaches well into the other sheet */
+    r.brush.centre[0] = 0.45;
+    r.brush.surface = 1;
+    df_error e;
+    assert_int_equal(df_stroke_recipe_replay(&r, from, N * N, 0, 1, b, &e), DF_EINVAL);
+    live_surface(&r, &A, from, a);
+    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, from, 0, 1, b, &e),
+                     DF_OK);
+    assert_memory_equal(a, b, 3 * N * N * 8);
+    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, from, 0, 2, b, &e),
+                     DF_OK);
+    assert_memory_equal(a, b, 3 * N * N * 8);
+    size_t other_moved = 0, own_moved = 0;
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++)
+            for (int k = 0; k < 3; k++) {
+                size_t q = 3 * (size_t)(j * N + i) + k;
+                if (i >= N / 2) assert_memory_equal(&b[q], &from[q], 8); /* exactly at rest */
+                else own_moved += b[q] != from[q];
+            }
+    assert_true(own_moved > 100);
+    r.brush.surface = 0;            /* without the mask the other sheet moves */
+    assert_int_equal(df_stroke_recipe_replay_mesh(&r, from, N * N, &A, from, 0, 1, b, &e),
+                     DF_OK);
+    for (int j = 0; j < N; j++)
+        for (int i = N / 2; i < N; i++) other_moved += b[3 * (j * N + i)] != from[3 * (j * N + i)];
+    assert_true(other_moved > 100);
+    df_mesh_sparse_free(&A);
+    free(from);
+    free(a);
+    free(b);
+}
+
+/* Version 2 carries `surface`; a version 1 blob (no surface field) still decodes (surface 0). */
+static void test_blob_versions(void **st)
+{
+    (void)st;
+    df_stroke_recipe r = grab_recipe(), back;
+    r.brush.surface = 1;
+    uint8_t *b = NULL;
+    size_t len = 0;
+    assert_int_equal(df_stroke_recipe_encode(&r, &b, &len, NULL), DF_OK);
+    assert_int_equal(len, DF_STROKE_RECIPE_FIXED);
+    assert_memory_equal(b, "DSR2", 4);
+    assert_int_equal(df_stroke_recipe_decode(b, len, &back, NULL), DF_OK);
+    assert_int_equal(back.brush.surface, 1);
+    b[32] = 2;                                  /* surface (i32 at offset 32) not 0/1 */
+    assert_int_equal(df_stroke_recipe_decode(b, len, &back, NULL), DF_EFORMAT);
+    /* the version 1 layout of the same recipe: magic DSR1, no surface field */
+    uint8_t v1[DF_STROKE_RECIPE_FIXED_V1];
+    memcpy(v1, "DSR1", 4);
+    memcpy(v1 + 4, b + 4, 28);
+    memcpy(v1 + 32, b + 36, DF_STROKE_RECIPE_FIXED - 36);
+    assert_int_equal(df_stroke_recipe_decode(v1, sizeof v1, &back, NULL), DF_OK);
+    assert_int_equal(back.brush.surface, 0);
+    assert_memory_equal(back.load, r.load, sizeof r.load);
+    assert_memory_equal(&back.brush.radius, &r.brush.radius, 8);
+    assert_int_equal(df_stroke_recipe_decode(v1, sizeof v1 - 1, &back, NULL), DF_EFORMAT);
+    free(b);
+}
+
 static void test_checksum_sees_every_bit(void **st)
 {
     (void)st;
@@ -192,6 +328,8 @@ int main(void)
         cmocka_unit_test(test_replay_matches_live),
         cmocka_unit_test(test_pinned_and_moving),
         cmocka_unit_test(test_blob_round_trip),
+        cmocka_unit_test(test_surface_replay),
+        cmocka_unit_test(test_blob_versions),
         cmocka_unit_test(test_checksum_sees_every_bit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
