@@ -78,6 +78,7 @@ def test_every_recording_replays_through_the_daemon(make_daemon, name):
         assert "end of the recording" in dev.error
         assert st["events"] == len(node.events), (dev.name, st)
         assert st["strokes_begun"] == st["strokes_ended"], st
+    c.get_mesh(sid)           # queued behind the devices' BRUSH_END (STATS is not a session job)
     assert c.stats(sid)["open_strokes"] == 0
     assert c.ping(b"still serving") == b"still serving"
     c.close()
