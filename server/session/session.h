@@ -233,8 +233,10 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
 struct df_frames;
 void df_session_resync_record(df_session *s, uint64_t version, const struct df_frames *frames);
 
-/* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
- * Errors: DF_ENOMEM (history unchanged). */
+/* Empties the history in place: s->cur its only state (reset-rest clears undo/redo), the rest
+ * shape s->rest its reference again (history.h: the anchor is packed against it; call this
+ * right after s->rest changes, before anything reads the history). Allocates nothing: always
+ * DF_OK (err unused, kept for the callers' error paths). Loop thread. */
 int df_session_history_reset(df_session *s, df_error *err);
 
 /* Copies the compute-state figures into s->seen. Loop thread, only while no job of s runs

@@ -49,6 +49,13 @@ void df_stroke_motion(const float *x0, float *d, const double *base, double *pos
 int df_stroke_recipe_replay(const df_stroke_recipe *r, const double *from, int32_t nv,
                             int planar, int threads, double *to, df_error *err);
 
+/* df_stroke_recipe_replay with caller-provided scratch: `scratch` holds 6 * nv floats (x0 and
+ * the field), reused across calls instead of two allocations per replay. Same results, same
+ * errors but DF_ENOMEM. */
+int df_stroke_recipe_replay_with(const df_stroke_recipe *r, const double *from, int32_t nv,
+                                 int planar, int threads, float *scratch, double *to,
+                                 df_error *err);
+
 /* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR1', i32 type,
  * dim, order, integrator, steps, mirror, moving, f64 ratio, radius, nu, centre[3],
  * mirror_point[3], mirror_normal[3], strength, load[16], u32 n_pins, i32 pin_flags, then

@@ -38,14 +38,22 @@ static void fake_apply(const fake *f, const double *from, double *to)
         to[i] = from[i] + f->a * sin(3.0 * from[i] + 1.0);
 }
 
+static int g_scratch_allocs; /* scratch buffers the fake allocated (reused within a plan) */
+
 static int fake_replay(void *ctx, const uint8_t *blob, size_t len, const double *from,
-                       double *to, df_error *err)
+                       double *to, void **scratch, df_error *err)
 {
     (void)ctx;
     if (len != sizeof(fake)) return df_error_set(err, DF_EFORMAT, "fake recipe: bad length");
+    if (!*scratch) { /* the history frees it after the plan */
+        if (!(*scratch = malloc(N * sizeof(double))))
+            return df_error_set(err, DF_ENOMEM, "fake recipe: out of memory");
+        g_scratch_allocs++;
+    }
     fake f;
     memcpy(&f, blob, sizeof f);
-    fake_apply(&f, from, to);
+    fake_apply(&f, from, *scratch);
+    memcpy(to, *scratch, N * sizeof *to);
     if (g_flip) to[3 * f.v0] += 1e-9;
     g_now += f.cost;
     g_calls++;
