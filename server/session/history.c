@@ -64,7 +64,7 @@ int df_history_set_reference(df_history *h, const double *ref, df_error *err)
             free(a);
             if (bad) {
                 h->mismatches++;
-                hi_drop_prefix(h, h->cur); /* the current state becomes the anchor */
+                hi_drop_below_current(h); /* the current state becomes the anchor */
             }
         }
     }
@@ -401,7 +401,7 @@ int df_history_install(df_history *h, df_history_plan *p, const double *state, d
     memcpy(h->state, state, h->n * sizeof *state);
     if (p->bad_anchor) { /* nothing below the new state is reachable */
         h->mismatches++;
-        hi_drop_prefix(h, h->cur);
+        hi_drop_below_current(h);
     }
     df_history_plan_free(p);
     h->gen++;
@@ -419,9 +419,10 @@ int df_history_repair(df_history *h, const df_history_plan *p)
         hi_truncate(h, h->cur);
     } else if (p->dir < 0) {
         int upto = h->cur;
-        for (int c = h->nck - 1; c >= 0 && p->bad_step >= 0; c--) /* -1: the anchor */
+        for (int c = h->nck - 1; c >= 0; c--)
             if (h->ck[c] > p->bad_step && h->ck[c] <= h->cur) upto = h->ck[c];
-        hi_drop_prefix(h, upto);
+        if (p->bad_step < 0) hi_drop_below_current(h); /* the anchor itself */
+        else hi_drop_prefix(h, upto);
     }
     h->gen++;
     hi_account(h);

@@ -268,6 +268,12 @@ void hi_drop_prefix(df_history *h, int upto)
     hi_tidy(h);
 }
 
+void hi_drop_below_current(df_history *h)
+{
+    hi_ck_clear(h);
+    hi_drop_prefix(h, h->cur);
+}
+
 int hi_drop_oldest(df_history *h)
 {
     uint64_t d0 = h->dropped;

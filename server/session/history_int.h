@@ -61,6 +61,10 @@ void hi_truncate(df_history *h, int from);
  * state becomes the only checkpoint); counts them in h->dropped. */
 void hi_drop_prefix(df_history *h, int upto);
 
+/* The anchor is unusable: drops it, every link and every step below the current state, which
+ * becomes the only checkpoint (a full copy); counts the steps in h->dropped. */
+void hi_drop_below_current(df_history *h);
+
 /* Drops the oldest step (or the oldest checkpoint segment), cur > 0 required. Returns the
  * number of steps dropped. */
 int hi_drop_oldest(df_history *h);
