@@ -139,12 +139,11 @@ static double *copy_of(const double *p, size_t n)
     return c;
 }
 
-/* The plan's new anchor `state`: packed against h->ref (read back through `tmp`, n doubles)
- * or a full copy. */
-static int plan_anchor(const df_history *h, const double *state, double *tmp,
-                       df_history_plan *p, df_error *err)
+/* The plan's new anchor `state`: packed against h->ref or a full copy. */
+static int plan_anchor(const df_history *h, const double *state, df_history_plan *p,
+                       df_error *err)
 {
-    if (h->ref) return hi_anchor_pack(h, state, tmp, &p->apack, &p->apack_len, &p->asum, err);
+    if (h->ref) return hi_anchor_pack(h, state, &p->apack, &p->apack_len, &p->asum, err);
     if (!(p->anchor = copy_of(state, h->n)))
         return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
     return DF_OK;
@@ -155,11 +154,8 @@ static int plan_anchor(const df_history *h, const double *state, double *tmp,
 static void plan_repack(const df_history *h, df_history_plan *p)
 {
     if (!h->ref || !h->anchor || p->anchor || p->apack) return;
-    double *tmp = malloc(h->n * sizeof *tmp);
-    if (tmp && hi_anchor_pack(h, h->anchor, tmp, &p->apack, &p->apack_len, &p->asum, NULL) ==
-                   DF_OK)
+    if (hi_anchor_pack(h, h->anchor, &p->apack, &p->apack_len, &p->asum, NULL) == DF_OK)
         p->repack = 1;
-    free(tmp);
 }
 
 /* Plans a checkpoint at `target` (the state after step `last`, a RECIPE step of cost `extra`
@@ -181,7 +177,7 @@ static int plan_checkpoint(const df_history *h, int nck, int last, uint64_t extr
         return p->bad_anchor ? DF_OK : df_error_set(err, rc, "%s", e.msg);
     }
     rc = hi_link_make(target, old, h->n, &p->link, err);
-    if (rc == DF_OK) rc = plan_anchor(h, target, old, p, err);
+    if (rc == DF_OK) rc = plan_anchor(h, target, p, err);
     free(old);
     p->new_ck = rc == DF_OK;
     return rc;
@@ -197,8 +193,9 @@ static int plan_recipe(const df_history *h, const double *pos, const uint8_t *bl
     df_error e;
     void *scratch = NULL;
     uint64_t (*tick)(void) = h->clock_ns ? h->clock_ns : now_ns;
+    int rc = h->replay(h->replay_ctx, NULL, 0, NULL, NULL, &scratch, &e); /* prepare */
     uint64_t t0 = tick();
-    int rc = h->replay(h->replay_ctx, blob, len, h->state, tmp, &scratch, &e);
+    if (rc == DF_OK) rc = h->replay(h->replay_ctx, blob, len, h->state, tmp, &scratch, &e);
     uint64_t t = tick() - t0;
     p->replays++;
     int same = rc == DF_OK && memcmp(tmp, pos, h->n * sizeof *tmp) == 0;
@@ -242,10 +239,7 @@ int df_history_plan_commit(const df_history *h, const double *pos, const uint8_t
         for (int k = 0; k < h->cur && !nck; k++)
             if (h->steps[k].kind == DF_HISTORY_RECIPE) nck = h->nck;
         if (nck == 0) { /* the first checkpoint: the state the recipe starts from */
-            double *tmp = malloc(h->n * sizeof *tmp);
-            rc = tmp ? plan_anchor(h, h->state, tmp, p, err)
-                     : df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
-            free(tmp);
+            rc = plan_anchor(h, h->state, p, err);
         } else {
             rc = plan_checkpoint(h, nck, h->cur, p->step.cost_ns, pos, p, err);
         }
@@ -291,7 +285,7 @@ static int plan_undo(const df_history *h, double *out, double *tmp, void **scrat
         }
     }
     if (rc == DF_OK && p->anchor && h->ref) { /* the moved anchor, packed */
-        rc = hi_anchor_pack(h, p->anchor, tmp, &p->apack, &p->apack_len, &p->asum, err);
+        rc = hi_anchor_pack(h, p->anchor, &p->apack, &p->apack_len, &p->asum, err);
         if (rc == DF_OK) {
             free(p->anchor);
             p->anchor = NULL;

@@ -20,7 +20,7 @@
  * its rest shape: a fraction of the full copy). Every read of a packed anchor decodes it (a
  * copy of the reference with the delta applied) and checks the checksum: a corrupt anchor or a
  * changed reference is DF_EINTERNAL, never a different mesh. New packed anchors are encoded
- * (and decoded back, checked) while planning, on the worker; an anchor the loop thread makes
+ * while planning, on the worker; an anchor the loop thread makes
  * (a drop below, df_history_repair) stays a full copy until the next plan packs it.
  * State j is reached from the current state when only XOR steps lie between (or forwards, for
  * redo), else from the newest checkpoint <= j (the anchor, or the anchor with links applied
@@ -58,6 +58,9 @@ enum { DF_HISTORY_XOR = 0, DF_HISTORY_RECIPE = 1 };
  * distinct). `*scratch` is the callback's own reusable buffer for one plan: NULL at the plan's
  * first replay; the callback may store a malloc'd buffer there (sized for this history's n) and
  * find it again at the plan's later replays; the history free()s it when the plan is done.
+ * A call with blob NULL (len 0, from and to NULL) only prepares *scratch (allocates and touches
+ * it) and returns DF_OK or DF_ENOMEM: the history makes it before a replay whose cost it
+ * measures, so that the cost recorded is that of a replay, not of first-touching memory.
  * DF_OK or an error with err set. Called on whichever thread plans or installs. */
 typedef int (*df_history_replay_fn)(void *ctx, const uint8_t *blob, size_t len,
                                     const double *from, double *to, void **scratch,

@@ -29,11 +29,9 @@ int hi_forward(const df_history *h, int k, double *a, double *tmp, void **scratc
 int hi_anchor_read(const df_history *h, double *out, int *bad, df_error *err);
 
 /* Packs `state` (n doubles) against h->ref into *blob / *len (malloc'd) with its checksum
- * *sum, then decodes it back into `tmp` (n doubles) and checks it is bitwise `state` (an
- * encoding that does not read back is DF_EINTERNAL, nothing returned). Errors: the codec's,
- * DF_EINTERNAL. */
-int hi_anchor_pack(const df_history *h, const double *state, double *tmp, uint8_t **blob,
-                   size_t *len, uint64_t *sum, df_error *err);
+ * *sum (every read checks it: hi_anchor_read). Errors: the codec's (nothing returned). */
+int hi_anchor_pack(const df_history *h, const double *state, uint8_t **blob, size_t *len,
+                   uint64_t *sum, df_error *err);
 
 /* Replaces h's anchor by the full copy `a` (owned; may be h->anchor) or, when blob is not
  * NULL, by the packed anchor (blob, len, sum; owned). */

@@ -30,9 +30,14 @@ static int replay_recipe(void *ctx, const uint8_t *blob, size_t len, const doubl
                          double *to, void **scratch, df_error *err)
 {
     const df_session *s = ctx;
-    if (!*scratch && !(*scratch = malloc(6 * (size_t)s->nv * sizeof(float))))
+    size_t bytes = 6 * (size_t)s->nv * sizeof(float);
+    if (!*scratch && !(*scratch = malloc(bytes)))
         return df_error_set(err, DF_ENOMEM, "undo history: out of memory replaying a stroke "
                             "(%d vertices)", s->nv);
+    if (!blob) { /* prepare only (history.h): touched now, not during a timed replay */
+        memset(*scratch, 0, bytes);
+        return DF_OK;
+    }
     df_stroke_recipe r;
     int rc = df_stroke_recipe_decode(blob, len, &r, err);
     if (rc != DF_OK) return rc;

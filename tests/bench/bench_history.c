@@ -55,8 +55,13 @@ static int replay(void *arg, const uint8_t *blob, size_t len, const double *from
                   void **scratch, df_error *err)
 {
     const ctx *c = arg;
-    if (!*scratch && !(*scratch = malloc(6 * (size_t)c->nv * sizeof(float))))
+    size_t bytes = 6 * (size_t)c->nv * sizeof(float);
+    if (!*scratch && !(*scratch = malloc(bytes)))
         return df_error_set(err, DF_ENOMEM, "out of memory");
+    if (!blob) { /* prepare only (history.h) */
+        memset(*scratch, 0, bytes);
+        return DF_OK;
+    }
     df_stroke_recipe r;
     int rc = df_stroke_recipe_decode(blob, len, &r, err);
     if (rc == DF_OK)

@@ -44,12 +44,13 @@ static int fake_replay(void *ctx, const uint8_t *blob, size_t len, const double 
                        double *to, void **scratch, df_error *err)
 {
     (void)ctx;
-    if (len != sizeof(fake)) return df_error_set(err, DF_EFORMAT, "fake recipe: bad length");
     if (!*scratch) { /* the history frees it after the plan */
         if (!(*scratch = malloc(N * sizeof(double))))
             return df_error_set(err, DF_ENOMEM, "fake recipe: out of memory");
         g_scratch_allocs++;
     }
+    if (!blob) return DF_OK; /* prepare only */
+    if (len != sizeof(fake)) return df_error_set(err, DF_EFORMAT, "fake recipe: bad length");
     fake f;
     memcpy(&f, blob, sizeof f);
     fake_apply(&f, from, *scratch);
@@ -173,9 +174,10 @@ static void test_checkpoints_by_cost_and_undo_bound(void **state)
     assert_int_equal(df_history_steps_of(&h, DF_HISTORY_XOR), 0);
     /* undo all the way, each undo replaying at most 2 steps (the budget: 10 / 4) */
     while (m.cur > 0) {
-        int calls = g_calls;
+        int calls = g_calls, allocs = g_scratch_allocs;
         undo(&h, &m);
         assert_true(g_calls - calls <= 2);
+        assert_true(g_scratch_allocs - allocs <= 1); /* one scratch per plan, reused */
     }
     assert_int_equal(h.nck, 1); /* the anchor came down with the undos */
     /* redo all, one replay each, checkpoints taken again */
