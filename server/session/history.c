@@ -10,7 +10,7 @@
 #include "server/session/history_int.h"
 #include "server/session/stroke_recipe.h" /* df_positions_checksum only */
 
-#define DF_HISTORY_DEFAULT_BUDGET_NS 250000000ull
+#define DF_HISTORY_DEFAULT_BUDGET_NS 1000000000ull
 
 int df_history_init(df_history *h, const double *pos, size_t n, int max_states, df_error *err)
 {

@@ -102,7 +102,7 @@ typedef struct df_history {
     df_history_link *links;  /* nck - 1: links[i] turns state ck[i + 1] into state ck[i] */
     df_history_replay_fn replay; /* NULL: RECIPE steps cannot be planned */
     void *replay_ctx;
-    uint64_t replay_budget_ns;   /* replay cost between checkpoints (default 250 ms) */
+    uint64_t replay_budget_ns;   /* replay cost between checkpoints (default 1 s) */
     uint64_t (*clock_ns)(void);  /* measures replay costs: NULL = CLOCK_MONOTONIC (tests set a
                                   * deterministic one) */
     uint64_t gen;            /* bumped by every change: a plan is for one generation */

@@ -6,7 +6,8 @@
  * pseudo-random centres (fixed seed), radius 0.02, tip 0.01 along z, nu 0.5, each computed as
  * the server does (df_stroke_recipe_replay = the live arithmetic) and committed as the session
  * does at BRUSH_END: planned (the recipe replayed once more and compared bitwise), then
- * installed, with the checkpoint budget history_replay_ms (default 250; DF_BENCH_HISTORY_MS
+ * installed, with the checkpoint budget history_replay_ms (the daemon's default,
+ * DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS; DF_BENCH_HISTORY_MS
  * overrides) measured on the real clock, the anchor packed against the load-time positions as
  * the session packs it against its rest shape (DF_BENCH_HISTORY_REF=0: a full-copy anchor).
  * Replays reuse one scratch per plan, as the session's callback does. Two falloffs: order 1
@@ -27,6 +28,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "server/config.h" /* DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS */
 #include "server/session/history.h"
 #include "server/session/stroke_recipe.h"
 
@@ -226,7 +228,8 @@ static int env_int(const char *name, int def, int lo, int hi)
 int main(void)
 {
     int n = env_int("DF_BENCH_HISTORY_N", 1000, 8, 4000);
-    int budget = env_int("DF_BENCH_HISTORY_MS", 250, 0, 3600000);
+    int budget = env_int("DF_BENCH_HISTORY_MS", DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS, 0,
+                         3600000);
     int undos = env_int("DF_BENCH_HISTORY_UNDOS", 60, 0, STROKES);
     int use_ref = env_int("DF_BENCH_HISTORY_REF", 1, 0, 1);
     long cpus = sysconf(_SC_NPROCESSORS_ONLN);
