@@ -171,8 +171,11 @@ static int run(int n, int order, int budget_ms, int undos, int threads, int use_
            "a checkpoint) %.1f ms mean, %.1f ms worst, install %.2f ms (loop thread) per "
            "stroke\n", 1e3 * t_stroke / STROKES, 1e3 * t_plan / STROKES, 1e3 * plan_worst,
            1e3 * t_install / STROKES);
+    double cost_sum = 0;
+    for (int k = 0; k < h.count; k++) cost_sum += (double)h.steps[k].cost_ns;
     printf("    one replay: %.1f ms with reused scratch, %.1f ms with two allocations per call "
-           "(median of 5)\n", rep_with, rep_alloc);
+           "(median of 5); recorded replay cost %.1f ms per step (mean)\n", rep_with, rep_alloc,
+           h.count ? 1e-6 * cost_sum / h.count : 0.0);
     size_t b_anchor, b_links, b_steps;
     df_history_parts(&h, &b_anchor, &b_links, &b_steps);
     printf("    held: %d recipe steps, %d checkpoints, %d undo steps; anchor %.2f MB (%s), "
