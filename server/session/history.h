@@ -20,8 +20,8 @@
  * its rest shape: a fraction of the full copy). Every read of a packed anchor decodes it (a
  * copy of the reference with the delta applied) and checks the checksum: a corrupt anchor or a
  * changed reference is DF_EINTERNAL, never a different mesh. New packed anchors are encoded
- * while planning, on the worker; an anchor the loop thread makes
- * (a drop below, df_history_repair) stays a full copy until the next plan packs it.
+ * while planning, on the worker; an anchor the loop thread makes (a drop below the current
+ * state, df_history_repair) stays a full copy until the next plan packs it.
  * State j is reached from the current state when only XOR steps lie between (or forwards, for
  * redo), else from the newest checkpoint <= j (the anchor, or the anchor with links applied
  * backwards) by applying the steps forwards (RECIPE: replay, checked against its checksum), or
@@ -39,9 +39,9 @@
  * to cur + 1; a commit after undos drops the redo tail. Bounds: at most max_states - 1 steps,
  * and at most `max_bytes` held in total; beyond either the oldest steps are dropped (counted in
  * `dropped`; with several checkpoints the whole oldest checkpoint segment goes at once; with one
- * checkpoint at state 0 the anchor is moved up one step, which replays a RECIPE step once (and
- * packs the anchor again) on the calling thread, unless no step would be left below the current state). A
- * replay whose checksum differs is never installed: the plan fails with DF_EINTERNAL and
+ * checkpoint at state 0 the anchor is moved up one step, which replays a RECIPE step once and
+ * packs the anchor again on the calling thread, unless no step would be left below the current
+ * state). A replay whose checksum differs is never installed: the plan fails with DF_EINTERNAL and
  * df_history_repair drops the steps it made unreachable (counted). Version numbers are NOT kept
  * here: undo/redo are broadcast as new versions by the session. */
 #ifndef DF_SERVER_HISTORY_H
