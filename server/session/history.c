@@ -193,7 +193,9 @@ static int plan_recipe(const df_history *h, const double *pos, const uint8_t *bl
     df_error e;
     void *scratch = NULL;
     uint64_t (*tick)(void) = h->clock_ns ? h->clock_ns : now_ns;
+    /* the cost recorded is a replay's, not first-touching fresh memory (the scratch, tmp) */
     int rc = h->replay(h->replay_ctx, NULL, 0, NULL, NULL, &scratch, &e); /* prepare */
+    memset(tmp, 0, h->n * sizeof *tmp);
     uint64_t t0 = tick();
     if (rc == DF_OK) rc = h->replay(h->replay_ctx, blob, len, h->state, tmp, &scratch, &e);
     uint64_t t = tick() - t0;
