@@ -43,7 +43,8 @@
  *   uploads_max_mb     buffers of all uploads in flight together, MiB (default 1024)
  *   history_max_mb     undo history of one session, MiB; the oldest steps are dropped beyond it
  *   history_replay_ms  replay cost between undo checkpoints, ms (history.h; 0 = after every
- *                      recipe step): an undo replays about this much at most
+ *                      recipe step; 0 .. 3600000, default DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS):
+ *                      an undo replays about this much at most
  *                      (0 .. 1048576; default physical RAM / 32, clamped to 64 .. 1024)
  *   resync_ring_mb     frames of the versions last broadcast that one session keeps for clients
  *                      resyncing from a version they hold (SUBSCRIBE FROM_VERSION, resync.h),
@@ -130,7 +131,10 @@
 #define DF_CONFIG_MAX_HISTORY_MB (1 << 20)
 #define DF_CONFIG_DEFAULT_RESYNC_RING_MB 32
 #define DF_CONFIG_MAX_RESYNC_RING_MB (1 << 20)
-#define DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS 250
+/* 1000: at 1M vertices 200 local strokes then hold ~1.3-1.5x the position bytes of undo history
+ * (bench_history; 250 gave 2.4x tri-scale, 6.2x single-scale), undo ~0.5 s median, ~1.3 s worst
+ * on the 2-core test machine */
+#define DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS 1000
 #define DF_CONFIG_MAX_HISTORY_REPLAY_MS 3600000
 #define DF_CONFIG_MEMORY_RAM_DIVISOR 2        /* default memory_max_mb = RAM / 2 ... */
 #define DF_CONFIG_MEMORY_MIN_DEFAULT_MB 256   /* ... at least this */

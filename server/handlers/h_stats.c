@@ -148,6 +148,9 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "history_recipe_steps", df_history_steps_of(&s->hist, DF_HISTORY_RECIPE));
         put(&st, "history_xor_steps", df_history_steps_of(&s->hist, DF_HISTORY_XOR));
         put(&st, "history_checkpoints", s->hist.nck);
+        size_t anchor_bytes;
+        df_history_parts(&s->hist, &anchor_bytes, NULL, NULL);
+        put(&st, "history_anchor_bytes", (double)anchor_bytes);
         put(&st, "history_replays", (double)s->hist.replays);
         put(&st, "history_replay_mismatches", (double)s->hist.mismatches);
         put(&st, "memory_bytes", (double)(s->mem_bytes + s->hist_charged + s->shm_charged +

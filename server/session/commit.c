@@ -104,7 +104,7 @@ static int apply_history(df_session *s, df_change *c)
         rc = c->hplan.valid ? df_session_history_install(s, &c->hplan, c->err)
                             : df_session_history_commit(s, c->err);
         break;
-    case DF_HIST_RESET: df_session_history_reset(s, NULL); break; /* keeps the old on ENOMEM */
+    case DF_HIST_RESET: df_session_history_reset(s, NULL); break; /* cannot fail */
     case DF_HIST_UNDO:
     case DF_HIST_REDO:
         if (c->hplan.valid) rc = df_session_history_install(s, &c->hplan, c->err);

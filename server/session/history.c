@@ -10,7 +10,7 @@
 #include "server/session/history_int.h"
 #include "server/session/stroke_recipe.h" /* df_positions_checksum only */
 
-#define DF_HISTORY_DEFAULT_BUDGET_NS 250000000ull
+#define DF_HISTORY_DEFAULT_BUDGET_NS 1000000000ull
 
 int df_history_init(df_history *h, const double *pos, size_t n, int max_states, df_error *err)
 {
@@ -49,6 +49,42 @@ void df_history_set_replay(df_history *h, df_history_replay_fn fn, void *ctx,
     h->replay_budget_ns = budget_ns;
 }
 
+int df_history_set_reference(df_history *h, const double *ref, df_error *err)
+{
+    if (!h || !h->state) return df_error_set(err, DF_EINVAL, "history: NULL");
+    int rc = DF_OK;
+    if (h->apack) { /* decoded against the old reference while it is still valid */
+        double *a = malloc(h->n * sizeof *a);
+        int bad = 0;
+        rc = a ? hi_anchor_read(h, a, &bad, err)
+               : df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+        if (rc == DF_OK) {
+            hi_anchor_set(h, a, NULL, 0, 0);
+        } else {
+            free(a);
+            if (bad) {
+                h->mismatches++;
+                hi_drop_below_current(h); /* the current state becomes the anchor */
+            }
+        }
+    }
+    if (rc == DF_OK || h->anchor || !h->nck) h->ref = ref;
+    h->gen++;
+    hi_account(h);
+    return rc;
+}
+
+void df_history_reset(df_history *h, const double *pos)
+{
+    if (!h || !h->state || !pos) return;
+    for (int i = 0; i < h->count; i++) hi_step_free(&h->steps[i]);
+    hi_ck_clear(h);
+    h->count = h->cur = 0;
+    memcpy(h->state, pos, h->n * sizeof *h->state);
+    h->gen++;
+    hi_account(h);
+}
+
 void df_history_free(df_history *h)
 {
     if (!h) return;
@@ -75,6 +111,7 @@ void df_history_plan_free(df_history_plan *p)
     if (!p) return;
     hi_step_free(&p->step);
     free(p->anchor);
+    free(p->apack);
     hi_link_free(&p->link);
     memset(p, 0, sizeof *p);
 }
@@ -102,18 +139,48 @@ static double *copy_of(const double *p, size_t n)
     return c;
 }
 
+/* The plan's new anchor `state`: packed against h->ref or a full copy. */
+static int plan_anchor(const df_history *h, const double *state, df_history_plan *p,
+                       df_error *err)
+{
+    if (h->ref) return hi_anchor_pack(h, state, &p->apack, &p->apack_len, &p->asum, err);
+    if (!(p->anchor = copy_of(state, h->n)))
+        return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+    return DF_OK;
+}
+
+/* When the plan leaves the anchor as it is and it is a full copy although a reference is set
+ * (the loop thread made it): packs it (plan->repack). A failure only leaves it a full copy. */
+static void plan_repack(const df_history *h, df_history_plan *p)
+{
+    if (!h->ref || !h->anchor || p->anchor || p->apack) return;
+    if (hi_anchor_pack(h, h->anchor, &p->apack, &p->apack_len, &p->asum, NULL) == DF_OK)
+        p->repack = 1;
+}
+
 /* Plans a checkpoint at `target` (the state after step `last`, a RECIPE step of cost `extra`
  * not held yet, or 0 when held) when the replay cost since the newest checkpoint is over
- * budget: plan->anchor = a copy of target, plan->link from it to the current anchor. */
+ * budget: the plan's new anchor = target (plan_anchor), plan->link from it to the current
+ * anchor. An anchor that does not decode: no checkpoint, plan->bad_anchor (the install drops
+ * what it made unreachable). */
 static int plan_checkpoint(const df_history *h, int nck, int last, uint64_t extra,
                            const double *target, df_history_plan *p, df_error *err)
 {
     if (nck < 1 || h->ck[nck - 1] > last) return DF_OK;
     if (cost(h, h->ck[nck - 1], last) + extra <= h->replay_budget_ns) return DF_OK;
-    if (!(p->anchor = copy_of(target, h->n)))
-        return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
-    p->new_ck = 1;
-    return hi_link_make(target, h->anchor, h->n, &p->link, err);
+    double *old = malloc(h->n * sizeof *old);
+    if (!old) return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+    df_error e;
+    int rc = hi_anchor_read(h, old, &p->bad_anchor, &e);
+    if (rc != DF_OK) {
+        free(old);
+        return p->bad_anchor ? DF_OK : df_error_set(err, rc, "%s", e.msg);
+    }
+    rc = hi_link_make(target, old, h->n, &p->link, err);
+    if (rc == DF_OK) rc = plan_anchor(h, target, p, err);
+    free(old);
+    p->new_ck = rc == DF_OK;
+    return rc;
 }
 
 /* The RECIPE step turning h->state into pos by `blob`, when a replay reproduces pos bitwise
@@ -124,12 +191,17 @@ static int plan_recipe(const df_history *h, const double *pos, const uint8_t *bl
     double *tmp = malloc(h->n * sizeof *tmp);
     if (!tmp) return df_error_set(err, DF_ENOMEM, "history: out of memory (replay)");
     df_error e;
+    void *scratch = NULL;
     uint64_t (*tick)(void) = h->clock_ns ? h->clock_ns : now_ns;
+    /* the cost recorded is a replay's, not first-touching fresh memory (the scratch, tmp) */
+    int rc = h->replay(h->replay_ctx, NULL, 0, NULL, NULL, &scratch, &e); /* prepare */
+    memset(tmp, 0, h->n * sizeof *tmp);
     uint64_t t0 = tick();
-    int rc = h->replay(h->replay_ctx, blob, len, h->state, tmp, &e);
+    if (rc == DF_OK) rc = h->replay(h->replay_ctx, blob, len, h->state, tmp, &scratch, &e);
     uint64_t t = tick() - t0;
     p->replays++;
     int same = rc == DF_OK && memcmp(tmp, pos, h->n * sizeof *tmp) == 0;
+    free(scratch);
     free(tmp);
     if (!same) {
         p->fallback = rc == DF_OK ? 2 : 1;
@@ -169,8 +241,7 @@ int df_history_plan_commit(const df_history *h, const double *pos, const uint8_t
         for (int k = 0; k < h->cur && !nck; k++)
             if (h->steps[k].kind == DF_HISTORY_RECIPE) nck = h->nck;
         if (nck == 0) { /* the first checkpoint: the state the recipe starts from */
-            if (!(p->anchor = copy_of(h->state, h->n)))
-                rc = df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
+            rc = plan_anchor(h, h->state, p, err);
         } else {
             rc = plan_checkpoint(h, nck, h->cur, p->step.cost_ns, pos, p, err);
         }
@@ -179,14 +250,15 @@ int df_history_plan_commit(const df_history *h, const double *pos, const uint8_t
         df_history_plan_free(p);
         return rc;
     }
+    plan_repack(h, p);
     p->valid = 1;
     return DF_OK;
 }
 
 /* Undo to j = cur - 1 into out (see history.h: XOR from the current state, else replay from
  * the newest checkpoint <= j, moving the anchor down when it is above j). */
-static int plan_undo(const df_history *h, double *out, double *tmp, df_history_plan *p,
-                     df_error *err)
+static int plan_undo(const df_history *h, double *out, double *tmp, void **scratch,
+                     df_history_plan *p, df_error *err)
 {
     int j = h->cur - 1, i = -1, rc = DF_OK;
     for (int c = 0; c < h->nck; c++)
@@ -196,17 +268,30 @@ static int plan_undo(const df_history *h, double *out, double *tmp, df_history_p
         p->keep_ck = (i < 0 ? 0 : i) + 1;
         if (!(p->anchor = malloc(h->n * sizeof *p->anchor)))
             return df_error_set(err, DF_ENOMEM, "history: out of memory (checkpoint)");
-        if ((rc = hi_ck_state(h, p->keep_ck - 1, p->anchor, err)) != DF_OK) return rc;
+        rc = hi_ck_state(h, p->keep_ck - 1, p->anchor, &p->mismatch, err);
+        if (rc != DF_OK) {
+            if (p->mismatch) p->bad_step = -1; /* the anchor */
+            return rc;
+        }
     }
     if (h->steps[j].kind == DF_HISTORY_XOR) {
         memcpy(out, h->state, h->n * sizeof *out);
-        return hi_forward(h, j, out, tmp, &p->replays, &p->mismatch, err); /* XOR: both ways */
+        rc = hi_forward(h, j, out, tmp, scratch, &p->replays, &p->mismatch, err); /* both ways */
+    } else { /* a RECIPE step: ck[0] <= j (history.h), so i >= 0 */
+        if (p->anchor) memcpy(out, p->anchor, h->n * sizeof *out);
+        else if ((rc = hi_anchor_read(h, out, &p->mismatch, err)) != DF_OK && p->mismatch)
+            p->bad_step = -1;
+        for (int k = h->ck[i]; rc == DF_OK && k < j; k++) {
+            rc = hi_forward(h, k, out, tmp, scratch, &p->replays, &p->mismatch, err);
+            if (p->mismatch) p->bad_step = k;
+        }
     }
-    /* a RECIPE step: ck[0] <= j (history.h), so i >= 0 */
-    memcpy(out, p->anchor ? p->anchor : h->anchor, h->n * sizeof *out);
-    for (int k = h->ck[i]; rc == DF_OK && k < j; k++) {
-        rc = hi_forward(h, k, out, tmp, &p->replays, &p->mismatch, err);
-        if (p->mismatch) p->bad_step = k;
+    if (rc == DF_OK && p->anchor && h->ref) { /* the moved anchor, packed */
+        rc = hi_anchor_pack(h, p->anchor, &p->apack, &p->apack_len, &p->asum, err);
+        if (rc == DF_OK) {
+            free(p->anchor);
+            p->anchor = NULL;
+        }
     }
     return rc;
 }
@@ -224,16 +309,18 @@ int df_history_plan_move(const df_history *h, int dir, double *out, df_history_p
     p->gen = h->gen;
     double *tmp = malloc(h->n * sizeof *tmp);
     if (!tmp) return df_error_set(err, DF_ENOMEM, "history: out of memory (undo)");
+    void *scratch = NULL;
     int rc;
     if (dir < 0) {
-        rc = plan_undo(h, out, tmp, p, err);
+        rc = plan_undo(h, out, tmp, &scratch, p, err);
     } else {
         memcpy(out, h->state, h->n * sizeof *out);
-        rc = hi_forward(h, h->cur, out, tmp, &p->replays, &p->mismatch, err);
+        rc = hi_forward(h, h->cur, out, tmp, &scratch, &p->replays, &p->mismatch, err);
         if (p->mismatch) p->bad_step = h->cur;
         if (rc == DF_OK && h->steps[h->cur].kind == DF_HISTORY_RECIPE)
             rc = plan_checkpoint(h, h->nck, h->cur + 1, 0, out, p, err);
     }
+    free(scratch);
     free(tmp);
     if (rc != DF_OK) {
         int mismatch = p->mismatch, bad = p->bad_step;
@@ -246,20 +333,26 @@ int df_history_plan_move(const df_history *h, int dir, double *out, df_history_p
         p->replays = replays;
         return rc;
     }
+    plan_repack(h, p);
     p->valid = 1;
     return DF_OK;
 }
 
 /* Appends the plan's new checkpoint (at h->cur) to h. */
+static void take_anchor(df_history *h, df_history_plan *p)
+{
+    hi_anchor_set(h, p->anchor, p->apack, p->apack_len, p->asum);
+    p->anchor = NULL;
+    p->apack = NULL;
+}
+
 static void push_checkpoint(df_history *h, df_history_plan *p)
 {
     if (!p->new_ck) return;
     h->links[h->nck - 1] = p->link;
     memset(&p->link, 0, sizeof p->link);
     h->ck[h->nck++] = h->cur;
-    free(h->anchor);
-    h->anchor = p->anchor;
-    p->anchor = NULL;
+    take_anchor(h, p);
 }
 
 int df_history_install(df_history *h, df_history_plan *p, const double *state, df_error *err)
@@ -278,8 +371,7 @@ int df_history_install(df_history *h, df_history_plan *p, const double *state, d
     if (p->dir == 0) {
         hi_truncate(h, h->cur);
         if (p->step.kind == DF_HISTORY_RECIPE && h->nck == 0) { /* the first checkpoint */
-            h->anchor = p->anchor;
-            p->anchor = NULL;
+            take_anchor(h, p);
             h->ck[0] = h->cur;
             h->nck = 1;
         }
@@ -288,19 +380,25 @@ int df_history_install(df_history *h, df_history_plan *p, const double *state, d
         h->cur = h->count;
         push_checkpoint(h, p);
     } else if (p->dir < 0) {
-        if (p->anchor) {
+        if (!p->repack && (p->anchor || p->apack)) {
             for (int i = p->keep_ck - 1; i + 1 < h->nck; i++) hi_link_free(&h->links[i]);
             h->nck = p->keep_ck;
-            free(h->anchor);
-            h->anchor = p->anchor;
-            p->anchor = NULL;
+            take_anchor(h, p);
         }
         h->cur--;
     } else {
         h->cur++;
         push_checkpoint(h, p);
     }
+    if (p->repack && h->nck && h->anchor) { /* the same full-copy anchor, packed */
+        hi_anchor_set(h, h->anchor, p->apack, p->apack_len, p->asum);
+        p->apack = NULL;
+    }
     memcpy(h->state, state, h->n * sizeof *state);
+    if (p->bad_anchor) { /* nothing below the new state is reachable */
+        h->mismatches++;
+        hi_drop_below_current(h);
+    }
     df_history_plan_free(p);
     h->gen++;
     hi_enforce(h);
@@ -319,7 +417,8 @@ int df_history_repair(df_history *h, const df_history_plan *p)
         int upto = h->cur;
         for (int c = h->nck - 1; c >= 0; c--)
             if (h->ck[c] > p->bad_step && h->ck[c] <= h->cur) upto = h->ck[c];
-        hi_drop_prefix(h, upto);
+        if (p->bad_step < 0) hi_drop_below_current(h); /* the anchor itself */
+        else hi_drop_prefix(h, upto);
     }
     h->gen++;
     hi_account(h);
@@ -393,6 +492,19 @@ size_t df_history_bytes(const df_history *h) { return h ? h->bytes : 0; }
 size_t df_history_undo_bytes(const df_history *h)
 {
     return h && h->state ? h->bytes - h->n * sizeof(double) : 0;
+}
+
+void df_history_parts(const df_history *h, size_t *anchor, size_t *links, size_t *steps)
+{
+    size_t a = 0, l = 0, s = 0;
+    if (h && h->state) {
+        a = h->anchor ? h->n * sizeof(double) : h->apack_len;
+        for (int i = 0; i + 1 < h->nck; i++) l += h->links[i].len + sizeof h->links[i];
+        for (int i = 0; i < h->count; i++) s += hi_step_bytes(&h->steps[i]);
+    }
+    if (anchor) *anchor = a;
+    if (links) *links = l;
+    if (steps) *steps = s;
 }
 
 int df_history_steps_of(const df_history *h, int kind)

@@ -11,9 +11,17 @@
  *          24 per moved vertex, but it only runs forwards.
  * The history keeps one full copy of the current state (`state`, n doubles). So that states
  * below a RECIPE step stay reachable it keeps CHECKPOINTS (history_ckpt.c) as soon as it holds a
- * RECIPE step: state indices ck[0] < ... < ck[nck-1], a full copy of the newest one (the
- * ANCHOR) and between consecutive ones a lossless packed link (delta.h delta
- * layout, taken from the newer to the older state). Every RECIPE step is at or above ck[0].
+ * RECIPE step: state indices ck[0] < ... < ck[nck-1], the newest one (the ANCHOR) and between
+ * consecutive ones a lossless packed link (delta.h delta layout, taken from the newer to the
+ * older state). Every RECIPE step is at or above ck[0]. Without a REFERENCE the anchor is a
+ * full copy (n doubles); with one (df_history_set_reference: a state the caller keeps alive and
+ * unchanged, e.g. the session's rest shape) it is held PACKED as the delta.h delta from the
+ * reference to the anchor plus the anchor's checksum (a local stroke history stays close to
+ * its rest shape: a fraction of the full copy). Every read of a packed anchor decodes it (a
+ * copy of the reference with the delta applied) and checks the checksum: a corrupt anchor or a
+ * changed reference is DF_EINTERNAL, never a different mesh. New packed anchors are encoded
+ * while planning, on the worker; an anchor the loop thread makes (a drop below the current
+ * state, df_history_repair) stays a full copy until the next plan packs it.
  * State j is reached from the current state when only XOR steps lie between (or forwards, for
  * redo), else from the newest checkpoint <= j (the anchor, or the anchor with links applied
  * backwards) by applying the steps forwards (RECIPE: replay, checked against its checksum), or
@@ -31,9 +39,9 @@
  * to cur + 1; a commit after undos drops the redo tail. Bounds: at most max_states - 1 steps,
  * and at most `max_bytes` held in total; beyond either the oldest steps are dropped (counted in
  * `dropped`; with several checkpoints the whole oldest checkpoint segment goes at once; with one
- * checkpoint at state 0 the anchor is moved up one step, which replays a RECIPE step once on
- * the calling thread, unless no step would be left below the current state). A
- * replay whose checksum differs is never installed: the plan fails with DF_EINTERNAL and
+ * checkpoint at state 0 the anchor is moved up one step, which replays a RECIPE step once and
+ * packs the anchor again on the calling thread, unless no step would be left below the current
+ * state). A replay whose checksum differs is never installed: the plan fails with DF_EINTERNAL and
  * df_history_repair drops the steps it made unreachable (counted). Version numbers are NOT kept
  * here: undo/redo are broadcast as new versions by the session. */
 #ifndef DF_SERVER_HISTORY_H
@@ -47,9 +55,16 @@
 enum { DF_HISTORY_XOR = 0, DF_HISTORY_RECIPE = 1 };
 
 /* Replays `blob` (len bytes, a RECIPE step) from state `from` into `to` (n doubles each,
- * distinct). DF_OK or an error with err set. Called on whichever thread plans or installs. */
+ * distinct). `*scratch` is the callback's own reusable buffer for one plan: NULL at the plan's
+ * first replay; the callback may store a malloc'd buffer there (sized for this history's n) and
+ * find it again at the plan's later replays; the history free()s it when the plan is done.
+ * A call with blob NULL (len 0, from and to NULL) only prepares *scratch (allocates and touches
+ * it) and returns DF_OK or DF_ENOMEM: the history makes it before a replay whose cost it
+ * measures, so that the cost recorded is that of a replay, not of first-touching memory.
+ * DF_OK or an error with err set. Called on whichever thread plans or installs. */
 typedef int (*df_history_replay_fn)(void *ctx, const uint8_t *blob, size_t len,
-                                    const double *from, double *to, df_error *err);
+                                    const double *from, double *to, void **scratch,
+                                    df_error *err);
 
 /* One step: state k -> state k + 1. */
 typedef struct df_history_step {
@@ -77,13 +92,17 @@ typedef struct df_history {
     size_t bytes;            /* held: state + anchor + links + steps */
     size_t max_bytes;        /* budget of `bytes` (SIZE_MAX: none) */
     uint64_t dropped;        /* oldest steps dropped to the caps or as unreachable */
-    double *anchor;          /* state ck[nck - 1] (n doubles); NULL when nck == 0 */
+    double *anchor;          /* state ck[nck - 1] as a full copy (n doubles), or NULL */
+    uint8_t *apack;          /* ... or packed against `ref` (delta.h delta ref -> anchor) */
+    size_t apack_len;        /* its bytes */
+    uint64_t asum;           /* df_positions_checksum of the packed anchor's state */
+    const double *ref;       /* the reference (n doubles, the caller's) or NULL: full copies */
     int *ck;                 /* checkpoint state indices, ascending (max_states + 1 slots) */
     int nck;                 /* 0 exactly when no RECIPE step is held */
     df_history_link *links;  /* nck - 1: links[i] turns state ck[i + 1] into state ck[i] */
     df_history_replay_fn replay; /* NULL: RECIPE steps cannot be planned */
     void *replay_ctx;
-    uint64_t replay_budget_ns;   /* replay cost between checkpoints (default 250 ms) */
+    uint64_t replay_budget_ns;   /* replay cost between checkpoints (default 1 s) */
     uint64_t (*clock_ns)(void);  /* measures replay costs: NULL = CLOCK_MONOTONIC (tests set a
                                   * deterministic one) */
     uint64_t gen;            /* bumped by every change: a plan is for one generation */
@@ -100,12 +119,19 @@ typedef struct df_history_plan {
     df_history_step step;    /* commit: the new step (owned until installed) */
     int keep_ck;             /* undo: checkpoints kept (nck when unchanged) */
     double *anchor;          /* undo: state ck[keep_ck - 1] (owned), or NULL: anchor unchanged;
-                              * commit/redo: the new anchor (a copy of the target) or NULL */
+                              * commit/redo: the new anchor (a copy of the target) or NULL;
+                              * NULL when packed (apack) */
+    uint8_t *apack;          /* the new anchor packed against h->ref (owned) or NULL */
+    size_t apack_len;
+    uint64_t asum;           /* its state's checksum */
+    int repack;              /* 1: apack is h's full-copy anchor packed (no other anchor change) */
+    int bad_anchor;          /* commit/redo: the anchor did not decode: the install drops every
+                              * step below the new state (counted as a mismatch) */
     int new_ck;              /* commit/redo: 1 = a checkpoint at the target state */
     df_history_link link;    /* commit/redo: the link from the target to the old anchor */
     uint64_t replays;        /* replays run while planning */
     int mismatch;            /* 1: a replay's checksum differed (the plan failed) */
-    int bad_step;            /* its step index */
+    int bad_step;            /* its step index; -1: the anchor did not decode */
 } df_history_plan;
 
 /* Initializes with the first state (a copy of `pos`, n doubles, n a multiple of 3 and
@@ -118,6 +144,19 @@ int df_history_init(df_history *h, const double *pos, size_t n, int max_states, 
  * checkpoints; 0: a checkpoint after every RECIPE step). */
 void df_history_set_replay(df_history *h, df_history_replay_fn fn, void *ctx,
                            uint64_t budget_ns);
+
+/* Sets the reference the anchor is packed against (history.h): `ref` (h->n doubles) must stay
+ * alive and unchanged while set; NULL: full-copy anchors. A packed anchor held is decoded
+ * against the old reference (which must still be unchanged) and kept as a full copy until the
+ * next plan packs it against the new one. Bumps the generation. Loop thread. Errors: DF_EINVAL,
+ * DF_ENOMEM, DF_EINTERNAL (the held anchor did not decode: every step below the current state
+ * is dropped, counted, and the reference set); on DF_ENOMEM nothing changed. */
+int df_history_set_reference(df_history *h, const double *ref, df_error *err);
+
+/* Forgets every step and checkpoint: `pos` (h->n doubles) becomes the only state (no undo, no
+ * redo). Keeps the replay callback, budgets, reference and counters (the forgotten steps are
+ * not counted as dropped); allocates nothing. Loop thread. */
+void df_history_reset(df_history *h, const double *pos);
 
 /* Frees every state; h becomes empty. NULL-safe. */
 void df_history_free(df_history *h);
@@ -183,8 +222,13 @@ int df_history_can_redo(const df_history *h);
 /* Bytes held (the current state, the anchor, links and every step). */
 size_t df_history_bytes(const df_history *h);
 
-/* Bytes of the undo history proper: anchor + links + steps (without the current state). */
+/* Bytes of the undo history proper: anchor + links + steps (without the current state); a
+ * packed anchor counts its packed bytes. */
 size_t df_history_undo_bytes(const df_history *h);
+
+/* The parts of df_history_undo_bytes: the anchor (packed or full), the links and the steps
+ * (RECIPE blobs and XOR arrays, with their structs). Any pointer may be NULL. */
+void df_history_parts(const df_history *h, size_t *anchor, size_t *links, size_t *steps);
 
 /* Steps held of `kind` (DF_HISTORY_XOR / DF_HISTORY_RECIPE). */
 int df_history_steps_of(const df_history *h, int kind);

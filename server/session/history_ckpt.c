@@ -86,8 +86,8 @@ int hi_step_xor(const double *a, const double *b, size_t n, df_history_step *st,
     return DF_OK;
 }
 
-int hi_forward(const df_history *h, int k, double *a, double *tmp, uint64_t *replays,
-               int *mismatch, df_error *err)
+int hi_forward(const df_history *h, int k, double *a, double *tmp, void **scratch,
+               uint64_t *replays, int *mismatch, df_error *err)
 {
     const df_history_step *s = &h->steps[k];
     if (s->kind == DF_HISTORY_XOR) {
@@ -97,7 +97,7 @@ int hi_forward(const df_history *h, int k, double *a, double *tmp, uint64_t *rep
     if (!h->replay)
         return df_error_set(err, DF_ESTATE, "history: step %d is a recipe and no replay is set",
                             k);
-    int rc = h->replay(h->replay_ctx, s->blob, s->len, a, tmp, err);
+    int rc = h->replay(h->replay_ctx, s->blob, s->len, a, tmp, scratch, err);
     (*replays)++;
     if (rc != DF_OK) return rc;
     uint64_t sum = df_positions_checksum(tmp, h->n);
@@ -112,12 +112,62 @@ int hi_forward(const df_history *h, int k, double *a, double *tmp, uint64_t *rep
     return DF_OK;
 }
 
-int hi_ck_state(const df_history *h, int i, double *out, df_error *err)
+int hi_anchor_read(const df_history *h, double *out, int *bad, df_error *err)
 {
-    memcpy(out, h->anchor, h->n * sizeof *out);
+    if (h->anchor) {
+        memcpy(out, h->anchor, h->n * sizeof *out);
+        return DF_OK;
+    }
+    df_error e = {0};
+    int rc = DF_EINTERNAL;
+    if (h->apack && h->ref) {
+        memcpy(out, h->ref, h->n * sizeof *out);
+        rc = df_codec_delta_apply(h->apack, h->apack_len, out, (int32_t)(h->n / 3), NULL, &e);
+        if (rc == DF_ENOMEM) return df_error_set(err, DF_ENOMEM, "history: %s", e.msg);
+    }
+    if (rc == DF_OK && df_positions_checksum(out, h->n) == h->asum) return DF_OK;
+    if (bad) *bad = 1;
+    return df_error_set(err, DF_EINTERNAL,
+                        "history: the undo checkpoint (%zu bytes packed against the rest "
+                        "shape) does not decode to the state it recorded (%s)", h->apack_len,
+                        rc != DF_OK ? (h->apack && h->ref ? e.msg : "no reference")
+                                    : "checksum differs: corrupt, or the reference changed");
+}
+
+int hi_anchor_pack(const df_history *h, const double *state, uint8_t **blob, size_t *len,
+                   uint64_t *sum, df_error *err)
+{
+    *blob = NULL;
+    *len = 0;
+    int rc = df_codec_delta_encode(h->ref, state, (int32_t)(h->n / 3), blob, len, err);
+    if (rc != DF_OK) return rc;
+    *sum = df_positions_checksum(state, h->n);
+    return DF_OK;
+}
+
+void hi_anchor_set(df_history *h, double *a, uint8_t *blob, size_t len, uint64_t sum)
+{
+    double *olda = h->anchor;
+    uint8_t *oldb = h->apack;
+    if (blob) {
+        if (a != olda) free(a);
+        a = NULL;
+    }
+    h->anchor = a;
+    h->apack = blob;
+    if (olda != a) free(olda);
+    if (oldb != blob) free(oldb);
+    h->apack_len = blob ? len : 0;
+    h->asum = blob ? sum : 0;
+}
+
+int hi_ck_state(const df_history *h, int i, double *out, int *bad, df_error *err)
+{
+    int rc = hi_anchor_read(h, out, bad, err);
+    if (rc != DF_OK) return rc;
     for (int l = h->nck - 2; l >= i; l--) {
-        int rc = df_codec_delta_apply(h->links[l].blob, h->links[l].len, out,
-                                      (int32_t)(h->n / 3), NULL, err);
+        rc = df_codec_delta_apply(h->links[l].blob, h->links[l].len, out, (int32_t)(h->n / 3),
+                                  NULL, err);
         if (rc != DF_OK) return rc;
     }
     return DF_OK;
@@ -139,14 +189,13 @@ void hi_link_free(df_history_link *l)
 void hi_ck_clear(df_history *h)
 {
     for (int i = 0; i + 1 < h->nck; i++) hi_link_free(&h->links[i]);
-    free(h->anchor);
-    h->anchor = NULL;
+    hi_anchor_set(h, NULL, NULL, 0, 0);
     h->nck = 0;
 }
 
 void hi_account(df_history *h)
 {
-    size_t b = h->n * sizeof(double) + (h->anchor ? h->n * sizeof(double) : 0);
+    size_t b = h->n * sizeof(double) + (h->anchor ? h->n * sizeof(double) : h->apack_len);
     for (int i = 0; i + 1 < h->nck; i++) b += h->links[i].len + sizeof h->links[i];
     for (int i = 0; i < h->count; i++) b += hi_step_bytes(&h->steps[i]);
     h->bytes = b;
@@ -189,7 +238,7 @@ void hi_drop_prefix(df_history *h, int upto)
     if (at < 0) { /* upto == cur: the current state becomes the only checkpoint */
         double *a = h->anchor ? h->anchor : malloc(h->n * sizeof *a);
         for (int i = 0; i + 1 < h->nck; i++) hi_link_free(&h->links[i]);
-        h->anchor = a;
+        hi_anchor_set(h, a, NULL, 0, 0); /* a full copy: the next plan packs it */
         h->nck = a ? 1 : 0;
         if (a) {
             memcpy(a, h->state, h->n * sizeof *a);
@@ -208,6 +257,12 @@ void hi_drop_prefix(df_history *h, int upto)
     hi_tidy(h);
 }
 
+void hi_drop_below_current(df_history *h)
+{
+    hi_ck_clear(h);
+    hi_drop_prefix(h, h->cur);
+}
+
 int hi_drop_oldest(df_history *h)
 {
     uint64_t d0 = h->dropped;
@@ -218,11 +273,20 @@ int hi_drop_oldest(df_history *h)
     } else if (h->cur == 1) {      /* nothing left below: the current state is the anchor */
         hi_drop_prefix(h, 1);
     } else {                       /* the anchor is state 0: move it up one step */
-        double *tmp = malloc(h->n * sizeof *tmp);
+        double *tmp = malloc(h->n * sizeof *tmp), *a = malloc(h->n * sizeof *a);
+        void *scratch = NULL;
         uint64_t replays = 0;
-        int mismatch = 0, rc = tmp ? hi_forward(h, 0, h->anchor, tmp, &replays, &mismatch, NULL)
-                                   : DF_ENOMEM;
+        int mismatch = 0, rc = tmp && a ? hi_anchor_read(h, a, &mismatch, NULL) : DF_ENOMEM;
+        if (rc == DF_OK) rc = hi_forward(h, 0, a, tmp, &scratch, &replays, &mismatch, NULL);
+        uint8_t *blob = NULL;
+        size_t len = 0;
+        uint64_t sum = 0;
+        if (rc == DF_OK && h->ref && hi_anchor_pack(h, a, &blob, &len, &sum, NULL) != DF_OK)
+            blob = NULL; /* kept as a full copy: the next plan packs it */
+        if (rc == DF_OK) hi_anchor_set(h, a, blob, len, sum);
+        else free(a);
         free(tmp);
+        free(scratch);
         h->replays += replays;
         h->mismatches += (uint64_t)mismatch;
         if (rc == DF_OK) {

@@ -24,36 +24,54 @@ uint64_t df_session_estimate_bytes(const df_mesh *mesh)
 }
 
 int df_session_replay_recipe(df_session *s, const df_stroke_recipe *r, const double *from,
-                             int threads, double *to, df_error *err)
+                             int threads, float *scratch, double *to, df_error *err)
 {
-    if (!r->brush.surface)
-        return df_stroke_recipe_replay(r, from, s->nv, s->mesh.planar, threads, to, err);
-    const df_mesh_sparse *adj;
-    int rc = df_surface_cache_adjacency(&s->surf, &s->mesh, &adj, err);
-    if (rc != DF_OK) return rc;
-    return df_stroke_recipe_replay_mesh(r, from, s->nv, adj, s->mesh.V, s->mesh.planar, threads,
-                                        to, err);
+    const df_mesh_sparse *adj = NULL;
+    if (r->brush.surface) {
+        int rc = df_surface_cache_adjacency(&s->surf, &s->mesh, &adj, err);
+        if (rc != DF_OK) return rc;
+    }
+    const double *rest = adj ? s->mesh.V : NULL;
+    if (scratch)
+        return df_stroke_recipe_replay_with(r, from, s->nv, adj, rest, s->mesh.planar, threads,
+                                            scratch, to, err);
+    return df_stroke_recipe_replay_mesh(r, from, s->nv, adj, rest, s->mesh.planar, threads, to,
+                                        err);
 }
 
 /* The history's replay of a RECIPE step (history.h): a stroke recipe (stroke_recipe.h)
- * recomputed on this session's mesh, with the server's thread count. Runs as the session's job
- * (its surface cache is the running job's). */
+ * recomputed on this session's mesh, with the server's thread count, through the plan's
+ * scratch (6 * nv floats, allocated at its first replay and reused by the others). Runs as
+ * the session's job (its surface cache is the running job's). */
 static int replay_recipe(void *ctx, const uint8_t *blob, size_t len, const double *from,
-                         double *to, df_error *err)
+                         double *to, void **scratch, df_error *err)
 {
     df_session *s = ctx;
+    size_t bytes = 6 * (size_t)s->nv * sizeof(float);
+    if (!*scratch && !(*scratch = malloc(bytes)))
+        return df_error_set(err, DF_ENOMEM, "undo history: out of memory replaying a stroke "
+                            "(%d vertices)", s->nv);
+    if (!blob) { /* prepare only (history.h): touched now, not during a timed replay */
+        memset(*scratch, 0, bytes);
+        return DF_OK;
+    }
     df_stroke_recipe r;
     int rc = df_stroke_recipe_decode(blob, len, &r, err);
     if (rc != DF_OK) return rc;
-    rc = df_session_replay_recipe(s, &r, from, s->srv->cfg.threads, to, err);
+    rc = df_session_replay_recipe(s, &r, from, s->srv->cfg.threads, *scratch, to, err);
     df_stroke_recipe_free(&r);
     return rc;
 }
 
+/* The replay callback and budget, and the reference the history packs its anchor against:
+ * the rest shape, which changes only at reset-rest (whose commit resets the history right
+ * after the copy, df_session_history_reset) and at a store restore (before the history is
+ * reset to the snapshot). */
 static void history_set_replay(df_session *s)
 {
     df_history_set_replay(&s->hist, replay_recipe, s,
                           (uint64_t)s->srv->cfg.history_replay_ms * 1000000u);
+    df_history_set_reference(&s->hist, s->rest, NULL); /* an empty history: cannot fail */
 }
 
 /* Recharges the history's bytes after a change (it bounded itself against df_mem_room). */
@@ -190,7 +208,6 @@ int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const 
                             mesh->nv);
     }
     s->srv = srv;
-    history_set_replay(s);
     s->mem_bytes = est;
     s->hist_charged = state;
     history_recharge(s);
@@ -198,6 +215,7 @@ int df_session_create_as(df_server *srv, df_mesh *mesh, const char *name, const 
     memset(mesh, 0, sizeof *mesh);
     s->nv = s->mesh.nv;
     memcpy(s->rest, s->mesh.V, n * sizeof(double));
+    history_set_replay(s);
     memcpy(s->cur, s->mesh.V, n * sizeof(double));
     for (size_t i = 0; i < n; i++) s->basef[i] = (float)s->mesh.V[i];
     atomic_init(&s->version, 0);
@@ -494,14 +512,10 @@ void df_session_resync_record(df_session *s, uint64_t version, const df_frames *
 
 int df_session_history_reset(df_session *s, df_error *err)
 {
-    df_history h;
-    int rc = df_history_init(&h, s->cur, 3 * (size_t)s->nv, DF_SESSION_HISTORY_MAX, err);
-    if (rc != DF_OK) return rc;
-    h.dropped = s->hist.dropped; /* the session's count survives a reset */
-    h.replays = s->hist.replays; /* and its replay counters */
-    h.mismatches = s->hist.mismatches;
-    df_history_free(&s->hist);
-    s->hist = h;
+    (void)err;
+    /* in place (allocates nothing, so it cannot fail): the rest shape may just have changed
+     * under the anchor packed against it (reset-rest, restore) and must not be read again */
+    df_history_reset(&s->hist, s->cur); /* counters survive */
     history_set_replay(s);
     df_history_set_max_bytes(&s->hist, history_budget(s));
     history_recharge(s);

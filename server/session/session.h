@@ -211,11 +211,12 @@ int df_session_history_commit(df_session *s, df_error *err);
 
 /* Recomputes stroke recipe `r` (stroke_recipe.h) from `from` into `to` (3 nv doubles each) on
  * this session's mesh: a surface-aware recipe with the session's vertex adjacency (its surface
- * cache, built on first use) and the mesh as loaded. Call from the session's running job (or
- * at restore, before the loop runs). Errors: those of df_stroke_recipe_replay(_mesh). */
+ * cache, built on first use) and the mesh as loaded. `scratch`: 6 nv floats reused across
+ * calls, or NULL (allocated per call). Call from the session's running job (or at restore,
+ * before the loop runs). Errors: those of df_stroke_recipe_replay_mesh. */
 struct df_stroke_recipe;
 int df_session_replay_recipe(df_session *s, const struct df_stroke_recipe *r, const double *from,
-                             int threads, double *to, df_error *err);
+                             int threads, float *scratch, double *to, df_error *err);
 
 /* As df_session_history_commit, with the recipe `blob` (len bytes, stroke_recipe.h) that
  * should turn the history's current state into s->cur: replayed on the calling thread, a
@@ -247,8 +248,10 @@ int df_session_mem_charge(df_server *srv, df_mem_kind kind, uint64_t bytes, cons
 struct df_frames;
 void df_session_resync_record(df_session *s, uint64_t version, const struct df_frames *frames);
 
-/* Replaces the history by a fresh one holding s->cur (reset-rest clears undo/redo).
- * Errors: DF_ENOMEM (history unchanged). */
+/* Empties the history in place: s->cur its only state (reset-rest clears undo/redo), the rest
+ * shape s->rest its reference again (history.h: the anchor is packed against it; call this
+ * right after s->rest changes, before anything reads the history). Allocates nothing: always
+ * DF_OK (err unused, kept for the callers' error paths). Loop thread. */
 int df_session_history_reset(df_session *s, df_error *err);
 
 /* Copies the compute-state figures into s->seen. Loop thread, only while no job of s runs

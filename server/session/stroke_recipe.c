@@ -146,18 +146,26 @@ int df_stroke_recipe_replay_mesh(const df_stroke_recipe *r, const double *from, 
 {
     if (!r || !from || !to || nv <= 0 || (adj && adj->n_rows != nv))
         return df_error_set(err, DF_EINVAL, "stroke replay: bad arguments");
-    size_t n = 3 * (size_t)nv;
-    float *x0 = malloc(n * sizeof *x0), *d = malloc(n * sizeof *d);
-    if (!x0 || !d) {
-        free(x0);
-        free(d);
+    float *scratch = malloc(6 * (size_t)nv * sizeof *scratch);
+    if (!scratch)
         return df_error_set(err, DF_ENOMEM, "stroke replay: out of memory (%d vertices)", nv);
-    }
+    int rc = df_stroke_recipe_replay_with(r, from, nv, adj, rest, planar, threads, scratch, to,
+                                          err);
+    free(scratch);
+    return rc;
+}
+
+int df_stroke_recipe_replay_with(const df_stroke_recipe *r, const double *from, int32_t nv,
+                                 const df_mesh_sparse *adj, const double *rest, int planar,
+                                 int threads, float *scratch, double *to, df_error *err)
+{
+    if (!r || !from || !to || !scratch || nv <= 0 || (adj && adj->n_rows != nv))
+        return df_error_set(err, DF_EINVAL, "stroke replay: bad arguments");
+    size_t n = 3 * (size_t)nv;
+    float *x0 = scratch, *d = scratch + n;
     for (size_t i = 0; i < n; i++) x0[i] = (float)from[i];
     int rc = field(r, x0, nv, adj, rest, planar, threads, d, err);
     if (rc == DF_OK) df_stroke_motion(x0, d, from, to, n);
-    free(x0);
-    free(d);
     return rc;
 }
 

@@ -80,6 +80,13 @@ int32_t df_stroke_surface_src(const float *x0, int32_t nv, const double *c);
 int df_stroke_surface_mask(const df_kelvinlet_brush *b, const float *x0, int32_t nv,
                            const double *dist, int32_t src, float *d, df_error *err);
 
+/* df_stroke_recipe_replay_mesh with caller-provided scratch: `scratch` holds 6 * nv floats (x0
+ * and the field), reused across calls instead of two allocations per replay; adj and rest may
+ * be NULL for a recipe whose brush.surface is 0. Same results, same errors. */
+int df_stroke_recipe_replay_with(const df_stroke_recipe *r, const double *from, int32_t nv,
+                                 const df_mesh_sparse *adj, const double *rest, int planar,
+                                 int threads, float *scratch, double *to, df_error *err);
+
 /* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR2', i32 type,
  * dim, order, integrator, steps, mirror, moving, surface, f64 ratio, radius, nu, centre[3],
  * mirror_point[3], mirror_normal[3], strength, load[16], u32 n_pins, i32 pin_flags, then

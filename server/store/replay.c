@@ -123,7 +123,7 @@ static int materialize(ctx *c, df_error *err)
                  (unsigned long long)rec.base_version);
         return mismatch(c, c->p_version, c->p_row, why);
     }
-    rc = df_session_replay_recipe(c->s, &r, bs->pos, c->threads, c->tmp, &e);
+    rc = df_session_replay_recipe(c->s, &r, bs->pos, c->threads, NULL, c->tmp, &e);
     df_stroke_recipe_free(&r);
     if (rc == DF_ENOMEM) return df_error_set(err, rc, "%s", e.msg);
     if (rc != DF_OK) {

@@ -120,3 +120,36 @@ def test_a_cancelled_then_new_stroke_and_an_undo_during_a_stroke(make_daemon):
         assert positions(c, sid) == s1
         c.undo(sid)
         assert positions(c, sid) == s0
+
+
+def test_checkpoints_packed_against_the_rest_shape_across_a_reset_rest(make_daemon):
+    """The undo checkpoints are packed against the session's rest shape (history.h): with a
+    checkpoint at every stroke, undo/redo give back exactly the states GET_MESH returned, before
+    and after a reset-rest (which makes the current positions the rest shape and clears the
+    history), and the undo history holds less than full copies of its checkpoints would."""
+    d = make_daemon("history_replay_ms = 0\n")
+    with d.unix_client() as c:
+        nv = 30 * 30
+        sid = c.load_mesh(grid_obj(30, 30), fmt=".obj", name="packed").session_id
+        for phase in range(2):
+            shots = [positions(c, sid)]
+            for k in range(4):
+                c.stroke(sid, stroke_brush(k + 4 * phase))
+                shots.append(positions(c, sid))
+            assert len(set(shots)) == len(shots)
+            s = c.stats(sid)
+            assert s["history_recipe_steps"] == 4 and s["history_checkpoints"] >= 4, s
+            # the newest checkpoint packed: less than its full copy (24 bytes per vertex)
+            assert 0 < s["history_anchor_bytes"] < 24 * nv, s
+            assert s["history_anchor_bytes"] < s["history_undo_bytes"], s
+            for k in range(3, -1, -1):
+                c.undo(sid)
+                assert positions(c, sid) == shots[k], "phase %d undo to %d" % (phase, k)
+            for k in range(1, 5):
+                c.redo(sid)
+                assert positions(c, sid) == shots[k], "phase %d redo to %d" % (phase, k)
+            assert c.stats(sid)["history_replay_mismatches"] == 0
+            c.reset_rest(sid)                    # rest = current; undo/redo cleared
+            s = c.stats(sid)
+            assert s["undo_depth"] == 0 and s["redo_depth"] == 0, s
+            assert positions(c, sid) == shots[4]

@@ -38,14 +38,23 @@ static void fake_apply(const fake *f, const double *from, double *to)
         to[i] = from[i] + f->a * sin(3.0 * from[i] + 1.0);
 }
 
+static int g_scratch_allocs; /* scratch buffers the fake allocated (reused within a plan) */
+
 static int fake_replay(void *ctx, const uint8_t *blob, size_t len, const double *from,
-                       double *to, df_error *err)
+                       double *to, void **scratch, df_error *err)
 {
     (void)ctx;
+    if (!*scratch) { /* the history frees it after the plan */
+        if (!(*scratch = malloc(N * sizeof(double))))
+            return df_error_set(err, DF_ENOMEM, "fake recipe: out of memory");
+        g_scratch_allocs++;
+    }
+    if (!blob) return DF_OK; /* prepare only */
     if (len != sizeof(fake)) return df_error_set(err, DF_EFORMAT, "fake recipe: bad length");
     fake f;
     memcpy(&f, blob, sizeof f);
-    fake_apply(&f, from, to);
+    fake_apply(&f, from, *scratch);
+    memcpy(to, *scratch, N * sizeof *to);
     if (g_flip) to[3 * f.v0] += 1e-9;
     g_now += f.cost;
     g_calls++;
@@ -124,7 +133,9 @@ static void check(const df_history *h, const model *m)
 static void undo(df_history *h, model *m)
 {
     df_error e;
-    assert_non_null(df_history_undo(h, &e));
+    const double *r = df_history_undo(h, &e);
+    if (!r) print_error("undo at %d: %s\n", h->cur, e.msg);
+    assert_non_null(r);
     m->cur--;
     check(h, m);
 }
@@ -163,9 +174,10 @@ static void test_checkpoints_by_cost_and_undo_bound(void **state)
     assert_int_equal(df_history_steps_of(&h, DF_HISTORY_XOR), 0);
     /* undo all the way, each undo replaying at most 2 steps (the budget: 10 / 4) */
     while (m.cur > 0) {
-        int calls = g_calls;
+        int calls = g_calls, allocs = g_scratch_allocs;
         undo(&h, &m);
         assert_true(g_calls - calls <= 2);
+        assert_true(g_scratch_allocs - allocs <= 1); /* one scratch per plan, reused */
     }
     assert_int_equal(h.nck, 1); /* the anchor came down with the undos */
     /* redo all, one replay each, checkpoints taken again */
@@ -175,6 +187,8 @@ static void test_checkpoints_by_cost_and_undo_bound(void **state)
         assert_int_equal(g_calls - calls, 1);
     }
     assert_int_equal(h.nck, 5);
+    assert_non_null(h.anchor); /* no reference: the anchor is a full copy */
+    assert_null(h.apack);
     assert_true(df_history_undo_bytes(&h) < df_history_bytes(&h));
     assert_int_equal(df_history_bytes(&h) - df_history_undo_bytes(&h), N * sizeof(double));
     df_history_free(&h);
@@ -365,6 +379,178 @@ static void test_stale_plan_and_bad_arguments(void **state)
     df_history_free(&h);
 }
 
+/* The anchor packed against a reference (history.h): the same random mix of commits, undos,
+ * redos and drops as above, bit-exact against the model, with the anchor held packed. */
+static void test_reference_packed_against_model(void **state)
+{
+    (void)state;
+    static model m;
+    static double ref[N];
+    uint64_t seed = 11;
+    for (int budget = 0; budget <= 20; budget += 10) {
+        df_history h;
+        init(&h, &m, 9, (uint64_t)budget);
+        memcpy(ref, m.s[0], sizeof ref); /* the "rest shape": alive and unchanged */
+        df_error e;
+        assert_int_equal(df_history_set_reference(&h, ref, &e), DF_OK);
+        int packed = 0;
+        for (int it = 0; it < 400; it++) {
+            seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+            int op = (int)((seed >> 33) % 10);
+            if (op < 4) {
+                fake f = mk(it, 1 + (seed >> 40) % 7);
+                commit_recipe(&h, &m, &f);
+            } else if (op < 5) {
+                commit_xor(&h, &m, 0.001 * (it + 1));
+            } else if (op < 8) {
+                if (m.cur > 0) undo(&h, &m);
+            } else if (m.cur < m.count) {
+                redo(&h, &m);
+            }
+            check(&h, &m);
+            assert_true(h.count <= 8);
+            assert_true(!h.anchor || !h.apack);                 /* one form at a time */
+            assert_int_equal(h.nck > 0, h.anchor || h.apack);
+            packed += h.apack != NULL;
+            size_t a, l, st;
+            df_history_parts(&h, &a, &l, &st);
+            assert_int_equal(a + l + st, df_history_undo_bytes(&h));
+            if (h.apack) assert_int_equal(a, h.apack_len);
+        }
+        assert_true(packed > 100); /* mostly packed (a full copy only after a drop, briefly) */
+        assert_int_equal(h.mismatches, 0);
+        /* every state still reachable, the way down and up again */
+        while (m.cur > 0) undo(&h, &m);
+        while (m.cur < m.count) redo(&h, &m);
+        df_history_free(&h);
+    }
+}
+
+/* A packed anchor is a fraction of a full copy when the states stay near the reference, and
+ * switching the reference off turns it back into a full copy with nothing else changed. */
+static void test_reference_bytes_and_switch(void **state)
+{
+    (void)state;
+    static model m;
+    static double ref[N];
+    df_history h;
+    init(&h, &m, 64, 5);
+    memcpy(ref, m.s[0], sizeof ref);
+    df_error e;
+    assert_int_equal(df_history_set_reference(&h, ref, &e), DF_OK);
+    for (int k = 0; k < 12; k++) {
+        fake f = mk(k, 3);
+        commit_recipe(&h, &m, &f);
+    }
+    assert_true(h.nck >= 3);
+    assert_non_null(h.apack);
+    assert_null(h.anchor);
+    size_t a;
+    df_history_parts(&h, &a, NULL, NULL);
+    assert_true(a < N * sizeof(double)); /* smaller than a full copy */
+    assert_int_equal(df_history_set_reference(&h, NULL, &e), DF_OK);
+    assert_null(h.apack);
+    assert_non_null(h.anchor);
+    assert_memory_equal(h.anchor, m.s[h.ck[h.nck - 1]], sizeof m.s[0]);
+    df_history_parts(&h, &a, NULL, NULL);
+    assert_int_equal(a, N * sizeof(double));
+    while (m.cur > 0) undo(&h, &m);
+    /* the reference back: the next plan packs the full-copy anchor (repack) */
+    assert_int_equal(df_history_set_reference(&h, ref, &e), DF_OK);
+    while (m.cur < m.count) redo(&h, &m);
+    assert_non_null(h.apack);
+    assert_null(h.anchor);
+    /* a reset forgets everything (no allocation) and keeps the counters */
+    uint64_t replays = h.replays;
+    df_history_reset(&h, m.s[2]);
+    assert_int_equal(df_history_can_undo(&h), 0);
+    assert_int_equal(df_history_can_redo(&h), 0);
+    assert_int_equal(h.nck, 0);
+    assert_int_equal(df_history_bytes(&h), N * sizeof(double));
+    assert_memory_equal(h.state, m.s[2], sizeof m.s[0]);
+    assert_int_equal(h.replays, replays);
+    df_history_free(&h);
+}
+
+/* A packed anchor that no longer decodes to the state it recorded (corrupt bytes, or the
+ * reference changed under it) is detected: the undo is refused with nothing changed, the
+ * repair drops what became unreachable; a commit due for a checkpoint drops it at install. */
+static void test_corrupt_packed_anchor_detected(void **state)
+{
+    (void)state;
+    static model m;
+    static double ref[N];
+    for (int how = 0; how < 2; how++) {
+        df_history h;
+        init(&h, &m, 64, 5);
+        memcpy(ref, m.s[0], sizeof ref);
+        df_error e;
+        assert_int_equal(df_history_set_reference(&h, ref, &e), DF_OK);
+        for (int k = 0; k < 9; k++) {
+            fake f = mk(k, 3); /* 3 + 3 > 5: a checkpoint every second step */
+            commit_recipe(&h, &m, &f);
+        }
+        undo(&h, &m); /* below the anchor: the anchor moved down, packed again */
+        assert_non_null(h.apack);
+        assert_true(h.steps[h.cur - 1].kind == DF_HISTORY_RECIPE);
+        if (how == 0) h.apack[h.apack_len / 2] ^= 0x5a; /* corrupt bytes */
+        else ref[7] += 1e-3;                            /* the reference changed */
+        double before[N], out[N];
+        memcpy(before, h.state, sizeof before);
+        size_t bytes = df_history_bytes(&h);
+        int nck = h.nck, redo_n = df_history_can_redo(&h);
+        df_history_plan p;
+        assert_int_equal(df_history_plan_move(&h, -1, out, &p, &e), DF_EINTERNAL);
+        assert_non_null(strstr(e.msg, "checkpoint"));
+        assert_true(p.mismatch && !p.valid);
+        assert_int_equal(p.bad_step, -1);
+        assert_int_equal(df_history_install(&h, &p, out, &e), DF_ESTATE);
+        assert_memory_equal(h.state, before, sizeof before); /* nothing changed */
+        assert_int_equal(df_history_bytes(&h), bytes);
+        assert_int_equal(h.nck, nck);
+        /* the repair: every step below the current state is unreachable and dropped */
+        int dropped = df_history_repair(&h, &p);
+        assert_int_equal(dropped, m.cur);
+        assert_int_equal(h.mismatches, 1);
+        assert_int_equal(df_history_can_undo(&h), 0);
+        assert_int_equal(df_history_can_redo(&h), redo_n);
+        memmove(m.s[0], m.s[m.cur], (size_t)(m.count - m.cur + 1) * sizeof m.s[0]);
+        m.count -= m.cur;
+        m.cur = 0;
+        check(&h, &m);
+        df_history_plan_free(&p);
+        if (how == 1) memcpy(ref, m.s[0], sizeof ref); /* the caller sets it right ... */
+        if (how == 1) assert_int_equal(df_history_set_reference(&h, ref, &e), DF_OK);
+        while (m.cur < m.count) redo(&h, &m); /* the redo tail still replays */
+        while (m.cur > 0) undo(&h, &m);
+        while (m.cur < m.count) redo(&h, &m);
+        /* a commit due for a checkpoint finds the anchor corrupt: committed, and the install
+         * drops every step below the new state (nothing below it is reachable) */
+        for (int k = 20; k < 23 || h.ck[h.nck - 1] == h.cur; k++) { /* one step past it */
+            fake f = mk(k, 3);
+            commit_recipe(&h, &m, &f);
+        }
+        assert_non_null(h.apack);
+        h.apack[h.apack_len / 2] ^= 0x5a;
+        fake f = mk(30, 3);
+        double next[N];
+        fake_apply(&f, h.state, next);
+        assert_int_equal(df_history_plan_commit(&h, next, (const uint8_t *)&f, sizeof f, &p, &e),
+                         DF_OK);
+        assert_true(p.bad_anchor && !p.new_ck);
+        assert_int_equal(df_history_install(&h, &p, next, &e), DF_OK);
+        assert_int_equal(h.mismatches, 2);
+        assert_int_equal(df_history_can_undo(&h), 0);
+        assert_memory_equal(h.state, next, sizeof next);
+        model_init(&m, next);
+        fake g = mk(31, 3);
+        commit_recipe(&h, &m, &g); /* and it goes on from there */
+        undo(&h, &m);
+        redo(&h, &m);
+        df_history_free(&h);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -374,6 +560,9 @@ int main(void)
         cmocka_unit_test(test_truncation_drops_the_redo_tail),
         cmocka_unit_test(test_mismatch_refused_and_repaired),
         cmocka_unit_test(test_stale_plan_and_bad_arguments),
+        cmocka_unit_test(test_reference_packed_against_model),
+        cmocka_unit_test(test_reference_bytes_and_switch),
+        cmocka_unit_test(test_corrupt_packed_anchor_detected),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
