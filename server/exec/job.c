@@ -10,6 +10,7 @@
 #include "server/net/conn.h"
 #include "server/log.h"
 #include "server/net/reply.h"
+#include "server/session/commit.h"
 
 df_job *df_job_new(df_server *srv, df_session *s, df_conn *c, uint16_t type, uint64_t req_id,
                    df_job_fn work, df_job_fn done)
@@ -300,11 +301,19 @@ int df_job_failed(df_job *j)
 }
 
 /* Ends (commits) a departed client's stroke. */
+/* Ends the stroke of a disconnected client as BRUSH_END would: one undo step, committed through
+ * df_session_commit so the store journals it (durable like any step; nobody is answered). */
 static void end_stroke(df_session *s, uint64_t conn_id)
 {
-    if (df_session_history_commit(s, NULL) != DF_OK)
-        df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo",
-               (unsigned long long)s->id);
+    df_error err = {0};
+    df_change c;
+    df_change_init(&c, NULL, &err);
+    c.hist = DF_HIST_COMMIT;
+    c.drop_stroke = 1; /* with no request the commit leaves the dropping to us (below) */
+    if (df_session_commit(s, &c) != DF_OK)
+        df_log(DF_LOG_WARN, "session %llu: could not record a stroke for undo: %s",
+               (unsigned long long)s->id, err.msg);
+    df_change_clear(s->srv, &c);
     df_session_drop_stroke(s, conn_id);
     if (s->srv->hid_ops && s->srv->hid_ops->strokes_changed) /* force feedback stops */
         s->srv->hid_ops->strokes_changed(s->srv, s);

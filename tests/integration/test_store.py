@@ -291,6 +291,40 @@ def test_a_stroke_open_at_the_kill_ends_at_restart_as_one_undo_step(tmp_path):
         check_stopped(d, d.stop())
 
 
+def test_a_stroke_ended_by_a_disconnect_is_its_own_undo_step_after_restart(tmp_path):
+    """A client that disconnects mid-stroke has the stroke ended as an undo step (as BRUSH_END);
+    that step is journaled, so after kill -9 the history keeps it apart from the next stroke:
+    two undos give back, bit for bit, the state between the strokes and the one before both."""
+    store = str(tmp_path / "gone.db")
+    d = start(tmp_path, store, 1)
+    with d.unix_client() as c:
+        sid = c.load_mesh(data=grid_obj(8, 8), fmt=".obj", name="gone").session_id
+        X = c.get_mesh(sid).positions
+        before = state(c, sid)
+        with d.unix_client() as gone:
+            gone.brush_begin(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.1),
+                                        radius=0.5))
+            gone.brush_update(sid, move=(0, 0, 0.15))
+        c.get_mesh(sid)                      # a session job: the disconnect's end has run
+        between = state(c, sid)
+        assert between[1] != before[1]
+        c.stroke(sid, Brush(type="grab", center=X[9:12], move=(0.1, 0, 0), radius=0.5))
+        after = state(c, sid)
+        live_depth = c.list_sessions()[0].undo_depth
+    kill9(d)
+    d = start(tmp_path, store, 2)
+    try:
+        with d.unix_client() as c:
+            assert state(c, sid) == after
+            assert c.list_sessions()[0].undo_depth == live_depth == 2
+            c.undo(sid)
+            assert state(c, sid)[1:] == between[1:]
+            c.undo(sid)
+            assert state(c, sid)[1:] == before[1:]
+    finally:
+        check_stopped(d, d.stop())
+
+
 def _packed_rows(store):
     """The change rows whose delta has the packed layout (codec.h: u32 0xFFFFFFFF, i32 nv,
     u32 count, a zstd frame), as (row id, blob)."""
