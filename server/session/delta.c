@@ -1,44 +1,11 @@
 /* delta.c — the packed / raw position delta codec (see delta.h). Moved here from
  * server/store/codec.c unchanged, so the undo history (session/) and the store share it. */
 #include "server/session/delta.h"
+#include "server/session/blob_io.h"
 
 #include <stdlib.h>
 #include <string.h>
 #include <zstd.h>
-
-/* ---- a bounded writer / reader ---- */
-typedef struct wbuf {
-    uint8_t *p;
-    size_t n;
-} wbuf;
-static void put(wbuf *w, const void *v, size_t n)
-{
-    memcpy(w->p + w->n, v, n);
-    w->n += n;
-}
-static void put_i32(wbuf *w, int32_t v) { put(w, &v, 4); }
-
-typedef struct rbuf {
-    const uint8_t *p;
-    size_t n, at;
-    int bad;
-} rbuf;
-static void get(rbuf *r, void *v, size_t n)
-{
-    if (r->bad || n > r->n - r->at) {
-        r->bad = 1;
-        memset(v, 0, n);
-        return;
-    }
-    memcpy(v, r->p + r->at, n);
-    r->at += n;
-}
-static int32_t get_i32(rbuf *r)
-{
-    int32_t v;
-    get(r, &v, 4);
-    return v;
-}
 
 /* ---- delta ---- */
 /* The raw (v1) layout's size for `count` changed vertices of nv. */
@@ -60,19 +27,19 @@ static int encode_raw(const double *old, const double *now, int32_t nv, uint32_t
 {
     int dense = count == (uint32_t)nv;
     size_t n = raw_size(count, nv);
-    wbuf w = {malloc(n ? n : 1), 0};
+    df_wbuf w = {malloc(n ? n : 1), 0};
     if (!w.p) return df_error_set(err, DF_ENOMEM, "store: out of memory encoding a change");
-    put(&w, &count, 4);
-    put_i32(&w, nv);
+    df_wput(&w, &count, 4);
+    df_wput_i32(&w, nv);
     if (!dense)
         for (int32_t i = 0; i < nv; i++)
             if (memcmp(old + 3 * (size_t)i, now + 3 * (size_t)i, 3 * sizeof(double)) != 0) {
                 uint32_t u = (uint32_t)i;
-                put(&w, &u, 4);
+                df_wput(&w, &u, 4);
             }
     for (int32_t i = 0; i < nv; i++)
         if (dense || memcmp(old + 3 * (size_t)i, now + 3 * (size_t)i, 3 * sizeof(double)) != 0)
-            put(&w, now + 3 * (size_t)i, 3 * sizeof(double));
+            df_wput(&w, now + 3 * (size_t)i, 3 * sizeof(double));
     *out = w.p;
     *len = w.n;
     return DF_OK;
@@ -216,12 +183,12 @@ static int apply_packed(const uint8_t *b, size_t len, double *pos, int32_t nv,
 int df_codec_delta_apply(const uint8_t *b, size_t len, double *pos, int32_t nv,
                          uint32_t *changed, df_error *err)
 {
-    rbuf r = {b, len, 0, 0};
+    df_rbuf r = {b, len, 0, 0};
     uint32_t count;
-    get(&r, &count, 4);
+    df_rget(&r, &count, 4);
     if (!r.bad && count == DF_CODEC_PACKED_MARKER)
         return apply_packed(b, len, pos, nv, changed, err);
-    int32_t bnv = get_i32(&r);
+    int32_t bnv = df_rget_i32(&r);
     if (r.bad || bnv != nv || count > (uint32_t)nv)
         return df_error_set(err, DF_EFORMAT, "store: change delta of %d vertices (count %u) on "
                             "a %d-vertex session", bnv, count, nv);

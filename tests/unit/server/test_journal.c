@@ -20,48 +20,7 @@
 #include "server/store/codec.h"
 #include "server/store/restore.h"
 #include "server/store/store.h"
-
-static char g_dir[64];
-
-static int setup(void **state)
-{
-    (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/df-journal-XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
-    return system(cmd) == 0 ? 0 : -1;
-}
-
-static void server_open(df_server *srv, const char *file)
-{
-    memset(srv, 0, sizeof *srv);
-    df_config_defaults(&srv->cfg, NULL);
-    snprintf(srv->cfg.store_path, sizeof srv->cfg.store_path, "%s/%s", g_dir, file);
-    df_error e;
-    if (df_store_start(srv, &e) != DF_OK) fail_msg("df_store_start: %s", e.msg);
-    assert_non_null(srv->store_ops);
-}
-
-static void server_close(df_server *srv)
-{
-    while (srv->sessions) df_session_destroy(srv->sessions);
-    df_store_stop(srv);
-}
-
-static int64_t query(df_server *srv, const char *sql)
-{
-    sqlite3_stmt *q;
-    assert_int_equal(sqlite3_prepare_v2(df_store_db(srv->store), sql, -1, &q, NULL), SQLITE_OK);
-    int64_t v = sqlite3_step(q) == SQLITE_ROW ? sqlite3_column_int64(q, 0) : -1;
-    sqlite3_finalize(q);
-    return v;
-}
+#include "tests/unit/server/store_rig.h"
 
 /* Commits `pos` (owned copy) as version `version` with the given extras; returns the rc. */
 static int commit(df_session *s, const double *pos, uint64_t version, int rest_from_cur,
@@ -414,5 +373,5 @@ int main(void)
         cmocka_unit_test(test_bad_rows_refuse_start),
         cmocka_unit_test(test_codecs),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, rig_setup, rig_teardown);
 }

@@ -24,50 +24,10 @@
 #include "server/store/record.h"
 #include "server/store/restore.h"
 #include "server/store/store.h"
+#include "tests/unit/server/store_rig.h"
 
 #define G 20 /* grid side: 400 vertices */
 #define CONN 42
-
-static char g_dir[64];
-
-static int setup(void **state)
-{
-    (void)state;
-    snprintf(g_dir, sizeof g_dir, "/tmp/df-srecipe-XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
-    return system(cmd) == 0 ? 0 : -1;
-}
-
-static void server_open(df_server *srv, const char *file)
-{
-    memset(srv, 0, sizeof *srv);
-    df_config_defaults(&srv->cfg, NULL);
-    snprintf(srv->cfg.store_path, sizeof srv->cfg.store_path, "%s/%s", g_dir, file);
-    df_error e;
-    if (df_store_start(srv, &e) != DF_OK) fail_msg("df_store_start: %s", e.msg);
-}
-
-static void server_close(df_server *srv)
-{
-    while (srv->sessions) df_session_destroy(srv->sessions);
-    df_store_stop(srv);
-}
-
-static int64_t query(df_server *srv, const char *sql)
-{
-    sqlite3_stmt *q;
-    assert_int_equal(sqlite3_prepare_v2(df_store_db(srv->store), sql, -1, &q, NULL), SQLITE_OK);
-    int64_t v = sqlite3_step(q) == SQLITE_ROW ? sqlite3_column_int64(q, 0) : -1;
-    sqlite3_finalize(q);
-    return v;
-}
 
 static df_session *grid_session(df_server *srv, const char *name)
 {
@@ -465,5 +425,5 @@ int main(void)
         cmocka_unit_test(test_mismatch_stops_at_the_last_verified),
         cmocka_unit_test(test_snapshot_by_replay_cost),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, rig_setup, rig_teardown);
 }
