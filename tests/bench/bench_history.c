@@ -31,6 +31,7 @@
 #include "server/config.h" /* DF_CONFIG_DEFAULT_HISTORY_REPLAY_MS */
 #include "server/session/history.h"
 #include "server/session/stroke_recipe.h"
+#include "tests/bench/bench_util.h"
 
 #define STROKES 200
 #define TARGET_X_POS 2.0
@@ -39,19 +40,6 @@ typedef struct ctx {
     int32_t nv;
     int threads;
 } ctx;
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static double rnd(uint64_t *s)
-{
-    *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
-    return (double)(*s >> 11) / 9007199254740992.0;
-}
 
 static int replay(void *arg, const uint8_t *blob, size_t len, const double *from, double *to,
                   void **scratch, df_error *err)
@@ -87,11 +75,11 @@ static double replay_ms(const df_stroke_recipe *r, const double *from, int32_t n
     double t[5];
     df_error e;
     for (int k = 0; k < 5; k++) {
-        double t0 = now();
+        double t0 = bench_now();
         int rc = scratch ? df_stroke_recipe_replay_with(r, from, nv, NULL, NULL, 0, threads,
                                                         scratch, to, &e)
                          : df_stroke_recipe_replay(r, from, nv, 0, threads, to, &e);
-        t[k] = rc == DF_OK ? 1e3 * (now() - t0) : -1;
+        t[k] = rc == DF_OK ? 1e3 * (bench_now() - t0) : -1;
     }
     qsort(t, 5, sizeof *t, cmp_double);
     return t[2];
@@ -131,12 +119,12 @@ static int run(int n, int order, int budget_ms, int undos, int threads, int use_
         r.brush.order = order;
         r.brush.radius = 0.02;
         r.brush.nu = 0.5;
-        r.brush.centre[0] = 0.1 + 0.8 * rnd(&seed);
-        r.brush.centre[1] = 0.1 + 0.8 * rnd(&seed);
+        r.brush.centre[0] = 0.1 + 0.8 * bench_rnd(&seed);
+        r.brush.centre[1] = 0.1 + 0.8 * bench_rnd(&seed);
         r.load[2] = 0.01;
         uint8_t *blob;
         size_t len;
-        double t0 = now();
+        double t0 = bench_now();
         if (df_stroke_recipe_replay_with(&r, cur, (int32_t)nv, NULL, NULL, 0, threads, scratch,
                                          pos, &e) !=
                 DF_OK ||
@@ -146,7 +134,7 @@ static int run(int n, int order, int budget_ms, int undos, int threads, int use_
             rep_with = replay_ms(&r, cur, (int32_t)nv, threads, scratch, out);
             rep_alloc = replay_ms(&r, cur, (int32_t)nv, threads, NULL, out);
         }
-        double t1 = now();
+        double t1 = bench_now();
         size_t changed = 0;
         for (size_t v = 0; v < nv; v++) changed += memcmp(cur + 3 * v, pos + 3 * v, 24) != 0;
         xor_bytes += changed * 28.0 < 24.0 * (double)nv ? changed * 28.0 : 24.0 * (double)nv;
@@ -155,10 +143,10 @@ static int run(int n, int order, int budget_ms, int undos, int threads, int use_
             return fprintf(stderr, "plan: %s\n", e.msg), 1;
         if (p.step.kind != DF_HISTORY_RECIPE)
             return fprintf(stderr, "stroke %d: the recipe did not replay bit for bit\n", s), 1;
-        double t2 = now();
+        double t2 = bench_now();
         if (df_history_install(&h, &p, pos, &e) != DF_OK)
             return fprintf(stderr, "install: %s\n", e.msg), 1;
-        t_install += now() - t2;
+        t_install += bench_now() - t2;
         t_plan += t2 - t1;
         if (t2 - t1 > plan_worst) plan_worst = t2 - t1;
         t_stroke += t1 - t0;
@@ -194,10 +182,10 @@ static int run(int n, int order, int budget_ms, int undos, int threads, int use_
     if (!lat) return fprintf(stderr, "out of memory\n"), 1;
     for (int u = 0; u < undos; u++) {
         df_history_plan p;
-        double t0 = now();
+        double t0 = bench_now();
         if (df_history_plan_move(&h, -1, out, &p, &e) != DF_OK)
             return fprintf(stderr, "undo: %s\n", e.msg), 1;
-        lat[u] = 1e3 * (now() - t0);
+        lat[u] = 1e3 * (bench_now() - t0);
         if (df_history_install(&h, &p, out, &e) != DF_OK)
             return fprintf(stderr, "undo install: %s\n", e.msg), 1;
         if (df_positions_checksum(h.state, nd) != sums[h.cur])

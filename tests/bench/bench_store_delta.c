@@ -36,24 +36,12 @@
 #include "server/store/codec.h"
 #include "server/store/restore.h"
 #include "server/store/store.h"
+#include "tests/bench/bench_util.h"
 
 #define STROKES 200
 #define UPDATES 4
 #define TARGET_X_POS 2.0
 #define CONN 7
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static double rnd(uint64_t *s)
-{
-    *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
-    return (double)(*s >> 11) / 9007199254740992.0;
-}
 
 static int cmp_d(const void *a, const void *b)
 {
@@ -119,11 +107,11 @@ static int publish(df_session *s, df_stroke **st, const df_stroke_recipe *r, dou
     c.pos = malloc(n * sizeof(double));
     c.uf = malloc(n * sizeof(float));
     if (!c.pos || !c.uf) return fprintf(stderr, "oom\n"), 1;
-    double t0 = now();
+    double t0 = bench_now();
     int threads = s->srv->cfg.threads;
     if (df_stroke_recipe_replay(r, x->base, s->nv, 0, threads, c.pos, &e) != DF_OK)
         return fprintf(stderr, "stroke: %s\n", e.msg), 1;
-    double t1 = now();
+    double t1 = bench_now();
     for (size_t i = 0; i < n; i++) c.uf[i] = (float)(c.pos[i] - s->mesh.V[i]);
     uint64_t ns = (uint64_t)((t1 - t0) * 1e9);
     if (!*st) {
@@ -140,9 +128,9 @@ static int publish(df_session *s, df_stroke **st, const df_stroke_recipe *r, dou
     c.recipe_strength = r->strength;
     memcpy(c.recipe_load, r->load, sizeof c.recipe_load);
     c.recipe_replayable = 1;
-    double t2 = now();
+    double t2 = bench_now();
     int rc = df_session_commit(s, &c);
-    *commit_s = now() - t2;
+    *commit_s = bench_now() - t2;
     *field_s = t1 - t0;
     df_change_clear(s->srv, &c);
     if (rc != DF_OK) return fprintf(stderr, "commit: %s\n", e.msg), 1;
@@ -227,8 +215,8 @@ static int run(int n, int order, const char *dir, uint64_t budget_ns)
         r.brush.order = order;
         r.brush.radius = 0.02;
         r.brush.nu = 0.5;
-        r.brush.centre[0] = 0.1 + 0.8 * rnd(&seed);
-        r.brush.centre[1] = 0.1 + 0.8 * rnd(&seed);
+        r.brush.centre[0] = 0.1 + 0.8 * bench_rnd(&seed);
+        r.brush.centre[1] = 0.1 + 0.8 * bench_rnd(&seed);
         r.strength = 1.0;
         memcpy(before, s->cur, nd * sizeof(double));
         df_stroke *st = NULL;
@@ -260,16 +248,16 @@ static int run(int n, int order, const char *dir, uint64_t budget_ns)
     df_store_stop(&srv);
     double mb = file_mb(srv.cfg.store_path);
 
-    double t0 = now();
+    double t0 = bench_now();
     df_store *check;
     if (df_store_open(srv.cfg.store_path, DF_DURABILITY_FULL, 0, 0, &check, NULL, &e) != DF_OK)
         return fprintf(stderr, "reopen: %s\n", e.msg), 1;
     df_store_close(check);
-    double t1 = now();
+    double t1 = bench_now();
     memset(&srv2, 0, sizeof srv2);
     srv2.cfg = srv.cfg;
     if (df_store_start(&srv2, &e) != DF_OK) return fprintf(stderr, "restore: %s\n", e.msg), 1;
-    double t2 = now();
+    double t2 = bench_now();
     df_session *r2 = df_session_find(&srv2, id);
     int same = r2 && memcmp(r2->cur, before, nd * sizeof(double)) == 0;
     int hrec = r2 ? df_history_steps_of(&r2->hist, DF_HISTORY_RECIPE) : 0;
