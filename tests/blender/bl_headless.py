@@ -320,6 +320,82 @@ def case_errors():
     bc.write_out(A.out, reports="ok")
 
 
+class ProgressRecorder:
+    """Stands in for progress.WM (the add-on's window-manager hook): records every call."""
+
+    def __init__(self):
+        self.calls = []
+
+    def begin(self, lo, hi):
+        self.calls.append(("begin", lo, hi))
+
+    def update(self, v):
+        self.calls.append(("update", v))
+
+    def end(self):
+        self.calls.append(("end",))
+
+
+def big_grid_object(n):
+    """An n x n vertex grid (2 (n-1)^2 triangles) built with numpy, wavy in z."""
+    i, j = np.meshgrid(np.arange(n, dtype=np.float32), np.arange(n, dtype=np.float32))
+    co = np.stack([i.ravel() / (n - 1), j.ravel() / (n - 1),
+                   0.05 * np.sin(7 * i.ravel() / n) * np.cos(5 * j.ravel() / n)], axis=1)
+    a = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel().astype(np.uint32)
+    tri = np.stack([a, a + 1, a + n + 1, a, a + n + 1, a + n], axis=1).reshape(-1, 3)
+    mesh = bpy.data.meshes.new("big")
+    mesh.vertices.add(n * n)
+    mesh.vertices.foreach_set("co", co.astype(np.float32).ravel())
+    mesh.loops.add(3 * len(tri))
+    mesh.loops.foreach_set("vertex_index", tri.ravel())
+    mesh.polygons.add(len(tri))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tri), 3, dtype=np.uint32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(tri), 3, dtype=np.uint32))
+    mesh.update()
+    obj = bpy.data.objects.new("big", mesh)
+    bpy.context.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def _check_progress(calls, what):
+    """begin once first, end once last, updates strictly increasing in 0..100 ending at 100."""
+    assert calls and calls[0][0] == "begin" and calls[-1] == ("end",), (what, calls)
+    assert [c[0] for c in calls].count("begin") == 1, (what, calls)
+    assert [c[0] for c in calls].count("end") == 1, (what, calls)
+    ups = [c[1] for c in calls if c[0] == "update"]
+    assert len(ups) >= 2, (what, calls)
+    assert all(b > a for a, b in zip(ups, ups[1:])), (what, ups)
+    assert 0 <= ups[0] and ups[-1] == 100, (what, ups)
+
+
+def case_progress():
+    """Share of a 300 x 300 grid (~5 MB PLY): Blender's progress indicator (through the
+    add-on's hook progress.WM) follows the upload and parse WORK_PROGRESS events; handle set
+    and move follow factorize / solve."""
+    mod = bc.install(A.zip)
+    rec = ProgressRecorder()
+    mod.progress.WM = rec
+    bpy.ops.object.select_all(action="DESELECT")
+    obj = big_grid_object(300)
+    bpy.ops.deformd.connect(address=ADDR)
+    bpy.ops.deformd.share()
+    sid = int(obj["deformd_session"])
+    _check_progress(rec.calls, "share")
+    c2 = bc.client(mod, A.socket)
+    assert np.array_equal(bc.daemon_positions(c2, sid), bc.positions(obj))
+    sel = np.zeros(len(obj.data.vertices), dtype=bool)
+    sel[[0, 299, 45150]] = True
+    obj.data.vertices.foreach_set("select", sel)
+    rec.calls = []
+    bpy.ops.deformd.handles_set()
+    _check_progress(rec.calls, "handles_set")
+    rec.calls = []
+    bpy.ops.deformd.handles_move(offset=(0.0, 0.0, 0.1), max_iters=30)
+    _check_progress([c for c in rec.calls], "handles_move")
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+
+
 CASES = {n[len("case_"):]: f for n, f in globals().items() if n.startswith("case_")}
 if A.case not in CASES:
     raise SystemExit("unknown case %r (known: %s)" % (A.case, ", ".join(sorted(CASES))))
