@@ -396,6 +396,47 @@ def case_progress():
     assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
 
 
+def case_knob():
+    """The daemon replays a PowerMate recording (hid_replay, speed 0) onto the shared session:
+    every BRUSH_STATE the knob produces lands in the panel's values (checked after each one the
+    add-on shows), and once the recording ended (the device UNPLUGGED) the panel holds the
+    daemon's BRUSH_STATE_GET."""
+    mod = bc.install(A.zip)
+    dc = mod.deformd_client
+    shown = []
+    real = mod.props.set_from_state
+
+    def watch(wm_props, st):
+        real(wm_props, st)
+        if bc.state(mod).brush_shown != (st.session_id, st.seq):
+            return                                  # older than what the panel shows
+        shown.append((st.origin, st.seq, st.radius, wm_props.brush_radius, st.nu,
+                      wm_props.brush_nu, st.falloff, wm_props.brush_falloff))
+    mod.props.set_from_state = watch                # sync and operators call it through props
+    obj, sid = _shared(mod)                         # the first subscribe starts the replay
+    c2 = bc.client(mod, A.socket)
+    wm = bpy.context.window_manager.deformd
+    st = bc.state(mod)
+    while True:
+        devs = [d for d in c2.devices_list() if d.dev_class]
+        final = c2.brush_state_get(sid)
+        if devs and all(d.state == dc.DevState.UNPLUGGED for d in devs) and \
+                st.brush_shown == (sid, final.seq):
+            break
+        bc.wait_readable(st.client, "knob brush states / the device's end")
+        bpy.ops.deformd.sync()
+    assert final.origin == dc.Origin.DEVICE and final.seq > 1, final
+    assert wm.brush_radius == np.float32(final.radius)
+    assert wm.brush_nu == np.float32(final.nu) and wm.brush_falloff == final.falloff
+    knob = [x for x in shown if x[0] == dc.Origin.DEVICE]
+    assert len({x[2] for x in knob}) >= 2, knob            # the panel followed several turns
+    for origin, seq, r, pr, nu, pnu, f, pf in shown:
+        assert pr == np.float32(r) and pnu == np.float32(nu) and pf == f, (seq, r, pr)
+    seqs = [x[1] for x in shown]
+    assert seqs == sorted(seqs), seqs
+    assert st.last_changer == final.origin_name
+
+
 CASES = {n[len("case_"):]: f for n, f in globals().items() if n.startswith("case_")}
 if A.case not in CASES:
     raise SystemExit("unknown case %r (known: %s)" % (A.case, ", ".join(sorted(CASES))))

@@ -63,6 +63,8 @@ class State:
         self.subscribers = 0                   # of current_sid, from the last listing
         self.last_changer = ""                 # origin name of the last brush-state change
         self.applying_remote = False           # panel props being set from an event
+        self.brush_shown = (0, 0)              # (session, seq) of the brush state in the panel
+        self.brush_states_shown = 0            # brush states (events, replies) put in the panel
         self.ticks = 0                         # timer polls run
         self.versions_applied = 0
         self.resyncs = 0                       # snapshots taken after a gap
