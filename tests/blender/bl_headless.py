@@ -437,6 +437,49 @@ def case_knob():
     assert st.last_changer == final.origin_name
 
 
+def _reconnect(expect):
+    """Share, stroke; disconnect; another client strokes twice; reconnect: the object is the
+    daemon's GET_MESH bit for bit and the add-on says how it resynced (`expect`: "replay" when
+    the daemon still keeps the missed versions, "snapshot" when it keeps none)."""
+    mod = bc.install(A.zip)
+    obj, sid = _shared(mod)
+    c2 = bc.client(mod, A.socket)
+    base = bc.positions(obj).copy()
+    bpy.ops.deformd.stroke(brush="grab", center=tuple(float(v) for v in base[200]),
+                           move=(0.0, 0.0, 0.1), radius=0.4)
+    st = bc.state(mod)
+    held_version = st.mirrors[sid].version
+    bpy.ops.deformd.disconnect()
+    kept = bc.positions(obj).copy()
+    for k in range(2):
+        c2.stroke(sid, mod.deformd_client.Brush(
+            type="grab", center=tuple(float(v) for v in base[300 + 40 * k]),
+            move=(0.05, 0.0, -0.1), radius=0.5))
+    assert c2.get_mesh(sid).version > held_version
+    bpy.ops.deformd.connect(address=ADDR)
+    got = bc.positions(obj)
+    assert np.array_equal(got.view(np.uint32), bc.daemon_positions(c2, sid).view(np.uint32))
+    assert not np.array_equal(got, kept)
+    assert st.mirrors[sid].version == c2.get_mesh(sid).version
+    assert (st.resumed_replay, st.resumed_snapshot) == \
+        ((1, 0) if expect == "replay" else (0, 1)), (st.resumed_replay, st.resumed_snapshot)
+    # live again: the next stroke by the other client arrives through the timer's code
+    ack = c2.stroke(sid, mod.deformd_client.Brush(
+        type="grab", center=tuple(float(v) for v in base[100]), move=(0.0, 0.1, 0.0),
+        radius=0.3))
+    bc.sync_until(mod, sid, ack.version)
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+    assert st.resyncs == 0                       # no gap after the resync
+
+
+def case_reconnect_replay():
+    _reconnect("replay")
+
+
+def case_reconnect_snapshot():
+    _reconnect("snapshot")
+
+
 CASES = {n[len("case_"):]: f for n, f in globals().items() if n.startswith("case_")}
 if A.case not in CASES:
     raise SystemExit("unknown case %r (known: %s)" % (A.case, ", ".join(sorted(CASES))))

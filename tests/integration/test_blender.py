@@ -79,6 +79,15 @@ def test_blender_knob_drives_the_panel(tmp_path, make_daemon):
     headless(tmp_path, "knob", d)
 
 
+@pytest.mark.parametrize("case,config", [("reconnect_replay", ""),
+                                         ("reconnect_snapshot", "resync_ring_mb = 0\n")])
+def test_blender_reconnect_resync(tmp_path, make_daemon, case, config):
+    """Reconnect after another client's strokes: SUBSCRIBE from_version replays what the object
+    missed when the daemon keeps it (resync ring), a snapshot when it keeps nothing (ring 0);
+    either way the object is GET_MESH bit for bit and the add-on counts which it was."""
+    headless(tmp_path, case, make_daemon(config))
+
+
 def test_blender_scripted_stroke_is_the_kelvinlet_grab(tmp_path, make_daemon):
     """deformd.stroke (object space) gives Blender the daemon's positions bit for bit (checked
     inside Blender against GET_MESH) and those are the Kelvinlet grab of the reference formula
