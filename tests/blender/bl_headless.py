@@ -417,6 +417,11 @@ def case_knob():
     c2 = bc.client(mod, A.socket)
     wm = bpy.context.window_manager.deformd
     st = bc.state(mod)
+    # at speed 0 the knob may have finished during the share, whose BRUSH_STATE_GET then showed
+    # its last state and the queued events would be skipped as older: forget what the panel
+    # shows (as before any state) so each queued event is seen landing in the panel
+    st.brush_shown = (sid, 0)
+    shown.clear()
     while True:
         devs = [d for d in c2.devices_list() if d.dev_class]
         final = c2.brush_state_get(sid)
