@@ -320,6 +320,171 @@ def case_errors():
     bc.write_out(A.out, reports="ok")
 
 
+class ProgressRecorder:
+    """Stands in for progress.WM (the add-on's window-manager hook): records every call."""
+
+    def __init__(self):
+        self.calls = []
+
+    def begin(self, lo, hi):
+        self.calls.append(("begin", lo, hi))
+
+    def update(self, v):
+        self.calls.append(("update", v))
+
+    def end(self):
+        self.calls.append(("end",))
+
+
+def big_grid_object(n):
+    """An n x n vertex grid (2 (n-1)^2 triangles) built with numpy, wavy in z."""
+    i, j = np.meshgrid(np.arange(n, dtype=np.float32), np.arange(n, dtype=np.float32))
+    co = np.stack([i.ravel() / (n - 1), j.ravel() / (n - 1),
+                   0.05 * np.sin(7 * i.ravel() / n) * np.cos(5 * j.ravel() / n)], axis=1)
+    a = (np.arange(n - 1)[None, :] + n * np.arange(n - 1)[:, None]).ravel().astype(np.uint32)
+    tri = np.stack([a, a + 1, a + n + 1, a, a + n + 1, a + n], axis=1).reshape(-1, 3)
+    mesh = bpy.data.meshes.new("big")
+    mesh.vertices.add(n * n)
+    mesh.vertices.foreach_set("co", co.astype(np.float32).ravel())
+    mesh.loops.add(3 * len(tri))
+    mesh.loops.foreach_set("vertex_index", tri.ravel())
+    mesh.polygons.add(len(tri))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tri), 3, dtype=np.uint32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(tri), 3, dtype=np.uint32))
+    mesh.update()
+    obj = bpy.data.objects.new("big", mesh)
+    bpy.context.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def _check_progress(calls, what):
+    """begin once first, end once last, updates strictly increasing in 0..100 ending at 100."""
+    assert calls and calls[0][0] == "begin" and calls[-1] == ("end",), (what, calls)
+    assert [c[0] for c in calls].count("begin") == 1, (what, calls)
+    assert [c[0] for c in calls].count("end") == 1, (what, calls)
+    ups = [c[1] for c in calls if c[0] == "update"]
+    assert len(ups) >= 2, (what, calls)
+    assert all(b > a for a, b in zip(ups, ups[1:])), (what, ups)
+    assert 0 <= ups[0] and ups[-1] == 100, (what, ups)
+
+
+def case_progress():
+    """Share of a 300 x 300 grid (~5 MB PLY): Blender's progress indicator (through the
+    add-on's hook progress.WM) follows the upload and parse WORK_PROGRESS events; handle set
+    and move follow factorize / solve."""
+    mod = bc.install(A.zip)
+    rec = ProgressRecorder()
+    mod.progress.WM = rec
+    bpy.ops.object.select_all(action="DESELECT")
+    obj = big_grid_object(300)
+    bpy.ops.deformd.connect(address=ADDR)
+    bpy.ops.deformd.share()
+    sid = int(obj["deformd_session"])
+    _check_progress(rec.calls, "share")
+    c2 = bc.client(mod, A.socket)
+    assert np.array_equal(bc.daemon_positions(c2, sid), bc.positions(obj))
+    sel = np.zeros(len(obj.data.vertices), dtype=bool)
+    sel[[0, 299, 45150]] = True
+    obj.data.vertices.foreach_set("select", sel)
+    rec.calls = []
+    bpy.ops.deformd.handles_set()
+    _check_progress(rec.calls, "handles_set")
+    rec.calls = []
+    bpy.ops.deformd.handles_move(offset=(0.0, 0.0, 0.1), max_iters=30)
+    _check_progress([c for c in rec.calls], "handles_move")
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+
+
+def case_knob():
+    """The daemon replays a PowerMate recording (hid_replay, speed 0) onto the shared session:
+    every BRUSH_STATE the knob produces lands in the panel's values (checked after each one the
+    add-on shows), and once the recording ended (the device UNPLUGGED) the panel holds the
+    daemon's BRUSH_STATE_GET."""
+    mod = bc.install(A.zip)
+    dc = mod.deformd_client
+    shown = []
+    real = mod.props.set_from_state
+
+    def watch(wm_props, st):
+        real(wm_props, st)
+        if bc.state(mod).brush_shown != (st.session_id, st.seq):
+            return                                  # older than what the panel shows
+        shown.append((st.origin, st.seq, st.radius, wm_props.brush_radius, st.nu,
+                      wm_props.brush_nu, st.falloff, wm_props.brush_falloff))
+    mod.props.set_from_state = watch                # sync and operators call it through props
+    obj, sid = _shared(mod)                         # the first subscribe starts the replay
+    c2 = bc.client(mod, A.socket)
+    wm = bpy.context.window_manager.deformd
+    st = bc.state(mod)
+    # at speed 0 the knob may have finished during the share, whose BRUSH_STATE_GET then showed
+    # its last state and the queued events would be skipped as older: forget what the panel
+    # shows (as before any state) so each queued event is seen landing in the panel
+    st.brush_shown = (sid, 0)
+    shown.clear()
+    while True:
+        devs = [d for d in c2.devices_list() if d.dev_class]
+        final = c2.brush_state_get(sid)
+        if devs and all(d.state == dc.DevState.UNPLUGGED for d in devs) and \
+                st.brush_shown == (sid, final.seq):
+            break
+        bc.wait_readable(st.client, "knob brush states / the device's end")
+        bpy.ops.deformd.sync()
+    assert final.origin == dc.Origin.DEVICE and final.seq > 1, final
+    assert wm.brush_radius == np.float32(final.radius)
+    assert wm.brush_nu == np.float32(final.nu) and wm.brush_falloff == final.falloff
+    knob = [x for x in shown if x[0] == dc.Origin.DEVICE]
+    assert len({x[2] for x in knob}) >= 2, knob            # the panel followed several turns
+    for origin, seq, r, pr, nu, pnu, f, pf in shown:
+        assert pr == np.float32(r) and pnu == np.float32(nu) and pf == f, (seq, r, pr)
+    seqs = [x[1] for x in shown]
+    assert seqs == sorted(seqs), seqs
+    assert st.last_changer == final.origin_name
+
+
+def _reconnect(expect):
+    """Share, stroke; disconnect; another client strokes twice; reconnect: the object is the
+    daemon's GET_MESH bit for bit and the add-on says how it resynced (`expect`: "replay" when
+    the daemon still keeps the missed versions, "snapshot" when it keeps none)."""
+    mod = bc.install(A.zip)
+    obj, sid = _shared(mod)
+    c2 = bc.client(mod, A.socket)
+    base = bc.positions(obj).copy()
+    bpy.ops.deformd.stroke(brush="grab", center=tuple(float(v) for v in base[200]),
+                           move=(0.0, 0.0, 0.1), radius=0.4)
+    st = bc.state(mod)
+    held_version = st.mirrors[sid].version
+    bpy.ops.deformd.disconnect()
+    kept = bc.positions(obj).copy()
+    for k in range(2):
+        c2.stroke(sid, mod.deformd_client.Brush(
+            type="grab", center=tuple(float(v) for v in base[300 + 40 * k]),
+            move=(0.05, 0.0, -0.1), radius=0.5))
+    assert c2.get_mesh(sid).version > held_version
+    bpy.ops.deformd.connect(address=ADDR)
+    got = bc.positions(obj)
+    assert np.array_equal(got.view(np.uint32), bc.daemon_positions(c2, sid).view(np.uint32))
+    assert not np.array_equal(got, kept)
+    assert st.mirrors[sid].version == c2.get_mesh(sid).version
+    assert (st.resumed_replay, st.resumed_snapshot) == \
+        ((1, 0) if expect == "replay" else (0, 1)), (st.resumed_replay, st.resumed_snapshot)
+    # live again: the next stroke by the other client arrives through the timer's code
+    ack = c2.stroke(sid, mod.deformd_client.Brush(
+        type="grab", center=tuple(float(v) for v in base[100]), move=(0.0, 0.1, 0.0),
+        radius=0.3))
+    bc.sync_until(mod, sid, ack.version)
+    assert np.array_equal(bc.positions(obj), bc.daemon_positions(c2, sid))
+    assert st.resyncs == 0                       # no gap after the resync
+
+
+def case_reconnect_replay():
+    _reconnect("replay")
+
+
+def case_reconnect_snapshot():
+    _reconnect("snapshot")
+
+
 CASES = {n[len("case_"):]: f for n, f in globals().items() if n.startswith("case_")}
 if A.case not in CASES:
     raise SystemExit("unknown case %r (known: %s)" % (A.case, ", ".join(sorted(CASES))))

@@ -16,6 +16,7 @@ import pytest
 
 from conftest import BUILD, ROOT, skip_or_fail
 from helpers import grab_displacement
+from test_hid import replay_config
 from test_tls import make_ca, make_server_cert, write_key
 
 ZIP = os.path.join(BUILD, "blender", "deformd_blender.zip")
@@ -66,9 +67,25 @@ def headless(tmp_path, case, daemon, out=None):
 
 
 @pytest.mark.parametrize("case", ["register", "second_user", "brush_state", "undo",
-                                  "join_reconnect", "handles", "elastic", "modifiers"])
+                                  "join_reconnect", "handles", "elastic", "modifiers", "progress"])
 def test_blender_headless(tmp_path, make_daemon, case):
     headless(tmp_path, case, make_daemon(), tmp_path / "out.json")
+
+
+def test_blender_knob_drives_the_panel(tmp_path, make_daemon):
+    """A PowerMate recording replayed by the daemon (hid_replay, speed 0) changes the session
+    brush; the panel's values follow each BRUSH_STATE and end at BRUSH_STATE_GET's."""
+    d = make_daemon(replay_config(["griffin-powermate_077d-0410_usb.raw.txt"]))
+    headless(tmp_path, "knob", d)
+
+
+@pytest.mark.parametrize("case,config", [("reconnect_replay", ""),
+                                         ("reconnect_snapshot", "resync_ring_mb = 0\n")])
+def test_blender_reconnect_resync(tmp_path, make_daemon, case, config):
+    """Reconnect after another client's strokes: SUBSCRIBE from_version replays what the object
+    missed when the daemon keeps it (resync ring), a snapshot when it keeps nothing (ring 0);
+    either way the object is GET_MESH bit for bit and the add-on counts which it was."""
+    headless(tmp_path, case, make_daemon(config))
 
 
 def test_blender_scripted_stroke_is_the_kelvinlet_grab(tmp_path, make_daemon):

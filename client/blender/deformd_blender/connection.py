@@ -58,14 +58,20 @@ class State:
         self.status = "disconnected"
         self.last_error = ""
         self.mirrors: Dict[int, object] = {}   # session id -> sync.Mirror
+        self.held: Dict[int, object] = {}      # mirrors kept over a disconnect (for resume)
+        self.held_address = ""                 # the daemon they came from
         self.current_sid = 0                   # the session the panel's brush belongs to
         self.sessions = []                     # last LIST_SESSIONS (SessionInfo items)
         self.subscribers = 0                   # of current_sid, from the last listing
         self.last_changer = ""                 # origin name of the last brush-state change
         self.applying_remote = False           # panel props being set from an event
+        self.brush_shown = (0, 0)              # (session, seq) of the brush state in the panel
+        self.brush_states_shown = 0            # brush states (events, replies) put in the panel
         self.ticks = 0                         # timer polls run
         self.versions_applied = 0
         self.resyncs = 0                       # snapshots taken after a gap
+        self.resumed_replay = 0                # reconnects resynced by SUBSCRIBE from_version
+        self.resumed_snapshot = 0              # ... for which the daemon sent a snapshot
         self.mesh_writes = 0
         self.rate_hz = 0.0                     # mesh updates per second (smoothed)
         self.last_apply_ms = 0.0
@@ -107,6 +113,11 @@ class State:
             except OSError:
                 pass
         self.client = None
+        if self.mirrors:                       # the replicas the objects show, for resume
+            if self.held_address != self.address:
+                self.held.clear()
+            self.held.update(self.mirrors)
+            self.held_address = self.address
         self.mirrors.clear()
         self.stroke_active = False
         self.list_rid = 0

@@ -4,12 +4,16 @@ a lost connection leaves the objects as they were last synced."""
 import bpy
 import numpy as np
 
-from . import brush_map, prefs, props, sync, upload
+from . import brush_map, prefs, progress, props, sync, upload
 from .connection import CLIENT_ERRORS, STATE, describe
 from .dc import Brush
 
 FLOAT3 = dict(size=3, subtype="XYZ")
 MOVE_TIMEOUT_S = 600.0      # a handle solve may run long (max_iters 0: the daemon's default)
+# Blender's progress indicator (0..100) over the WORK_PROGRESS stages of share and handles
+SHARE_STAGES = {"upload": (0.0, 50.0), "parse": (50.0, 100.0)}
+SET_STAGES = {"factorize": (0.0, 100.0)}
+SOLVE_STAGES = {"factorize": (0.0, 10.0), "solve": (10.0, 100.0)}
 
 
 def _fail(op, exc) -> set:
@@ -76,8 +80,9 @@ class DEFORMD_OT_share(bpy.types.Operator):
             if nv != len(obj.data.vertices):
                 raise ValueError("modifiers change %s's vertex count (%d -> %d): apply them "
                                  "first" % (obj.name, len(obj.data.vertices), nv))
-            info = STATE.client.load_mesh(data, fmt=".ply", name=self.name or obj.name,
-                                          file_name=obj.name + ".ply")
+            with progress.work(SHARE_STAGES) as cb:
+                info = STATE.client.load_mesh(data, fmt=".ply", name=self.name or obj.name,
+                                              file_name=obj.name + ".ply", progress=cb)
             if info.nv != nv:
                 STATE.client.close_session(info.session_id)
                 raise ValueError("deformd kept %d of %d vertices (loose vertices?): not shared"
@@ -293,8 +298,9 @@ class DEFORMD_OT_handles_set(bpy.types.Operator):
             if not len(idx):
                 raise ValueError("select the handle vertices first")
             p = props.get(context)
-            STATE.client.set_handles(sid, idx.tolist(), energy=p.handle_energy,
-                                     w=p.handle_w, s=p.handle_s)
+            with progress.work(SET_STAGES) as cb:
+                STATE.client.set_handles(sid, idx.tolist(), energy=p.handle_energy,
+                                         w=p.handle_w, s=p.handle_s, progress=cb)
         except CLIENT_ERRORS as e:
             return _fail(self, e)
         self.report({"INFO"}, "deformd: %d handle(s)" % len(idx))
@@ -309,7 +315,8 @@ def handle_targets(sid: int, offset) -> list:
 
 
 class DEFORMD_OT_handles_move(bpy.types.Operator):
-    """Move every handle by an offset (object space) and solve (progress shown meanwhile)"""
+    """Move every handle by an offset (object space) and solve (progress shown meanwhile: the
+    solve's WORK_PROGRESS; no PROGRESS iterates, whose indicator would start over after it)"""
     bl_idname = "deformd.handles_move"
     bl_label = "Move Handles"
     offset: bpy.props.FloatVectorProperty(name="Offset", **FLOAT3)
@@ -318,9 +325,10 @@ class DEFORMD_OT_handles_move(bpy.types.Operator):
     def execute(self, context):
         try:
             sid = need_session(context)
-            STATE.client.move_handles(sid, handle_targets(sid, self.offset),
-                                      max_iters=self.max_iters, progress_every=10,
-                                      timeout=MOVE_TIMEOUT_S)
+            with progress.work(SOLVE_STAGES) as cb:
+                STATE.client.move_handles(sid, handle_targets(sid, self.offset),
+                                          max_iters=self.max_iters, progress_every=0,
+                                          timeout=MOVE_TIMEOUT_S, progress=cb)
         except CLIENT_ERRORS as e:
             return _fail(self, e)
         err = sync.tick(force=True)

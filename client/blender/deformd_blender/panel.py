@@ -41,6 +41,9 @@ class DEFORMD_PT_panel(bpy.types.Panel):
         lay.label(text="Subscribers: %d (you included)" % STATE.subscribers)
         if STATE.last_changer:
             lay.label(text="Brush last changed by: %s" % STATE.last_changer)
+        if STATE.resumed_replay or STATE.resumed_snapshot:
+            lay.label(text="Reconnects resynced: %d by replay, %d by snapshot"
+                      % (STATE.resumed_replay, STATE.resumed_snapshot))
         box = lay.box()
         box.label(text="Session brush")
         for f in props.BRUSH_FIELDS:

@@ -25,7 +25,14 @@ def _send_brush_field(field):
 
 
 def set_from_state(wm_props, st) -> None:
-    """Shows a BrushState (event or reply) in the panel without echoing it back."""
+    """Shows a BrushState (event or reply) in the panel without echoing it back. A state older
+    than the one shown (seq below the shown one's, same session: an event queued before a
+    BRUSH_STATE_GET reply that already showed it) is ignored."""
+    shown = STATE.brush_shown
+    if shown[0] == st.session_id and st.seq < shown[1]:
+        return
+    STATE.brush_shown = (st.session_id, st.seq)
+    STATE.brush_states_shown += 1
     STATE.applying_remote = True
     try:
         for f in BRUSH_FIELDS:

@@ -6,9 +6,9 @@ import numpy as np
 
 from . import overlay, prefs, progress
 from . import props as panel_props
-from .connection import CLIENT_ERRORS, STATE, describe, now
+from .connection import CLIENT_ERRORS, STATE, TIMEOUT_S as STATE_TIMEOUT_S, describe, now
 from .dc import MsgType, messages
-from .mirror import Gap, Mirror
+from .mirror import SNAPSHOT as SNAPSHOT_KIND, Gap, Mirror
 
 TIMER_INTERVAL_S = 1.0 / 60.0
 LIST_EVERY_S = 2.0
@@ -53,15 +53,63 @@ def resync(m: Mirror) -> None:
     STATE.resyncs += 1
 
 
+def resume(obj, m: Mirror) -> Mirror:
+    """Subscribes again to the session of a mirror held since the last disconnect and brings it
+    to the current version by SUBSCRIBE from_version = m.version (PROTOCOL.md 6.2): the daemon
+    replays the versions missed, or sends one snapshot when it no longer keeps them (or the
+    session never reached m.version); the replica applies either. Counts STATE.resumed_replay /
+    STATE.resumed_snapshot. Raises CLIENT_ERRORS; ValueError for a vertex count that changed."""
+    c = STATE.client
+    start = m.version
+    info = c.subscribe(m.sid, from_version=start)
+    if info.nv != m.nv or len(obj.data.vertices) != m.nv:
+        c.unsubscribe(m.sid)
+        raise ValueError("session %d has %d vertices, object %s has %d"
+                         % (m.sid, info.nv, obj.name, len(obj.data.vertices)))
+    STATE.mirrors[m.sid] = m
+    mode = "replay" if info.version == start else None
+    # the resync frames come first on the connection: read until the first one says which
+    # (a snapshot carries kind SNAPSHOT) and the replica holds the reply's version
+    while mode is None or m.version != info.version:
+        ev = c.next_event(timeout=STATE_TIMEOUT_S)
+        if ev is None:
+            raise TimeoutError("session %d: no resync frame within %g s"
+                               % (m.sid, STATE_TIMEOUT_S))
+        d = getattr(ev, "disp", ev)
+        if mode is None and getattr(d, "session_id", 0) == m.sid and hasattr(d, "kind"):
+            mode = "snapshot" if d.kind == SNAPSHOT_KIND else "replay"
+        _take(ev)
+        if STATE.mirrors.get(m.sid) is not m:
+            raise ValueError("session %d was closed during its resync" % m.sid)
+    if mode == "replay":
+        STATE.resumed_replay += 1
+    else:
+        STATE.resumed_snapshot += 1
+    STATE.current_sid = m.sid
+    STATE.subscribers = info.subscribers
+    m.write(obj.data)
+    STATE.mesh_writes += 1
+    panel_props.set_from_state(panel_props.get(), c.brush_state_get(m.sid))
+    return m
+
+
 def reattach_scene(scene) -> int:
     """After a (re)connect: every object of `scene` that names a session is subscribed again and
-    resynced. Returns how many; objects whose session is gone keep their positions."""
+    resynced: by resume() when this Blender still holds the object's replica from before the
+    disconnect (same object, same vertex count), else by attach() (a full snapshot). Returns
+    how many; objects whose session is gone keep their positions."""
     n = 0
+    held, STATE.held = (STATE.held if STATE.held_address == STATE.address else {}), {}
     for obj in scene.objects:
         sid = session_of(obj)
         if sid and obj.type == "MESH" and sid not in STATE.mirrors:
+            m = held.get(sid)
             try:
-                attach(obj, sid)
+                if m is not None and m.object_name == obj.name and \
+                        m.nv == len(obj.data.vertices):
+                    resume(obj, m)
+                else:
+                    attach(obj, sid)
                 n += 1
             except CLIENT_ERRORS as e:
                 STATE.last_error = describe(e)
