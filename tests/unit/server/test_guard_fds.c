@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include "server/net/guard.h"
+#include "tests/unit/unit_skip.h"
 
 static struct rlimit limits(void)
 {
@@ -33,7 +34,9 @@ static void test_raises_the_soft_limit_to_what_max_clients_needs(void **state)
     (void)state;
     struct rlimit rl = limits();
     rlim_t need = 300 + DF_GUARD_FD_RESERVE;
-    if (rl.rlim_max != RLIM_INFINITY && rl.rlim_max < need) skip();
+    if (rl.rlim_max != RLIM_INFINITY && rl.rlim_max < need)
+        unit_skip("hard RLIMIT_NOFILE %llu is below %llu", (unsigned long long)rl.rlim_max,
+                  (unsigned long long)need);
     set_soft(100);
     assert_int_equal(df_guard_fd_limit(300), (long)need);
     assert_int_equal(limits().rlim_cur, need);
@@ -44,7 +47,8 @@ static void test_never_lowers_the_soft_limit(void **state)
 {
     (void)state;
     struct rlimit rl = limits();
-    if (rl.rlim_max != RLIM_INFINITY && rl.rlim_max < 1000) skip();
+    if (rl.rlim_max != RLIM_INFINITY && rl.rlim_max < 1000)
+        unit_skip("hard RLIMIT_NOFILE %llu is below 1000", (unsigned long long)rl.rlim_max);
     set_soft(1000);
     assert_int_equal(df_guard_fd_limit(10), 1000);
     assert_int_equal(limits().rlim_cur, 1000);
@@ -55,7 +59,8 @@ static void test_stops_at_the_hard_limit(void **state)
 {
     (void)state;
     struct rlimit rl = limits();
-    if (rl.rlim_max != RLIM_INFINITY && rl.rlim_max < 200) skip();
+    if (rl.rlim_max != RLIM_INFINITY && rl.rlim_max < 200)
+        unit_skip("hard RLIMIT_NOFILE %llu is below 200", (unsigned long long)rl.rlim_max);
     rl.rlim_cur = 100;
     rl.rlim_max = 200; /* irreversible without privileges: this test runs last */
     assert_int_equal(setrlimit(RLIMIT_NOFILE, &rl), 0);
