@@ -37,6 +37,7 @@
 #include "server/log.h"
 #include "server/net/reply.h"
 #include "server/session/stream.h"
+#include "server/session/stroke_end.h"
 #include "server/session/stroke_recipe.h"
 #include "server/session/surface_cache.h"
 
@@ -462,19 +463,7 @@ static void end_work(df_job *j)
                              (unsigned long long)s->id);
         return;
     }
-    size_t n = 3 * (size_t)s->nv;
-    uint8_t *blob = NULL;
-    size_t len = 0;
-    if (st->last_replayable && memcmp(st->base, s->hist.state, n * sizeof(double)) == 0) {
-        df_stroke_recipe r = {.brush = st->last_brush, .strength = st->last_strength,
-                              .n_pins = st->n_pins, .pin_flags = st->pin_flags,
-                              .pins = st->pins};
-        memcpy(r.load, st->last_load, sizeof r.load);
-        df_error e;
-        if (df_stroke_recipe_encode(&r, &blob, &len, &e) != DF_OK) blob = NULL; /* XOR then */
-    }
-    j->rc = df_history_plan_commit(&s->hist, s->cur, blob, len, &j->change.hplan, &j->err);
-    free(blob);
+    j->rc = df_stroke_end_plan(s, st, &j->change.hplan, &j->err);
 }
 
 /* BRUSH_END done: the stroke becomes one undo step and is dropped (loop thread, FIFO order). */

@@ -32,6 +32,7 @@
 
 #include "server/session/commit.h"
 #include "server/session/session.h"
+#include "server/session/stroke_end.h"
 #include "server/session/stroke_recipe.h"
 #include "server/store/codec.h"
 #include "server/store/restore.h"
@@ -148,19 +149,8 @@ static int end_stroke(df_session *s)
     df_change_init(&c, &q, &e);
     c.hist = DF_HIST_COMMIT;
     c.drop_stroke = 1;
-    const df_stroke *st = s->strokes;
-    uint8_t *blob = NULL;
-    size_t len = 0;
-    if (st && st->last_replayable &&
-        memcmp(st->base, s->hist.state, 3 * (size_t)s->nv * sizeof(double)) == 0) {
-        df_stroke_recipe r = {.brush = st->last_brush, .strength = st->last_strength};
-        memcpy(r.load, st->last_load, sizeof r.load);
-        if (df_stroke_recipe_encode(&r, &blob, &len, &e) != DF_OK)
-            return fprintf(stderr, "recipe: %s\n", e.msg), 1;
-    }
-    if (df_history_plan_commit(&s->hist, s->cur, blob, len, &c.hplan, &e) != DF_OK)
-        return fprintf(stderr, "history: %s\n", e.msg), 1;
-    free(blob);
+    if (!s->strokes || df_stroke_end_plan(s, s->strokes, &c.hplan, &e) != DF_OK)
+        return fprintf(stderr, "history: %s\n", s->strokes ? e.msg : "no open stroke"), 1;
     int rc = df_session_commit(s, &c);
     df_change_clear(s->srv, &c);
     if (rc != DF_OK) return fprintf(stderr, "end: %s\n", e.msg), 1;

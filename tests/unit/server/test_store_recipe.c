@@ -19,6 +19,7 @@
 
 #include "server/session/commit.h"
 #include "server/session/session.h"
+#include "server/session/stroke_end.h"
 #include "server/session/stroke_recipe.h"
 #include "server/store/journal.h"
 #include "server/store/record.h"
@@ -146,19 +147,8 @@ static void end(df_session *s)
     df_change_init(&c, &q, &e);
     c.hist = DF_HIST_COMMIT;
     c.drop_stroke = 1;
-    const df_stroke *st = s->strokes;
-    size_t n = 3 * (size_t)s->nv;
-    uint8_t *blob = NULL;
-    size_t len = 0;
-    if (st && st->last_replayable && memcmp(st->base, s->hist.state, n * sizeof(double)) == 0) {
-        df_stroke_recipe r = {.brush = st->last_brush, .strength = st->last_strength,
-                              .n_pins = st->n_pins, .pin_flags = st->pin_flags,
-                              .pins = st->pins};
-        memcpy(r.load, st->last_load, sizeof r.load);
-        assert_int_equal(df_stroke_recipe_encode(&r, &blob, &len, &e), DF_OK);
-    }
-    assert_int_equal(df_history_plan_commit(&s->hist, s->cur, blob, len, &c.hplan, &e), DF_OK);
-    free(blob);
+    assert_non_null(s->strokes);
+    assert_int_equal(df_stroke_end_plan(s, s->strokes, &c.hplan, &e), DF_OK);
     assert_int_equal(df_session_commit(s, &c), DF_OK);
     df_change_clear(s->srv, &c);
 }
