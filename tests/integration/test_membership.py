@@ -8,7 +8,6 @@ changes the policy. A wrong key is EPERM, changes nothing and is rate-limited pe
 failed AUTHs. The owner, policy, key hash and members survive a restart (store on), and a
 schema 1 store (before the access table) is migrated."""
 import json
-import os
 import secrets
 import sqlite3
 import subprocess
@@ -18,14 +17,9 @@ import pytest
 from conftest import DEFORMCTL, Daemon, check_stopped
 from deformd_client import Brush, Client, DeformdError, errors as E
 from helpers import downgrade_store, grid_obj
+from test_session_access import write_key
 
 WHO = ("admin", "alice", "bob", "carol")
-
-
-def write_key(path) -> None:
-    with open(path, "w") as f:
-        f.write(secrets.token_hex(32) + "\n")
-    os.chmod(path, 0o600)
 
 
 @pytest.fixture
