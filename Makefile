@@ -230,7 +230,8 @@ tsan:
 	  OMP_THREAD_LIMIT=1 OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 \
 	  BUILD=$(TSAN_BUILD) MESHES=$(MESHES) PYTHON=$(PYTHON) SUITES="unit integration" \
 	  PYTEST_ARGS="$(TSAN_DESELECT)" bash tests/run_tests.sh
-tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN)) $(ADDON_ZIP)
+tsan-build: $(ALL_LIBS) $(BINS) $(filter $(BUILD)/tests/unit/server/%,$(UNIT_BIN)) $(ADDON_ZIP) \
+            $(BUILD)/bench/bench_load
 
 # libFuzzer targets: tests/fuzz/fuzz_X.c -> $(BUILD)/fuzz/fuzz_X, built by clang over the proto and core
 # sources (compiled once into $(BUILD)/fuzz/obj; -MMD -MP: header changes rebuild them; their .d
