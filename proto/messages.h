@@ -426,7 +426,7 @@ typedef struct df_msg_move_result {    /* final reply of a handle move */
     uint8_t status;                    /* df_move_status (not RUNNING) */
     uint32_t iterations;               /* ADMM iterations run */
     double objective;                  /* final energy, finite */
-    double residual;                   /* |E_k - E_k-1| / (E_k + 1), finite, >= 0 */
+    double residual;                   /* stop residual (admm.h DF_ADMM_RESIDUAL), finite, >= 0 */
     double elapsed_ms;                 /* solve wall time, finite, >= 0 */
 } df_msg_move_result;
 

@@ -66,12 +66,29 @@ typedef enum df_admm_energy {
     DF_ADMM_POLYLINE = 5
 } df_admm_energy;
 
+/* DF_ADMM_RESIDUAL — the scale-invariant stop test of df_admm_run (independent of the mesh's
+ * length unit and of the energy's scale: the old |E_k - E_k-1| / (E_k + 1) was absolute when
+ * E ~ 1e-6 and stopped early). After each iteration k:
+ *   e_k   = |E_k - E_k-1| / |E_k|                      (relative objective change; 0 when equal)
+ *   pri_k = ||r_k|| / max(||A x_k||, ||z_k||)          (relative primal residual)
+ *   dua_k = ||s_k|| / ||y_k||                          (relative dual residual)
+ *   residual = max(e_k, sqrt(tol) * max(pri_k, dua_k))
+ * and the run has converged when residual < tol, i.e. the objective changed by less than tol
+ * relative AND both ADMM residuals are below sqrt(tol) relative (near the optimum the objective
+ * error is quadratic in them). The residuals are Boyd et al. (2011, sec. 3.3) for the blocks of this
+ * splitting, in the penalty metric (rho on Z = V - Vrest, gamma_e on F_e(V) = R_e X_e):
+ * r = (V - Vrest - Z, F_e(V) - R_e X_e), A x = (V - Vrest, F_e(V)), z = (Z, R_e X_e),
+ * s = the change of (Z, R_e X_e) over the iteration and y = (U, W) the scaled duals (s and y both
+ * measured in the constraint space, i.e. Boyd's rho A^T B dz and rho A^T u without the common A^T).
+ * Per-vertex energies (spokes and rims) have only the Z block. Boyd's absolute term eps_abs sqrt(n)
+ * is 0: a zero residual counts as 0 and a nonzero one over a zero scale as +inf. */
 typedef struct df_admm_params {
     df_admm_energy energy;
     double w;              /* SC-L1 weight (energy per unit a_i per unit length), >= 0 */
     double s;              /* SC-L1 threshold distance (mesh length unit), > 0 */
     double rho;            /* ADMM penalty of Z = V - Vrest; must be > w max(a_i) / s */
-    double tol;            /* stop when |E_k - E_k-1| / (E_k + 1) < tol; default 1e-11 */
+    double tol;            /* stop test (df_admm_run): residual < tol, see DF_ADMM_RESIDUAL below;
+                              default 1e-11; 0: never stop early */
     int max_iters;         /* default iteration cap of df_admm_run; default 500 */
     double youngs;         /* Neo-Hookean Young's modulus E (Pa); default 1e7 */
     double poisson;        /* Neo-Hookean Poisson ratio nu in (-1, 0.5); default 0.45 */
@@ -138,7 +155,7 @@ int df_admm_set_positions(df_admm *s, const double *V, int32_t *n_changed, df_er
 typedef struct df_admm_progress {
     int iteration;         /* iterations done in this run */
     double objective;      /* elastic + locality at V */
-    double residual;       /* |E_k - E_k-1| / (E_k + 1) */
+    double residual;       /* the stop test's residual (DF_ADMM_RESIDUAL) */
     const double *V;
     int32_t nv;
 } df_admm_progress;
@@ -168,7 +185,7 @@ typedef struct df_admm_result {
     double objective;      /* elastic + locality of the final V (the paper's E) */
     double elastic;        /* elastic energy part of `objective` */
     double locality;       /* sum_i w a_i ||V_i - Vrest_i||_SC-L1 */
-    double residual;       /* last |E_k - E_k-1| / (E_k + 1); +inf when no iteration ran */
+    double residual;       /* last residual (DF_ADMM_RESIDUAL); +inf when no iteration ran */
     int converged;         /* 1 when residual < tol */
     df_admm_stop stop;     /* why the run ended */
     int anderson_accepted; /* accelerated steps accepted (0 without acceleration) */

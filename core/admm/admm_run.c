@@ -1,12 +1,13 @@
 /* admm_run.c — the ADMM iteration loop (Alg. 1): local step 1, local step 2, global step, dual
- * updates, objective and residual |E_k - E_k-1| / (E_k + 1), budgets, progress callback and the
- * optional Anderson acceleration. */
+ * updates, objective, the scale-invariant stop test (relative energy change and relative primal and
+ * dual residuals, admm.h), budgets, progress callback and the optional Anderson acceleration. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "core/admm/admm_internal.h"
+#include "core/admm/admm_resid.h"
 
 /* safety factor on the predicted cost of the next iteration when a time budget is set */
 #define ADMM_BUDGET_MARGIN 1.05
@@ -54,6 +55,11 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         x_before = malloc((size_t)s->n_state * sizeof(double));
         if (!x_before) return df_error_set(err, DF_ENOMEM, "admm_run: out of memory");
     }
+    admm_resid rs;
+    if (admm_resid_init(&rs, s, err)) { free(x_before); return DF_ENOMEM; }
+    /* primal and dual residuals must fall below sqrt(tol) (relative): near the optimum the
+     * objective error is quadratic in them, so this matches the energy test's |dE| < tol |E| */
+    const double sq_tol = sqrt(s->p.tol);
     double E_prev = s->E_last;
     if (!isfinite(E_prev)) {
         double el0 = admm_elastic(s, s->Vout), lo0 = admm_locality(s, s->Vout);
@@ -76,8 +82,11 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         }
         if (x_before) memcpy(x_before, s->state, (size_t)s->n_state * sizeof(double));
         double el_fused;
+        admm_resid_snapshot(&rs, s);
         rc = iterate(s, &r, &el_fused, err);
         if (rc) break;
+        double pri, dual;
+        admm_resid_measure(&rs, s, &pri, &dual);
         /* Neo-Hookean: an inverted iterate (infinite energy) is not reported while the positions
          * reported so far are feasible; the ADMM state continues from it all the same */
         int hold = s->damp && !isfinite(el_fused) && isfinite(s->E_last) && isfinite(s->el_last);
@@ -104,7 +113,14 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         r.elastic = el;
         r.locality = lo;
         r.objective = E;
-        r.residual = (!hold && isfinite(E) && isfinite(E_prev)) ? fabs(E - E_prev) / (E + 1.0) : INFINITY;
+        if (!hold && isfinite(E) && isfinite(E_prev)) {
+            double dE = fabs(E - E_prev), rel = dE == 0.0 ? 0.0 : dE / fabs(E);
+            double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
+            r.residual = rel > pd ? rel : pd;
+            if (isnan(r.residual)) r.residual = INFINITY;
+        } else {
+            r.residual = INFINITY;
+        }
         E_prev = E;
         s->E_last = E;
         s->el_last = el;
@@ -117,6 +133,7 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         if (conv) { r.converged = 1; r.stop = DF_ADMM_STOP_CONVERGED; break; }
     }
     free(x_before);
+    admm_resid_free(&rs);
     if (r.iterations == 0 && rc == DF_OK) {
         r.objective = E_prev;
         r.elastic = admm_elastic(s, s->Vout);
