@@ -47,8 +47,9 @@
  * have them; their vertices still move with the elements they share with the rest. A vertex whose
  * every element is degenerate (a "follower", e.g. a duplicated vertex) has no energy term of its
  * own (a_i = 0): after every iteration it is placed at its rest offset from the mean displacement of
- * its neighbours through those elements (followers of followers in turn); one that no kept element,
- * handle or affine vertex reaches stays at its rest position (counted in `at_rest`).
+ * its neighbours through those elements (followers of followers in turn), or of those neighbours
+ * alone that share its rest position when there are some (a duplicated vertex stays on its twin);
+ * one that no kept element, handle or affine vertex reaches stays at rest (counted in `at_rest`).
  *
  * Threading: a solver object is used by one thread at a time (it owns its cholmod_common);
  * df_admm_run uses OpenMP over elements and vertices inside.

@@ -81,10 +81,11 @@ static int classify(const double *V, int32_t nv, const int32_t *E, int32_t ne, i
 }
 
 /* Followers of the flagged elements in placement order: fo_v[f] follows the mean displacement of
- * fo_src[fo_ptr[f] .. fo_ptr[f+1]), vertices placed before it (anchor[v] = 1: fixed by the solve).
+ * fo_src[fo_ptr[f] .. fo_ptr[f+1]), its neighbours in those elements placed before it (anchor[v]
+ * = 1: fixed by the solve), or only those of them at its very rest position (V, nv x 3) if any.
  * Followers no anchor reaches are not listed (*at_rest counts them). Arrays may come back NULL
  * when there are no followers. */
-static int plan(int32_t nv, const int32_t *E, int32_t ne, int esz, const uint8_t *flag,
+static int plan(const double *V, int32_t nv, const int32_t *E, int32_t ne, int esz, const uint8_t *flag,
                 const uint8_t *anchor, int32_t *n_fol, int32_t *at_rest, int32_t **fo_v,
                 int32_t **fo_ptr, int32_t **fo_src, df_error *err)
 {
@@ -127,6 +128,11 @@ static int plan(int32_t nv, const int32_t *E, int32_t ne, int esz, const uint8_t
                     int32_t j = E[(size_t)de[t] * esz + a];
                     if (j != v && lvl[j] < pass) src[ns++] = j;
                 }
+            int32_t nc = s0; /* sources at the very same rest position (a duplicated vertex):
+                                follow those alone, so that the follower stays on its twin */
+            for (int32_t t = s0; t < ns; t++)
+                if (dist2(V + 3 * (size_t)src[t], V + 3 * (size_t)v) == 0.0) src[nc++] = src[t];
+            if (nc > s0) ns = nc;
             if (ns > s0) { v_out[placed++] = v; ptr[placed] = ns; }
         }
         for (int32_t f = before; f < placed; f++) lvl[v_out[f]] = pass;
@@ -158,7 +164,7 @@ int df_admm_find_degenerate(const df_mesh *m, uint8_t *flags, df_admm_degenerate
         for (int32_t e = 0; e < m->ne; e++)
             if (!f[e])
                 for (int a = 0; a < esz; a++) anchor[m->E[(size_t)e * esz + a]] = 1;
-        rc = plan(m->nv, m->E, m->ne, esz, f, anchor, &r.followers, &r.at_rest, &fv, &fp, &fs, err);
+        rc = plan(m->V, m->nv, m->E, m->ne, esz, f, anchor, &r.followers, &r.at_rest, &fv, &fp, &fs, err);
     }
     free(fv); free(fp); free(fs); free(anchor);
     if (!flags) free(f);
@@ -206,7 +212,7 @@ int admm_filter_degenerate(df_admm *s, const df_mesh *m, const int32_t *handles,
     for (int t = 0; t < naff; t++)
         for (int32_t i = 0; i < aff[t].n; i++) anchor[aff[t].verts[i]] = 1;
     if (nd > 0)
-        rc = plan(m->nv, m->E, m->ne, esz, flag, anchor, &s->deg.followers, &s->deg.at_rest,
+        rc = plan(m->V, m->nv, m->E, m->ne, esz, flag, anchor, &s->deg.followers, &s->deg.at_rest,
                   &s->fo_v, &s->fo_ptr, &s->fo_src, err);
     free(flag);
     if (!rc && nd > 0) { /* followers and unreached ones: no locality term of their own */

@@ -113,7 +113,8 @@ void admm_free_operators(df_admm *s);
 /* admm_degen.c: sets s->E, s->ne (kept elements), s->E_in, s->e_map, s->deg and the follower
  * plan from mesh m (indices already checked), the handles and the affine sets. Errors: DF_EINVAL
  * (every element degenerate), DF_ENOMEM. admm_place_followers: V_f = Vrest_f + the mean
- * displacement V - Vrest of its sources, for every follower in order. */
+ * displacement V - Vrest of its sources (its neighbours in degenerate elements placed before it,
+ * or only those at its very rest position when there are some), for every follower in order. */
 int admm_filter_degenerate(df_admm *s, const df_mesh *m, const int32_t *handles, int32_t nh,
                            const df_admm_affine *aff, int naff, df_error *err);
 void admm_place_followers(const df_admm *s, double *V);
