@@ -63,7 +63,8 @@ static void load_report_text(const ctl_ctx *ctx, const char *file, const df_msg_
         {r->dropped_elements, "lower-dimensional elements dropped (e.g. OBJ 'l' lines beside "
                               "faces, MEDIT Edges in a tet mesh; the session keeps one kind)"},
         {r->duplicate_elements, "duplicate elements (same vertices as an earlier one)"},
-        {r->degenerate_elements, "degenerate elements (zero measure or repeated vertex)"},
+        {r->degenerate_elements, "degenerate elements (zero or near-zero measure, or a repeated "
+                                 "vertex): excluded from the solver's energies"},
         {r->inverted_elements, "inverted elements"},
         {r->nonmanifold_edges, "non-manifold edges"},
         {r->nonmanifold_faces, "non-manifold faces"},

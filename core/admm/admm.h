@@ -41,6 +41,16 @@
  * is required. (The paper's released code used 10 w / s instead of rho; its settings translate to
  * w = rho s / 10: pig ARAP 1e-4, pig Neo-Hookean 500, bar3 ARAP 1e-3, apple Neo-Hookean 1.)
  *
+ * Degenerate elements (df_admm_find_degenerate: a repeated vertex, |measure| <=
+ * DF_ADMM_DEGENERATE_SHAPE_REL (longest edge)^d, or |measure| <= DF_ADMM_DEGENERATE_SIZE_REL times
+ * the median measure of the other elements) are excluded from every energy, as if the mesh did not
+ * have them; their vertices still move with the elements they share with the rest. A vertex whose
+ * every element is degenerate (a "follower", e.g. a duplicated vertex) has no energy term of its
+ * own (a_i = 0): after every iteration it is placed at its rest offset from the mean displacement of
+ * its neighbours through those elements (followers of followers in turn), or of those neighbours
+ * alone that share its rest position when there are some (a duplicated vertex stays on its twin);
+ * one that no kept element, handle or affine vertex reaches stays at rest (counted in `at_rest`).
+ *
  * Threading: a solver object is used by one thread at a time (it owns its cholmod_common);
  * df_admm_run uses OpenMP over elements and vertices inside.
  * Errors follow core/common/df_error.h: on any error the solver state is unchanged. */
@@ -57,6 +67,11 @@
 #define DF_ADMM_MAX_AFFINE_ROWS 2048      /* total scalar affine constraint rows (sum |S_k| m_k) */
 #define DF_ADMM_MAX_ITERS_LIMIT 1000000   /* largest accepted max_iters */
 #define DF_ADMM_MAX_ANDERSON 20           /* largest Anderson history */
+
+/* Degenerate element thresholds (see the header comment): shape relative to the element's longest
+ * edge (as core/mesh's DF_MESH_DEGENERATE_REL), size relative to the mesh's median element. */
+#define DF_ADMM_DEGENERATE_SHAPE_REL 1e-12
+#define DF_ADMM_DEGENERATE_SIZE_REL 1e-10
 
 typedef enum df_admm_energy {
     DF_ADMM_ARAP = 1,
@@ -121,13 +136,28 @@ typedef struct df_admm_affine {
 
 typedef struct df_admm df_admm;
 
+/* What the solver does with degenerate elements. */
+typedef struct df_admm_degenerate {
+    int32_t elements;      /* degenerate elements, excluded from the energies */
+    int32_t followers;     /* vertices of degenerate elements only, moved with their neighbours */
+    int32_t at_rest;       /* such vertices no other vertex reaches: kept at their rest position */
+} df_admm_degenerate;
+
+/* Classifies the elements of `mesh` as the solver does (header comment) without building a solver:
+ * flags (may be NULL; else mesh->ne bytes) receives 1 per degenerate element, *rep the counts
+ * (followers / at_rest as for a solver without handles or affine sets). O(ne log ne), any thread.
+ * Errors: DF_EINVAL (NULL mesh/rep, empty mesh, unknown kind, index out of range), DF_ENOMEM;
+ * *rep untouched on error. */
+int df_admm_find_degenerate(const df_mesh *mesh, uint8_t *flags, df_admm_degenerate *rep,
+                            df_error *err);
+
 /* Creates a solver for `mesh` (copied: the caller keeps ownership), `params`, the nh handle vertex
  * indices `handles` (distinct, in [0, nv), nh >= 1) and n_affine affine sets (may be NULL/0).
  * Computes per-element/per-vertex operators, analyzes and factorizes the global matrix once
  * (CHOLMOD). Initial state: V = rest, Z = U = W = 0, handle targets = rest positions.
  * Errors: DF_EINVAL (NULL args, bad params, rho <= w max(a_i)/s, energy/mesh kind mismatch, handle
  * out of range or repeated, empty handle set, affine vertex out of range or also a handle, NaN/Inf
- * coordinates, degenerate or inverted elements), DF_ELIMIT, DF_ESINGULAR (matrix or affine system
+ * coordinates, every element degenerate, inverted elements), DF_ELIMIT, DF_ESINGULAR (matrix or affine system
  * singular), DF_ENOMEM, DF_EINTERNAL (CHOLMOD/LAPACK failure). *out untouched on error. */
 int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int32_t *handles,
                    int32_t nh, const df_admm_affine *affine, int n_affine, df_admm **out,
@@ -230,7 +260,8 @@ int df_admm_evaluate(const df_admm *s, const double *V, double *elastic, double 
 
 /* Sculpting mode: makes the current V the new rest shape (recomputes operators and refactors:
  * one analysis + one factorization), resets Z, U, W to 0 and the handle targets to their current
- * positions. Errors: DF_EINVAL (the current shape has degenerate/inverted elements), DF_ESINGULAR,
+ * positions; the elements are classified again on the new rest shape. Errors: DF_EINVAL (the
+ * current shape has inverted elements or only degenerate ones), DF_ESINGULAR,
  * DF_ENOMEM, DF_EINTERNAL; solver unchanged on error. */
 int df_admm_reset_rest(df_admm *s, df_error *err);
 
@@ -243,6 +274,9 @@ typedef struct df_admm_stats {
 
 /* Copies the lifetime counters. NULL-safe (zeroes `out` for a NULL solver). */
 void df_admm_get_stats(const df_admm *s, df_admm_stats *out);
+
+/* Copies the solver's degenerate-element counts (header comment). NULL-safe (zeroes `out`). */
+void df_admm_get_degenerate(const df_admm *s, df_admm_degenerate *out);
 
 /* Frees the solver. NULL-safe. */
 void df_admm_free(df_admm *s);

@@ -126,8 +126,9 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->p = *params;
     s->kind = mesh->kind;
     s->nv = mesh->nv;
-    s->ne = mesh->ne;
     s->esz = df_mesh_elem_size(mesh->kind);
+    rc = admm_filter_degenerate(s, mesh, handles, nh, affine, n_affine, err); /* sets E, ne */
+    if (rc) { df_admm_free(s); return rc; }
     /* 2D only when the mesh is declared 2D: a flat 3D mesh (every z = 0) deforms in 3D */
     s->planar = mesh->planar != 0;
 #ifdef _OPENMP
@@ -142,7 +143,6 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     s->el_last = s->lo_last = NAN;
     size_t nv3 = (size_t)s->nv * 3;
     s->n_state = 6 * (int64_t)s->nv + (s->family == ADMM_FAM_ELEMENT ? 9 * (int64_t)s->ne : 0);
-    s->E = malloc((size_t)s->ne * s->esz * sizeof(int32_t));
     s->Vrest = malloc(nv3 * sizeof(double));
     s->state = calloc((size_t)s->n_state, sizeof(double));
     s->Vout = malloc(nv3 * sizeof(double));
@@ -178,7 +178,6 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
         df_admm_free(s);
         return df_error_set(err, DF_ENOMEM, "admm: out of memory");
     }
-    memcpy(s->E, mesh->E, (size_t)s->ne * s->esz * sizeof(int32_t));
     memcpy(s->Vrest, mesh->V, nv3 * sizeof(double));
     s->V = s->state;
     s->U = s->state + nv3;
@@ -312,8 +311,8 @@ int df_admm_reset_rest(df_admm *s, df_error *err)
     m.kind = s->kind;
     m.nv = s->nv;
     m.V = s->Vout;
-    m.ne = s->ne;
-    m.E = s->E;
+    m.ne = s->ne_in; /* as given: classified again on the new rest shape */
+    m.E = s->E_in;
     df_admm *n = NULL;
     int rc = df_admm_create(&m, &s->p, s->hidx, s->nh, s->aff, s->naff, &n, err);
     if (rc) return rc;
@@ -341,6 +340,7 @@ void df_admm_free(df_admm *s)
     admm_free_system(s);
     if (s->cc_started) cholmod_finish(&s->cc);
     admm_free_operators(s);
+    admm_free_degenerate(s);
     admm_aa_free(&s->aa);
     for (int k = 0; k < s->naff; k++) free((void *)s->aff[k].verts);
     free(s->aff);

@@ -28,7 +28,13 @@ struct df_admm {
     df_mesh_kind kind;
     int planar;
     int32_t nv, ne, esz;
-    int32_t *E;              /* ne x esz */
+    int32_t *E;              /* ne x esz: the non-degenerate elements (admm_degen.c) */
+    int32_t ne_in, *E_in;    /* the mesh's elements as given (reset_rest rebuilds from them) */
+    int32_t *e_map;          /* ne: index of each kept element in E_in */
+    df_admm_degenerate deg;  /* excluded elements and followers */
+    int32_t *fo_v, *fo_ptr, *fo_src; /* followers in placement order, their source vertices */
+    uint8_t *fo_flag;        /* nv (NULL without degenerate elements): 1 for a vertex of degenerate
+                                elements only (follower or kept at rest): a_i = 0 */
     double *Vrest;           /* nv x 3 */
     int64_t n_state;         /* 6 nv (+ 9 ne for the element family) */
     double *state;           /* V | U | W (W only for the element family) */
@@ -103,6 +109,16 @@ struct df_admm {
  * bending rows, incidence). Frees previous ones. */
 int admm_build_operators(df_admm *s, df_error *err);
 void admm_free_operators(df_admm *s);
+
+/* admm_degen.c: sets s->E, s->ne (kept elements), s->E_in, s->e_map, s->deg and the follower
+ * plan from mesh m (indices already checked), the handles and the affine sets. Errors: DF_EINVAL
+ * (every element degenerate), DF_ENOMEM. admm_place_followers: V_f = Vrest_f + the mean
+ * displacement V - Vrest of its sources (its neighbours in degenerate elements placed before it,
+ * or only those at its very rest position when there are some), for every follower in order. */
+int admm_filter_degenerate(df_admm *s, const df_mesh *m, const int32_t *handles, int32_t nh,
+                           const df_admm_affine *aff, int naff, df_error *err);
+void admm_place_followers(const df_admm *s, double *V);
+void admm_free_degenerate(df_admm *s);
 
 /* admm_system.c: assembles K, eliminates handles, analyzes + factorizes, affine Schur.
  * admm_solve: rhs (nfree x 3, already holding B + rho(...)) -> V (free rows, affine corrected). */

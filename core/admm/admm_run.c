@@ -90,7 +90,10 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         /* Neo-Hookean: an inverted iterate (infinite energy) is not reported while the positions
          * reported so far are feasible; the ADMM state continues from it all the same */
         int hold = s->damp && !isfinite(el_fused) && isfinite(s->E_last) && isfinite(s->el_last);
-        if (!hold) memcpy(s->Vout, s->V, (size_t)s->nv * 3 * sizeof(double));
+        if (!hold) {
+            memcpy(s->Vout, s->V, (size_t)s->nv * 3 * sizeof(double));
+            admm_place_followers(s, s->Vout); /* vertices of degenerate elements only */
+        }
         double ta = admm_now();
         if (x_before) r.anderson_accepted += admm_aa_step(&s->aa, x_before, s->state) && s->aa.pending;
         /* element family: the energy of Vout (= V before any Anderson extrapolation) came with the

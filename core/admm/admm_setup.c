@@ -9,8 +9,8 @@
 #include "core/admm/admm_internal.h"
 #include "core/admm/nh_prox.h"
 
-/* an element is degenerate when |measure| <= ADMM_DEGENERATE_REL (longest edge)^dim */
-#define ADMM_DEGENERATE_REL 1e-12
+/* kept elements are checked again (defensive; admm_degen.c excluded the degenerate ones) */
+#define ADMM_DEGENERATE_REL DF_ADMM_DEGENERATE_SHAPE_REL
 
 static double dist2(const double *x, const double *y)
 {
@@ -60,9 +60,9 @@ static int build_elements(df_admm *s, df_error *err)
             double det = D[0] * c0 + D[1] * c1 + D[2] * c2;
             double v = det / 6.0;
             if (!(fabs(v) > ADMM_DEGENERATE_REL * longest * longest * longest))
-                return df_error_set(err, DF_EINVAL, "admm: tet %d is degenerate (volume %g)", (int)e, v);
+                return df_error_set(err, DF_EINVAL, "admm: tet %d is degenerate (volume %g)", (int)s->e_map[e], v);
             if (v < 0)
-                return df_error_set(err, DF_EINVAL, "admm: tet %d is inverted (volume %g)", (int)e, v);
+                return df_error_set(err, DF_EINVAL, "admm: tet %d is inverted (volume %g)", (int)s->e_map[e], v);
             double inv[9] = {c0 / det, (D[2] * D[7] - D[1] * D[8]) / det, (D[1] * D[5] - D[2] * D[4]) / det,
                              c1 / det, (D[0] * D[8] - D[2] * D[6]) / det, (D[2] * D[3] - D[0] * D[5]) / det,
                              c2 / det, (D[1] * D[6] - D[0] * D[7]) / det, (D[0] * D[4] - D[1] * D[3]) / det};
@@ -82,9 +82,9 @@ static int build_elements(df_admm *s, df_error *err)
                             e1[0] * e2[1] - e1[1] * e2[0]};
             double area = 0.5 * sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
             if (!(area > ADMM_DEGENERATE_REL * longest * longest))
-                return df_error_set(err, DF_EINVAL, "admm: triangle %d is degenerate (area %g)", (int)e, area);
+                return df_error_set(err, DF_EINVAL, "admm: triangle %d is degenerate (area %g)", (int)s->e_map[e], area);
             if (s->planar && cr[2] < 0)
-                return df_error_set(err, DF_EINVAL, "admm: triangle %d is inverted (clockwise)", (int)e);
+                return df_error_set(err, DF_EINVAL, "admm: triangle %d is inverted (clockwise)", (int)s->e_map[e]);
             double l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
             double t1[3] = {e1[0] / l1, e1[1] / l1, e1[2] / l1};
             double p = e2[0] * t1[0] + e2[1] * t1[1] + e2[2] * t1[2];
@@ -131,7 +131,7 @@ static int check_simplices(const df_admm *s, df_error *err)
         const int32_t *el = s->E + (size_t)e * s->esz;
         if (s->esz == 2) {
             double l = dist2(s->Vrest + 3 * (size_t)el[0], s->Vrest + 3 * (size_t)el[1]);
-            if (!(l > 0)) return df_error_set(err, DF_EINVAL, "admm: segment %d has zero length", (int)e);
+            if (!(l > 0)) return df_error_set(err, DF_EINVAL, "admm: segment %d has zero length", (int)s->e_map[e]);
         } else {
             const double *x0 = s->Vrest + 3 * (size_t)el[0];
             const double *x1 = s->Vrest + 3 * (size_t)el[1], *x2 = s->Vrest + 3 * (size_t)el[2];
@@ -141,9 +141,9 @@ static int check_simplices(const df_admm *s, df_error *err)
             double a2 = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
             double lm = fmax(fmax(dist2(x0, x1), dist2(x0, x2)), dist2(x1, x2));
             if (!(a2 > 2 * ADMM_DEGENERATE_REL * lm))
-                return df_error_set(err, DF_EINVAL, "admm: triangle %d is degenerate", (int)e);
+                return df_error_set(err, DF_EINVAL, "admm: triangle %d is degenerate", (int)s->e_map[e]);
             if (s->planar && cr[2] < 0)
-                return df_error_set(err, DF_EINVAL, "admm: triangle %d is inverted (clockwise)", (int)e);
+                return df_error_set(err, DF_EINVAL, "admm: triangle %d is inverted (clockwise)", (int)s->e_map[e]);
         }
     }
     return DF_OK;
@@ -316,6 +316,9 @@ int admm_build_operators(df_admm *s, df_error *err)
             for (int c = 0; c < s->esz; c++) s->a[el[c]] += m / s->esz;
         }
     }
+    if (s->fo_flag) /* vertices of degenerate elements only: no locality term (admm.h) */
+        for (int32_t i = 0; i < s->nv; i++)
+            if (s->fo_flag[i]) s->a[i] = 0.0;
     s->max_a = 0;
     for (int32_t i = 0; i < s->nv; i++) if (s->a[i] > s->max_a) s->max_a = s->a[i];
     return DF_OK;

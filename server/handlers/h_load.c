@@ -51,6 +51,7 @@ typedef struct df_upload {
     char owner[DF_PRINCIPAL_MAX]; /* the requester's principal: the new session's owner */
     df_mesh mesh;           /* parsed by the worker */
     df_mesh_report rep;     /* the reader's report */
+    df_admm_degenerate degen; /* degenerate elements as the solver classifies them */
     df_work work;           /* WORK_PROGRESS of the request (options PROGRESS), else off */
     uint64_t parse_total;   /* bytes of the buffer being parsed (last progress callback) */
 } df_upload;
@@ -98,6 +99,11 @@ static void load_work(df_job *j)
     if (j->rc == DF_OK && (uint32_t)u->mesh.ne > DF_MAX_MESH_ELEMENTS)
         j->rc = df_error_set(&j->err, DF_ELIMIT, "mesh has %d elements (max %u)", u->mesh.ne,
                              DF_MAX_MESH_ELEMENTS);
+    /* the solver's own classification (worker thread: O(ne log ne)); a mesh without elements has
+     * none */
+    memset(&u->degen, 0, sizeof u->degen);
+    if (j->rc == DF_OK && u->mesh.ne > 0)
+        j->rc = df_admm_find_degenerate(&u->mesh, NULL, &u->degen, &j->err);
     if (j->rc == DF_OK && u->mesh.nv < 1)
         j->rc = df_error_set(&j->err, DF_EFORMAT, "mesh has no vertices");
     free(u->data); /* early: the parsed mesh replaces it (uncharged in load_done) */
@@ -175,6 +181,12 @@ static void load_done(df_job *j)
     df_log(DF_LOG_INFO, "session %llu '%s': %d vertices, %d elements%s%s",
            (unsigned long long)s->id, s->name, nv, ne, u->path ? " from " : "",
            u->path ? u->path : "");
+    s->degen = u->degen;
+    if (u->degen.elements > 0)
+        df_log(DF_LOG_INFO, "session %llu: %d degenerate element(s) excluded from the solver's "
+               "energies; %d vertex(es) of such elements only follow their neighbours, %d stay at "
+               "rest", (unsigned long long)s->id, (int)u->degen.elements,
+               (int)u->degen.followers, (int)u->degen.at_rest);
     df_msg_load_reply r;
     memset(&r, 0, sizeof r);
     df_session_info_fill(s, &r.info);
@@ -188,7 +200,7 @@ static void load_done(df_job *j)
         q->polygons_triangulated = (uint32_t)p->polygons_triangulated;
         q->dropped_elements = (uint32_t)p->ignored_elements;
         q->duplicate_elements = (uint32_t)p->duplicate_elements;
-        q->degenerate_elements = (uint32_t)p->degenerate_elements;
+        q->degenerate_elements = (uint32_t)u->degen.elements; /* as the solver counts them */
         q->inverted_elements = (uint32_t)p->inverted_elements;
         q->nonmanifold_edges = (uint32_t)p->nonmanifold_edges;
         q->nonmanifold_faces = (uint32_t)p->nonmanifold_faces;

@@ -160,6 +160,11 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         /* the oldest from_version a resync replays (current version when nothing is kept) */
         put(&st, "resync_from", (double)(s->resync.count ? df_resync_first(&s->resync) - 1
                                                           : atomic_load(&s->version)));
+        /* degenerate elements: 1 = excluded from the solver's energies (admm.h) */
+        put(&st, "degenerate_elements", s->degen.elements);
+        put(&st, "degenerate_action", s->degen.elements > 0);
+        put(&st, "degenerate_followers", s->degen.followers);
+        put(&st, "degenerate_at_rest", s->degen.at_rest);
         put(&st, "open_strokes", strokes);
         put(&st, "brush.seq", (double)s->brush_seq);
         put(&st, "job_running", s->running != NULL);

@@ -127,6 +127,9 @@ typedef struct df_session {
     float *scratch_rows;         /* sparse rows, nv x 3 */
     double *scratch_pos;         /* next positions, nv x 3 (brush: swapped with cur) */
     float *scratch_disp;         /* brush field, nv x 3 */
+    /* Degenerate elements of the rest shape as loaded or restored (df_admm_find_degenerate; the
+     * solver excludes them from its energies): written before the session is published. */
+    df_admm_degenerate degen;
     double brush_last_ms;        /* worker time of the last brush begin/update/cancel */
     double move_last_ms;         /* worker time of the last handle move */
     df_session_seen seen;        /* loop thread only: the above as of the last finished job */

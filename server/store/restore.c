@@ -137,6 +137,11 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         if (rc == DF_OK && snap) memcpy(k ? s->rest : s->cur, snap, pb);
         free(snap);
     }
+    if (rc == DF_OK && s->mesh.ne > 0) { /* of the rest shape, as a load counts them */
+        df_mesh rm = s->mesh;
+        rm.V = s->rest;
+        rc = df_admm_find_degenerate(&rm, NULL, &s->degen, &e);
+    }
     if (rc == DF_OK) rc = restore_access(srv, s, q, &e);
     if (rc == DF_OK) rc = df_session_history_reset(s, &e); /* undo starts at the snapshot */
     df_replay_result rr;

@@ -1,7 +1,7 @@
 /* Unit tests of the ADMM's constraints and input checking: affine constraints on vertex sets
  * (plane, line, point) hold to 1e-9 after a run while handles pull the mesh; bad input (rho <=
- * w max(a_i)/s, NaN targets, handle out of range or repeated, empty handle set, inverted or
- * degenerate elements, energy/mesh mismatch, affine vertex that is a handle, dependent affine
+ * w max(a_i)/s, NaN targets, handle out of range or repeated, empty handle set, inverted
+ * elements (degenerate ones are excluded and counted instead), energy/mesh mismatch, affine vertex that is a handle, dependent affine
  * rows, NaN coordinates, bad parameters) gives a clear error and changes nothing. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -157,11 +157,20 @@ static void test_bad_input(void **st)
     m.E[0] = m.E[1]; m.E[1] = t0;
     expect_create_error(&m, &p, h, 2, DF_EINVAL, "inverted");
     m.E[1] = m.E[0]; m.E[0] = t0;
-    /* degenerate tet: collapse a vertex onto another */
+    /* degenerate tets (a vertex collapsed onto another) are no longer refused: excluded from the
+     * energy and counted (test_admm_degenerate.c); only a mesh of nothing else is refused */
     double keep[3];
     memcpy(keep, m.V + 3 * m.E[4 * 5 + 3], 24);
     memcpy(m.V + 3 * m.E[4 * 5 + 3], m.V + 3 * m.E[4 * 5 + 2], 24);
-    expect_create_error(&m, &p, h, 2, DF_EINVAL, "degenerate");
+    df_admm_degenerate dg;
+    assert_int_equal(df_admm_find_degenerate(&m, NULL, &dg, &err), DF_OK);
+    assert_true(dg.elements >= 1);
+    df_admm *sd = NULL;
+    assert_int_equal(df_admm_create(&m, &p, h, 2, NULL, 0, &sd, &err), DF_OK);
+    df_admm_degenerate dgs;
+    df_admm_get_degenerate(sd, &dgs);
+    assert_int_equal(dgs.elements, dg.elements);
+    df_admm_free(sd);
     memcpy(m.V + 3 * m.E[4 * 5 + 3], keep, 24);
     /* NaN coordinate, bad element index */
     m.V[7] = NAN;
