@@ -10,11 +10,13 @@
  * of the fit (u = 0 there), so fixed handles hold the field down around them.
  * Choice of radius: the caller's, or (radius <= 0) DF_KGUESS_SPREAD_FRACTION times the RMS
  * distance of the handles from their centroid (the handle spread), at least 1% of the mesh's
- * bounding-box diagonal. A radius of the whole spread carries the move into the whole region
- * between the handles, but the SC-L1 locality term of the ADMM solver wants the far field at
- * rest (and is flat beyond its threshold s): on pig ARAP such a guess converged to a worse local
- * minimum (objective +4e-5 relative, 5000 iterations against 1212 without); a tenth of the spread
- * keeps the guess local (bench_kguess). Near handles have close to equal kernel blocks, so K is
+ * bounding-box diagonal. Measured (tests/bench/bench_kguess.c, to tol 1e-11): bar3 ARAP 3518
+ * plain iterations, 3029 with a tenth of the spread, 3358 with 0.03; pig ARAP 1212 plain, but
+ * with the guess it stops at the 5000 cap on a worse objective (+4e-5 relative at the whole
+ * spread, +5e-4 at a tenth): the SC-L1 locality term is flat beyond its threshold s, so free
+ * vertices the guess displaced by more than s feel no pull back to rest and the solve settles in
+ * another local minimum. The guess suits moves whose result is smooth over the handles' region
+ * and is an option, never the default. Near handles have close to equal kernel blocks, so K is
  * nearly singular: a ridge of
  * DF_KGUESS_RIDGE * A(0) is added to its diagonal, which leaves the fit residual at the handles
  * (reported) small but not zero; the guess then snaps the handles exactly onto their targets.
@@ -26,7 +28,8 @@
 
 #include "core/common/df_error.h"
 
-#define DF_KGUESS_MAX_HANDLES 4096   /* largest handle count (the dense system is 3nh square) */
+#define DF_KGUESS_MAX_HANDLES 1536   /* largest handle count: the dense 3nh square system takes
+                                        72 nh^2 bytes (170 MB here; pig, 1016 handles: 74 MB) */
 #define DF_KGUESS_RIDGE 1e-10        /* Tikhonov ridge of the fit, relative to K's diagonal */
 #define DF_KGUESS_SPREAD_FRACTION 0.1 /* default radius / RMS handle spread */
 
