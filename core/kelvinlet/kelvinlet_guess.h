@@ -10,12 +10,13 @@
  * of the fit (u = 0 there), so fixed handles hold the field down around them.
  * Choice of radius: the caller's, or (radius <= 0) DF_KGUESS_SPREAD_FRACTION times the RMS
  * distance of the handles from their centroid (the handle spread), at least 1% of the mesh's
- * bounding-box diagonal. Measured (tests/bench/bench_kguess.c, to tol 1e-11): bar3 ARAP 3518
- * plain iterations, 3029 with a tenth of the spread, 3358 with 0.03; pig ARAP 1212 plain, but
- * with the guess it stops at the 5000 cap on a worse objective (+4e-5 relative at the whole
- * spread, +5e-4 at a tenth): the SC-L1 locality term is flat beyond its threshold s, so free
- * vertices the guess displaced by more than s feel no pull back to rest and the solve settles in
- * another local minimum. The guess suits moves whose result is smooth over the handles' region
+ * bounding-box diagonal. Measured (tests/bench/bench_kguess.c, to tol 1e-11, 5000 cap, default
+ * radius): bar3 ARAP 3518 -> 2808 iterations, bar3 Neo-Hookean 3689 -> 3263, same objective
+ * (1e-12); pig ARAP 1212 -> cap, objective +5e-4 relative (+4e-5 with the whole spread as
+ * radius); pig Neo-Hookean 2067 -> cap, objective -17% (another, lower local minimum, not
+ * converged). The SC-L1 locality term is flat beyond its threshold s: free vertices the guess
+ * displaced by more than s feel no pull back to rest, so on pig the solve settles elsewhere.
+ * The guess suits moves whose result is smooth over the handles' region
  * and is an option, never the default. Near handles have close to equal kernel blocks, so K is
  * nearly singular: a ridge of
  * DF_KGUESS_RIDGE * A(0) is added to its diagonal, which leaves the fit residual at the handles

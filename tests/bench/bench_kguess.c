@@ -4,7 +4,12 @@
  * tolerance (1e-11) or 5000 iterations, once started from the rest shape (handles jump to their
  * targets in the first global step) and once from the Kelvinlet guess (df_admm_set_positions).
  * Prints iterations, time (the guess's own cost included) and the final objective of both, with
- * the target "fewer iterations" for the guess. Weights as bench_admm: w = rho s / 10. */
+ * the target "fewer iterations" for the guess. Weights as bench_admm: w = rho s / 10 (bar3
+ * Neo-Hookean, not in the paper: pig's rho 5e5 with bar3's s 0.1). Optional arguments: a factor
+ * on the default radius, and the index (0..3) of the one experiment to run. Measured on 2 shared
+ * cores: bar3 ARAP 3518 -> 2808 iterations (20.2 -> 15.6 s), bar3 Neo-Hookean 3689 -> 3263
+ * (36.2 -> 37.9 s), same objectives; pig ARAP 1212 -> 5000 (cap, objective +5e-4), pig
+ * Neo-Hookean 2067 -> 5000 (cap, objective -17%): see kelvinlet_guess.h. */
 #include <math.h>
 #ifdef _OPENMP
 #include <omp.h>
