@@ -82,6 +82,8 @@ UNIT_HELP  := $(wildcard tests/unit/*.c)
 # links.
 $(foreach a,$(AREAS),$(eval UNIT_LINK_$(a) := $(call lib,$(a)) $(BASE_LIBS)))
 $(foreach a,$(AREAS),$(eval UNIT_SYS_$(a) := $(MATH_LIBS)))
+# admm: test_admm_kguess seeds the solver with core/kelvinlet's guess
+UNIT_LINK_admm      := $(call lib,admm) $(call lib,kelvinlet) $(BASE_LIBS)
 UNIT_SYS_common     := -lm
 UNIT_SYS_mesh       := -lm
 UNIT_SYS_kelvinlet  := $(KELV_SYS)

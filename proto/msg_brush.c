@@ -88,9 +88,9 @@ static int brush_check(const df_msg_brush *m, df_error *err)
     if (m->use_session_field > 1)
         return df_error_set(err, DF_EINVAL, "%s: use_session_field %u not 0/1", M,
                             m->use_session_field);
-    if (m->options & ~DF_WORK_OPTS_ALL)
+    if (m->options & ~DF_WORK_OPTS_NOT_MOVE)
         return df_error_set(err, DF_EPROTO_RESERVED, "%s: options 0x%x has unknown bits 0x%x", M,
-                            (unsigned)m->options, (unsigned)(m->options & ~DF_WORK_OPTS_ALL));
+                            (unsigned)m->options, (unsigned)(m->options & ~DF_WORK_OPTS_NOT_MOVE));
     if (m->options_field > 1)
         return df_error_set(err, DF_EINVAL, "%s: options_field %u not 0/1", M, m->options_field);
     if (m->surface > 1)

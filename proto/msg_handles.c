@@ -31,7 +31,7 @@ static int indices_check(const int32_t *idx, uint32_t n, const char *M, const ch
 /* The optional trailing `options` u32 (DF_WORK_OPT_*) of handles and handle_move: 0 when the
  * body ends here; 4 more bytes hold it (*present = 1; unknown bits: DF_EPROTO_RESERVED); 1..3
  * are a cut field (DF_EPROTO_TRUNCATED); more are left for df_rd_end (DF_EPROTO_TRAILING). */
-static uint32_t read_options(df_rd *r, uint8_t *present)
+static uint32_t read_options(df_rd *r, uint8_t *present, uint32_t allowed)
 {
     size_t left = r->rc ? 0 : r->n - r->off;
     *present = 0;
@@ -39,19 +39,19 @@ static uint32_t read_options(df_rd *r, uint8_t *present)
         return 0;
     *present = 1;
     uint32_t o = df_rd_u32(r, "options");
-    if (o & ~DF_WORK_OPTS_ALL)
+    if (o & ~allowed)
         df_rd_fail(r, DF_EPROTO_RESERVED, "options", "unknown bits 0x%x",
-                   (unsigned)(o & ~DF_WORK_OPTS_ALL));
+                   (unsigned)(o & ~allowed));
     return o;
 }
 
-static int options_check(uint32_t o, uint8_t field, const char *M, df_error *err)
+static int options_check(uint32_t o, uint8_t field, uint32_t allowed, const char *M, df_error *err)
 {
     if (field > 1)
         return df_error_set(err, DF_EINVAL, "%s: options_field %u not 0/1", M, field);
-    if (o & ~DF_WORK_OPTS_ALL)
+    if (o & ~allowed)
         return df_error_set(err, DF_EPROTO_RESERVED, "%s: options 0x%x has unknown bits 0x%x", M,
-                            (unsigned)o, (unsigned)(o & ~DF_WORK_OPTS_ALL));
+                            (unsigned)o, (unsigned)(o & ~allowed));
     return DF_OK;
 }
 
@@ -60,7 +60,7 @@ static int handles_check(const df_msg_handles *m, df_error *err)
     const char *M = "handles";
     if (m->session_id == 0)
         return df_error_set(err, DF_EINVAL, "%s: session_id 0 is not a session", M);
-    int orc = options_check(m->options, m->options_field, M, err);
+    int orc = options_check(m->options, m->options_field, DF_WORK_OPTS_NOT_MOVE, M, err);
     if (orc)
         return orc;
     if (m->energy < 1 || m->energy > DF_ENERGY_MAX)
@@ -222,7 +222,7 @@ int df_msg_handles_decode(const uint8_t *p, size_t n, df_msg_handles *m, df_erro
     uint32_t got = 0;
     for (; got < t.n_affine && !r.rc; got++)
         affine_read(&r, &t.affine[got]);
-    t.options = read_options(&r, &t.options_field);
+    t.options = read_options(&r, &t.options_field, DF_WORK_OPTS_NOT_MOVE);
     int rc = df_rd_end(&r);
     if (!rc)
         rc = handles_check(&t, err);
@@ -254,7 +254,7 @@ static int move_check(const df_msg_handle_move *m, df_error *err)
     const char *M = "handle_move";
     if (m->session_id == 0)
         return df_error_set(err, DF_EINVAL, "%s: session_id 0 is not a session", M);
-    int orc = options_check(m->options, m->options_field, M, err);
+    int orc = options_check(m->options, m->options_field, DF_WORK_OPTS_ALL, M, err);
     if (orc)
         return orc;
     if (m->max_iters > DF_MAX_MOVE_ITERS)
@@ -304,7 +304,7 @@ int df_msg_handle_move_decode(const uint8_t *p, size_t n, df_msg_handle_move *m,
     t.targets = df_rd_alloc(&r, 3 * (size_t)t.n_targets, sizeof(double), "targets");
     for (size_t i = 0; !r.rc && i < 3 * (size_t)t.n_targets; i++)
         t.targets[i] = df_rd_f64(&r, "targets");
-    t.options = read_options(&r, &t.options_field);
+    t.options = read_options(&r, &t.options_field, DF_WORK_OPTS_ALL);
     int rc = df_rd_end(&r);
     if (rc || (rc = move_check(&t, err))) {
         free(t.targets);

@@ -123,7 +123,7 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     return CTL_EXIT_OK;
 }
 
-enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_PROGRESS, M_COUNT };
+enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_PROGRESS, M_KGUESS, M_COUNT };
 
 static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     CTL_GLOBAL_OPTS,
@@ -135,6 +135,8 @@ static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     {"max-ms", 1, "--max-ms MS        wall-clock budget in ms (default: none)"},
     {"progress-every", 1, "--progress-every N progress event every N iterations (default 10)"},
     {"progress", 1, CTL_PROGRESS_HELP},
+    {"kelvinlet-guess", 0, "--kelvinlet-guess  start the solver from the Kelvinlet field of the "
+                           "handles' move"},
 };
 
 static const char *status_name(unsigned s)
@@ -241,7 +243,8 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     ctl_progress pr;
     ctl_progress_init(&pr, ctx->prog, cmd->name, pmode, stderr);
     df_client_set_event_callback(c, ctl_progress_event, &pr);
-    m.options = ctl_progress_wanted(&pr) ? DF_WORK_OPT_PROGRESS : 0;
+    m.options = (ctl_progress_wanted(&pr) ? DF_WORK_OPT_PROGRESS : 0) |
+                (a->val[M_KGUESS] ? DF_WORK_OPT_KELVINLET_GUESS : 0);
     rc = df_client_handles_move(c, &m, &r, &e);
     ctl_progress_finish(&pr);
     free(targets);
@@ -284,7 +287,7 @@ const ctl_cmd ctl_cmds_handles[] = {
      1, run_handles},
     {"move",
      "move SESSION --targets FILE [--handles FILE] [--max-iters N] [--max-ms MS]\n"
-     "       [--progress-every N] [--progress MODE]",
+     "       [--progress-every N] [--progress MODE] [--kelvinlet-guess]",
      "Move the handles to their targets; waits for the final iterate and prints iterations, "
      "residual, objective.",
      MOVE_OPTS, M_COUNT, 1, run_move},

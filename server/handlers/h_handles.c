@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/kelvinlet/kelvinlet_guess.h"
 #include "proto/wire_core_map.h"
 #include "server/session/cache.h"
 #include "server/net/conn.h"
@@ -364,6 +365,25 @@ static int targets_check(const df_session *s, const df_handleset *hs, const doub
     return DF_OK;
 }
 
+/* Option KELVINLET_GUESS: the solver starts from the Kelvinlet field of the handles' move
+ * (core/kelvinlet/kelvinlet_guess.h: default radius, the solver's Poisson ratio for Neo-Hookean,
+ * 0.5 otherwise) applied to the session's current positions, the handles on their targets. */
+static int guess_positions(df_admm *solver, const df_session *s, const df_handleset *hs,
+                           const double *targets, df_error *err)
+{
+    size_t n = 3 * (size_t)s->mesh.nv;
+    double *G = malloc(n * sizeof *G);
+    if (!G)
+        return df_error_set(err, DF_ENOMEM, "handles_move: out of memory for the Kelvinlet guess");
+    double nu = hs->params.energy == DF_ADMM_NEOHOOKEAN ? hs->params.poisson : 0.5;
+    int rc = df_kelvinlet_guess(s->cur, s->mesh.nv, hs->handles, hs->nh, targets, 0.0, nu, G,
+                                NULL, NULL, err);
+    if (rc == DF_OK)
+        rc = df_admm_set_positions(solver, G, NULL, err);
+    free(G);
+    return rc;
+}
+
 /* Checks the request and prepares the solver for the first slice of a move: the handle set's
  * solver (rebuilt when evicted), the session's current positions, the targets. */
 static int move_setup(df_job *j)
@@ -390,7 +410,11 @@ static int move_setup(df_job *j)
     /* Start from the session's current positions (PROTOCOL.md 6): an undo, a brush or another
      * client's edit since the solver's last run invalidates its warm start there. A target
      * with z != 0 on a 2D session is refused here (df_admm_set_targets, EINVAL). */
-    rc = df_admm_set_positions(r->solver, s->cur, NULL, &j->err);
+    if (r->mv.options & DF_WORK_OPT_KELVINLET_GUESS) {
+        rc = guess_positions(r->solver, s, hs, r->mv.targets, &j->err);
+    } else {
+        rc = df_admm_set_positions(r->solver, s->cur, NULL, &j->err);
+    }
     if (rc == DF_OK) rc = df_admm_set_targets(r->solver, r->mv.targets, &j->err);
     r->progress_every = r->mv.progress_every;
     r->uf_prev = s->uf; /* its iterates are encoded one from the other (publish_iterate) */

@@ -499,3 +499,24 @@ def test_brush_rejected_by_the_daemon_says_server_and_exits_1(ctl, daemon, spot,
     ctl("brush", sid, "--type", "grab", "--center", "0,0.1,0", "--move", "0,0,0.01",
         "--radius", 0.3)
     assert _state(daemon, sid)[0] == v1 + 1
+
+
+def test_move_with_the_kelvinlet_guess(ctl, daemon, meshes, tmp_path):
+    """`move --kelvinlet-guess` (issue 14 item 5): the solver starts from the Kelvinlet field of
+    the handles' move, handles on their targets, so one iteration already has them there."""
+    rest = os.path.join(meshes, "teaser_apple_rest.node")
+    hfile = os.path.join(meshes, "teaser_apple_handles.txt")
+    tfile = os.path.join(meshes, "teaser_apple_init1.node")
+    sid = int(ctl("load", rest).stdout)
+    ctl("handles", sid, "--energy", "arap", "--handles", hfile, "--iters", 40)
+    j = json.loads(ctl("--json", "move", sid, "--targets", tfile, "--kelvinlet-guess",
+                       "--max-iters", 1).stdout)
+    assert j["iterations"] == 1
+    ctl("get", sid, "--out", tmp_path / "moved.node")
+    P = read_node_positions(str(tmp_path / "moved.node"))
+    T = read_node_positions(tfile)
+    R = read_node_positions(rest)
+    handles = read_indices(hfile)
+    assert max(abs(P[h][k] - T[h][k]) for h in handles for k in range(3)) < 1e-4
+    free = [i for i in range(len(P)) if i not in set(handles)]
+    assert max(abs(P[i][k] - R[i][k]) for i in free for k in range(3)) > 1e-3

@@ -294,7 +294,7 @@ static void test_handles_and_move_fields(void **state)
     df_msg_handle_move_free(&mo);
     /* the optional options (PROTOCOL.md 4.16): PROGRESS read back; an explicit 0 is kept as a
      * field so that the body re-encodes to the same bytes */
-    for (uint32_t opt = 0; opt <= DF_WORK_OPT_PROGRESS; opt++) {
+    for (uint32_t opt = 0; opt <= (DF_WORK_OPT_PROGRESS | DF_WORK_OPT_KELVINLET_GUESS); opt++) {
         df_msg_handle_move mp = mv;
         mp.options = opt;
         mp.options_field = 1;
@@ -312,6 +312,18 @@ static void test_handles_and_move_fields(void **state)
         df_buf_free(&c);
         df_msg_handle_move_free(&mo);
     }
+    /* KELVINLET_GUESS is a handle_move bit only: a handles body carrying it is refused */
+    df_msg_handles hk;
+    memset(&hk, 0, sizeof hk);
+    hk.session_id = 7;
+    hk.energy = DF_ENERGY_ARAP;
+    int32_t one = 0;
+    hk.n_handles = 1;
+    hk.handles = &one;
+    hk.options = DF_WORK_OPT_KELVINLET_GUESS;
+    hk.options_field = 1;
+    df_buf_reset(&b);
+    assert_int_equal(df_msg_handles_encode(&hk, &b, &e), DF_EPROTO_RESERVED);
     df_buf_free(&b);
 }
 
