@@ -44,6 +44,7 @@ extern const df_job_kind df_k_set_brush_param;
 extern const df_job_kind df_k_handles_set, df_k_handles_move, df_k_handles_get, df_k_reset_rest;
 extern const df_job_kind df_k_history; /* undo and redo */
 extern const df_job_kind df_k_get_mesh, df_k_snapshot;
+extern const df_job_kind df_k_session_peers; /* h_peers.c: who is subscribed (4.38) */
 
 /* Fills a session_info body from `s` (loop thread). */
 void df_session_info_fill(const df_session *s, df_msg_session_info *out);
