@@ -8,12 +8,14 @@ closes its end (the daemon forgets a connection's subscriptions before it closes
 import json
 import os
 import socket
+import struct
 import subprocess
 
 import pytest
 
 from conftest import DEFORMCTL
-from deformd_client import Client, DeformdError, PeerFlag, Transport, errors as E
+from deformd_client import Client, DeformdError, PeerFlag, ProtocolError, Transport, schema
+from deformd_client import errors as E
 from deformd_client import messages as m, peers as pr
 from helpers import grid_obj
 from test_membership import run, keys, tcp  # noqa: F401 (fixtures: TCP keys alice/bob/carol)
@@ -164,3 +166,31 @@ def test_deformctl_peers(daemon):
         r = subprocess.run(base + ["--json", "peers", "no-such-session"], capture_output=True,
                            text=True, timeout=60)
         assert r.returncode == 1 and json.loads(r.stdout)["name"] == "ENOTFOUND"
+
+
+def _patched(p, off, fmt, value):
+    b = bytearray(p)
+    struct.pack_into(fmt, b, off, value)
+    return bytes(b)
+
+
+def test_python_peer_list_codec_round_trip_and_refusals():
+    rows = [pr.Peer(5, PeerFlag.EDIT | PeerFlag.SHM, Transport.UNIX, "blender", "uid:1000"),
+            pr.Peer(9, PeerFlag.SELF, Transport.TCP, "", "key:bob")]
+    p = pr.encode_peer_list(rows)
+    assert len(p) == 4 + sum(12 + 2 + len(r.name) + 2 + len(r.principal) for r in rows)
+    back = pr.decode_peer_list(p)
+    assert back == rows
+    assert [r.label for r in back] == ["blender", "key:bob"]
+    assert [r.transport_name for r in back] == ["unix", "tcp"]
+    assert pr.decode_peer_list(pr.encode_peer_list([])) == []
+    # row 0 at 4: client_id 4, flags 12, transport 13, reserved 14; count at 0
+    for off, fmt, value, needle in ((4, "<Q", 0, "client_id 0"), (12, "<B", 0x10, "flag"),
+                                    (13, "<B", 3, "transport 3"), (14, "<H", 1, "reserved"),
+                                    (0, "<I", schema.MAX_PEERS + 1, "exceed")):
+        with pytest.raises(ProtocolError) as ei:
+            pr.decode_peer_list(_patched(p, off, fmt, value))
+        assert needle in str(ei.value)
+    for bad in (p[:-1], p + b"\0", _patched(p, 0, "<I", 3)):
+        with pytest.raises(ProtocolError):
+            pr.decode_peer_list(bad)
