@@ -48,7 +48,9 @@ def poll(c, t: float) -> None:
             STATE.peers_rid = 0
             STATE.peers, STATE.peers_sid = [], sid
             STATE.last_peers_t = t
-            STATE.last_error = "deformd: peers of session %d: %s: %s" % (sid, e.name, e.message)
+            if sid in STATE.mirrors:             # else it was closed: its event said so
+                STATE.last_error = "deformd: peers of session %d: %s: %s" % (sid, e.name,
+                                                                               e.message)
             return
         if parts is None:
             return
