@@ -6,6 +6,7 @@
  * answered beside it (DF_JOB_BESIDE_READ: the subscriber list is no mesh state). Rows: the
  * session's subscribers in subscription order, at most DF_MAX_PEERS (the asking connection's
  * row always among them when it is subscribed). */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -27,29 +28,37 @@ static void peer_row(const df_session *s, int i, const df_conn *asker, df_msg_pe
     snprintf(out->principal, sizeof out->principal, "%s", c->principal);
 }
 
+int df_session_peers_fill(const df_session *s, const df_conn *asker, uint32_t cap,
+                          df_msg_peer_list *out, df_error *err)
+{
+    uint32_t n = (uint32_t)s->nsubs > cap ? cap : (uint32_t)s->nsubs;
+    df_msg_peer_info *items = n ? calloc(n, sizeof *items) : NULL;
+    if (n && !items)
+        return df_error_set(err, DF_ENOMEM, "session_peers: out of memory listing %u peers",
+                            (unsigned)n);
+    uint32_t k = 0;
+    int self = -1; /* the asker's index when it falls beyond the cap */
+    for (int i = 0; i < s->nsubs; i++) {
+        if (k < n) peer_row(s, i, asker, &items[k++]);
+        else if (s->subs[i] == asker) self = i;
+    }
+    if (self >= 0 && n) peer_row(s, self, asker, &items[n - 1]); /* keep the asker's own row */
+    out->count = n;
+    out->items = items;
+    return DF_OK;
+}
+
 static void peers_done(df_job *j)
 {
     if (df_job_failed(j)) return;
-    const df_session *s = j->s;
-    const df_conn *asker = j->req.c;
-    uint32_t n = s->nsubs > (int)DF_MAX_PEERS ? DF_MAX_PEERS : (uint32_t)s->nsubs;
-    df_msg_peer_list out = {.count = n, .items = n ? calloc(n, sizeof *out.items) : NULL};
-    if (n && !out.items) {
-        df_error err;
-        df_error_set(&err, DF_ENOMEM, "session_peers: out of memory listing %u peers",
-                     (unsigned)n);
+    df_msg_peer_list out;
+    df_error err;
+    if (df_session_peers_fill(j->s, j->req.c, DF_MAX_PEERS, &out, &err) != DF_OK) {
         df_req_fail(&j->req, &err);
         return;
     }
-    uint32_t k = 0;
-    int self = -1; /* the asker's index when it would fall beyond the cap */
-    for (int i = 0; i < s->nsubs; i++) {
-        if (k < n) peer_row(s, i, asker, &out.items[k++]);
-        else if (s->subs[i] == asker) self = i;
-    }
-    if (self >= 0) peer_row(s, self, asker, &out.items[n - 1]); /* keep the asker's own row */
     df_req_reply_peer_list(&j->req, &out);
-    free(out.items);
+    df_msg_peer_list_free(&out);
 }
 
 const df_job_kind df_k_session_peers = {.decode = df_job_decode_ref, .done = peers_done,
