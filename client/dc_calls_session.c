@@ -1,5 +1,6 @@
 /* dc_calls_session.c — libdeformclient calls for connection-level and session messages: ping,
- * auth, load mesh (chunked inline upload or server path), list/open/close, subscribe. */
+ * auth, load mesh (chunked inline upload or server path), list/open/close, subscribe, session
+ * peers. */
 #include "client/dc_client.h"
 
 #include <stdio.h>
@@ -350,4 +351,24 @@ int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err)
     int rc = dc_session_ref_call(c, DF_MSG_UNSUBSCRIBE, session_id, NULL, err);
     if (rc == DF_OK) dc_shm_drop(c, session_id);
     return rc;
+}
+
+static int reply_peers(void *user, const df_frame_header *h, const uint8_t *p, df_error *err)
+{
+    return df_msg_peer_list_decode(p, h->payload_len, user, err);
+}
+
+int df_client_session_peers(df_client *c, uint64_t session_id, df_msg_peer_list *out,
+                            df_error *err)
+{
+    df_msg_session_ref m = {session_id};
+    df_msg_peer_list t;
+    memset(&t, 0, sizeof t);
+    int rc = dc_request(c, DF_MSG_SESSION_PEERS, dc_enc_session_ref, &m, reply_peers, &t, err);
+    if (rc) {
+        df_msg_peer_list_free(&t);
+        return rc;
+    }
+    *out = t;
+    return DF_OK;
 }

@@ -220,6 +220,16 @@ int df_client_subscribe_from(df_client *c, uint64_t session_id, uint64_t from_ve
                              df_msg_session_info *info, df_error *err);
 int df_client_unsubscribe(df_client *c, uint64_t session_id, df_error *err);
 
+/* Who is connected to a session (SESSION_PEERS, PROTOCOL.md 4.38): one row per connection
+ * subscribed to session_id, in subscription order, into *out (items malloc'd:
+ * df_msg_peer_list_free; count 0 when nobody is subscribed). Each row: the connection id, its
+ * HELLO client_name and principal, its transport (DF_TRANSPORT_UNIX / _TCP) and DF_PEER_* flags
+ * (SELF: this connection, EDIT: it may edit the session, SHM: it reads the shared-memory
+ * stream). Needs the observe right. Errors: DF_ENOTFOUND (no such session), DF_EPERM (no
+ * observe right), transport errors; *out is unchanged on error. Caller's thread. */
+int df_client_session_peers(df_client *c, uint64_t session_id, df_msg_peer_list *out,
+                            df_error *err);
+
 /* Switches this subscription to the shared-memory stream (PROTOCOL.md 6.1; Unix socket, same
  * host, subscribed first): the daemon writes each broadcast frame once into a ring file that this
  * client maps read-only, and sends a 24-byte SHM_REF in its place. The library resolves them:

@@ -112,6 +112,10 @@ enum { DF_WIRE_ACCESS_FLAGS(DF_X_AFLAG) }; /* DF_ACCESS_NEW_KEY */
 typedef enum df_work_stage { DF_WIRE_WORK_STAGES(DF_X_STAGE) } df_work_stage;
 #define DF_X_WOPT(n, v) DF_X_ENUM(DF_WORK_OPT_, n, v)
 enum { DF_WIRE_WORK_OPTS(DF_X_WOPT) };
+#define DF_X_PEERF(n, v) DF_X_ENUM(DF_PEER_, n, v)
+enum { DF_WIRE_PEER_FLAGS(DF_X_PEERF) }; /* DF_PEER_SELF, _EDIT, _SHM */
+#define DF_X_TRANSPORT(n, v) DF_X_ENUM(DF_TRANSPORT_, n, v)
+enum { DF_WIRE_TRANSPORTS(DF_X_TRANSPORT) }; /* DF_TRANSPORT_UNIX, _TCP */
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -145,6 +149,9 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_DEVSTATE_MAX (0 DF_WIRE_DEV_STATES(DF_X_COUNT))        /* 1..MAX */
 #define DF_ACCESS_MODE_MAX (0 DF_WIRE_ACCESS_MODES(DF_X_COUNT))   /* 1..MAX */
 #define DF_ACCESS_FLAGS_ALL (0u DF_WIRE_ACCESS_FLAGS(DF_X_OR))
+#define DF_PEER_FLAGS_ALL (0u DF_WIRE_PEER_FLAGS(DF_X_OR))
+#define DF_TRANSPORT_MAX (0 DF_WIRE_TRANSPORTS(DF_X_COUNT))      /* 1..MAX */
+_Static_assert(DF_TRANSPORT_TCP == DF_TRANSPORT_MAX, "the transports stay contiguous");
 _Static_assert(DF_ACCESS_MODE_OWNER == DF_ACCESS_MODE_MAX, "the access modes stay contiguous");
 _Static_assert(DF_DEVCLASS_PEN == DF_DEVCLASS_MAX && DF_DEVBACKEND_REPLAY == DF_DEVBACKEND_MAX &&
                DF_DEVSTATE_UNPLUGGED == DF_DEVSTATE_MAX, "the device enums stay contiguous");
@@ -565,6 +572,20 @@ typedef struct df_msg_access_info {    /* SESSION_ACCESS / JOIN reply: the sessi
     uint8_t key[DF_JOIN_KEY_BYTES];
 } df_msg_access_info;
 
+/* ------------------------------------------------------ session peers (PROTOCOL.md 4.38) */
+typedef struct df_msg_peer_info {      /* one connection subscribed to a session */
+    uint64_t client_id;                /* != 0: the daemon's connection id */
+    uint8_t flags;                     /* DF_PEER_* bits (SELF, EDIT, SHM) */
+    uint8_t transport;                 /* DF_TRANSPORT_* 1..DF_TRANSPORT_MAX */
+    char name[DF_MAX_NAME_LEN + 1];    /* the client_name of its HELLO, may be "" */
+    char principal[DF_MAX_NAME_LEN + 1]; /* who it acts as: "uid:1000", "key:NAME", ... */
+} df_msg_peer_info;
+
+typedef struct df_msg_peer_list {      /* SESSION_PEERS reply */
+    uint32_t count;                    /* 0..DF_MAX_PEERS */
+    df_msg_peer_info *items;           /* malloc'd on decode */
+} df_msg_peer_list;
+
 /* ------------------------------------------------------------------------------ functions */
 #define DF_MSG_CODEC(T)                                                                \
     int df_msg_##T##_encode(const df_msg_##T *m, df_buf *out, df_error *err);          \
@@ -608,6 +629,8 @@ DF_MSG_CODEC(session_access)
 DF_MSG_CODEC(join)
 DF_MSG_CODEC(access_info)
 DF_MSG_CODEC(work_progress)
+DF_MSG_CODEC(peer_info)
+DF_MSG_CODEC(peer_list)
 #undef DF_MSG_CODEC
 
 /* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
@@ -642,6 +665,7 @@ void df_msg_disp_free(df_msg_disp *m);
 void df_msg_progress_free(df_msg_progress *m);
 void df_msg_stats_free(df_msg_stats *m);
 void df_msg_device_list_free(df_msg_device_list *m);
+void df_msg_peer_list_free(df_msg_peer_list *m);
 
 /* Empty bodies (list sessions request, auth success reply): DF_OK for n == 0, else
  * DF_EPROTO_TRAILING. */
@@ -683,7 +707,9 @@ typedef enum df_body_kind {
     DF_BODY_DEVICE_INFO, DF_BODY_DEVICE_LIST, DF_BODY_DEVICE_BIND, DF_BODY_DEVICE_VIEW,
     /* per-session access */
     DF_BODY_SESSION_ACCESS, DF_BODY_JOIN, DF_BODY_ACCESS_INFO,
-    DF_BODY_WORK_PROGRESS
+    DF_BODY_WORK_PROGRESS,
+    /* session peers */
+    DF_BODY_PEER_LIST
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -728,6 +754,7 @@ typedef struct df_msg_any {
         df_msg_join join;
         df_msg_access_info access_info;
         df_msg_work_progress work_progress;
+        df_msg_peer_list peer_list;
     } u;
 } df_msg_any;
 

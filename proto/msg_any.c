@@ -73,6 +73,7 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
     case DF_BODY_WORK_PROGRESS:
         rc = df_msg_work_progress_decode(p, n, &t.u.work_progress, err);
         break;
+    case DF_BODY_PEER_LIST: rc = df_msg_peer_list_decode(p, n, &t.u.peer_list, err); break;
     default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
     }
     if (rc)
@@ -96,6 +97,7 @@ void df_msg_any_free(df_msg_any *m)
     case DF_BODY_PROGRESS: df_msg_progress_free(&m->u.progress); break;
     case DF_BODY_STATS: df_msg_stats_free(&m->u.stats); break;
     case DF_BODY_DEVICE_LIST: df_msg_device_list_free(&m->u.device_list); break;
+    case DF_BODY_PEER_LIST: df_msg_peer_list_free(&m->u.peer_list); break;
     default: break;
     }
 }
@@ -146,6 +148,7 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
     case DF_BODY_JOIN: return df_msg_join_encode(&m->u.join, out, e);
     case DF_BODY_ACCESS_INFO: return df_msg_access_info_encode(&m->u.access_info, out, e);
     case DF_BODY_WORK_PROGRESS: return df_msg_work_progress_encode(&m->u.work_progress, out, e);
+    case DF_BODY_PEER_LIST: return df_msg_peer_list_encode(&m->u.peer_list, out, e);
     }
     return DF_EINTERNAL;
 }

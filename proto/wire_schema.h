@@ -56,6 +56,8 @@
 #define DF_STREAM_CHUNK_BYTES (16u << 20)     /* recommended payload bound of a stream chunk */
 /* devices (HID, issue 11) */
 #define DF_MAX_DEVICES 256u                   /* devices in a device_list (and per daemon) */
+/* session peers (SESSION_PEERS, PROTOCOL.md 4.38) */
+#define DF_MAX_PEERS 4096u                    /* rows of a peer_list */
 
 #define DF_WIRE_LIMITS(X)                                                                    \
     X(DF_MAX_FRAME_PAYLOAD) X(DF_MAX_MESH_VERTICES) X(DF_MAX_MESH_ELEMENTS)                  \
@@ -64,7 +66,8 @@
     X(DF_MAX_PINNED_POINTS) X(DF_MAX_BRUSH_STEPS) X(DF_MAX_FALLOFF) X(DF_MAX_HANDLES)        \
     X(DF_MAX_AFFINE_SETS) X(DF_MAX_ANDERSON) X(DF_MAX_MOVE_ITERS) X(DF_MAX_STATS_ENTRIES)    \
     X(DF_MAX_STATS_KEY_LEN) X(DF_STREAM_CHUNK_BYTES)                                      \
-    X(DF_MAX_DEVICES)
+    X(DF_MAX_DEVICES)                                                                        \
+    X(DF_MAX_PEERS)
 
 /* ------------------------------------------------- AUTH HMAC-SHA256 exchange (PROTOCOL.md 4.3) */
 #define DF_AUTH_NONCE_BYTES 32u             /* client and server nonces */
@@ -98,6 +101,7 @@
     /* per-session access (PROTOCOL.md 4.34..4.36) */                                         \
     X(SESSION_ACCESS, 0x0017, session_access, SESSION_ACCESS, ACCESS_INFO, NONE)             \
     X(JOIN, 0x0018, join, JOIN, ACCESS_INFO, NONE)                                           \
+    X(SESSION_PEERS, 0x0019, session_peers, SESSION_REF, PEER_LIST, NONE) /* 4.38 */         \
     X(BRUSH_BEGIN, 0x0020, brush_begin, BRUSH, ACK, NONE)                                    \
     X(BRUSH_UPDATE, 0x0021, brush_update, BRUSH_UPDATE, ACK, NONE)                           \
     X(BRUSH_END, 0x0022, brush_end, SESSION_REF, ACK, NONE)                                  \
@@ -262,6 +266,14 @@
 /* session_access `flags` (DF_ACCESS_*) */
 #define DF_WIRE_ACCESS_FLAGS(X) X(NEW_KEY, 1u << 0) /* rotate the join key; the reply has it */
 
+/* session peers (PROTOCOL.md 4.38): peer_info `flags` (DF_PEER_*) and `transport`
+ * (DF_TRANSPORT_*) */
+#define DF_WIRE_PEER_FLAGS(X)                                                                \
+    X(SELF, 1u << 0) /* the connection that asked */                                         \
+    X(EDIT, 1u << 1) /* its principal holds the edit right on the session */                 \
+    X(SHM, 1u << 2)  /* it streams through the shared-memory ring (STREAM_SHM) */
+#define DF_WIRE_TRANSPORTS(X) X(UNIX, 1) X(TCP, 2) /* the socket it is connected through */
+
 /* Every enum list: X(list macro, C prefix, Python class, kind) for tools that walk them all. */
 #define DF_WIRE_ENUMS(X)                                                                     \
     X(DF_WIRE_FLAGS, DF_FLAG_, FrameFlag, flags)                                                \
@@ -291,7 +303,9 @@
     X(DF_WIRE_ACCESS_MODES, DF_ACCESS_MODE_, AccessMode, enum)                               \
     X(DF_WIRE_ACCESS_FLAGS, DF_ACCESS_, AccessFlag, flags)                               \
     X(DF_WIRE_WORK_STAGES, DF_STAGE_, WorkStage, enum)                                       \
-    X(DF_WIRE_WORK_OPTS, DF_WORK_OPT_, WorkOpt, flags)
+    X(DF_WIRE_WORK_OPTS, DF_WORK_OPT_, WorkOpt, flags)                                       \
+    X(DF_WIRE_PEER_FLAGS, DF_PEER_, PeerFlag, flags)                                         \
+    X(DF_WIRE_TRANSPORTS, DF_TRANSPORT_, Transport, enum)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

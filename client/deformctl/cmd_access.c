@@ -1,5 +1,6 @@
-/* cmd_access.c — `deformctl access` and `deformctl join`: a session's access policy and joining
- * a session with its join key (PROTOCOL.md 4.34..4.36).
+/* cmd_access.c — `deformctl access`, `deformctl join` and `deformctl peers`: a session's access
+ * policy, joining a session with its join key (PROTOCOL.md 4.34..4.36) and who is connected to
+ * it (4.38).
  *
  *   deformctl access SESSION [--mode open|key|owner] [--observers on|off] [--new-key]
  *       prints the policy ("session N: mode M, observers on|off, owner P, K members"); with
@@ -7,7 +8,10 @@
  *       key mode without one) is printed once as "join key HEX" (JSON: "key").
  *   deformctl join SESSION --key HEX
  *       becomes a member of SESSION (give its id: a session that admits no observers cannot be
- *       found by name) with the 64 hex digits of its join key. */
+ *       found by name) with the 64 hex digits of its join key.
+ *   deformctl peers SESSION
+ *       one line per connection subscribed to SESSION: "client ID 'NAME' as PRINCIPAL over
+ *       unix|tcp[, edit][, shm][ (you)]" after "session N: K peers" (JSON: "peers" array). */
 #include <inttypes.h>
 #include <stdio.h>
 #include <string.h>
@@ -18,6 +22,7 @@
 
 enum { O_MODE = CTL_NGLOBAL, O_OBSERVERS, O_NEW_KEY, O_ACCESS_COUNT };
 enum { O_KEY = CTL_NGLOBAL, O_JOIN_COUNT };
+enum { O_PEERS_COUNT = CTL_NGLOBAL };
 
 static const dc_cli_opt ACCESS_OPTS[O_ACCESS_COUNT] = {
     CTL_GLOBAL_OPTS,
@@ -30,6 +35,8 @@ static const dc_cli_opt JOIN_OPTS[O_JOIN_COUNT] = {
     CTL_GLOBAL_OPTS,
     {"key", 1, "--key HEX          the session's join key, 64 hex digits"},
 };
+
+static const dc_cli_opt PEERS_OPTS[O_PEERS_COUNT] = {CTL_GLOBAL_OPTS};
 
 static const char *const MODES[] = {"open", "key", "owner", NULL};
 static const char *const ON_OFF[] = {"off", "on", NULL};
@@ -136,6 +143,59 @@ static int run_join(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     return CTL_EXIT_OK;
 }
 
+static const char *transport_name(uint8_t t)
+{
+    return t == DF_TRANSPORT_UNIX ? "unix" : t == DF_TRANSPORT_TCP ? "tcp" : "?";
+}
+
+static void print_peers(const ctl_ctx *ctx, uint64_t sid, const df_msg_peer_list *l)
+{
+    if (ctx->json) {
+        printf("{\"ok\":true,\"session\":%" PRIu64 ",\"peers\":[", sid);
+        for (uint32_t i = 0; i < l->count; i++) {
+            const df_msg_peer_info *p = &l->items[i];
+            printf("%s{\"id\":%" PRIu64 ",\"name\":", i ? "," : "", p->client_id);
+            ctl_json_str(stdout, p->name);
+            printf(",\"principal\":");
+            ctl_json_str(stdout, p->principal);
+            printf(",\"transport\":\"%s\",\"self\":%s,\"edit\":%s,\"shm\":%s}",
+                   transport_name(p->transport), p->flags & DF_PEER_SELF ? "true" : "false",
+                   p->flags & DF_PEER_EDIT ? "true" : "false",
+                   p->flags & DF_PEER_SHM ? "true" : "false");
+        }
+        printf("]}\n");
+        return;
+    }
+    printf("session %" PRIu64 ": %" PRIu32 " peer%s\n", sid, l->count, l->count == 1 ? "" : "s");
+    for (uint32_t i = 0; i < l->count; i++) {
+        const df_msg_peer_info *p = &l->items[i];
+        printf("client %" PRIu64 " '%s' as %s over %s%s%s%s\n", p->client_id, p->name,
+               p->principal[0] ? p->principal : "-", transport_name(p->transport),
+               p->flags & DF_PEER_EDIT ? ", edit" : "", p->flags & DF_PEER_SHM ? ", shm" : "",
+               p->flags & DF_PEER_SELF ? " (you)" : "");
+    }
+}
+
+static int run_peers(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
+{
+    df_client *c = ctl_connect(ctx, cmd);
+    if (!c) return CTL_EXIT_SERVER;
+    df_error e;
+    uint64_t sid = 0;
+    df_msg_peer_list l = {0, NULL};
+    int rc = ctl_session_id(c, a->pos[0], &sid, &e);
+    if (rc == DF_OK) rc = df_client_session_peers(c, sid, &l, &e);
+    if (rc != DF_OK) {
+        rc = ctl_fail(ctx, cmd, c, &e);
+        df_client_close(c);
+        return rc;
+    }
+    print_peers(ctx, sid, &l);
+    df_msg_peer_list_free(&l);
+    df_client_close(c);
+    return CTL_EXIT_OK;
+}
+
 const ctl_cmd ctl_cmds_access[] = {
     {"access", "access SESSION [--mode open|key|owner] [--observers on|off] [--new-key]",
      "Print the session's access policy (mode, observers, owner, members); with options, the "
@@ -146,5 +206,9 @@ const ctl_cmd ctl_cmds_access[] = {
      "owner's 'deformctl access SESSION --new-key'); members may edit. Give SESSION's id when "
      "the session admits no observers.",
      JOIN_OPTS, O_JOIN_COUNT, 1, run_join},
+    {"peers", "peers SESSION",
+     "List the connections subscribed to the session: id, HELLO name, principal, transport, "
+     "whether each may edit or reads the shared-memory stream, and which one is you.",
+     PEERS_OPTS, O_PEERS_COUNT, 1, run_peers},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},
 };

@@ -61,7 +61,7 @@ extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
 extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
 extern const ctl_cmd ctl_cmds_brush_state[]; /* brush-state */
 extern const ctl_cmd ctl_cmds_devices[];   /* devices [bind DEVICE SESSION] */
-extern const ctl_cmd ctl_cmds_access[];    /* access join */
+extern const ctl_cmd ctl_cmds_access[];    /* access join peers */
 extern const ctl_cmd ctl_cmds_preview[];   /* preview */
 
 /* Prints a session brush (brush_state_out.c): event 0 as `brush-state` does ('key value' lines,

@@ -32,6 +32,7 @@ static const struct {
     {DF_MSG_SUBSCRIBE, NULL, &df_k_subscribe},
     {DF_MSG_UNSUBSCRIBE, NULL, &df_k_unsubscribe},
     {DF_MSG_STREAM_SHM, NULL, &df_k_stream_shm},
+    {DF_MSG_SESSION_PEERS, NULL, &df_k_session_peers},
     {DF_MSG_BRUSH_BEGIN, NULL, &df_k_brush_begin},
     {DF_MSG_BRUSH_UPDATE, NULL, &df_k_brush_update},
     {DF_MSG_BRUSH_END, NULL, &df_k_brush_end},

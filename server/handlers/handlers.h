@@ -44,6 +44,16 @@ extern const df_job_kind df_k_set_brush_param;
 extern const df_job_kind df_k_handles_set, df_k_handles_move, df_k_handles_get, df_k_reset_rest;
 extern const df_job_kind df_k_history; /* undo and redo */
 extern const df_job_kind df_k_get_mesh, df_k_snapshot;
+extern const df_job_kind df_k_session_peers; /* h_peers.c: who is subscribed (4.38) */
+
+/* The SESSION_PEERS rows of `s` (PROTOCOL.md 4.38) as seen by connection `asker` (may be NULL):
+ * one per subscriber in subscription order, at most `cap` (DF_MAX_PEERS on the wire); when the
+ * asker is a subscriber beyond the cap, its row replaces the last. Flags: DF_PEER_SELF on the
+ * asker's row, DF_PEER_EDIT when the subscriber's principal holds the edit right now (access.h),
+ * DF_PEER_SHM for shared-memory subscribers. out->items is malloc'd (NULL when count is 0;
+ * df_msg_peer_list_free). DF_OK or DF_ENOMEM (out untouched). Loop thread. */
+int df_session_peers_fill(const df_session *s, const df_conn *asker, uint32_t cap,
+                          df_msg_peer_list *out, df_error *err);
 
 /* Fills a session_info body from `s` (loop thread). */
 void df_session_info_fill(const df_session *s, df_msg_session_info *out);

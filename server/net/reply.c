@@ -69,6 +69,7 @@ DF_OUT_DEF(brush_cursor)
 DF_OUT_DEF(device_info)
 DF_OUT_DEF(device_list)
 DF_OUT_DEF(access_info)
+DF_OUT_DEF(peer_list)
 DF_OUT_DEF(work_progress)
 
 void df_reply_error(df_conn *c, uint16_t type, uint64_t request_id, int code, const char *fmt, ...)

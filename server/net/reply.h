@@ -44,6 +44,7 @@ DF_OUT_DECL(brush_cursor)
 DF_OUT_DECL(device_info)
 DF_OUT_DECL(device_list)
 DF_OUT_DECL(access_info)
+DF_OUT_DECL(peer_list)
 DF_OUT_DECL(work_progress)
 #undef DF_OUT_DECL
 

@@ -69,6 +69,7 @@ DF_REQ_REPLY_DEF(shm_info)
 DF_REQ_REPLY_DEF(brush_state)
 DF_REQ_REPLY_DEF(device_list)
 DF_REQ_REPLY_DEF(access_info)
+DF_REQ_REPLY_DEF(peer_list)
 
 void df_req_reply_empty(df_req *r)
 {

@@ -75,6 +75,7 @@ DF_REQ_REPLY_DECL(shm_info)
 DF_REQ_REPLY_DECL(brush_state)
 DF_REQ_REPLY_DECL(device_list)
 DF_REQ_REPLY_DECL(access_info)
+DF_REQ_REPLY_DECL(peer_list)
 #undef DF_REQ_REPLY_DECL
 
 #endif

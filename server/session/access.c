@@ -10,7 +10,7 @@ int df_access_needed(uint16_t type)
     switch (type) {
     case DF_MSG_SUBSCRIBE: case DF_MSG_UNSUBSCRIBE: case DF_MSG_STREAM_SHM:
     case DF_MSG_GET_MESH: case DF_MSG_SNAPSHOT: case DF_MSG_HANDLES_GET:
-    case DF_MSG_BRUSH_STATE_GET:
+    case DF_MSG_BRUSH_STATE_GET: case DF_MSG_SESSION_PEERS:
         return DF_RIGHT_OBSERVE;
     case DF_MSG_BRUSH_BEGIN: case DF_MSG_BRUSH_UPDATE: case DF_MSG_BRUSH_END:
     case DF_MSG_BRUSH_CANCEL: case DF_MSG_SET_BRUSH_PARAM: case DF_MSG_BRUSH_STATE_SET:

@@ -4,7 +4,7 @@
  * peer_key, "admin" for key_file, "tcp" on a server without keys; server/net/peer.h, auth.h).
  * The principal that loads a session owns it (df_session.owner). Rights on a session:
  *   DF_RIGHT_OBSERVE  subscribe, unsubscribe, shared-memory stream, get mesh, snapshot,
- *                     handles get, brush state get; also open session, a session's stats and
+ *                     handles get, brush state get, session peers; also open session, a session's stats and
  *                     being listed (checked by their handlers)
  *   DF_RIGHT_EDIT     brush strokes and parameters, brush state set, handles set / move,
  *                     undo / redo, device bind and device view

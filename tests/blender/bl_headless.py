@@ -5,7 +5,9 @@ starts the daemon. A failed assertion ends Blender with exit code 1."""
 import os
 import select
 import signal
+import socket
 import sys
+import types
 
 import bpy
 import numpy as np
@@ -483,6 +485,90 @@ def case_reconnect_replay():
 
 def case_reconnect_snapshot():
     _reconnect("snapshot")
+
+
+class _Layout:
+    """Stands in for a panel's UILayout: records the text of every label drawn."""
+
+    def __init__(self, out):
+        self.out = out
+
+    def box(self):
+        return self
+
+    def row(self, **kw):
+        return self
+
+    def column(self, **kw):
+        return self
+
+    def label(self, text="", **kw):
+        self.out.append(text)
+
+    def prop(self, *a, **kw):
+        pass
+
+    def operator(self, *a, **kw):
+        return types.SimpleNamespace()
+
+
+def panel_labels(mod):
+    """The labels the add-on's sidebar panel draws now (its own draw(), a recording layout)."""
+    out = []
+    mod.panel.DEFORMD_PT_panel.draw(types.SimpleNamespace(layout=_Layout(out)), bpy.context)
+    return out
+
+
+def peers_answered(mod):
+    """Runs the timer's code (deformd.sync) once, which must send SESSION_PEERS (due), then
+    until its reply is collected, waiting on the add-on's socket in between."""
+    st = bc.state(mod)
+    bpy.ops.deformd.sync()
+    assert st.peers_rid, "the timer sent no SESSION_PEERS"
+    while st.peers_rid:
+        bc.wait_readable(st.client, "the SESSION_PEERS reply")
+        bpy.ops.deformd.sync()
+    assert st.peers_sid == st.current_sid
+    return st.peers
+
+
+def case_peers():
+    """Who else is connected: a second client with a HELLO name subscribes; once the subscriber
+    count changes (the panel's session refresh), the timer's SESSION_PEERS lists it and the
+    panel shows its name and principal; after it disconnects the list loses it."""
+    mod = bc.install(A.zip)
+    obj, sid = _shared(mod)
+    me = "uid:%d" % os.getuid()
+    rows = peers_answered(mod)                                 # a new session: listed at once
+    assert [(p.name, p.principal, p.is_self) for p in rows] == [("blender", me, True)]
+    assert mod.peers.others() == []
+    assert "Also connected: 0" in panel_labels(mod)
+    c2 = mod.deformd_client.Client.connect_unix(A.socket, timeout=10.0, name="second-sculptor")
+    c2.subscribe(sid)
+    bpy.ops.deformd.list_sessions()                            # the count changes: 1 -> 2
+    assert bc.state(mod).subscribers == 2
+    peers_answered(mod)
+    others = mod.peers.others()
+    assert [(p.name, p.principal, p.can_edit) for p in others] == \
+        [("second-sculptor", me, True)]                       # one uid: the owner edits
+    labels = panel_labels(mod)
+    assert "Also connected: 1" in labels, labels
+    assert "second-sculptor (%s)" % me in labels, labels
+    # it disconnects: half-close and read until the daemon closes its end, so the daemon has
+    # dropped its subscription before the next SESSION_PEERS
+    c2.sock.shutdown(socket.SHUT_WR)
+    while c2.sock.recv(1 << 16):
+        pass
+    c2.close()
+    bpy.ops.deformd.list_sessions()                            # 2 -> 1
+    assert bc.state(mod).subscribers == 1
+    peers_answered(mod)
+    assert mod.peers.others() == []
+    labels = panel_labels(mod)
+    assert "Also connected: 0" in labels and not any("second-sculptor" in t for t in labels)
+    # the panel's session goes away: the list empties instead of showing stale rows
+    bpy.ops.deformd.disconnect()
+    assert bc.state(mod).peers == [] and mod.peers.others() == []
 
 
 CASES = {n[len("case_"):]: f for n, f in globals().items() if n.startswith("case_")}

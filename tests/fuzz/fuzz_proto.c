@@ -48,6 +48,8 @@ static const uint16_t kinds[][2] = {
     {DF_MSG_DEVICE_BIND, 0}, {DF_MSG_DEVICE_VIEW, 0},
     /* per-session access */
     {DF_MSG_SESSION_ACCESS, 0}, {DF_MSG_JOIN, 0}, {DF_MSG_SESSION_ACCESS, DF_FLAG_REPLY},
+    /* session peers */
+    {DF_MSG_SESSION_PEERS, DF_FLAG_REPLY},
 };
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

@@ -67,7 +67,8 @@ def headless(tmp_path, case, daemon, out=None):
 
 
 @pytest.mark.parametrize("case", ["register", "second_user", "brush_state", "undo",
-                                  "join_reconnect", "handles", "elastic", "modifiers", "progress"])
+                                  "join_reconnect", "handles", "elastic", "modifiers", "progress",
+                                  "peers"])
 def test_blender_headless(tmp_path, make_daemon, case):
     headless(tmp_path, case, make_daemon(), tmp_path / "out.json")
 

@@ -251,6 +251,8 @@ ENUM_FIELDS = [
     ("4.15", "options", "WorkOpt", True, ("KELVINLET_GUESS",)),  # handle_move only
     ("4.16", "options", "WorkOpt", True, ()),
     ("4.37", "stage", "WorkStage", False, ()),
+    ("4.38", "flags", "PeerFlag", True, ()),
+    ("4.38", "transport", "Transport", False, ()),
 ]
 
 

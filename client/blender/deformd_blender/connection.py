@@ -78,6 +78,12 @@ class State:
         self.last_write_t = 0.0                # perf_counter of the last mesh write
         self.last_list_t = 0.0
         self.list_rid = 0                      # LIST_SESSIONS in flight (the timer's)
+        self.peers = []                        # SESSION_PEERS rows of peers_sid (peers.py)
+        self.peers_sid = 0                     # the session `peers` belongs to
+        self.peers_rid = 0                     # SESSION_PEERS in flight (the timer's)
+        self.peers_rid_sid = 0                 # ... for this session
+        self.last_peers_t = 0.0                # when the last one was sent / answered
+        self.peers_subs = -1                   # `subscribers` when the last one was sent
         self.stroke_active = False             # the modal operator holds a stroke
 
     @property
@@ -121,6 +127,8 @@ class State:
         self.mirrors.clear()
         self.stroke_active = False
         self.list_rid = 0
+        self.peers, self.peers_sid, self.peers_rid, self.peers_rid_sid = [], 0, 0, 0
+        self.last_peers_t, self.peers_subs = 0.0, -1
         self.status = "disconnected" + (": " + why if why else "")
         if why:
             self.last_error = why

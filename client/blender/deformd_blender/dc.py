@@ -13,3 +13,4 @@ ProtocolError = client.ProtocolError
 Brush = client.Brush
 MsgType = client.MsgType
 messages = client.messages
+peers = client.peers

@@ -252,6 +252,9 @@ class DEFORMD_OT_list_sessions(bpy.types.Operator):
             if not STATE.connected:
                 raise ValueError("not connected (deformd.connect first)")
             STATE.sessions = STATE.client.list_sessions()
+            for s in STATE.sessions:           # the panel's count (and peers.py's trigger)
+                if s.session_id == STATE.current_sid:
+                    STATE.subscribers = s.subscribers
         except CLIENT_ERRORS as e:
             return _fail(self, e)
         return {"FINISHED"}

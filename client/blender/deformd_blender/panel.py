@@ -3,7 +3,7 @@ BRUSH_STATE events update it; edits send BRUSH_STATE_SET), handles, undo / redo,
 the session, the update rate."""
 import bpy
 
-from . import overlay, props, sync
+from . import overlay, peers, props, sync
 from .connection import STATE
 
 
@@ -37,8 +37,8 @@ class DEFORMD_PT_panel(bpy.types.Panel):
             return
         m = STATE.mirrors[sid]
         lay.label(text="Session %d, version %d, %d vertices" % (sid, m.version, m.nv))
-        # the protocol gives a count, not who (no per-session client list)
         lay.label(text="Subscribers: %d (you included)" % STATE.subscribers)
+        _draw_peers(lay)
         if STATE.last_changer:
             lay.label(text="Brush last changed by: %s" % STATE.last_changer)
         if STATE.resumed_replay or STATE.resumed_snapshot:
@@ -64,6 +64,28 @@ class DEFORMD_PT_panel(bpy.types.Panel):
         box.operator("deformd.handle_drag")
         lay.label(text="Mesh writes: %.0f Hz, last %.1f ms%s" % (
             STATE.rate_now(), STATE.last_apply_ms, " (overlay live)" if overlay.shown() else ""))
+
+
+def peer_line(p) -> str:
+    """One peer of the panel's list: its HELLO name (else its principal), then its principal
+    when the name is shown, its transport when TCP, and "observer" when it may not edit."""
+    text = p.label
+    if p.name and p.principal:
+        text += " (%s)" % p.principal
+    if p.transport_name == "tcp":
+        text += ", tcp"
+    if not p.can_edit:
+        text += ", observer"
+    return text
+
+
+def _draw_peers(lay) -> None:
+    """Who else is connected (SESSION_PEERS, refreshed by the timer about once a second)."""
+    rows = peers.others()
+    box = lay.box()
+    box.label(text="Also connected: %d" % len(rows), icon="COMMUNITY")
+    for p in rows:
+        box.label(text=peer_line(p), icon="USER")
 
 
 CLASSES = (DEFORMD_PT_panel,)

@@ -1,10 +1,11 @@
 """Bringing sessions onto objects and keeping them in sync: attach() (subscribe, base positions,
 snapshot), tick() (the 60 Hz timer and deformd.sync: non-blocking read, every version applied to
-the numpy replica, one mesh write per object), resync on a gap, and the timer itself."""
+the numpy replica, one mesh write per object; the session list and the peer list, peers.py,
+requested and collected without waiting), resync on a gap, and the timer itself."""
 import bpy
 import numpy as np
 
-from . import overlay, prefs, progress
+from . import overlay, peers, prefs, progress
 from . import props as panel_props
 from .connection import CLIENT_ERRORS, STATE, TIMEOUT_S as STATE_TIMEOUT_S, describe, now
 from .dc import MsgType, messages
@@ -191,6 +192,7 @@ def tick(force: bool = False) -> str:
         for m in list(STATE.mirrors.values()):
             _write(m, force, t)
         _list_sessions(c, t)
+        peers.poll(c, t)
     except CLIENT_ERRORS as e:
         return STATE.lost(e)
     _redraw()

@@ -16,13 +16,14 @@ from .devices import DeviceInfo
 from .errors import ConnectionClosed, DeformdError, ErrorCode, error_name
 from .frame import Frame, FrameDecoder, FrameError, encode_frame, encode_header
 from .mesh_state import MeshState, OutOfSync
+from .peers import Peer
 from .messages import (AffineSet, Brush, HandleParams, HandleSet, LoadReport, MoveResult,
                        SessionInfo, ShmInfo)
 from .schema import (BrushParam, BrushStateField, BrushType, ChangeKind, CursorFlag,
                      DispEncoding, Energy, Feature, Format, FrameFlag, GetMeshFlag, Integrator,
                      LoadOpt, LoadSource, MeshKind, MeshSection, MoveStatus, MsgType, Origin,
                      PinFlag, SubscribeFlag, DevClass, DevBackend, DevState, AuthMethod,
-                     WorkOpt, WorkStage)
+                     WorkOpt, WorkStage, PeerFlag, Transport)
 from .progress import WorkProgress
 from .stream import Disp, Progress, ShmRing
 from .wire import ProtocolError
@@ -39,6 +40,6 @@ __all__ = [
     "MoveStatus", "MsgType", "PinFlag", "SubscribeFlag",
     "BrushCursor", "BrushState", "BrushValues", "BrushStateField", "CursorFlag", "Origin",
     "DeviceInfo", "DevClass", "DevBackend", "DevState", "AuthError", "AuthMethod",
-    "WorkProgress", "WorkOpt", "WorkStage",
+    "WorkProgress", "WorkOpt", "WorkStage", "Peer", "PeerFlag", "Transport",
 ]
 __version__ = "0.1.0"

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import access as ac
+from . import peers as pr
 from . import brush_state as bs
 from . import devices as dv
 from . import messages as m
@@ -298,6 +299,8 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "join": (ac.decode_join, lambda x: ac.encode_join(*x)),
     "access_info": (ac.decode_access_info, ac.encode_access_info),
     "work_progress": (pg.decode_work_progress, pg.encode_work_progress),
+    # session peers
+    "peer_list": (pr.decode_peer_list, pr.encode_peer_list),
 }
 
 

@@ -44,6 +44,7 @@ from . import brush_state as bs
 from . import devices as dv
 from . import frame as fr
 from . import messages as m
+from . import peers as pr
 from . import progress as pg
 from . import schema
 from . import stream as st
@@ -773,6 +774,14 @@ class Client(PollMixin):
         is EPERM (and rate-limited per peer: ELIMIT)."""
         raw = bytes.fromhex(key) if isinstance(key, str) else bytes(key)
         return ac.decode_access_info(self._one(m.JOIN, ac.encode_join(session_id, raw)))
+
+    def session_peers(self, session_id: int) -> List[pr.Peer]:
+        """Who is connected to the session (PROTOCOL.md 4.38): one Peer per connection
+        subscribed to it, in subscription order: client_id, name (its HELLO client_name),
+        principal, transport, flags (PeerFlag: SELF marks this connection's own row, EDIT a
+        peer that may edit, SHM one on the shared-memory stream). Needs the observe right
+        (DeformdError EPERM); ENOTFOUND for an unknown session."""
+        return pr.decode_peer_list(self._one(m.SESSION_PEERS, m.encode_session_ref(session_id)))
 
     # ------------------------------------------------------------------ devices (HID)
     def devices_list(self) -> List[dv.DeviceInfo]:

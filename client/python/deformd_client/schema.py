@@ -50,6 +50,7 @@ MAX_STATS_ENTRIES = 1024
 MAX_STATS_KEY_LEN = 63
 STREAM_CHUNK_BYTES = 16 << 20
 MAX_DEVICES = 256              # devices (HID)
+MAX_PEERS = 4096               # rows of a peer_list (SESSION_PEERS reply)
 
 LIMITS: Dict[str, int] = {k: v for k, v in dict(globals()).items()
                           if k.startswith("MAX_") or k == "STREAM_CHUNK_BYTES"}
@@ -69,6 +70,7 @@ class MsgType(IntEnum):
     STREAM_SHM = 0x0016
     SESSION_ACCESS = 0x0017    # per-session access
     JOIN = 0x0018
+    SESSION_PEERS = 0x0019     # who is connected to a session (4.38)
     BRUSH_BEGIN = 0x0020
     BRUSH_UPDATE = 0x0021
     BRUSH_END = 0x0022
@@ -120,6 +122,7 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.STREAM_SHM: Bodies("session_ref", "shm_info", None),
     MsgType.SESSION_ACCESS: Bodies("session_access", "access_info", None),
     MsgType.JOIN: Bodies("join", "access_info", None),
+    MsgType.SESSION_PEERS: Bodies("session_ref", "peer_list", None),
     MsgType.BRUSH_BEGIN: Bodies("brush", "ack", None),
     MsgType.BRUSH_UPDATE: Bodies("brush_update", "ack", None),
     MsgType.BRUSH_END: Bodies("session_ref", "ack", None),
@@ -348,6 +351,19 @@ class AccessFlag(IntFlag):
 
 
 JOIN_KEY_BYTES = 32      # DF_JOIN_KEY_BYTES: a session's join key
+
+
+class PeerFlag(IntFlag):
+    """peer_info `flags` (PROTOCOL.md 4.38)."""
+    SELF = 1 << 0     # the connection that asked
+    EDIT = 1 << 1     # its principal holds the edit right on the session
+    SHM = 1 << 2      # it streams through the shared-memory ring
+
+
+class Transport(IntEnum):
+    """peer_info `transport` (PROTOCOL.md 4.38)."""
+    UNIX = 1
+    TCP = 2
 
 
 class WorkStage(IntEnum):

@@ -17,9 +17,9 @@ typedef struct sample {
 } sample;
 
 enum { N_SAMPLES_BASE = 42, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
-       N_SAMPLES_WORK = 4,
+       N_SAMPLES_WORK = 4, N_SAMPLES_PEERS = 3,
        N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS +
-                   N_SAMPLES_WORK };
+                   N_SAMPLES_WORK + N_SAMPLES_PEERS };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -303,6 +303,23 @@ static inline void build_samples(sample *s)
     df_msg_work_progress wp = {0, DF_STAGE_PARSE, 0, 1 << 20, 3 << 20, 12.5};
     ADD("work_progress", DF_MSG_WORK_PROGRESS, DF_FLAG_EVENT,
         df_msg_work_progress_encode(&wp, out, &e));
+    /* session peers (PROTOCOL.md 4.38): the request, two rows (one unnamed), an empty list */
+    df_msg_session_ref spr = {9};
+    ADD("session_peers", DF_MSG_SESSION_PEERS, 0, df_msg_session_ref_encode(&spr, out, &e));
+    static df_msg_peer_info peer_rows[2];
+    memset(peer_rows, 0, sizeof peer_rows);
+    peer_rows[0] = (df_msg_peer_info){.client_id = 3, .flags = DF_PEER_EDIT | DF_PEER_SHM,
+                                      .transport = DF_TRANSPORT_UNIX};
+    snprintf(peer_rows[0].name, sizeof peer_rows[0].name, "blender");
+    snprintf(peer_rows[0].principal, sizeof peer_rows[0].principal, "uid:1000");
+    peer_rows[1] = (df_msg_peer_info){.client_id = 41, .flags = DF_PEER_SELF,
+                                      .transport = DF_TRANSPORT_TCP};
+    snprintf(peer_rows[1].principal, sizeof peer_rows[1].principal, "key:bob");
+    df_msg_peer_list pl = {2, peer_rows};
+    ADD("peer_list", DF_MSG_SESSION_PEERS, DF_FLAG_REPLY, df_msg_peer_list_encode(&pl, out, &e));
+    df_msg_peer_list pl0 = {0, NULL};
+    ADD("peer_list_empty", DF_MSG_SESSION_PEERS, DF_FLAG_REPLY,
+        df_msg_peer_list_encode(&pl0, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);

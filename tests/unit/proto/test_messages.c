@@ -449,7 +449,8 @@ static void test_body_kind_table(void **state)
     int known = 0;
     for (unsigned t = 0; t <= 0xFFFF; t++)
         known += df_msg_type_valid((uint16_t)t);
-    assert_int_equal(known, 33 + 4 + 2 + 1); /* + the device (HID), access types, WORK_PROGRESS */
+    assert_int_equal(known, 33 + 4 + 2 + 1 + 1); /* + the device (HID), access types,
+                                                  * WORK_PROGRESS, SESSION_PEERS */
     /* shared-memory stream: a session ref in, shm_info back; SHM_REF only as an event */
     assert_int_equal(df_msg_body_kind(DF_MSG_STREAM_SHM, 0, &k, &e), DF_OK);
     assert_int_equal(k, DF_BODY_SESSION_REF);
