@@ -171,6 +171,7 @@ typedef struct df_server {
     void *commit_hook_arg;
     struct df_store *store;       /* the durable store (server/store/store.h), NULL: none */
     const df_store_ops *store_ops;/* its entry points (journal.h), NULL: none */
+    struct df_cluster *cluster;   /* cluster mode (server/cluster/cluster.h), NULL: off */
 } df_server;
 
 /* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,

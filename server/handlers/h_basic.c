@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "server/cluster/cluster.h"
 #include "server/net/auth.h"
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
@@ -134,6 +135,9 @@ int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
     if (rc != DF_OK) return rc;
     df_session *s = m.session_id ? df_session_find(r->srv, m.session_id)
                                  : df_session_find_name(r->srv, m.name);
+    if (!s && m.session_id && r->srv->cluster &&
+        (rc = df_cluster_route(r->srv, m.session_id, &s, err)) != DF_OK)
+        return rc; /* redirected, or taken over (cluster.h) */
     if (!s) {
         if (m.session_id)
             return df_error_set(err, DF_ENOTFOUND, "open_session: no session %llu",

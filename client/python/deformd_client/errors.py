@@ -19,6 +19,7 @@ class ErrorCode(IntEnum):
     EINTERNAL = -10
     EEXIST = -11
     EPERM = -12
+    EMOVED = -13
     EPROTO_BADMAGIC = -100
     EPROTO_BADVERSION = -101
     EPROTO_BADTYPE = -102
