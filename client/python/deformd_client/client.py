@@ -49,7 +49,7 @@ from . import schema
 from . import stream as st
 from .poll import PollMixin
 from .stream import ShmRing
-from .errors import ConnectionClosed, DeformdError, error_name
+from .errors import EMOVED, ConnectionClosed, DeformdError, error_name, moved_address
 from .wire import ProtocolError
 
 DEFAULT_TIMEOUT_S = 60.0
@@ -131,6 +131,12 @@ class Client(PollMixin):
         self._shm_detaching: Set[int] = set()       # attach failed: refs count as lost
         self.server: Optional[m.HelloReply] = None
         self.authenticated = False
+        # cluster mode (PROTOCOL.md 4.38): an EMOVED answer moves the client to the owner's
+        # address (TCP, same name, key and TLS context) and retries the request once there
+        self.follow_moved = True
+        self.moves = 0                               # redirects followed so far
+        self._name, self._key = name, key
+        self._ssl_context: Optional[ssl.SSLContext] = None
         try:
             if key_file is not None and key is None:
                 key = auth.load_key(key_file)
@@ -178,7 +184,39 @@ class Client(PollMixin):
         except BaseException:
             s.close()
             raise
-        return cls(s, timeout, hello, name, key, key_file)
+        c = cls(s, timeout, hello, name, key, key_file)
+        c._ssl_context = ssl_context
+        return c
+
+    def move_to(self, host: str, port: int) -> None:
+        """Replaces the connection by a new one to the daemon at host:port (TCP, with this
+        client's name, key and TLS context), HELLO and AUTH done: the cluster redirect (EMOVED).
+        Replies and events not yet read from the old connection, and its subscriptions and
+        shared-memory rings, are dropped: subscribe again on the new daemon."""
+        s = socket.create_connection((host, port), timeout=self.timeout)
+        try:
+            s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            if self._ssl_context is not None:
+                s = self._ssl_context.wrap_socket(s, server_hostname=host)
+        except BaseException:
+            s.close()
+            raise
+        old = self.sock
+        for sid in list(self._shm):
+            self._drop_shm(sid)
+        self.sock = s
+        self._decoder = fr.FrameDecoder()
+        self._frames.clear()
+        self._partial.clear()
+        self._pending.clear()
+        self._done.clear()
+        self._work_cbs.clear()
+        old.close()
+        self.authenticated = False
+        self.server = self.hello(self._name)
+        if self._key is not None:
+            self.authenticate(self._key)
+        self.moves += 1
 
     def close(self) -> None:
         """Closes the socket and every shared-memory ring mapping."""
@@ -446,7 +484,17 @@ class Client(PollMixin):
 
     def request(self, msg_type: int, payload: bytes = b"",
                 timeout: Optional[float] = None) -> List[fr.Frame]:
-        return self.wait_reply(self.send(msg_type, payload), timeout)
+        """Sends one request and waits for its reply. An EMOVED answer (cluster mode) moves the
+        client to the session's owner (move_to) and sends the request there once more, when
+        follow_moved is set (the default)."""
+        try:
+            return self.wait_reply(self.send(msg_type, payload), timeout)
+        except DeformdError as e:
+            addr = moved_address(e.message) if e.code == EMOVED and self.follow_moved else None
+            if addr is None:
+                raise
+            self.move_to(*addr)
+            return self.wait_reply(self.send(msg_type, payload), timeout)
 
     def _one(self, msg_type: int, payload: bytes = b"") -> bytes:
         parts = self.request(msg_type, payload)
