@@ -209,6 +209,11 @@ int df_cluster_start(df_server *srv, df_error *err)
     return DF_OK;
 }
 
+static void free_cluster(uv_handle_t *h)
+{
+    free(h->data);
+}
+
 void df_cluster_stop(df_server *srv)
 {
     df_cluster *cl = srv->cluster;
@@ -229,7 +234,7 @@ void df_cluster_stop(df_server *srv)
     srv->store_ops = srv->store ? &df_store_journal_ops : NULL;
     df_redis_free(cl->r);
     free(cl->owned);
-    /* the handles close with the loop's other handles */
+    /* the handles close with the loop's other handles; the last one frees cl */
     uv_close((uv_handle_t *)&cl->renew, NULL);
-    uv_close((uv_handle_t *)&cl->drop, (uv_close_cb)free);
+    uv_close((uv_handle_t *)&cl->drop, free_cluster);
 }

@@ -500,6 +500,18 @@ class Client(PollMixin):
         parts = self.request(msg_type, payload)
         return b"".join(p.payload for p in parts)
 
+    def _request_progress(self, msg_type: int, payload: bytes,
+                          progress: Optional["ProgressFn"]) -> bytes:
+        """send + _wait_with_progress, following an EMOVED redirect once as request() does."""
+        try:
+            return self._wait_with_progress(self.send(msg_type, payload), progress)
+        except DeformdError as e:
+            addr = moved_address(e.message) if e.code == EMOVED and self.follow_moved else None
+            if addr is None:
+                raise
+            self.move_to(*addr)
+            return self._wait_with_progress(self.send(msg_type, payload), progress)
+
     def _wait_with_progress(self, rid: int, progress: Optional["ProgressFn"],
                             timeout: Optional[float] = None) -> bytes:
         """wait_reply(rid) with `progress` receiving that request's WORK_PROGRESS events."""
@@ -690,17 +702,17 @@ class Client(PollMixin):
         update; see the module doc); the stroke's later updates report to brush_update's."""
         if progress is not None:
             brush = dataclasses.replace(brush, options=pg.WORK_OPT_PROGRESS)
-        rid = self.send(m.BRUSH_BEGIN, m.encode_brush(session_id, brush))
-        return m.decode_ack(self._wait_with_progress(rid, progress))
+        return m.decode_ack(self._request_progress(m.BRUSH_BEGIN,
+                                                   m.encode_brush(session_id, brush), progress))
 
     def brush_update(self, session_id: int, move=None, twist=None, scale: float = 0.0,
                      matrix=None, progress: Optional["ProgressFn"] = None) -> m.Ack:
         """Cumulative load since the stroke began (same meaning as in Brush). progress: the
         pin LU's "factorize" events when this update (re)builds it, for a stroke whose
         brush_begin asked for progress."""
-        rid = self.send(m.BRUSH_UPDATE,
-                        m.encode_brush_update(session_id, move, twist, scale, matrix))
-        return m.decode_ack(self._wait_with_progress(rid, progress))
+        return m.decode_ack(self._request_progress(
+            m.BRUSH_UPDATE, m.encode_brush_update(session_id, move, twist, scale, matrix),
+            progress))
 
     def brush_end(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.BRUSH_END, m.encode_session_ref(session_id)))
