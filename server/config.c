@@ -266,9 +266,8 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
     }
     if (strcmp(key, "advertise") == 0) {
         const char *colon = strrchr(value, ':');
-        if (value[0] && (!colon || colon == value || !colon[1] ||
-                         strlen(value) >= sizeof cfg->advertise))
-            return df_error_set(err, DF_EINVAL, "advertise: '%s' is not HOST:PORT", value);
+        if (value[0] && (!colon || colon == value || !colon[1] || strlen(value) > 255))
+            return df_error_set(err, DF_EINVAL, "advertise: '%s' is not HOST:PORT (at most 255 bytes)", value);
         strcpy(cfg->advertise, value);
         return DF_OK;
     }

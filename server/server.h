@@ -88,6 +88,7 @@ typedef struct df_conn {
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */
+    int want_owners;         /* its HELLO set DF_HELLO_WANT_OWNERS (cluster/cluster.h list) */
     int admit_waiting;       /* accepted at max_clients: admitted or refused at the end of the
                               * loop iteration (guard.h), not reading until then */
     uint64_t accepted_ms;    /* uv_now() at accept (handshake timeout) */

@@ -67,15 +67,19 @@ int df_cluster_row_state(df_server *srv, uint64_t id, int64_t *snap_version, int
     return df_rows_last_change(srv->store, id, last_row, err);
 }
 
-int df_cluster_snapshot(df_cluster *cl, df_owned *o, const char *name, df_error *err)
+int df_cluster_snapshot(df_cluster *cl, df_owned *o, const df_session *s, uint64_t version,
+                        df_error *err)
 {
+    char info[DF_SESSION_NAME_MAX + 96];
+    snprintf(info, sizeof info, "%d %d %d %d %" PRIu64 " %d %s", (int)s->mesh.kind,
+             s->mesh.planar, s->mesh.nv, s->mesh.ne, version, s->acc.observers, s->name);
     df_store *st = cl->srv->store;
     int64_t sv, lr;
     uint8_t *snap = NULL;
     size_t len = 0;
     int rc = df_cluster_row_state(cl->srv, o->id, &sv, &lr, err);
     if (rc == DF_OK) rc = df_rows_dump_session(st, o->id, &snap, &len, err);
-    if (rc == DF_OK) rc = df_rlog_snapshot(cl->r, o->id, o->token, name, snap, len, err);
+    if (rc == DF_OK) rc = df_rlog_snapshot(cl->r, o->id, o->token, info, snap, len, err);
     free(snap);
     if (rc == DF_OK) {
         o->snap_version = sv;

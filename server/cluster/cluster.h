@@ -57,12 +57,17 @@ int df_cluster_route(df_server *srv, uint64_t id, struct df_session **out, df_er
  * that df_session_create gives it. No-op outside cluster mode. Errors: DF_EIO. */
 int df_cluster_next_id(df_server *srv, df_error *err);
 
-/* Every session of the cluster not held here: calls fn(arg, id, name, owner address or ""
- * when unleased) for each. Errors: DF_EIO. */
-int df_cluster_foreach_remote(df_server *srv,
-                              void (*fn)(void *arg, uint64_t id, const char *name,
-                                         const char *owner),
-                              void *arg, df_error *err);
+/* LIST_SESSIONS in cluster mode: `local` (this daemon's listed sessions, oldest first; owned by
+ * the caller) plus every session of the cluster held elsewhere or nowhere (from the Redis index:
+ * its sizes, the version of its last replicated change; subscribers and undo depths 0; those
+ * that admit no observers only for admins), answered on r. When the requester's HELLO set
+ * DF_HELLO_WANT_OWNERS, the owners trailer follows (PROTOCOL.md 4.10): each listed session's
+ * owner address ("" while unleased). Errors: DF_EIO (Redis), DF_ENOMEM; r is then not
+ * answered. */
+struct df_req;
+struct df_msg_session_list;
+int df_cluster_list_sessions(struct df_req *r, const struct df_msg_session_list *local,
+                             df_error *err);
 
 /* This daemon's advertised address ("" outside cluster mode). */
 const char *df_cluster_advertise(const df_server *srv);

@@ -50,8 +50,12 @@ void df_cluster_schedule_drop(df_cluster *cl, uint64_t id, const char *why);
 int df_cluster_row_state(df_server *srv, uint64_t id, int64_t *snap_version, int64_t *last_row,
                          df_error *err);
 
-/* Writes session s's whole row set as its Redis snapshot (fenced by o's token) and records
- * the replicated state in o. Errors: DF_ESTATE (fenced), DF_EIO, DF_EINTERNAL, DF_ENOMEM. */
-int df_cluster_snapshot(df_cluster *cl, df_owned *o, const char *name, df_error *err);
+/* Writes session s's whole row set as its Redis snapshot (fenced by o's token), its index
+ * entry (list.c: "KIND PLANAR NV NE VERSION OBSERVERS NAME", `version` the session's after the change
+ * being written) and records the replicated state in o. Errors: DF_ESTATE (fenced), DF_EIO,
+ * DF_EINTERNAL, DF_ENOMEM. */
+struct df_session;
+int df_cluster_snapshot(df_cluster *cl, df_owned *o, const struct df_session *s,
+                        uint64_t version, df_error *err);
 
 #endif

@@ -60,7 +60,7 @@ int df_cluster_rebuild(df_cluster *cl, uint64_t id, const char *token, df_sessio
                                              "restored", id);
     if (rc == DF_OK) rc = df_cluster_own(cl, id, token, err);
     df_owned *o = rc == DF_OK ? df_cluster_owned(cl, id) : NULL;
-    if (o) rc = df_cluster_snapshot(cl, o, s->name, err);
+    if (o) rc = df_cluster_snapshot(cl, o, s, atomic_load(&s->version), err);
     if (rc != DF_OK) {
         df_cluster_disown(cl, id);
         if (s) df_session_destroy(s);

@@ -36,7 +36,7 @@ static int replicate(df_server *srv, const df_session *s, uint64_t version, int 
     int rc = df_cluster_row_state(srv, s->id, &sv, &lr, err);
     if (rc != DF_OK) return failed(cl, s->id, rc, err);
     if (whole || sv != o->snap_version || lr < o->last_row) {
-        rc = df_cluster_snapshot(cl, o, s->name, err);
+        rc = df_cluster_snapshot(cl, o, s, version, err);
         return rc == DF_OK ? DF_OK : failed(cl, s->id, rc, err);
     }
     if (lr == o->last_row) return DF_OK; /* nothing journaled */
@@ -65,7 +65,7 @@ static int session_created(df_server *srv, const df_session *s, df_error *err)
     else if (got < 0) rc = got;
     if (rc == DF_OK) rc = df_cluster_own(cl, s->id, token, err);
     df_owned *o = rc == DF_OK ? df_cluster_owned(cl, s->id) : NULL;
-    if (o) rc = df_cluster_snapshot(cl, o, s->name, err);
+    if (o) rc = df_cluster_snapshot(cl, o, s, atomic_load(&s->version), err);
     if (rc != DF_OK) {
         df_error e;
         df_cluster_disown(cl, s->id);

@@ -14,7 +14,7 @@ static const char k_append[] =
     "if redis.call('GET', KEYS[1]) ~= ARGV[1] then return redis.error_reply('FENCED') end\n"
     "return redis.call('XADD', KEYS[2], '*', 'v', ARGV[2], 'r', ARGV[3])\n";
 
-/* KEYS lease, snap, log, index; ARGV token, snap, id, name */
+/* KEYS lease, snap, log, index; ARGV token, snap, id, info */
 static const char k_snapshot[] =
     "if redis.call('GET', KEYS[1]) ~= ARGV[1] then return redis.error_reply('FENCED') end\n"
     "redis.call('SET', KEYS[2], ARGV[2])\n"
@@ -60,7 +60,7 @@ int df_rlog_append(df_redis *r, uint64_t id, const char *token, uint64_t version
     return rc != DF_OK ? rc : fenced_reply(rep, id, "appending a change", err);
 }
 
-int df_rlog_snapshot(df_redis *r, uint64_t id, const char *token, const char *name,
+int df_rlog_snapshot(df_redis *r, uint64_t id, const char *token, const char *info,
                        const uint8_t *snap, size_t len, df_error *err)
 {
     char kl[64], ks[64], kg[64], sid[24];
@@ -69,9 +69,9 @@ int df_rlog_snapshot(df_redis *r, uint64_t id, const char *token, const char *na
     df_lease_key(id, "log", kg, sizeof kg);
     snprintf(sid, sizeof sid, "%" PRIu64, id);
     const char *argv[11] = {"EVAL", k_snapshot, "4", kl, ks, kg, INDEX_KEY, token,
-                            (const char *)snap, sid, name};
+                            (const char *)snap, sid, info};
     size_t lens[11] = {4, strlen(k_snapshot), 1, strlen(kl), strlen(ks), strlen(kg),
-                       strlen(INDEX_KEY), strlen(token), len, strlen(sid), strlen(name)};
+                       strlen(INDEX_KEY), strlen(token), len, strlen(sid), strlen(info)};
     redisReply *rep;
     int rc = df_redis_cmd(r, 11, argv, lens, &rep, err);
     return rc != DF_OK ? rc : fenced_reply(rep, id, "writing a snapshot", err);

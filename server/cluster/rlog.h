@@ -5,7 +5,8 @@
  *   deformd:{ID}:snap   the snapshot: every store row of the session (rows.h dump)
  *   deformd:{ID}:log    the Stream: one entry per acknowledged change after the snapshot,
  *                       fields v (the session version) and r (the changes row, rows.h)
- *   deformd:sessions    hash ID -> name of every session of the cluster (LIST_SESSIONS)
+ *   deformd:sessions    hash ID -> "KIND PLANAR NV NE VERSION OBSERVERS NAME" of each of the
+ *                       cluster, as of its last snapshot (LIST_SESSIONS, list.c)
  *   deformd:next_id     INCR: the cluster's session ids (never reused)
  * Each write is one Lua script that first compares deformd:{ID}:lease with the writer's token
  * and fails with "FENCED" when it differs (the lease expired or another daemon took it): an
@@ -35,8 +36,8 @@ int df_rlog_append(df_redis *r, uint64_t id, const char *token, uint64_t version
                      const uint8_t *row, size_t len, df_error *err);
 
 /* Fenced snapshot: `snap` (len bytes, rows.h session dump) becomes session id's snapshot, its
- * log is emptied and the index names it `name`. Errors: as df_rlog_append. */
-int df_rlog_snapshot(df_redis *r, uint64_t id, const char *token, const char *name,
+ * log is emptied and its index entry becomes `info` (list.c). Errors: as df_rlog_append. */
+int df_rlog_snapshot(df_redis *r, uint64_t id, const char *token, const char *info,
                        const uint8_t *snap, size_t len, df_error *err);
 
 /* Fenced removal of every key of session id (a close). Errors: as df_rlog_append. */

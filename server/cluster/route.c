@@ -43,35 +43,3 @@ int df_cluster_route(df_server *srv, uint64_t id, df_session **out, df_error *er
     }
     return rc;
 }
-
-int df_cluster_foreach_remote(df_server *srv,
-                              void (*fn)(void *arg, uint64_t id, const char *name,
-                                         const char *owner),
-                              void *arg, df_error *err)
-{
-    df_cluster *cl = srv->cluster;
-    if (!cl) return DF_OK;
-    redisReply *rep;
-    int rc = df_redis_cmdv(cl->r, &rep, err, 2, "HGETALL", "deformd:sessions");
-    if (rc != DF_OK) return rc;
-    if (rep->type != REDIS_REPLY_ARRAY) {
-        df_redis_reply_free(rep);
-        return df_error_set(err, DF_EINTERNAL, "cluster redis: HGETALL deformd:sessions: "
-                            "unexpected reply");
-    }
-    for (size_t i = 0; rc == DF_OK && i + 1 < rep->elements; i += 2) {
-        const redisReply *k = rep->element[i], *v = rep->element[i + 1];
-        if (k->type != REDIS_REPLY_STRING || v->type != REDIS_REPLY_STRING) continue;
-        uint64_t id = strtoull(k->str, NULL, 10);
-        if (!id || df_session_find(srv, id)) continue;
-        char token[DF_LEASE_VALUE_MAX];
-        const char *addr = "";
-        uint64_t epoch;
-        int l = df_lease_get(cl->r, id, token, err);
-        if (l < 0) rc = l;
-        else if (l == 1 && df_lease_parse(token, &epoch, &addr, NULL) != DF_OK) addr = "";
-        if (rc == DF_OK) fn(arg, id, v->str, addr);
-    }
-    df_redis_reply_free(rep);
-    return rc;
-}

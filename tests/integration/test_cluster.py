@@ -21,6 +21,7 @@ from cluster_harness import LEASE_MS, Cluster, Redis, owner_port, poll_until
 from conftest import DEFORMCTL
 from deformd_client import Brush, DeformdError, MeshState
 from deformd_client import errors as E
+from deformd_client import messages as m
 from deformd_client.stream import Disp
 from helpers import grid_obj, obj_bytes_positions
 
@@ -90,6 +91,22 @@ def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
         assert out.returncode == 0, out.stderr
         with d0.unix_client() as owner:
             assert owner.get_mesh(sid).version == expected + 1
+        # LIST_SESSIONS on any daemon: every session of the cluster with its owner's address
+        with d1.tcp_client() as c:
+            s2 = c.load_mesh(grid_obj(4, 4), fmt=".obj", name="second").session_id
+        with d2.unix_client() as c:
+            infos = {i.session_id: i for i in c.list_sessions()}
+        assert sorted(infos) == sorted([sid, s2])
+        assert (infos[sid].name, infos[sid].nv, infos[sid].version, infos[sid].owner) == \
+            ("shared", len(X) // 3, expected + 1, "127.0.0.1:%d" % d0.tcp_port)
+        assert (infos[s2].name, infos[s2].nv, infos[s2].owner) == \
+            ("second", 16, "127.0.0.1:%d" % d1.tcp_port)
+        # a client whose HELLO did not ask for owners gets the plain list (old clients)
+        with d2.unix_client(hello=False) as old:
+            old.server = m.decode_hello_reply(old._one(m.HELLO, m.encode_hello(1, 1, 0, "old")))
+            plain = old.list_sessions()
+        assert sorted(i.session_id for i in plain) == sorted([sid, s2])
+        assert all(i.owner is None for i in plain)
         # without following, the redirect names the owner
         with d1.tcp_client() as c:
             c.follow_moved = False

@@ -525,7 +525,8 @@ class Client(PollMixin):
     # ------------------------------------------------------------------ handshake
     def hello(self, name: str = "deformd-python") -> m.HelloReply:
         self.server = m.decode_hello_reply(
-            self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, 0, name)))
+            self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, schema.HELLO_WANT_OWNERS,
+                                              name)))
         return self.server
 
     def auth(self, method: int, token: bytes) -> Tuple[int, bytes]:
