@@ -17,7 +17,7 @@ import subprocess
 import threading
 import time
 
-from cluster_harness import LEASE_MS, Cluster, Redis, owner_port, poll_until
+from cluster_harness import LEASE_MS, Cluster, Redis, owner_port, poll_until, redis_cmd
 from conftest import DEFORMCTL
 from deformd_client import Brush, DeformdError, MeshState
 from deformd_client import errors as E
@@ -107,6 +107,13 @@ def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
             plain = old.list_sessions()
         assert sorted(i.session_id for i in plain) == sorted([sid, s2])
         assert all(i.owner is None for i in plain)
+        # a close through any daemon closes it on its owner and in Redis
+        with d2.tcp_client() as c:
+            c.close_session(s2)
+            assert c.moves == 1
+            assert [i.session_id for i in c.list_sessions()] == [sid]
+        assert redis_cmd(r.port, "EXISTS", "deformd:{%d}:snap" % s2).startswith(b":0")
+        assert redis_cmd(r.port, "EXISTS", "deformd:{%d}:snap" % sid).startswith(b":1")
         # without following, the redirect names the owner
         with d1.tcp_client() as c:
             c.follow_moved = False
