@@ -42,7 +42,7 @@ HID_SYS     := -lhidapi-hidraw -lusb-1.0
 # (server/net/tls.c, client/dc_tls.c), linked by everything that links the proto layer's auth
 # (the daemon, libdeformclient users, their unit tests).
 CRYPTO_SYS  := -lssl -lcrypto
-SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lzstd -lpthread $(CRYPTO_SYS)
+SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lzstd -lhiredis -lpthread $(CRYPTO_SYS)
 # core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers
 # (they compile every core source).
@@ -131,7 +131,7 @@ DEB_PKGS := build-essential pkg-config libsuitesparse-dev liblapacke-dev libopen
             libuv1-dev libhidapi-dev libusb-1.0-0-dev libsqlite3-dev libcmocka-dev \
             python3 python3-pytest python3-pip python3-setuptools clang libclang-rt-14-dev \
              libembree-dev systemd python3-seccomp strace man-db libssl-dev libzstd-dev \
-            blender python3-numpy xvfb xauth libpng-dev
+            blender python3-numpy xvfb xauth libpng-dev redis-server libhiredis-dev
 
 # (the folders are prerequisites too: a removed module rebuilds the zip)
 $(BUILD)/blender/deformd_blender.zip: $(ADDON_SRC) client/blender/deformd_blender client/python/deformd_client

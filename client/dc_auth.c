@@ -1,5 +1,6 @@
 /* dc_auth.c — the HMAC-SHA256 key authentication of libdeformclient (deformclient.h,
  * PROTOCOL.md 4.3): challenge, proof, and the check of the server's proof. */
+#include <stdlib.h>
 #include <string.h>
 
 #include <openssl/crypto.h>
@@ -64,6 +65,16 @@ int df_client_authenticate(df_client *c, const void *key, size_t key_len, df_err
     }
     OPENSSL_cleanse(mc, sizeof mc);
     OPENSSL_cleanse(ms, sizeof ms);
+    if (rc == DF_OK && c->key != key) { /* kept for a cluster redirect (dc_move.c) */
+        uint8_t *k = malloc(key_len);
+        if (k) {
+            memcpy(k, key, key_len);
+            if (c->key) OPENSSL_cleanse(c->key, c->key_len);
+            free(c->key);
+            c->key = k;
+            c->key_len = key_len;
+        }
+    }
     return rc;
 }
 

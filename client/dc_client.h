@@ -26,7 +26,25 @@ struct df_client {
     uint8_t *shm_frame;          /* copy of the frame an SHM_REF points at */
     size_t shm_cap;
     uint16_t load_flags;         /* DF_LOAD_OPT_* ORed into every load (df_client_set_load_flags) */
+    /* cluster redirects (dc_move.c): what a reconnection to the owner repeats */
+    int follow_moved;            /* 1 (default): EMOVED reconnects to the owner and retries */
+    int moves;                   /* redirects followed */
+    char name[DF_MAX_NAME_LEN + 1]; /* the hello's client name */
+    char *tls_ca;                /* the TLS CA file of the connection (NULL: plain) */
+    uint8_t *key;                /* the key it authenticated with (NULL: none), key_len bytes */
+    size_t key_len;
 };
+
+/* Cluster redirect (dc_move.c): after an EMOVED error whose message is "MOVED <id> <host:port>",
+ * reconnects c to host:port (TCP, TLS with c->tls_ca when set, hello with c->name, AUTH with
+ * c->key) in place of its connection (subscriptions and rings are dropped). Returns DF_OK, or
+ * DF_EINVAL (not a MOVED message: the caller keeps the original error), or the connection's
+ * error (c is then broken). */
+int dc_move(df_client *c, const char *moved_msg, df_error *err);
+
+/* The hello handshake on c's connection with client name `name` (c->server gets the reply).
+ * Errors: the server's, DF_EIO. */
+int dc_hello(df_client *c, const char *name, df_error *err);
 
 /* One mapped ring of a session this client streams through shared memory. */
 typedef struct dc_shm {

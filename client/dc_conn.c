@@ -2,6 +2,8 @@
  * buffering, event dispatch and the request/reply loop (see deformclient.h). */
 #include "client/dc_client.h"
 
+#include <openssl/crypto.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -36,6 +38,14 @@ static int wrap_fd(int fd, const char *name, const char *host, const char *tls_c
     c->timeout_ms = -1;
     c->next_id = 1;
     c->rbuf = rb;
+    c->follow_moved = 1;
+    snprintf(c->name, sizeof c->name, "%s", name ? name : DF_CLIENT_NAME);
+    if (tls_ca && !(c->tls_ca = strdup(tls_ca))) {
+        free(c);
+        free(rb);
+        close(fd);
+        return df_error_set(err, DF_ENOMEM, "out of memory for a client");
+    }
     df_buf_init(&c->out);
     int rc = tls_ca ? dc_tls_start(c, host, tls_ca, err) : DF_OK;
     if (rc == DF_OK) rc = hello(c, name, err);
@@ -89,6 +99,9 @@ void df_client_close(df_client *c)
     free(c->rbuf);
     free(c->pbuf);
     df_buf_free(&c->out);
+    free(c->tls_ca);
+    if (c->key) OPENSSL_cleanse(c->key, c->key_len);
+    free(c->key);
     free(c);
 }
 
@@ -364,7 +377,16 @@ int dc_request(df_client *c, uint16_t type, dc_encode_fn enc, const void *msg,
         c->remote_err = 0;
         return rc;
     }
-    return df_client_transact(c, type, c->out.data, c->out.len, on_reply, user, err);
+    rc = df_client_transact(c, type, c->out.data, c->out.len, on_reply, user, err);
+    if (rc == DF_EMOVED && c->remote_err && c->follow_moved && type != DF_MSG_HELLO &&
+        type != DF_MSG_AUTH) {
+        df_error moved = *err; /* the owner's address; retried there once (dc_move.c) */
+        if (dc_move(c, moved.msg, err) != DF_OK) return rc == DF_EMOVED ? err->code : rc;
+        df_buf_reset(&c->out);
+        if ((rc = enc ? enc(msg, &c->out, err) : DF_OK) != DF_OK) return rc;
+        rc = df_client_transact(c, type, c->out.data, c->out.len, on_reply, user, err);
+    }
+    return rc;
 }
 
 static int reply_hello(void *user, const df_frame_header *h, const uint8_t *p, df_error *err)
@@ -375,6 +397,11 @@ static int reply_hello(void *user, const df_frame_header *h, const uint8_t *p, d
 static int enc_hello(const void *m, df_buf *out, df_error *err)
 {
     return df_msg_hello_encode(m, out, err);
+}
+
+int dc_hello(df_client *c, const char *name, df_error *err)
+{
+    return hello(c, name, err);
 }
 
 static int hello(df_client *c, const char *name, df_error *err)

@@ -65,6 +65,16 @@ int df_client_connect_tcp(const char *host, int port, const char *name, df_clien
 int df_client_connect_tcp_tls(const char *host, int port, const char *name, const char *tls_ca,
                               df_client **out, df_error *err);
 
+/* Cluster mode (PROTOCOL.md 4.39): a request answered EMOVED ("MOVED <id> <host:port>": the
+ * session is owned by another daemon) reconnects the client to that address (TCP; TLS with the
+ * same CA file, the same hello name, AUTH with the key it authenticated with) and is sent there
+ * once more; subscriptions and shared-memory rings of the old connection are gone (subscribe
+ * again). on = 0 turns that off (the EMOVED error is returned). Default on. */
+void df_client_set_follow_moved(df_client *c, int on);
+
+/* Redirects followed so far (df_client_set_follow_moved). */
+int df_client_moves(const df_client *c);
+
 /* Closes the connection and frees the client. NULL-safe. */
 void df_client_close(df_client *c);
 

@@ -21,6 +21,6 @@ const char *df_proto_error_name(int code)
 
 int df_proto_error_valid(int code)
 {
-    return (code <= DF_EINVAL && code >= DF_EPERM) ||
+    return (code <= DF_EINVAL && code >= DF_EMOVED) ||
            (code <= DF_EPROTO_BADMAGIC && code >= DF_EPROTO_CHUNK);
 }

@@ -148,6 +148,10 @@
     X(HID, 1u << 6)           /* the HID device subsystem runs (DEVICES_LIST ...) */         \
     X(SHM_STREAM, 1u << 7)    /* STREAM_SHM available to Unix-socket clients */
 
+/* A bit of the client's HELLO `features` only (never in a hello_reply): the client decodes the
+ * owners trailer of a session_list (PROTOCOL.md 4.10, cluster mode); without it none is sent. */
+#define DF_HELLO_WANT_OWNERS (1u << 16)
+
 /* --------------------------------------------------------------------------------- enums */
 #define DF_WIRE_LOAD_SOURCES(X) X(INLINE, 0) X(PATH, 1) /* DF_LOAD_*: bytes inline / a path */
 

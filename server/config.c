@@ -53,6 +53,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->hid_on = 1;
     cfg->hid_replay_speed = 1.0;
     cfg->hid_enumerate_s = DF_CONFIG_DEFAULT_HID_ENUMERATE_S;
+    cfg->cluster_lease_ms = 3000;
     df_access_config_defaults(&cfg->access);
 }
 
@@ -206,6 +207,7 @@ static const int_key k_int_keys[] = {
     {"hid_enumerate_s", offsetof(df_server_config, hid_enumerate_s), 0,
      DF_CONFIG_MAX_HID_ENUMERATE_S},
     {"store_max_mb", offsetof(df_server_config, store_max_mb), 0, 1 << 30},
+    {"cluster_lease_ms", offsetof(df_server_config, cluster_lease_ms), 300, 600000},
 };
 
 /* socket_mode: octal permission bits, 0..0777, with or without a leading 0. */
@@ -253,6 +255,20 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
             return df_error_set(err, DF_EINVAL, "store: '%s' is not a path (1..%d bytes) or none",
                                 value, DF_CONFIG_PATH_MAX - 1);
         strcpy(cfg->store_path, value);
+        return DF_OK;
+    }
+    if (strcmp(key, "cluster") == 0) {
+        if (value[0] && (strncmp(value, "redis://", 8) != 0 || !strchr(value + 8, ':') ||
+                         strlen(value) >= sizeof cfg->cluster))
+            return df_error_set(err, DF_EINVAL, "cluster: '%s' is not redis://HOST:PORT", value);
+        strcpy(cfg->cluster, value);
+        return DF_OK;
+    }
+    if (strcmp(key, "advertise") == 0) {
+        const char *colon = strrchr(value, ':');
+        if (value[0] && (!colon || colon == value || !colon[1] || strlen(value) > 255))
+            return df_error_set(err, DF_EINVAL, "advertise: '%s' is not HOST:PORT (at most 255 bytes)", value);
+        strcpy(cfg->advertise, value);
         return DF_OK;
     }
     if (strcmp(key, "durability") == 0) {
@@ -481,6 +497,9 @@ static const char k_usage[] =
     "                      under systemd, else $XDG_STATE_HOME/deformd/deformd.db); 'none' =\n"
     "                      memory only (config: store, durability = full|normal|off,\n"
     "                      store_max_mb)\n"
+    "                      cluster mode (config only): cluster = redis://HOST:PORT,\n"
+    "                      advertise = HOST:PORT, cluster_lease_ms (sessions leased in Redis,\n"
+    "                      replicated to a Redis Stream, failed over to another daemon)\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"
     "  --log-level LEVEL   error | warn | info | debug (default info)\n"
     "  --spin-us N         compute workers poll N us for the next short job before sleeping\n"

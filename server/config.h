@@ -86,6 +86,11 @@
  *                      checkpoints: survives kill -9, not a power loss), OFF
  *   store_max_mb       cap of the store file, MiB (0 = none, default): a change beyond it
  *                      fails like a full disk
+ *   cluster            redis://HOST:PORT: cluster mode (server/cluster/cluster.h): sessions
+ *                      are leased, replicated to Redis and failed over; "" (default): off
+ *   advertise          HOST:PORT other daemons redirect clients to (default: the tcp
+ *                      listener's address); required with cluster
+ *   cluster_lease_ms   session lease ttl, ms (default 3000, 300..600000)
  * Command line (overrides the file): --socket PATH, --store PATH|none, --tcp HOST:PORT,
  * --tcp-insecure, --config FILE, --foreground, --log-level LEVEL, --spin-us N, --inline-us N,
  * --hid-replay FILE[,FILE...], --key-file FILE, --check-config, --help. */
@@ -195,6 +200,9 @@ typedef struct df_server_config {
     char store_path[DF_CONFIG_PATH_MAX];  /* config `store`: "" = the default, "none", a path */
     int durability;              /* 0 full, 1 normal, 2 off (store.h DF_DURABILITY_*) */
     int store_max_mb;            /* store file cap, MiB (0 = none) */
+    char cluster[DF_CONFIG_PATH_MAX];   /* config `cluster`: "redis://host:port", "" = off */
+    char advertise[DF_CONFIG_PATH_MAX]; /* config `advertise`: "host:port" ("" = tcp's) */
+    int cluster_lease_ms;        /* session lease ttl, ms */
 } df_server_config;
 
 /* Fills `cfg` with the defaults; the socket path comes from `xdg_runtime_dir` (may be NULL or "",

@@ -170,6 +170,18 @@ static void check_replay(check_out *o, const df_server_config *cfg)
     }
 }
 
+/* cluster mode (cluster/cluster.h): a local store, and an address to advertise. Redis itself is
+ * not contacted here (start-up refuses when it does not answer). */
+static void check_cluster(check_out *o, const df_server_config *cfg)
+{
+    if (!cfg->cluster[0]) return;
+    if (strcmp(cfg->store_path, "none") == 0)
+        problem(o, cfg, "cluster", NULL, "cluster: needs a local store (store = PATH, not none)");
+    if (!cfg->advertise[0] && !cfg->tcp_host[0])
+        problem(o, cfg, "cluster", NULL, "cluster: needs advertise = HOST:PORT or a tcp listener "
+                "(the address other daemons redirect clients to)");
+}
+
 int df_config_check(const df_server_config *cfg, char *out, size_t cap)
 {
     char dummy[1];
@@ -181,5 +193,6 @@ int df_config_check(const df_server_config *cfg, char *out, size_t cap)
     check_tls(&o, cfg);
     check_allow(&o, cfg);
     check_replay(&o, cfg);
+    check_cluster(&o, cfg);
     return o.n;
 }

@@ -18,7 +18,8 @@
  *   - tls_cert / tls_key: both set, readable, the key not readable by others and matching;
  *   - allow_paths: each entry exists and is a directory (stricter than start-up, which accepts
  *     a missing one and then refuses every load from it);
- *   - hid_replay: each file parses as a replay file (read, not played).
+ *   - hid_replay: each file parses as a replay file (read, not played);
+ *   - cluster: a local store (not none) and an address to advertise (advertise or tcp).
  * Appends one line per problem to `out` (NUL-terminated, truncated to `cap` bytes): "FILE:LINE:
  * message" when the key's line is found in cfg->config_path (the last line setting it to the
  * value in use, or holding the entry for a list key), else "command line: message". Returns the number of

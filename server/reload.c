@@ -60,6 +60,9 @@ static void note_restart(const df_server_config *cur, const df_server_config *n)
                               sizeof cur->access.peer_keys[0] *
                                   (size_t)cur->access.n_peer_keys) != 0,
                    "peer_key");
+    DF_RESTART_KEY(strcmp(cur->cluster, n->cluster) != 0, "cluster");
+    DF_RESTART_KEY(strcmp(cur->advertise, n->advertise) != 0, "advertise");
+    DF_RESTART_KEY(cur->cluster_lease_ms != n->cluster_lease_ms, "cluster_lease_ms");
 #undef DF_RESTART_KEY
     if (len)
         df_log(DF_LOG_WARN, "reload: changed settings that need a restart (running values "

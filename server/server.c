@@ -1,4 +1,5 @@
 /* server.c — start/stop of the daemon, signals (see server.h). */
+#include "server/cluster/cluster.h"
 #include "server/server.h"
 
 #include <stdio.h>
@@ -96,6 +97,11 @@ int df_server_start(df_server *srv, uv_loop_t *loop, const df_server_config *cfg
     if (rc == DF_OK && (rc = df_listener_open(srv, err)) == DF_OK &&
         (rc = df_guard_init(srv, err)) != DF_OK)
         df_listener_close(srv);
+    /* cluster mode after the listeners: its default advertised address is the tcp one */
+    if (rc == DF_OK && (rc = df_cluster_start(srv, err)) != DF_OK) {
+        df_guard_free(srv);
+        df_listener_close(srv);
+    }
     if (rc != DF_OK) {
         if (store_rc == DF_OK) { /* opened: the listeners failed */
             while (srv->sessions) df_session_destroy(srv->sessions);
@@ -138,6 +144,7 @@ static void on_stop_timer(uv_timer_t *h)
     if (srv->jobs_running > 0 || df_hid_manager_busy(srv)) return;
     uv_timer_stop(h);
     uv_close((uv_handle_t *)h, (uv_close_cb)free);
+    df_cluster_stop(srv); /* leases released: other daemons take over at once */
     /* Sessions: every FIFO is drained (queued jobs were answered or dropped). */
     while (srv->sessions) {
         df_session *s = srv->sessions;
@@ -181,6 +188,7 @@ void df_server_stop(df_server *srv)
 void df_server_free(df_server *srv)
 {
     while (srv->sessions) df_session_destroy(srv->sessions);
+    df_cluster_stop(srv);
     df_store_stop(srv);
     df_hid_manager_free(srv);
     df_pool_free(srv->pool);

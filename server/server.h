@@ -88,6 +88,7 @@ typedef struct df_conn {
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */
+    int want_owners;         /* its HELLO set DF_HELLO_WANT_OWNERS (cluster/cluster.h list) */
     int admit_waiting;       /* accepted at max_clients: admitted or refused at the end of the
                               * loop iteration (guard.h), not reading until then */
     uint64_t accepted_ms;    /* uv_now() at accept (handshake timeout) */
@@ -171,6 +172,7 @@ typedef struct df_server {
     void *commit_hook_arg;
     struct df_store *store;       /* the durable store (server/store/store.h), NULL: none */
     const df_store_ops *store_ops;/* its entry points (journal.h), NULL: none */
+    struct df_cluster *cluster;   /* cluster mode (server/cluster/cluster.h), NULL: off */
 } df_server;
 
 /* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,

@@ -40,6 +40,7 @@ const char *df_error_name(int code)
     case DF_EINTERNAL: return "EINTERNAL";
     case DF_EEXIST: return "EEXIST";
     case DF_EPERM: return "EPERM";
+    case DF_EMOVED: return "EMOVED";
     default: return "EUNKNOWN";
     }
 }

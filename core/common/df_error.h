@@ -23,7 +23,9 @@ enum {
     DF_EUNSUPPORTED = -9, /* a valid request this build or mesh kind does not support */
     DF_EINTERNAL = -10, /* a library call failed unexpectedly (CHOLMOD, LAPACK) */
     DF_EEXIST = -11,    /* the name is already in use (e.g. a session name) */
-    DF_EPERM = -12      /* the peer lacks a right on the session (access control) */
+    DF_EPERM = -12,     /* the peer lacks a right on the session (access control) */
+    DF_EMOVED = -13     /* the session is owned by another daemon of the cluster: the message
+                         * is "MOVED <id> <host:port>" (server/cluster/cluster.h) */
 };
 
 #define DF_ERROR_MSG_MAX 256

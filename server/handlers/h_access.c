@@ -15,6 +15,7 @@
 
 #include <openssl/crypto.h>
 
+#include "server/cluster/cluster.h"
 #include "server/handlers/handlers.h"
 #include "server/log.h"
 #include "server/net/auth_limit.h"
@@ -48,7 +49,8 @@ static int apply(df_server *srv, df_session *s, df_membership *next, df_error *e
 static df_session *find(df_req *r, uint64_t id, df_error *err)
 {
     df_session *s = df_session_find(r->srv, id);
-    if (!s)
+    if (!s && r->srv->cluster) df_cluster_route(r->srv, id, &s, err); /* cluster.h */
+    else if (!s)
         df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
                      (unsigned long long)id);
     return s;
@@ -60,7 +62,7 @@ int df_h_session_access(df_req *r, const uint8_t *p, df_error *err)
     int rc = df_msg_session_access_decode(p, r->len, &m, err);
     if (rc != DF_OK) return rc;
     df_session *s = find(r, m.session_id, err);
-    if (!s) return DF_ENOTFOUND;
+    if (!s) return err->code;
     int set = m.mode || m.observers || m.flags;
     if ((rc = df_access_require(r, s, set ? DF_RIGHT_OWN : DF_RIGHT_OBSERVE, err)) != DF_OK)
         return rc;
@@ -136,7 +138,7 @@ int df_h_join(df_req *r, const uint8_t *p, df_error *err)
     df_session *s = find(r, m.session_id, err);
     if (!s) {
         OPENSSL_cleanse(&m, sizeof m);
-        return DF_ENOTFOUND;
+        return err->code;
     }
     int have = df_access_rights(c, s);
     df_msg_access_info out;

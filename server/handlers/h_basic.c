@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "server/cluster/cluster.h"
 #include "server/net/auth.h"
 #include "server/net/conn.h"
 #include "server/handlers/handlers.h"
@@ -56,6 +57,7 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
         df_conn_close_after_flush(c, "hello: no common protocol version"); /* PROTOCOL.md 4.2b */
         return DF_OK;
     }
+    c->want_owners = (m.features & DF_HELLO_WANT_OWNERS) != 0; /* cluster.h listing */
     const df_server_config *cfg = &c->srv->cfg;
     df_msg_hello_reply r;
     memset(&r, 0, sizeof r);
@@ -122,9 +124,10 @@ int df_h_list_sessions(df_req *r, const uint8_t *p, df_error *err)
         if (LISTED(s)) df_session_info_fill(s, &l.items[--i]);
 #undef LISTED
     l.count = (uint32_t)n;
-    df_req_reply_session_list(r, &l);
+    rc = c->srv->cluster ? df_cluster_list_sessions(r, &l, err) /* the whole cluster's */
+                         : (df_req_reply_session_list(r, &l), DF_OK);
     free(l.items);
-    return DF_OK;
+    return rc;
 }
 
 int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
@@ -134,6 +137,9 @@ int df_h_open_session(df_req *r, const uint8_t *p, df_error *err)
     if (rc != DF_OK) return rc;
     df_session *s = m.session_id ? df_session_find(r->srv, m.session_id)
                                  : df_session_find_name(r->srv, m.name);
+    if (!s && m.session_id && r->srv->cluster &&
+        (rc = df_cluster_route(r->srv, m.session_id, &s, err)) != DF_OK)
+        return rc; /* redirected, or taken over (cluster.h) */
     if (!s) {
         if (m.session_id)
             return df_error_set(err, DF_ENOTFOUND, "open_session: no session %llu",

@@ -5,6 +5,7 @@
  * state as of its arrival. */
 #include <string.h>
 
+#include "server/cluster/cluster.h"
 #include "server/handlers/handlers.h"
 #include "server/net/conn.h"
 #include "server/net/reply.h"
@@ -15,7 +16,8 @@
 static df_session *find(df_req *r, uint64_t sid, df_error *err)
 {
     df_session *s = df_session_find(r->srv, sid);
-    if (!s)
+    if (!s && r->srv->cluster) df_cluster_route(r->srv, sid, &s, err); /* cluster.h */
+    else if (!s)
         df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
                      (unsigned long long)sid);
     else if (df_access_check(r, s, err) != DF_OK) /* observe (get) / edit (set), access.h */

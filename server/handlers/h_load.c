@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "server/cluster/cluster.h"
 #include "server/net/conn.h"
 #include "server/session/access.h"
 #include "server/handlers/handlers.h"
@@ -172,6 +173,7 @@ static void load_done(df_job *j)
     uint64_t up = u->path ? 0 : u->total; /* quotas again: other loads may have finished */
     if (df_access_quota_check(j->srv, u->owner, up, df_session_estimate_bytes(&u->mesh),
                               &j->err) != DF_OK ||
+        df_cluster_next_id(j->srv, &j->err) != DF_OK || /* cluster-wide id (cluster.h) */
         df_session_create_as(j->srv, &u->mesh, u->name, u->owner, &s, &j->err) != DF_OK) {
         j->rc = j->err.code;
         df_job_failed(j);

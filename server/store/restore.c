@@ -177,7 +177,7 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
         df_change c;
         df_change_init(&c, NULL, NULL);
         c.hist = DF_HIST_COMMIT;
-        rc = df_store_journal_ops.change(srv, s, &c, &e);
+        rc = (srv->store_ops ? srv->store_ops : &df_store_journal_ops)->change(srv, s, &c, &e);
         if (rc == DF_OK) rc = df_session_history_commit(s, &e);
         df_change_clear(srv, &c);
         df_log(DF_LOG_INFO, "session %llu: the stroke or move open when the daemon stopped "
@@ -207,6 +207,28 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     return DF_OK;
 }
 
+#define SESSIONS_QUERY                                                                     \
+    "SELECT id, name, kind, planar, nv, ne, nf, version, brush, brush_seq, snap_version,"  \
+    " a.owner, a.mode, a.observers, a.key_hash, a.members FROM sessions LEFT JOIN access a" \
+    " ON a.session = sessions.id"
+
+int df_store_restore_session(df_server *srv, df_store *st, uint64_t id, df_error *err)
+{
+    sqlite3_stmt *q = NULL;
+    if (sqlite3_prepare_v2(df_store_db(st), SESSIONS_QUERY " WHERE id = ?", -1, &q, NULL) !=
+        SQLITE_OK)
+        return df_store_fail(st, DF_EIO, "reading the session", err);
+    sqlite3_bind_int64(q, 1, (sqlite3_int64)id);
+    uint64_t next = srv->next_session_id;
+    int rc = sqlite3_step(q) == SQLITE_ROW
+                 ? restore_one(srv, st, q, err)
+                 : df_error_set(err, DF_ENOTFOUND, "store %s: no session %llu",
+                                df_store_path(st), (unsigned long long)id);
+    sqlite3_finalize(q);
+    srv->next_session_id = next > id ? next : id;
+    return rc;
+}
+
 static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
 {
     sqlite3 *db = df_store_db(st);
@@ -218,11 +240,7 @@ static int restore_all(df_server *srv, df_store *st, int *count, df_error *err)
         return df_store_fail(st, DF_EIO, "reading meta", err);
     if (sqlite3_step(q) == SQLITE_ROW) next = (uint64_t)sqlite3_column_int64(q, 0);
     sqlite3_finalize(q);
-    if (sqlite3_prepare_v2(db, "SELECT id, name, kind, planar, nv, ne, nf, version, brush,"
-                           " brush_seq, snap_version, a.owner, a.mode, a.observers, a.key_hash,"
-                           " a.members FROM sessions LEFT JOIN access a ON a.session ="
-                           " sessions.id ORDER BY id",
-                           -1, &q, NULL) != SQLITE_OK)
+    if (sqlite3_prepare_v2(db, SESSIONS_QUERY " ORDER BY id", -1, &q, NULL) != SQLITE_OK)
         return df_store_fail(st, DF_EIO, "reading the sessions", err);
     int rc = DF_OK, step;
     while (rc == DF_OK && (step = sqlite3_step(q)) == SQLITE_ROW) {

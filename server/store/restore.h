@@ -32,6 +32,15 @@
  * session is destroyed and the store closed. */
 int df_store_start(df_server *srv, df_error *err);
 
+/* Restores session id from the rows of `st` into srv, as df_store_start restores each
+ * session (cluster mode's failover: the rows loaded from Redis, server/cluster/rebuild.h);
+ * srv->next_session_id is left at max(its value, id). A change the restore appends (a stroke
+ * left open) goes through srv->store_ops when set. Errors: DF_ENOTFOUND (no such row), and
+ * as df_store_start's restore (DF_EFORMAT, DF_EIO, DF_ELIMIT, DF_ENOMEM; the session is not
+ * created). Loop thread. */
+struct df_store;
+int df_store_restore_session(df_server *srv, struct df_store *st, uint64_t id, df_error *err);
+
 /* Closes the store (after the sessions are freed). NULL-safe on srv->store. */
 void df_store_stop(df_server *srv);
 

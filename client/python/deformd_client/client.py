@@ -50,7 +50,7 @@ from . import schema
 from . import stream as st
 from .poll import PollMixin
 from .stream import ShmRing
-from .errors import ConnectionClosed, DeformdError, error_name
+from .errors import EMOVED, ConnectionClosed, DeformdError, error_name, moved_address
 from .wire import ProtocolError
 
 DEFAULT_TIMEOUT_S = 60.0
@@ -132,6 +132,12 @@ class Client(PollMixin):
         self._shm_detaching: Set[int] = set()       # attach failed: refs count as lost
         self.server: Optional[m.HelloReply] = None
         self.authenticated = False
+        # cluster mode (PROTOCOL.md 4.39): an EMOVED answer moves the client to the owner's
+        # address (TCP, same name, key and TLS context) and retries the request once there
+        self.follow_moved = True
+        self.moves = 0                               # redirects followed so far
+        self._name, self._key = name, key
+        self._ssl_context: Optional[ssl.SSLContext] = None
         try:
             if key_file is not None and key is None:
                 key = auth.load_key(key_file)
@@ -179,7 +185,39 @@ class Client(PollMixin):
         except BaseException:
             s.close()
             raise
-        return cls(s, timeout, hello, name, key, key_file)
+        c = cls(s, timeout, hello, name, key, key_file)
+        c._ssl_context = ssl_context
+        return c
+
+    def move_to(self, host: str, port: int) -> None:
+        """Replaces the connection by a new one to the daemon at host:port (TCP, with this
+        client's name, key and TLS context), HELLO and AUTH done: the cluster redirect (EMOVED).
+        Replies and events not yet read from the old connection, and its subscriptions and
+        shared-memory rings, are dropped: subscribe again on the new daemon."""
+        s = socket.create_connection((host, port), timeout=self.timeout)
+        try:
+            s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            if self._ssl_context is not None:
+                s = self._ssl_context.wrap_socket(s, server_hostname=host)
+        except BaseException:
+            s.close()
+            raise
+        old = self.sock
+        for sid in list(self._shm):
+            self._drop_shm(sid)
+        self.sock = s
+        self._decoder = fr.FrameDecoder()
+        self._frames.clear()
+        self._partial.clear()
+        self._pending.clear()
+        self._done.clear()
+        self._work_cbs.clear()
+        old.close()
+        self.authenticated = False
+        self.server = self.hello(self._name)
+        if self._key is not None:
+            self.authenticate(self._key)
+        self.moves += 1
 
     def close(self) -> None:
         """Closes the socket and every shared-memory ring mapping."""
@@ -447,11 +485,33 @@ class Client(PollMixin):
 
     def request(self, msg_type: int, payload: bytes = b"",
                 timeout: Optional[float] = None) -> List[fr.Frame]:
-        return self.wait_reply(self.send(msg_type, payload), timeout)
+        """Sends one request and waits for its reply. An EMOVED answer (cluster mode) moves the
+        client to the session's owner (move_to) and sends the request there once more, when
+        follow_moved is set (the default)."""
+        try:
+            return self.wait_reply(self.send(msg_type, payload), timeout)
+        except DeformdError as e:
+            addr = moved_address(e.message) if e.code == EMOVED and self.follow_moved else None
+            if addr is None:
+                raise
+            self.move_to(*addr)
+            return self.wait_reply(self.send(msg_type, payload), timeout)
 
     def _one(self, msg_type: int, payload: bytes = b"") -> bytes:
         parts = self.request(msg_type, payload)
         return b"".join(p.payload for p in parts)
+
+    def _request_progress(self, msg_type: int, payload: bytes,
+                          progress: Optional["ProgressFn"]) -> bytes:
+        """send + _wait_with_progress, following an EMOVED redirect once as request() does."""
+        try:
+            return self._wait_with_progress(self.send(msg_type, payload), progress)
+        except DeformdError as e:
+            addr = moved_address(e.message) if e.code == EMOVED and self.follow_moved else None
+            if addr is None:
+                raise
+            self.move_to(*addr)
+            return self._wait_with_progress(self.send(msg_type, payload), progress)
 
     def _wait_with_progress(self, rid: int, progress: Optional["ProgressFn"],
                             timeout: Optional[float] = None) -> bytes:
@@ -466,7 +526,8 @@ class Client(PollMixin):
     # ------------------------------------------------------------------ handshake
     def hello(self, name: str = "deformd-python") -> m.HelloReply:
         self.server = m.decode_hello_reply(
-            self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, 0, name)))
+            self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, schema.HELLO_WANT_OWNERS,
+                                              name)))
         return self.server
 
     def auth(self, method: int, token: bytes) -> Tuple[int, bytes]:
@@ -643,17 +704,17 @@ class Client(PollMixin):
         update; see the module doc); the stroke's later updates report to brush_update's."""
         if progress is not None:
             brush = dataclasses.replace(brush, options=pg.WORK_OPT_PROGRESS)
-        rid = self.send(m.BRUSH_BEGIN, m.encode_brush(session_id, brush))
-        return m.decode_ack(self._wait_with_progress(rid, progress))
+        return m.decode_ack(self._request_progress(m.BRUSH_BEGIN,
+                                                   m.encode_brush(session_id, brush), progress))
 
     def brush_update(self, session_id: int, move=None, twist=None, scale: float = 0.0,
                      matrix=None, progress: Optional["ProgressFn"] = None) -> m.Ack:
         """Cumulative load since the stroke began (same meaning as in Brush). progress: the
         pin LU's "factorize" events when this update (re)builds it, for a stroke whose
         brush_begin asked for progress."""
-        rid = self.send(m.BRUSH_UPDATE,
-                        m.encode_brush_update(session_id, move, twist, scale, matrix))
-        return m.decode_ack(self._wait_with_progress(rid, progress))
+        return m.decode_ack(self._request_progress(
+            m.BRUSH_UPDATE, m.encode_brush_update(session_id, move, twist, scale, matrix),
+            progress))
 
     def brush_end(self, session_id: int) -> m.Ack:
         return m.decode_ack(self._one(m.BRUSH_END, m.encode_session_ref(session_id)))

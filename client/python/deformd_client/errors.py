@@ -19,6 +19,7 @@ class ErrorCode(IntEnum):
     EINTERNAL = -10
     EEXIST = -11
     EPERM = -12
+    EMOVED = -13
     EPROTO_BADMAGIC = -100
     EPROTO_BADVERSION = -101
     EPROTO_BADTYPE = -102
@@ -53,3 +54,19 @@ class DeformdError(Exception):
 
 class ConnectionClosed(ConnectionError):
     """The daemon closed the connection (or it broke) before the expected reply arrived."""
+
+
+def moved_address(message: str):
+    """The owner's (host, port) of an EMOVED message "MOVED <session_id> <host:port>" (PROTOCOL.md
+    7, cluster mode), or None when the message is not of that form."""
+    parts = message.split()
+    if len(parts) != 3 or parts[0] != "MOVED" or ":" not in parts[2]:
+        return None
+    host, _, port = parts[2].rpartition(":")
+    try:
+        p = int(port)
+    except ValueError:
+        return None
+    if not host or not 0 < p < 65536:
+        return None
+    return host.strip("[]"), p

@@ -160,6 +160,8 @@ class SessionInfo:
     redo_depth: int
     name: str
     report: Optional["LoadReport"] = None   # LOAD_MESH with LOAD_OPT_EXT only
+    owner: Optional[str] = None   # LIST_SESSIONS of a cluster daemon: the owner's host:port
+                                  # ("" while no daemon holds it; PROTOCOL.md 4.10)
 
 
 @dataclass
@@ -207,9 +209,18 @@ def decode_load_reply(p: bytes) -> SessionInfo:
 
 
 def decode_session_list(p: bytes) -> List[SessionInfo]:
+    """The list, and (a cluster daemon, to a client whose HELLO set HELLO_WANT_OWNERS) the
+    owners trailer into each item's .owner."""
     r = Reader(p, "session_list")
     n = r.take("I")
     out = [_read_session_info(r) for _ in range(n)]
+    if r.off < len(p):
+        if r.take("I") != n:
+            raise ProtocolError("session_list: owners trailer count is not the list's")
+        for s in out:
+            if r.take("Q") != s.session_id:
+                raise ProtocolError("session_list: owners trailer out of order")
+            s.owner = r.str()
     r.end()
     return out
 

@@ -184,6 +184,11 @@ class Feature(IntFlag):
     SHM_STREAM = 1 << 7
 
 
+# A bit of the client's HELLO features only (proto/wire_schema.h DF_HELLO_WANT_OWNERS): the client
+# decodes the owners trailer of a session_list (PROTOCOL.md 4.10, cluster mode).
+HELLO_WANT_OWNERS = 1 << 16
+
+
 # ------------------------------------------------------------------ enums
 class LoadSource(IntEnum):
     INLINE = 0

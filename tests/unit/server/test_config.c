@@ -208,6 +208,41 @@ static void test_network_and_admission_keys(void **state)
     assert_non_null(strstr(df_config_usage(), "--tcp-insecure"));
 }
 
+static void test_cluster_keys(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_config_defaults(&c, NULL);
+    assert_string_equal(c.cluster, "");
+    assert_string_equal(c.advertise, "");
+    assert_int_equal(c.cluster_lease_ms, 3000);
+    const char *text = "cluster = redis://10.0.0.5:6379\nadvertise = host-a:7878\n"
+                       "cluster_lease_ms = 1500\n";
+    df_error e;
+    assert_int_equal(df_config_parse(&c, text, strlen(text), "t.conf", &e), DF_OK);
+    assert_string_equal(c.cluster, "redis://10.0.0.5:6379");
+    assert_string_equal(c.advertise, "host-a:7878");
+    assert_int_equal(c.cluster_lease_ms, 1500);
+    /* bad values: a clear error naming the key, nothing changed */
+    const char *bad[][2] = {{"cluster", "10.0.0.5:6379"}, {"cluster", "redis://nohost"},
+                            {"advertise", "nohost"}, {"advertise", ":7878"},
+                            {"advertise", "h:"}, {"cluster_lease_ms", "299"},
+                            {"cluster_lease_ms", "600001"}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        assert_int_equal(df_config_set(&c, bad[i][0], bad[i][1], &e), DF_EINVAL);
+        assert_non_null(strstr(e.msg, bad[i][0]));
+    }
+    assert_string_equal(c.cluster, "redis://10.0.0.5:6379");
+    assert_string_equal(c.advertise, "host-a:7878");
+    assert_int_equal(c.cluster_lease_ms, 1500);
+    char longer[300];
+    memset(longer, 'a', sizeof longer);
+    memcpy(longer + 280, ":1", 3);
+    assert_int_equal(df_config_set(&c, "advertise", longer, &e), DF_EINVAL);
+    assert_int_equal(df_config_set(&c, "cluster", "", &e), DF_OK); /* off again */
+    assert_string_equal(c.cluster, "");
+}
+
 static void test_load_file_and_cli(void **state)
 {
     (void)state;
@@ -439,6 +474,7 @@ int main(void)
         cmocka_unit_test(test_parse_file_text),
         cmocka_unit_test(test_parse_errors_leave_config_untouched),
         cmocka_unit_test(test_network_and_admission_keys),
+        cmocka_unit_test(test_cluster_keys),
         cmocka_unit_test(test_load_file_and_cli),
         cmocka_unit_test(test_allowed_paths),
         cmocka_unit_test(test_log_levels),

@@ -124,12 +124,30 @@ static void test_no_listener_and_truncation(void **state)
     assert_int_equal(run(args, NULL, 0, &action), 1);
 }
 
+static void test_cluster_needs_store_and_address(void **state)
+{
+    (void)state;
+    char conf[512], sock[512], out[4096];
+    df_cli_action action;
+    snprintf(sock, sizeof sock, "--socket=%s/s.sock", g_dir);
+    write_file("cl.conf", "cluster = redis://127.0.0.1:6379\nstore = none\n", conf, sizeof conf);
+    const char *args[] = {"--config", conf, sock, NULL};
+    assert_int_equal(run(args, out, sizeof out, &action), 2);
+    assert_non_null(strstr(out, "cl.conf:1: cluster: needs a local store"));
+    assert_non_null(strstr(out, "cl.conf:1: cluster: needs advertise"));
+    write_file("cl2.conf", "cluster = redis://127.0.0.1:6379\nadvertise = h:1\n", conf,
+               sizeof conf);
+    assert_int_equal(run(args, out, sizeof out, &action), 0);
+    assert_string_equal(out, "");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_clean_configuration),
         cmocka_unit_test(test_each_problem_names_its_line),
         cmocka_unit_test(test_no_listener_and_truncation),
+        cmocka_unit_test(test_cluster_needs_store_and_address),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -1,0 +1,45 @@
+/* redis.h — the daemon's one synchronous connection to the cluster's Redis (cluster.h).
+ *
+ * Cluster mode writes every acknowledged change to Redis before the ack, as the SQLite store
+ * (server/store/journal.h) writes before it: a synchronous hiredis context on the loop thread,
+ * the simplest correct choice (an async context on the loop would need the commit to wait for
+ * the reply; see cluster.h). Every command has a timeout (DF_REDIS_TIMEOUT_MS); a connection
+ * that failed is dropped and reconnected at the next command, so a restarted Redis is used
+ * again without a restart of the daemon. Loop thread. */
+#ifndef DF_SERVER_CLUSTER_REDIS_H
+#define DF_SERVER_CLUSTER_REDIS_H
+
+#include <stddef.h>
+
+#include "core/common/df_error.h"
+
+#define DF_REDIS_TIMEOUT_MS 2000 /* connect and command timeout */
+
+struct redisReply;
+typedef struct df_redis df_redis;
+
+/* Parses `url` ("redis://HOST:PORT") into a new, not yet connected df_redis (*out). Errors:
+ * DF_EINVAL (not that form; message names it), DF_ENOMEM. */
+int df_redis_new(const char *url, df_redis **out, df_error *err);
+
+/* Closes and frees. NULL-safe. */
+void df_redis_free(df_redis *r);
+
+/* "HOST:PORT" of the server (owned by r). */
+const char *df_redis_addr(const df_redis *r);
+
+/* Runs one command given as argc strings of lengths argvlen (binary-safe), connecting first
+ * when needed. *out gets the reply (free with df_redis_reply_free). A Redis error reply is
+ * returned as DF_OK with *out of type REDIS_REPLY_ERROR: the caller reads it. Errors: DF_EIO
+ * (cannot connect, timeout, connection lost: the connection is dropped and retried at the
+ * next call; message names the server). */
+int df_redis_cmd(df_redis *r, int argc, const char **argv, const size_t *argvlen,
+                 struct redisReply **out, df_error *err);
+
+/* df_redis_cmd of NUL-terminated strings. */
+int df_redis_cmdv(df_redis *r, struct redisReply **out, df_error *err, int argc, ...);
+
+/* Frees a reply (NULL-safe). */
+void df_redis_reply_free(struct redisReply *rep);
+
+#endif

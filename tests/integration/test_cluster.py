@@ -1,0 +1,338 @@
+"""Cluster mode (server/cluster/cluster.h, issue 15): three daemons and one redis-server on
+loopback ports.
+
+- clients connected to different daemons join one session (redirected to its owner: EMOVED),
+  stroke it concurrently and converge bit-identically (every subscriber's replica equals GET_MESH
+  from the owner); deformctl on a non-owner follows the redirect too;
+- kill -9 of the owner in the middle of a stroke storm, several times: a new owner serves once
+  the lease expired, and no acknowledged edit is lost: the session's version and positions equal
+  those of a single plain daemon (the "shadow") that received exactly the acknowledged requests
+  (and the one in flight when the cluster applied it before dying);
+- a stale owner (SIGSTOP past its lease, SIGCONT) cannot append (fencing) and drops the session;
+- Redis killed (-9) and restarted with its AOF: nothing acknowledged is lost, editing continues.
+Failover times are printed (timing is never asserted)."""
+import os
+import signal
+import subprocess
+import threading
+import time
+
+from cluster_harness import LEASE_MS, Cluster, Redis, owner_port, poll_until, redis_cmd
+from conftest import DEFORMCTL
+from deformd_client import Brush, DeformdError, MeshState
+from deformd_client import errors as E
+from deformd_client import messages as m
+from deformd_client.stream import Disp
+from helpers import grid_obj, obj_bytes_positions
+
+GRID = 16
+
+
+def brush_of(X, k):
+    vi = (k * 37) % (len(X) // 3)
+    return Brush(type="grab" if k % 3 else "twist", center=X[3 * vi:3 * vi + 3],
+                 move=(0.01, 0.0, 0.02 * (1 + k % 4)), twist=(0, 0, 0.1), radius=0.3, nu=0.4)
+
+
+def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 3)
+    clients = []
+    try:
+        d0, d1, d2 = cl.daemons
+        data = grid_obj(24, 24)
+        X = obj_bytes_positions(data)
+        with d0.unix_client() as a:
+            sid = a.load_mesh(data, fmt=".obj", name="shared").session_id
+        clients = [d.tcp_client() for d in (d0, d1, d2) for _ in range(2)]
+        for c in clients:
+            c.subscribe(sid)
+        # the four clients of d1 and d2 were redirected to the owner d0
+        assert [owner_port(c) for c in clients] == [d0.tcp_port] * 6
+        assert [c.moves for c in clients] == [0, 0, 1, 1, 1, 1]
+        errors = []
+        start = threading.Barrier(len(clients))
+        strokes, updates = 4, 2
+
+        def worker(k):
+            c = clients[k]
+            try:
+                start.wait()
+                for s in range(strokes):
+                    c.brush_begin(sid, brush_of(X, 7 * k + s))
+                    for u in range(1, updates + 1):
+                        c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
+                    c.brush_end(sid)
+            except Exception as e:  # reported below with the client number
+                errors.append((k, repr(e)))
+
+        threads = [threading.Thread(target=worker, args=(k,)) for k in range(len(clients))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(120)
+        assert not errors, errors
+        expected = len(clients) * strokes * (1 + updates)
+        with d0.unix_client() as owner:
+            final = owner.get_mesh(sid)
+        assert final.version == expected
+        for k, c in enumerate(clients):
+            replica = MeshState(X)
+            for ev in c.events(timeout=5.0):
+                if isinstance(ev, Disp):
+                    replica.apply(ev)
+                if replica.version == expected:
+                    break
+            assert replica.version == expected, "client %d" % k
+            assert replica.tobytes() == final.positions.tobytes(), "client %d diverged" % k
+        # deformctl on a daemon that does not own the session follows the redirect
+        out = subprocess.run([DEFORMCTL, "--tcp", "127.0.0.1:%d" % d2.tcp_port, "undo", str(sid)],
+                             capture_output=True, text=True, timeout=30)
+        assert out.returncode == 0, out.stderr
+        with d0.unix_client() as owner:
+            assert owner.get_mesh(sid).version == expected + 1
+        # LIST_SESSIONS on any daemon: every session of the cluster with its owner's address
+        with d1.tcp_client() as c:
+            s2 = c.load_mesh(grid_obj(4, 4), fmt=".obj", name="second").session_id
+        with d2.unix_client() as c:
+            infos = {i.session_id: i for i in c.list_sessions()}
+        assert sorted(infos) == sorted([sid, s2])
+        assert (infos[sid].name, infos[sid].nv, infos[sid].version, infos[sid].owner) == \
+            ("shared", len(X) // 3, expected + 1, "127.0.0.1:%d" % d0.tcp_port)
+        assert (infos[s2].name, infos[s2].nv, infos[s2].owner) == \
+            ("second", 16, "127.0.0.1:%d" % d1.tcp_port)
+        # a client whose HELLO did not ask for owners gets the plain list (old clients)
+        with d2.unix_client(hello=False) as old:
+            old.server = m.decode_hello_reply(old._one(m.HELLO, m.encode_hello(1, 1, 0, "old")))
+            plain = old.list_sessions()
+        assert sorted(i.session_id for i in plain) == sorted([sid, s2])
+        assert all(i.owner is None for i in plain)
+        # a close through any daemon closes it on its owner and in Redis
+        with d2.tcp_client() as c:
+            c.close_session(s2)
+            assert c.moves == 1
+            assert [i.session_id for i in c.list_sessions()] == [sid]
+        assert redis_cmd(r.port, "EXISTS", "deformd:{%d}:snap" % s2).startswith(b":0")
+        assert redis_cmd(r.port, "EXISTS", "deformd:{%d}:snap" % sid).startswith(b":1")
+        # without following, the redirect names the owner
+        with d1.tcp_client() as c:
+            c.follow_moved = False
+            try:
+                c.get_mesh(sid)
+                raise AssertionError("a non-owner served the session")
+            except DeformdError as e:
+                assert e.code == E.EMOVED
+                assert e.message == "MOVED %d 127.0.0.1:%d" % (sid, d0.tcp_port)
+    finally:
+        for c in clients:
+            c.close()
+        cl.stop()
+        r.stop()
+
+
+class Storm:
+    """One writer stroking a cluster session, mirrored request by request onto a plain daemon
+    (the shadow) once acknowledged: the shadow holds what the cluster must hold."""
+
+    def __init__(self, cl, shadow, data):
+        self.cl = cl
+        self.X = obj_bytes_positions(data)
+        d0 = cl.daemons[0]
+        with d0.unix_client() as a:
+            self.sid = a.load_mesh(data, fmt=".obj", name="storm").session_id
+        self.sh = shadow.unix_client()
+        self.ssid = self.sh.load_mesh(data, fmt=".obj", name="storm").session_id
+        self.w = d0.tcp_client()
+        self.inflight = None       # (op, args) sent to the cluster, not acknowledged
+        self.open = False          # a stroke is open on the shadow
+        self.acked = 0             # versions acknowledged so far
+        self.k = 0
+
+    def apply(self, c, sid, op, args):
+        if op == "begin":
+            return c.brush_begin(sid, args)
+        if op == "update":
+            return c.brush_update(sid, move=args)
+        return c.brush_end(sid)
+
+    def step(self):
+        """The next request of the storm (strokes of begin, two updates, end), mirrored."""
+        phase = self.k % 4
+        op = ("begin", "update", "update", "end")[phase]
+        args = brush_of(self.X, self.k // 4) if op == "begin" else (0.01 * phase, 0, 0.01)
+        self.inflight = (op, args)
+        ack = self.apply(self.w, self.sid, op, args)
+        self.inflight = None
+        self.apply(self.sh, self.ssid, op, args)
+        self.open = op != "end"
+        self.acked = ack.version
+        self.k += 1
+
+    def after_failover(self, version):
+        """The cluster came back at `version`: the in-flight request counts when it was applied
+        (it bumped the version); a stroke left open was ended by the restore."""
+        sv = self.sh.get_mesh(self.ssid).version
+        if version == sv + 1 and self.inflight and self.inflight[0] != "end":
+            self.apply(self.sh, self.ssid, *self.inflight)
+            self.open = True
+        self.inflight = None
+        if self.open:
+            self.sh.brush_end(self.ssid)
+            self.open = False
+        self.k += (-self.k) % 4      # the next request begins a stroke
+
+    def check(self, c):
+        m = c.get_mesh(self.sid)
+        ref = self.sh.get_mesh(self.ssid)
+        assert m.version >= self.acked, "acked version %d lost (now %d)" % (self.acked, m.version)
+        assert m.version == ref.version
+        assert m.positions.tobytes() == ref.positions.tobytes(), "positions differ at version %d" \
+            % m.version
+
+
+def reconnect(cl, sid, k):
+    """A client on a live daemon, following redirects, once the session is served again."""
+    def attempt():
+        c = cl.daemons[k % len(cl.daemons)].tcp_client(timeout=5.0)
+        try:
+            c.get_mesh(sid)
+        except BaseException:
+            c.close()
+            raise
+        return c
+    return poll_until(attempt, "a new owner serving session %d" % sid)
+
+
+KILLS = 5
+
+
+def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon):
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 3)
+    shadow = make_daemon()
+    s = None
+    try:
+        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        times = []
+        for kill in range(KILLS):
+            target = s.acked + 5 + kill      # versions acknowledged before the kill
+            owner = cl.by_port(owner_port(s.w))
+            assert owner is not None
+            fire = threading.Event()
+            killer = threading.Thread(target=lambda: (fire.wait(60), owner.proc.kill()))
+            killer.start()
+            t_kill = None
+            try:
+                while True:
+                    s.step()
+                    if s.acked >= target and not fire.is_set():
+                        fire.set()            # killed while the next requests are in flight
+                        t_kill = time.monotonic()
+            except (ConnectionError, OSError, DeformdError) as e:
+                if isinstance(e, DeformdError):
+                    assert e.code in (E.EIO, E.ESTATE), e
+            fire.set()
+            killer.join(30)
+            owner.proc.wait()
+            if t_kill is None:
+                t_kill = time.monotonic()
+            s.w.close()
+            cl.kill9(owner)                   # its replacement joins the cluster
+            s.w = reconnect(cl, s.sid, kill)
+            times.append(time.monotonic() - t_kill)
+            s.after_failover(s.w.get_mesh(s.sid).version)
+            s.check(s.w)
+        for _ in range(8):                   # the last owner keeps serving
+            s.step()
+        s.check(s.w)
+        print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
+              % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
+    finally:
+        if s:
+            s.w.close()
+            s.sh.close()
+        cl.stop()
+        r.stop()
+
+
+def test_stale_owner_is_fenced_and_drops_the_session(tmp_path):
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 2)
+    try:
+        d0, d1 = cl.daemons
+        data = grid_obj(GRID, GRID)
+        X = obj_bytes_positions(data)
+        x = d0.tcp_client()
+        x.follow_moved = False
+        sid = x.load_mesh(data, fmt=".obj", name="fenced").session_id
+        x.brush_begin(sid, brush_of(X, 1))
+        os.kill(d0.proc.pid, signal.SIGSTOP)
+        try:
+            def take_over():
+                with d1.tcp_client(timeout=5.0) as c:
+                    c.follow_moved = False      # the stopped owner would not answer
+                    return c.get_mesh(sid).version
+            v_taken = poll_until(take_over, "d1 taking over from the stopped owner")
+            assert v_taken == 1                 # the begin; its stroke ended by the restore
+            with d1.tcp_client() as y:
+                y.follow_moved = False
+                v_new = y.stroke(sid, brush_of(X, 2)).version
+        finally:
+            os.kill(d0.proc.pid, signal.SIGCONT)
+        # the woken owner's write is refused (fenced), or it already dropped the session
+        try:
+            x.brush_update(sid, move=(0.05, 0, 0))
+            raise AssertionError("a fenced owner acknowledged a change")
+        except DeformdError as e:
+            assert e.code in (E.ESTATE, E.EMOVED), e
+        with d1.tcp_client() as y:
+            assert y.get_mesh(sid).version == v_new     # nothing of the stale owner
+        def dropped():
+            with d0.tcp_client(timeout=5.0) as c:
+                c.follow_moved = False
+                try:
+                    c.get_mesh(sid)
+                except DeformdError as e:
+                    if e.code == E.EMOVED:
+                        return e.message
+                raise OSError("d0 still serves the session")
+        assert dropped() == "MOVED %d 127.0.0.1:%d" % (sid, d1.tcp_port)
+        log = d0.log()
+        assert "session %d dropped from this daemon" % sid in log
+        assert "fenced" in log
+        x.close()
+    finally:
+        cl.stop()
+        r.stop()
+
+
+def test_redis_killed_and_restarted_with_aof_loses_nothing_acknowledged(tmp_path, make_daemon):
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 2)
+    shadow = make_daemon()
+    s = None
+    try:
+        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        for _ in range(10):
+            s.step()
+        port = r.port
+        r.kill9()
+        try:                                  # Redis down: the change is refused, not acked
+            s.step()
+            raise AssertionError("a change was acknowledged without Redis")
+        except DeformdError as e:
+            assert e.code == E.EIO, e
+        r = Redis(str(tmp_path), port)        # the same AOF
+        s.w.close()
+        s.w = reconnect(cl, s.sid, 1)
+        s.after_failover(s.w.get_mesh(s.sid).version)
+        s.check(s.w)
+        for _ in range(8):
+            s.step()
+        s.check(s.w)
+    finally:
+        if s:
+            s.w.close()
+            s.sh.close()
+        cl.stop()
+        r.stop()
