@@ -126,6 +126,9 @@
     X(BRUSH_CURSOR, 0x0085, brush_cursor, NONE, NONE, BRUSH_CURSOR) /* rate-limited */       \
     X(DEVICE_STATE, 0x0086, device_state, NONE, NONE, DEVICE_INFO) /* a device changed */    \
     X(WORK_PROGRESS, 0x0087, work_progress, NONE, NONE, WORK_PROGRESS) /* opt-in, 4.37 */    \
+    /* negotiated stream encodings (hello stream_encoding, PROTOCOL.md 4.38, 4.39) */           \
+    X(QDISP, 0x0088, qdisp, NONE, NONE, QDISP)      /* one version, quantized delta */       \
+    X(ZFRAME, 0x0089, zframe, NONE, NONE, ZFRAME)   /* a zstd-compressed event frame */      \
     X(ERROR, 0x00FF, error, NONE, NONE, NONE) /* error body not tied to a request type */
 
 /* ------------------------------------------------------------------------------ feature bits
@@ -262,6 +265,15 @@
 /* session_access `flags` (DF_ACCESS_*) */
 #define DF_WIRE_ACCESS_FLAGS(X) X(NEW_KEY, 1u << 0) /* rotate the join key; the reply has it */
 
+/* the range of a quantized stream's error_bound (f64, mesh units) */
+#define DF_STREAM_ERROR_LO 1e-30
+#define DF_STREAM_ERROR_HI 1e30
+/* hello / hello_reply `stream_encoding` (DF_STREAM_ENC_*; PROTOCOL.md 4.2, 4.38, 4.39): how the
+ * connection's displacement stream travels. 0 (no bit) is exact float32, the default. */
+#define DF_WIRE_STREAM_ENCS(X)                                                               \
+    X(QUANTIZED, 1u << 0) /* QDISP events: deltas quantized to 2 x error_bound */           \
+    X(ZSTD, 1u << 1)      /* stream events may come as ZFRAME (zstd) */
+
 /* Every enum list: X(list macro, C prefix, Python class, kind) for tools that walk them all. */
 #define DF_WIRE_ENUMS(X)                                                                     \
     X(DF_WIRE_FLAGS, DF_FLAG_, FrameFlag, flags)                                                \
@@ -291,7 +303,8 @@
     X(DF_WIRE_ACCESS_MODES, DF_ACCESS_MODE_, AccessMode, enum)                               \
     X(DF_WIRE_ACCESS_FLAGS, DF_ACCESS_, AccessFlag, flags)                               \
     X(DF_WIRE_WORK_STAGES, DF_STAGE_, WorkStage, enum)                                       \
-    X(DF_WIRE_WORK_OPTS, DF_WORK_OPT_, WorkOpt, flags)
+    X(DF_WIRE_WORK_OPTS, DF_WORK_OPT_, WorkOpt, flags)                                       \
+    X(DF_WIRE_STREAM_ENCS, DF_STREAM_ENC_, StreamEnc, flags)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

@@ -85,6 +85,8 @@ typedef struct df_conn {
     int pending;             /* requests accepted and not yet answered */
     int hello_done;          /* a HELLO succeeded (required before most requests) */
     char name[DF_MAX_NAME_LEN + 1]; /* the client_name of its HELLO ("" before / when none) */
+    uint8_t stream_enc;      /* DF_STREAM_ENC_* bits of its HELLO (0: exact float32) */
+    double stream_err;       /* QUANTIZED: the error bound E of its HELLO (mesh units) */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */

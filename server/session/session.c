@@ -1,5 +1,6 @@
 /* session.c — session registry, subscribers, strokes (see session.h). */
 #include "server/session/session.h"
+#include "server/session/stream_enc.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -290,6 +291,7 @@ void df_session_destroy(df_session *s)
     free(s->subs);
     free(s->sub_shm);
     df_shm_destroy(s->shm);
+    df_stream_enc_free(s);
     df_brush_state_release(s);
     while (s->strokes) {
         df_stroke *st = s->strokes;
@@ -369,6 +371,7 @@ int df_session_unsubscribe(df_session *s, df_conn *c)
             memmove(s->subs + i, s->subs + i + 1, (size_t)(s->nsubs - i - 1) * sizeof *s->subs);
             memmove(s->sub_shm + i, s->sub_shm + i + 1, (size_t)(s->nsubs - i - 1));
             s->nsubs--;
+            df_stream_enc_prune(s);
             df_conn_unref(c);
             return 1;
         }
@@ -412,6 +415,14 @@ static df_sbuf *shm_ref_for(df_session *s, df_sbuf *frame)
     return ref;
 }
 
+/* 1 when a subscriber negotiated a stream encoding (stream_enc.h). */
+static int any_encoded(df_conn *const *subs, int n)
+{
+    for (int i = 0; i < n; i++)
+        if (subs[i]->stream_enc) return 1;
+    return 0;
+}
+
 void df_session_broadcast(df_session *s, df_sbuf *frame)
 {
     /* df_conn_send may drop a subscriber (closing it unsubscribes it): iterate over a copy. */
@@ -431,12 +442,26 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
         df_conn_ref(subs[i]);
     }
     df_sbuf *ref = shm_ref_for(s, frame);
+    /* negotiated encodings (stream_enc.h): every quantized group follows every stream frame,
+     * whoever of its subscribers is still open */
+    df_enc_variants vs = {.n = 0};
+    int encoded = s->nqg > 0 || any_encoded(subs, n);
+    if (encoded && df_stream_enc_applies(frame)) {
+        df_stream_enc_follow(s, frame, &vs);
+    } else {
+        encoded = 0;
+    }
     for (int i = 0; i < n; i++) {
         int by_ref = ref && shm[i];
-        if (!subs[i]->closing && df_conn_send(subs[i], by_ref ? ref : frame) == DF_OK && by_ref)
+        df_sbuf *f = by_ref ? df_sbuf_ref(ref)
+                     : encoded ? df_stream_enc_frame(s, subs[i], frame, &vs)
+                               : df_sbuf_ref(frame);
+        if (f && !subs[i]->closing && df_conn_send(subs[i], f) == DF_OK && by_ref)
             s->srv->stats.shm_refs++;
+        df_sbuf_unref(f);
         df_conn_unref(subs[i]);
     }
+    df_stream_enc_variants_clear(&vs);
     df_sbuf_unref(ref);
     if (subs != local) free(subs);
     if (shm != local_shm) free(shm);

@@ -251,6 +251,7 @@ ENUM_FIELDS = [
     ("4.15", "options", "WorkOpt", True, ("KELVINLET_GUESS",)),  # handle_move only
     ("4.16", "options", "WorkOpt", True, ()),
     ("4.37", "stage", "WorkStage", False, ()),
+    ("4.2 ", "stream_encoding", "StreamEnc", True, ()),
 ]
 
 

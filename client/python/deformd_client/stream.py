@@ -31,6 +31,7 @@ class Disp:
     count: int
     idx: Optional[array]   # array('I') of count vertex indices (SPARSE), else None
     xyz: array             # array('f') of 3*count displacement components
+    wire_bytes: int = 0    # bytes its frames took on the wire (Client events; 0 elsewhere)
 
     @property
     def kind_name(self) -> str:
