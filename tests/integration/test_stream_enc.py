@@ -222,3 +222,59 @@ def test_raw_hello_trailer_bytes(make_daemon):
         reply = c._one(m.HELLO, m.encode_hello(1, 1, 0, "raw"))
         h = m.decode_hello_reply(reply)
         assert not h.has_stream and len(reply) == 46 + 2 + len(h.server_name)
+
+
+@pytest.mark.parametrize("encoding", ["exact", "quantized", "zstd", "quantized+zstd"])
+def test_deformctl_watch_prints_the_bytes_of_each_version(make_daemon, encoding):
+    """deformctl watch --encoding prints `bytes N` per version (and "bytes" in --json): the
+    bytes a Python client with the same encoding received for that version."""
+    import json
+    import subprocess
+    from conftest import DEFORMCTL
+    d = make_daemon()
+    enc = m.STREAM_ENCODINGS[encoding]
+    with d.unix_client() as ed:
+        sid = ed.load_mesh(grid_obj(16, 16), fmt=".obj", name="w").session_id
+        X = ed.get_mesh(sid).positions
+        err = 1e-3 * bbox_diag(X)
+        qargs = ["--error", repr(err)] if enc & m.STREAM_ENC_QUANTIZED else []
+        py = Client.connect_unix(d.socket_path, timeout=TIMEOUT,
+                                 encoding=enc if enc else None,
+                                 error=err if enc & m.STREAM_ENC_QUANTIZED else 0.0)
+        with py:
+            py.subscribe(sid)
+            n = 3
+            for json_out in (False, True):
+                p = subprocess.Popen([DEFORMCTL, "--socket", d.socket_path] +
+                                     (["--json"] if json_out else []) +
+                                     ["watch", str(sid), "--encoding", encoding, "--count",
+                                      str(n)] + qargs,
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                head = p.stdout.readline()      # printed once subscribed
+                assert "watching" in head, head + p.stderr.read()
+                v0 = int(ed.stats(sid)["version"])
+                for k in range(n):
+                    ed.stroke(sid, Brush(type="grab", center=X[3 * k:3 * k + 3],
+                                         move=(0.01, 0, 0.02), radius=0.3))
+                out, errs = p.communicate(timeout=TIMEOUT)
+                assert p.returncode == 0, errs
+                evs = collect(py, sid, v0 + n)
+                want = {e.version: e.wire_bytes for e in evs}
+                lines = out.splitlines()
+                assert len(lines) == n
+                for line in lines:
+                    if json_out:
+                        j = json.loads(line)
+                        v, nbytes = j["version"], j["bytes"]
+                    else:
+                        f = line.split()
+                        v, nbytes = int(f[1]), int(f[f.index("bytes") + 1])
+                    assert nbytes == want[v] and nbytes > 0, line
+        bad = subprocess.run([DEFORMCTL, "--socket", d.socket_path, "watch", str(sid),
+                              "--encoding", "quantized"], capture_output=True, text=True,
+                             timeout=TIMEOUT)
+        assert bad.returncode != 0 and "--error" in bad.stderr
+        bad = subprocess.run([DEFORMCTL, "--socket", d.socket_path, "watch", str(sid),
+                              "--encoding", "lossy"], capture_output=True, text=True,
+                             timeout=TIMEOUT)
+        assert bad.returncode != 0 and "--encoding" in bad.stderr
