@@ -12,7 +12,7 @@
 #include "server/log.h"
 #include "server/net/reply.h"
 
-#define ZSTD_STREAM_LEVEL 1       /* fast: a 12 MB dense frame compresses in tens of ms */
+#define ZSTD_STREAM_LEVEL 1       /* fast; the loop thread compresses each frame */
 #define ZFRAME_HEADER 12         /* zframe body bytes before the zstd frame */
 #define ZSTD_MIN_PAYLOAD 256      /* smaller frames are never worth a ZFRAME header */
 #define K_LIMIT 4503599627370495.0 /* 2^52 - 1: K stays exact in double and in the wire's range */
@@ -112,59 +112,91 @@ df_sbuf *df_stream_enc_zstd(df_sbuf *frame)
     return z;
 }
 
-/* The QDISP frame of `frame` (a DISPLACEMENT or PROGRESS chunk) for group `g`, updating g->K. */
+static inline uint8_t *put_varint(uint8_t *q, uint64_t v)
+{
+    while (v >= 0x80) {
+        *q++ = (uint8_t)(v | 0x80);
+        v >>= 7;
+    }
+    *q++ = (uint8_t)v;
+    return q;
+}
+
+#define QDISP_HEADER 48  /* qdisp body bytes before the rows (PROTOCOL.md 4.38) */
+#define QDISP_ROW_MAX 29 /* varint gap + 3 zigzag varints of |dq| < 2^53 */
+#define DISP_HEADER 44   /* disp body bytes before the rows (4.21) */
+#define PROGRESS_HEADER 32
+
+/* The QDISP frame of `frame` (a DISPLACEMENT or PROGRESS chunk the daemon built: read in place,
+ * bounds checked) for group `g`, updating g->K. One pass: each row's new K, its change written
+ * as varints straight into the frame. */
 static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
 {
-    df_error err;
-    df_frame_header h;
-    if (df_frame_header_decode(frame->data, frame->len, &h, &err) != DF_OK) return NULL;
-    const uint8_t *pl = frame->data + DF_FRAME_HEADER_SIZE;
-    df_msg_progress pr;
-    df_msg_disp *d = &pr.disp;
-    memset(&pr, 0, sizeof pr);
-    int rc = h.type == DF_MSG_PROGRESS ? df_msg_progress_decode(pl, h.payload_len, &pr, &err)
-                                       : df_msg_disp_decode(pl, h.payload_len, d, &err);
-    if (rc != DF_OK || d->nv != (uint32_t)s->nv) {
-        df_log(DF_LOG_ERROR, "session %llu: quantized stream: a broadcast frame does not decode "
-               "(%s)", (unsigned long long)s->id, rc ? err.msg : "vertex count");
-        df_msg_disp_free(d);
+    const uint8_t *h = frame->data, *p = h + DF_FRAME_HEADER_SIZE;
+    size_t n = frame->len - DF_FRAME_HEADER_SIZE;
+    uint16_t type = df_le16_load(h + 6);
+    if (type == DF_MSG_PROGRESS) {
+        p += PROGRESS_HEADER;
+        n -= n >= PROGRESS_HEADER ? PROGRESS_HEADER : n;
+    }
+    uint32_t nv = n >= DISP_HEADER ? df_le32_load(p + 28) : 0;
+    uint32_t count = n >= DISP_HEADER ? df_le32_load(p + 40) : 0;
+    uint32_t offset = n >= DISP_HEADER ? df_le32_load(p + 36) : 0;
+    uint8_t enc = n >= DISP_HEADER ? p[25] : 0;
+    size_t row = enc == DF_DISP_SPARSE ? 16 : 12;
+    if (n < DISP_HEADER || nv != (uint32_t)s->nv || (enc != DF_DISP_SPARSE && enc != DF_DISP_DENSE) ||
+        n != DISP_HEADER + row * (size_t)count ||
+        (enc == DF_DISP_DENSE && (uint64_t)offset + count > nv)) {
+        df_log(DF_LOG_ERROR, "session %llu: quantized stream: a broadcast frame does not parse",
+               (unsigned long long)s->id);
         return NULL;
     }
-    df_msg_qdisp qd = {.session_id = d->session_id, .version = d->version,
-                       .base_version = d->base_version, .kind = d->kind, .nv = d->nv,
-                       .step = g->step};
-    qd.idx = malloc(((size_t)d->count + 1) * sizeof *qd.idx);
-    qd.dq = malloc(((size_t)d->count + 1) * 3 * sizeof *qd.dq);
-    df_sbuf *out = NULL;
-    if (qd.idx && qd.dq) {
-        for (uint32_t r = 0; r < d->count; r++) {
-            size_t i = d->encoding == DF_DISP_SPARSE ? (size_t)d->idx[r] : d->offset + (size_t)r;
-            int64_t *K = g->K + 3 * i, *dq = qd.dq + 3 * (size_t)qd.count;
-            const float *u = d->xyz + 3 * (size_t)r;
-            int nz = 0;
-            for (int k = 0; k < 3; k++) {
-                int64_t kn = quantize(u[k], g->step);
-                dq[k] = kn - K[k];
-                nz |= dq[k] != 0;
-                K[k] = kn;
-            }
-            if (nz) qd.idx[qd.count++] = (int32_t)i;
+    size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count;
+    uint8_t *out = malloc(cap);
+    if (!out) return NULL;
+    uint8_t *o = out + DF_FRAME_HEADER_SIZE, *q = o + QDISP_HEADER;
+    const uint8_t *rows = p + DISP_HEADER;
+    int64_t prev = -1;
+    uint32_t sent = 0;
+    for (uint32_t r = 0; r < count; r++, rows += row) {
+        uint32_t i = enc == DF_DISP_SPARSE ? df_le32_load(rows) : offset + r;
+        if (i >= nv) {
+            free(out);
+            return NULL;
         }
-        df_buf b;
-        df_buf_init(&b);
-        size_t start;
-        if (df_frame_begin(&b, DF_MSG_QDISP, h.flags, h.request_id, &start, &err) == DF_OK &&
-            df_msg_qdisp_encode(&qd, &b, &err) == DF_OK && df_frame_end(&b, start, &err) == DF_OK)
-            out = df_sbuf_from_buf(&b);
-        df_buf_free(&b);
+        float u[3];
+        memcpy(u, rows + (enc == DF_DISP_SPARSE ? 4 : 0), 12);
+        int64_t *K = g->K + 3 * (size_t)i, dq[3];
+        for (int k = 0; k < 3; k++) {
+            int64_t kn = quantize(u[k], g->step);
+            dq[k] = kn - K[k];
+            K[k] = kn;
+        }
+        if ((dq[0] | dq[1] | dq[2]) == 0) continue;
+        q = put_varint(q, (uint64_t)((int64_t)i - prev - 1));
+        prev = i;
+        for (int k = 0; k < 3; k++)
+            q = put_varint(q, ((uint64_t)dq[k] << 1) ^ (uint64_t)(dq[k] >> 63));
+        sent++;
     }
-    free(qd.idx);
-    free(qd.dq);
-    df_msg_disp_free(d);
-    if (!out)
-        df_log(DF_LOG_ERROR, "session %llu: quantized stream frame of version %llu failed",
-               (unsigned long long)s->id, (unsigned long long)qd.version);
-    return out;
+    size_t len = (size_t)(q - out);
+    memcpy(out, h, DF_FRAME_HEADER_SIZE); /* same flags and request id */
+    df_le16_store(out + 6, DF_MSG_QDISP);
+    df_le32_store(out + 20, (uint32_t)(len - DF_FRAME_HEADER_SIZE));
+    memcpy(o, p, 24);                     /* session_id, version, base_version */
+    o[24] = p[24];                        /* kind */
+    o[25] = 0;
+    df_le16_store(o + 26, 0);
+    df_le32_store(o + 28, nv);
+    df_le32_store(o + 32, sent);
+    df_le32_store(o + 36, (uint32_t)(q - (o + QDISP_HEADER)));
+    uint64_t step;
+    memcpy(&step, &g->step, 8);
+    df_le64_store(o + 40, step);
+    uint8_t *shrunk = realloc(out, len);
+    df_sbuf *b = df_sbuf_adopt(shrunk ? shrunk : out, len);
+    if (!b) free(shrunk ? shrunk : out);
+    return b;
 }
 
 static df_enc_variant *variant(df_enc_variants *vs, uint8_t enc, double e)
