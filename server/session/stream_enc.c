@@ -232,13 +232,18 @@ static df_enc_variant *build(df_session *s, df_sbuf *frame, df_enc_variants *vs,
     return v;
 }
 
+df_sbuf *df_stream_enc_get(df_session *s, uint8_t enc, double e, df_sbuf *frame,
+                           df_enc_variants *vs)
+{
+    enc &= DF_STREAM_ENC_ALL;
+    if (!enc) return df_sbuf_ref(frame);
+    df_enc_variant *v = build(s, frame, vs, enc, enc & DF_STREAM_ENC_QUANTIZED ? e : 0);
+    return v ? df_sbuf_ref(v->frame) : NULL;
+}
+
 df_sbuf *df_stream_enc_frame(df_session *s, const df_conn *c, df_sbuf *frame, df_enc_variants *vs)
 {
-    uint8_t enc = c->stream_enc & DF_STREAM_ENC_ALL;
-    if (!enc) return df_sbuf_ref(frame);
-    double e = enc & DF_STREAM_ENC_QUANTIZED ? c->stream_err : 0;
-    df_enc_variant *v = build(s, frame, vs, enc, e);
-    return v ? df_sbuf_ref(v->frame) : NULL;
+    return df_stream_enc_get(s, c->stream_enc, c->stream_err, frame, vs);
 }
 
 void df_stream_enc_follow(df_session *s, df_sbuf *frame, df_enc_variants *vs)

@@ -64,6 +64,10 @@ int df_stream_enc_applies(const df_sbuf *frame);
  * frame and the subscriber must resync. Release the variants with df_stream_enc_variants_clear. */
 df_sbuf *df_stream_enc_frame(df_session *s, const df_conn *c, df_sbuf *frame, df_enc_variants *vs);
 
+/* df_stream_enc_frame for encoding `enc` with error bound `e` (not a connection's). */
+df_sbuf *df_stream_enc_get(df_session *s, uint8_t enc, double e, df_sbuf *frame,
+                           df_enc_variants *vs);
+
 /* Builds the QUANTIZED variant of every group of `s` for `frame` into `vs` (so every group's K
  * follows every stream frame, whether or not one of its subscribers takes it). */
 void df_stream_enc_follow(df_session *s, df_sbuf *frame, df_enc_variants *vs);

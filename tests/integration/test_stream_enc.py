@@ -278,3 +278,53 @@ def test_deformctl_watch_prints_the_bytes_of_each_version(make_daemon, encoding)
                               "--encoding", "lossy"], capture_output=True, text=True,
                              timeout=TIMEOUT)
         assert bad.returncode != 0 and "--encoding" in bad.stderr
+
+
+@pytest.mark.parametrize("encoding", ["quantized", "zstd"])
+def test_a_subscriber_that_cannot_keep_up_gets_coalesced_versions(make_daemon, encoding):
+    """output_queue_limit 4 MiB: a subscriber with a stream encoding that does not read while
+    40 versions are broadcast is not dropped and its queue does not grow past the limit: once
+    its queue holds limit / 8 the versions are folded, and when it reads again it gets one
+    coalesced version (base_version = the version it held) that brings its replica to the
+    final version, within E (quantized) or exactly (zstd). stats counts the folded versions,
+    daemon-wide and for that client, and shows every client's bytes_per_s."""
+    d = make_daemon("output_queue_limit = 4m\n")
+    enc = m.STREAM_ENCODINGS[encoding]
+    with d.unix_client() as ed:
+        sid = ed.load_mesh(grid_obj(200, 200), fmt=".obj", name="slow").session_id
+        X = ed.get_mesh(sid).positions
+        err = 1e-6 * bbox_diag(X) if enc & m.STREAM_ENC_QUANTIZED else 0.0
+        slow = Client.connect_unix(d.socket_path, timeout=TIMEOUT, encoding=enc, error=err)
+        with slow:
+            held = MeshState.sync(slow, sid)
+            slow.subscribe(sid)
+            ed.brush_begin(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.001),
+                                      radius=0.5))
+            n = 40
+            for k in range(2, n + 1):
+                ed.brush_update(sid, move=(0.001 * k, 0.0005 * k, 0.001 * k))
+            ed.brush_end(sid)
+            last = int(ed.stats(sid)["version"])
+            assert last == n
+            st = ed.stats()
+            assert st["stream_coalesced_versions"] > 0, "nothing was coalesced"
+            mine = [k for k in st if k.startswith("client.") and k.endswith(".coalesced")
+                    and st[k] > 0]
+            assert len(mine) == 1, mine
+            assert all(st[k] >= 0 for k in st if k.endswith(".bytes_per_s"))
+            assert sum(k.endswith(".bytes_per_s") for k in st) >= 2   # editor and slow
+            folded = int(st[mine[0]])
+            evs = collect(slow, sid, last)
+            coalesced = [e for e in evs if e.version > e.base_version + 1]
+            assert len(coalesced) == 1 and coalesced[0].version == last
+            assert len(evs) + folded - 1 == last   # every version applied or folded
+            for e in evs:
+                assert held.apply(e)
+            final = ed.get_mesh(sid)
+            exact = MeshState(ed.get_mesh(sid, base=True).base, last)
+            exact.apply(ed.snapshot(sid))
+            if err:
+                within(held, exact, err, "coalesced %s" % encoding)
+            else:
+                assert held.tobytes() == final.positions.tobytes()
+            assert slow.ping(b"alive") == b"alive"           # not dropped
