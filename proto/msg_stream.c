@@ -26,7 +26,9 @@ static size_t put_varint(uint8_t *q, uint64_t v)
 static uint64_t zigzag(int64_t v) { return ((uint64_t)v << 1) ^ (uint64_t)(v >> 63); }
 static int64_t unzigzag(uint64_t u) { return (int64_t)(u >> 1) ^ -(int64_t)(u & 1); }
 
-/* Reads one LEB128 varint of at most 10 bytes from p[*off .. n); 0 on truncation / overlong. */
+/* Reads one LEB128 varint of at most 10 bytes from p[*off .. n); 0 on truncation, more than
+ * 10 bytes, or a non-canonical encoding (a last byte 0 after the first: every value has one
+ * encoding, so a decoded body re-encodes to the same bytes). */
 static int get_varint(const uint8_t *p, size_t n, size_t *off, uint64_t *v)
 {
     uint64_t r = 0;
@@ -35,7 +37,7 @@ static int get_varint(const uint8_t *p, size_t n, size_t *off, uint64_t *v)
         r |= (uint64_t)(b & 0x7f) << shift;
         if (!(b & 0x80)) {
             *v = r;
-            return 1;
+            return shift == 0 || b != 0;
         }
     }
     return 0;
@@ -139,8 +141,8 @@ int df_msg_qdisp_decode(const uint8_t *p, size_t n, df_msg_qdisp *m, df_error *e
         if (!get_varint(p, n, &off, &gap) || !get_varint(p, n, &off, &v[0]) ||
             !get_varint(p, n, &off, &v[1]) || !get_varint(p, n, &off, &v[2])) {
             df_msg_qdisp_free(&t);
-            return df_error_set(err, DF_EPROTO_TRUNCATED, "qdisp: row %u truncated or a varint "
-                                "longer than 10 bytes", i);
+            return df_error_set(err, DF_EPROTO_TRUNCATED, "qdisp: row %u truncated, or a varint "
+                                "longer than 10 bytes or not in its shortest form", i);
         }
         if (gap >= (uint64_t)t.nv || prev + 1 + (int64_t)gap >= (int64_t)t.nv) {
             df_msg_qdisp_free(&t);

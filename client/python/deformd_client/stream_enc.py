@@ -45,9 +45,12 @@ def _varint(p, off: int, n: int):
         off += 1
         v |= (b & 0x7F) << shift
         if not b & 0x80:
+            if b == 0 and shift:
+                break                   # not the shortest form: refused (one encoding a value)
             return v, off
         shift += 7
-    raise ProtocolError("qdisp: truncated row or a varint longer than 10 bytes")
+    raise ProtocolError("qdisp: truncated row, or a varint longer than 10 bytes or not in its "
+                        "shortest form")
 
 
 def decode_qdisp(p: bytes) -> QDisp:
