@@ -10,7 +10,7 @@ import ctypes
 import ctypes.util
 import math
 from array import array
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import List, Optional
 
 from . import frame as fr
@@ -34,7 +34,8 @@ class QDisp:
     step: float
     idx: List[int]
     dq: List[int]
-    wire_bytes: int = 0          # bytes of its frames on the wire (compressed size for ZFRAME)
+    # bytes of its frames on the wire (compressed size for ZFRAME); not part of equality
+    wire_bytes: int = field(default=0, compare=False)
     kind_name: str = "qdisp"
 
 
