@@ -36,6 +36,10 @@ static df_qgroup *find_group(df_session *s, double err)
 int df_stream_enc_join(df_session *s, const df_conn *c, df_error *err)
 {
     if (!(c->stream_enc & DF_STREAM_ENC_QUANTIZED) || find_group(s, c->stream_err)) return DF_OK;
+    if (s->nqg >= DF_QGROUP_MAX)
+        return df_error_set(err, DF_ELIMIT, "subscribe: session %llu already streams %d "
+                            "distinct quantized error bounds (at most %d); connect with one of "
+                            "theirs", (unsigned long long)s->id, s->nqg, DF_QGROUP_MAX);
     size_t m = 3 * (size_t)s->nv;
     int64_t *K = malloc(m * sizeof *K);
     df_qgroup *g = realloc(s->qg, (size_t)(s->nqg + 1) * sizeof *g);

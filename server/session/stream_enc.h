@@ -21,6 +21,10 @@
 #include "server/net/sbuf.h"
 #include "server/session/session.h"
 
+/* Distinct error bounds (quantized groups) one session streams at once: with their zstd forms
+ * and the exact zstd one, every variant of a broadcast frame fits df_enc_variants. */
+#define DF_QGROUP_MAX 15
+
 /* One quantized encoding group of a session. */
 typedef struct df_qgroup {
     double err;                  /* the clients' error bound E (mesh units) */
@@ -50,7 +54,7 @@ typedef struct df_enc_variant {
 } df_enc_variant;
 
 typedef struct df_enc_variants {
-    df_enc_variant v[32];
+    df_enc_variant v[2 * DF_QGROUP_MAX + 2];
     int n;
 } df_enc_variants;
 

@@ -328,3 +328,32 @@ def test_a_subscriber_that_cannot_keep_up_gets_coalesced_versions(make_daemon, e
             else:
                 assert held.tobytes() == final.positions.tobytes()
             assert slow.ping(b"alive") == b"alive"           # not dropped
+
+
+def test_distinct_error_bounds_per_session_are_limited(make_daemon):
+    """Each distinct error bound is a group the daemon keeps per session (DF_QGROUP_MAX 15): a
+    16th is refused with ELIMIT naming the limit, and the session streams on for the others."""
+    d = make_daemon()
+    with d.unix_client() as ed:
+        sid = ed.load_mesh(grid_obj(6, 6), fmt=".obj", name="groups").session_id
+        cs = []
+        try:
+            for k in range(15):
+                c = Client.connect_unix(d.socket_path, encoding=m.STREAM_ENC_QUANTIZED,
+                                        error=1e-3 * (k + 1))
+                cs.append(c)
+                c.subscribe(sid)
+            extra = Client.connect_unix(d.socket_path, encoding=m.STREAM_ENC_QUANTIZED,
+                                        error=0.5)
+            cs.append(extra)
+            with pytest.raises(DeformdError) as ei:
+                extra.subscribe(sid)
+            assert ei.value.code == E.ELIMIT and "15" in str(ei.value)
+            same = Client.connect_unix(d.socket_path, encoding=m.STREAM_ENC_QUANTIZED,
+                                       error=1e-3)       # an existing group: admitted
+            cs.append(same)
+            same.subscribe(sid)
+            assert int(ed.stats(sid)["subscribers"]) == 16
+        finally:
+            for c in cs:
+                c.close()
