@@ -40,8 +40,9 @@ MATH_LIBS   := -lcholmod -lsuitesparseconfig -llapacke -llapack -lopenblas -lm
 HID_SYS     := -lhidapi-hidraw -lusb-1.0
 # CRYPTO_SYS: OpenSSL libssl + libcrypto, for proto/auth_mac.c (HMAC-SHA256 of AUTH) and TLS
 # (server/net/tls.c, client/dc_tls.c), linked by everything that links the proto layer's auth
-# (the daemon, libdeformclient users, their unit tests).
-CRYPTO_SYS  := -lssl -lcrypto
+# (the daemon, libdeformclient users, their unit tests); and libzstd (libzstd-dev), which
+# libdeformclient uses for the zstd stream encoding (client/dc_stream_enc.c, PROTOCOL.md 6.3).
+CRYPTO_SYS  := -lssl -lcrypto -lzstd
 SERVER_SYS  := -luv $(HID_SYS) -lsqlite3 -lzstd -lhiredis -lpthread $(CRYPTO_SYS)
 # core/geom (the pen's ray cast): Embree 3 (libembree-dev), linked by what uses core/geom: the
 # daemon (server/hid/hid_pen_target.c), the geom and server unit tests, the benches, the fuzzers

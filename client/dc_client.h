@@ -86,6 +86,12 @@ int dc_enc_session_ref(const void *m, df_buf *out, df_error *err);
 int dc_session_ref_call(df_client *c, uint16_t type, uint64_t session_id, df_msg_ack *ack,
                         df_error *err);
 
+/* Applies one QDISP chunk to a replica (dc_stream_enc.c, PROTOCOL.md 6.3); `last`: no MORE.
+ * Returns 1 when it completed a version, 0 when more chunks follow or it was ignored (another
+ * session, a version already held), or DF_ESTATE (a gap) / DF_EFORMAT / DF_EINVAL / DF_ENOMEM
+ * with r->stale set. */
+int dc_replica_feed_qdisp(df_client_replica *r, const df_msg_qdisp *q, int last, df_error *err);
+
 /* Monotonic clock in microseconds. */
 double dc_now_us(void);
 

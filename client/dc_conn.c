@@ -19,12 +19,13 @@ double dc_now_us(void)
     return (double)ts.tv_sec * 1e6 + (double)ts.tv_nsec * 1e-3;
 }
 
-static int hello(df_client *c, const char *name, df_error *err);
+static int hello(df_client *c, const char *name, uint8_t enc, double bound, df_error *err);
 
 /* A client on connected socket `fd` (closed on error): TLS first when `tls_ca` is set (the
- * certificate must name `host`), then the hello. */
-static int wrap_fd(int fd, const char *name, const char *host, const char *tls_ca,
-                   df_client **out, df_error *err)
+ * certificate must name `host`), then the hello (asking for stream encoding `enc` with error
+ * bound `bound` when enc != 0). */
+static int wrap_fd_enc(int fd, const char *name, const char *host, const char *tls_ca,
+                       uint8_t enc, double bound, df_client **out, df_error *err)
 {
     df_client *c = calloc(1, sizeof *c);
     uint8_t *rb = malloc(DF_CLIENT_READ_BUF);
@@ -48,13 +49,35 @@ static int wrap_fd(int fd, const char *name, const char *host, const char *tls_c
     }
     df_buf_init(&c->out);
     int rc = tls_ca ? dc_tls_start(c, host, tls_ca, err) : DF_OK;
-    if (rc == DF_OK) rc = hello(c, name, err);
+    if (rc == DF_OK) rc = hello(c, name, enc, bound, err);
     if (rc) {
         df_client_close(c);
         return rc;
     }
     *out = c;
     return DF_OK;
+}
+
+static int wrap_fd(int fd, const char *name, const char *host, const char *tls_ca,
+                   df_client **out, df_error *err)
+{
+    return wrap_fd_enc(fd, name, host, tls_ca, 0, 0, out, err);
+}
+
+int df_client_connect_enc(const char *unix_path, const char *host, int port, const char *tls_ca,
+                          const char *name, uint8_t encoding, double error_bound,
+                          df_client **out, df_error *err)
+{
+    if (!out || (!unix_path && !host))
+        return df_error_set(err, DF_EINVAL, "df_client_connect_enc: NULL out or no address");
+    int rc = df_msg_stream_enc_check(encoding != 0, encoding, error_bound, "connect", err);
+    if (rc)
+        return rc;
+    int fd = unix_path ? dc_net_connect_unix(unix_path, err) : dc_net_connect_tcp(host, port, err);
+    if (fd < 0)
+        return fd;
+    return wrap_fd_enc(fd, name, unix_path ? NULL : host, unix_path ? NULL : tls_ca, encoding,
+                       error_bound, out, err);
 }
 
 int df_client_connect_unix(const char *path, const char *name, df_client **out, df_error *err)
@@ -399,15 +422,22 @@ static int enc_hello(const void *m, df_buf *out, df_error *err)
     return df_msg_hello_encode(m, out, err);
 }
 
+/* the hello of a redirected connection (dc_move.c) asks for the stream encoding the first
+ * connection was granted, so the replica's stream keeps its form */
 int dc_hello(df_client *c, const char *name, df_error *err)
 {
-    return hello(c, name, err);
+    uint8_t enc = c->server.has_stream ? c->server.stream_encoding : 0;
+    double bound = c->server.has_stream ? c->server.error_bound : 0;
+    return hello(c, name, enc, bound, err);
 }
 
-static int hello(df_client *c, const char *name, df_error *err)
+static int hello(df_client *c, const char *name, uint8_t enc, double bound, df_error *err)
 {
     df_msg_hello m;
     memset(&m, 0, sizeof m);
+    m.has_stream = enc != 0; /* exact: the original hello, no trailer */
+    m.stream_encoding = enc;
+    m.error_bound = enc ? bound : 0;
     m.min_version = DF_PROTO_VERSION_MIN;
     m.max_version = DF_PROTO_VERSION;
     m.features = DF_FEAT_ALL;

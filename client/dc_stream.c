@@ -79,6 +79,7 @@ void df_client_replica_free(df_client_replica *r)
         return;
     free(r->base);
     free(r->u);
+    free(r->K);
     memset(r, 0, sizeof *r);
 }
 
@@ -135,6 +136,7 @@ static int feed_disp(df_client_replica *r, const df_msg_disp *d, int last, df_er
     r->versions_applied++;
     if (snapshot)
         r->stale = 0;
+    r->step = 0; /* exact values: a later QDISP derives K from them */
     return 1;
 }
 
@@ -147,6 +149,29 @@ int df_client_replica_feed(df_client_replica *r, const df_frame_header *h, const
         return 0;
     int last = !(h->flags & DF_FLAG_MORE);
     int rc;
+    if (h->type == DF_MSG_ZFRAME) {
+        df_frame_header in;
+        uint8_t *raw = NULL;
+        rc = df_client_zframe_unwrap(h, payload, &in, &raw, err);
+        if (rc) {
+            r->stale = 1;
+            return rc;
+        }
+        rc = df_client_replica_feed(r, &in, raw, err);
+        free(raw);
+        return rc;
+    }
+    if (h->type == DF_MSG_QDISP) {
+        df_msg_qdisp q;
+        rc = df_msg_qdisp_decode(payload, h->payload_len, &q, err);
+        if (rc) {
+            r->stale = 1;
+            return rc;
+        }
+        rc = dc_replica_feed_qdisp(r, &q, last, err);
+        df_msg_qdisp_free(&q);
+        return rc;
+    }
     if (h->type == DF_MSG_DISPLACEMENT || h->type == DF_MSG_SNAPSHOT) {
         df_msg_disp d;
         rc = df_msg_disp_decode(payload, h->payload_len, &d, err);
@@ -190,6 +215,7 @@ int df_client_replica_resync(df_client *c, df_client_replica *r, df_error *err)
     r->building = 0;
     r->rows_seen = 0;
     r->stale = 0;
+    r->step = 0; /* exact: a later QDISP derives K from these values */
     return DF_OK;
 }
 

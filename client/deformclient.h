@@ -67,13 +67,24 @@ int df_client_connect_tcp_tls(const char *host, int port, const char *name, cons
 
 /* Cluster mode (PROTOCOL.md 4.39): a request answered EMOVED ("MOVED <id> <host:port>": the
  * session is owned by another daemon) reconnects the client to that address (TCP; TLS with the
- * same CA file, the same hello name, AUTH with the key it authenticated with) and is sent there
+ * same CA file, the same hello name and stream encoding, AUTH with the key it authenticated with) and is sent there
  * once more; subscriptions and shared-memory rings of the old connection are gone (subscribe
  * again). on = 0 turns that off (the EMOVED error is returned). Default on. */
 void df_client_set_follow_moved(df_client *c, int on);
 
 /* Redirects followed so far (df_client_set_follow_moved). */
 int df_client_moves(const df_client *c);
+
+/* Connects like df_client_connect_unix (`unix_path` non-NULL) or df_client_connect_tcp_tls
+ * (`host`, `port`, `tls_ca` may be NULL) and asks in the hello for stream encoding `encoding`
+ * (DF_STREAM_ENC_* bits; 0: exact float32, the original hello) with absolute error bound
+ * `error_bound` (mesh units, QUANTIZED only, else 0; PROTOCOL.md 4.2, 6.3). The granted encoding
+ * is in df_client_server_info(c)->stream_encoding. Stream events then include DF_MSG_QDISP
+ * and DF_MSG_ZFRAME frames, which df_client_replica_feed takes. Errors: as the connects, and
+ * DF_EINVAL for a bad encoding request (checked before connecting). */
+int df_client_connect_enc(const char *unix_path, const char *host, int port, const char *tls_ca,
+                          const char *name, uint8_t encoding, double error_bound,
+                          df_client **out, df_error *err);
 
 /* Closes the connection and frees the client. NULL-safe. */
 void df_client_close(df_client *c);
@@ -376,6 +387,10 @@ typedef struct df_client_replica {
     uint32_t rows_seen;     /* rows of `building` applied so far */
     int stale;              /* 1 after a gap or bad chunk: resync with a snapshot */
     uint64_t versions_applied; /* complete versions applied */
+    /* quantized stream (PROTOCOL.md 6.3), made by the first QDISP: */
+    double step;            /* the stream's step q (2 x error bound), 0 before */
+    int64_t *K;             /* nv x 3 quantized displacements (NULL before) */
+    int k_exact;            /* 1: u holds exact values (a snapshot); K was derived from them */
 } df_client_replica;
 
 /* Initialises a replica from `base` (nv x 3, copied) at `version`, with u = 0 (or a copy of
@@ -384,8 +399,10 @@ int df_client_replica_init(df_client_replica *r, uint64_t session_id, uint32_t n
                            const float *base, const float *u0, uint64_t version, df_error *err);
 void df_client_replica_free(df_client_replica *r);
 
-/* Feeds one frame (a DF_MSG_DISPLACEMENT or DF_MSG_PROGRESS event, or a snapshot reply chunk)
- * to the replica. Frames of other sessions are ignored (returns 0). Returns 1 when the frame
+/* Feeds one frame (a DF_MSG_DISPLACEMENT or DF_MSG_PROGRESS event, a snapshot reply chunk, or
+ * with a negotiated stream encoding a DF_MSG_QDISP event or a DF_MSG_ZFRAME wrapping any of
+ * them) to the replica. QDISP: u becomes fl32(step x K) (within the error bound of the exact
+ * displacements, PROTOCOL.md 6.3); a snapshot makes u exact again. Frames of other sessions are ignored (returns 0). Returns 1 when the frame
  * completed a version (r->version updated), 0 when more chunks are needed or the frame was
  * ignored, or a negative error: DF_ESTATE for a version gap (r->stale set: resync with
  * df_client_replica_resync), DF_EFORMAT/DF_EINVAL for a bad chunk (r->stale set). An SHM_REF
@@ -397,6 +414,13 @@ int df_client_replica_feed(df_client_replica *r, const df_frame_header *h, const
 
 /* Resynchronises the replica with a dense snapshot of the current version. */
 int df_client_replica_resync(df_client *c, df_client_replica *r, df_error *err);
+
+/* Pure helper: decompresses a DF_MSG_ZFRAME event (h, payload) into the frame it stands for:
+ * *inner gets its header (the inner type, same flags and request id, payload_len = raw_len)
+ * and *raw a malloc'd copy of its payload (free it). Errors: DF_EINVAL / DF_EPROTO_* for a bad
+ * zframe body, DF_EFORMAT when the zstd data is corrupt or not raw_len bytes, DF_ENOMEM. */
+int df_client_zframe_unwrap(const df_frame_header *h, const uint8_t *payload,
+                            df_frame_header *inner, uint8_t **raw, df_error *err);
 
 /* Current positions base + u into out (nv x 3). */
 void df_client_replica_positions(const df_client_replica *r, float *out);

@@ -116,6 +116,8 @@ enum { DF_WIRE_WORK_OPTS(DF_X_WOPT) };
 enum { DF_WIRE_PEER_FLAGS(DF_X_PEERF) }; /* DF_PEER_SELF, _EDIT, _SHM */
 #define DF_X_TRANSPORT(n, v) DF_X_ENUM(DF_TRANSPORT_, n, v)
 enum { DF_WIRE_TRANSPORTS(DF_X_TRANSPORT) }; /* DF_TRANSPORT_UNIX, _TCP */
+#define DF_X_SENC(n, v) DF_X_ENUM(DF_STREAM_ENC_, n, v)
+enum { DF_WIRE_STREAM_ENCS(DF_X_SENC) }; /* DF_STREAM_ENC_QUANTIZED, DF_STREAM_ENC_ZSTD */
 
 /* The wire owns these numbers; where core/mesh has the same enum (load format, mesh kind) the
  * daemon and the client pass values through, so each value is checked equal here. */
@@ -133,6 +135,7 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_BS_ALL (0u DF_WIRE_BRUSH_STATE_FIELDS(DF_X_OR))  /* every brush state field */
 #define DF_CURSOR_FLAGS_ALL (0u DF_WIRE_CURSOR_FLAGS(DF_X_OR))
 #define DF_WORK_OPTS_ALL (0u DF_WIRE_WORK_OPTS(DF_X_OR))
+#define DF_STREAM_ENC_ALL (0u DF_WIRE_STREAM_ENCS(DF_X_OR))
 /* the options bits valid in handles and brush_begin (KELVINLET_GUESS is handle_move only) */
 #define DF_WORK_OPTS_NOT_MOVE ((uint32_t)DF_WORK_OPT_PROGRESS)
 #define DF_STAGE_MAX (0 DF_WIRE_WORK_STAGES(DF_X_COUNT)) /* stages this build sends: 1..MAX */
@@ -172,6 +175,11 @@ typedef struct df_msg_hello {          /* client -> server, first message on a c
     uint16_t max_version;              /* newest, >= min_version */
     uint32_t features;                 /* DF_FEAT_* bits the client can use (informative) */
     char client_name[DF_MAX_NAME_LEN + 1]; /* UTF-8, may be "" */
+    /* optional trailing stream encoding request (PROTOCOL.md 4.2): absent in old clients' hello */
+    uint8_t has_stream;                /* 1: the 10 trailing bytes are present (encode/decode) */
+    uint8_t stream_encoding;           /* DF_STREAM_ENC_* bits; 0 = exact float32 */
+    double error_bound;                /* QUANTIZED: absolute error E in mesh units, finite, in
+                                        * [1e-30, 1e30]; else 0 */
 } df_msg_hello;
 
 typedef struct df_msg_hello_reply {
@@ -187,6 +195,10 @@ typedef struct df_msg_hello_reply {
     uint64_t max_client_queue_bytes;   /* output queue bound; a client beyond it is dropped */
     uint8_t auth_required;             /* 1: requests other than hello/auth/ping get EPROTO_AUTH */
     char server_name[DF_MAX_NAME_LEN + 1]; /* e.g. "deformd 0.1" */
+    /* optional trailer, present iff the hello had one: the stream encoding granted */
+    uint8_t has_stream;
+    uint8_t stream_encoding;           /* DF_STREAM_ENC_* bits */
+    double error_bound;                /* as in df_msg_hello */
 } df_msg_hello_reply;
 
 typedef struct df_msg_auth {           /* AUTH request and reply (PROTOCOL.md 4.3) */
@@ -586,6 +598,27 @@ typedef struct df_msg_peer_list {      /* SESSION_PEERS reply */
     df_msg_peer_info *items;           /* malloc'd on decode */
 } df_msg_peer_list;
 
+/* ------------------------------------------ negotiated stream encodings (PROTOCOL.md 4.40, 4.41) */
+typedef struct df_msg_qdisp {          /* QDISP event: one chunk of a quantized version delta */
+    uint64_t session_id;               /* != 0 */
+    uint64_t version;                  /* version this frame produces */
+    uint64_t base_version;             /* < version */
+    uint8_t kind;                      /* df_change_kind 1..6 (never SNAPSHOT) */
+    uint32_t nv;                       /* mesh vertex count, 1..DF_MAX_MESH_VERTICES */
+    uint32_t count;                    /* rows in this chunk, <= nv */
+    double step;                       /* quantization step q (2 x error bound), finite, > 0 */
+    int32_t *idx;                      /* count vertex indices, strictly increasing, < nv */
+    int64_t *dq;                       /* count x 3 changes of the quantized displacement, in
+                                        * steps (|dq| < 2^53); malloc'd on decode */
+} df_msg_qdisp;
+
+typedef struct df_msg_zframe {         /* ZFRAME event: a stream event frame compressed by zstd */
+    uint16_t inner_type;               /* DF_MSG_DISPLACEMENT, DF_MSG_PROGRESS or DF_MSG_QDISP */
+    uint32_t raw_len;                  /* bytes of the inner payload, <= DF_MAX_FRAME_PAYLOAD */
+    uint32_t zlen;                     /* bytes of `z`, >= 1 */
+    const uint8_t *z;                  /* one zstd frame; points into the payload (decode) */
+} df_msg_zframe;
+
 /* ------------------------------------------------------------------------------ functions */
 #define DF_MSG_CODEC(T)                                                                \
     int df_msg_##T##_encode(const df_msg_##T *m, df_buf *out, df_error *err);          \
@@ -631,6 +664,8 @@ DF_MSG_CODEC(access_info)
 DF_MSG_CODEC(work_progress)
 DF_MSG_CODEC(peer_info)
 DF_MSG_CODEC(peer_list)
+DF_MSG_CODEC(qdisp)
+DF_MSG_CODEC(zframe)
 #undef DF_MSG_CODEC
 
 /* Checks the fields of `v` selected by `mask` (DF_BS_* bits) against the ranges of
@@ -666,6 +701,13 @@ void df_msg_progress_free(df_msg_progress *m);
 void df_msg_stats_free(df_msg_stats *m);
 void df_msg_device_list_free(df_msg_device_list *m);
 void df_msg_peer_list_free(df_msg_peer_list *m);
+void df_msg_qdisp_free(df_msg_qdisp *m);
+
+/* Checks a hello / hello_reply stream-encoding trailer (PROTOCOL.md 4.2): without `has`, enc and
+ * e must be 0; with it, enc only DF_STREAM_ENC_* bits, e in [DF_STREAM_ERROR_LO,
+ * DF_STREAM_ERROR_HI] with QUANTIZED and 0 without. DF_OK or DF_EINVAL naming the field (`msg`
+ * names the message). Pure. */
+int df_msg_stream_enc_check(uint8_t has, uint8_t enc, double e, const char *msg, df_error *err);
 
 /* Empty bodies (list sessions request, auth success reply): DF_OK for n == 0, else
  * DF_EPROTO_TRAILING. */
@@ -709,7 +751,9 @@ typedef enum df_body_kind {
     DF_BODY_SESSION_ACCESS, DF_BODY_JOIN, DF_BODY_ACCESS_INFO,
     DF_BODY_WORK_PROGRESS,
     /* session peers */
-    DF_BODY_PEER_LIST
+    DF_BODY_PEER_LIST,
+    /* negotiated stream encodings */
+    DF_BODY_QDISP, DF_BODY_ZFRAME
 } df_body_kind;
 
 typedef struct df_msg_any {
@@ -755,6 +799,8 @@ typedef struct df_msg_any {
         df_msg_access_info access_info;
         df_msg_work_progress work_progress;
         df_msg_peer_list peer_list;
+        df_msg_qdisp qdisp;
+        df_msg_zframe zframe;
     } u;
 } df_msg_any;
 

@@ -74,6 +74,8 @@ int df_msg_any_decode(uint16_t type, uint16_t flags, const uint8_t *p, size_t n,
         rc = df_msg_work_progress_decode(p, n, &t.u.work_progress, err);
         break;
     case DF_BODY_PEER_LIST: rc = df_msg_peer_list_decode(p, n, &t.u.peer_list, err); break;
+    case DF_BODY_QDISP: rc = df_msg_qdisp_decode(p, n, &t.u.qdisp, err); break;
+    case DF_BODY_ZFRAME: rc = df_msg_zframe_decode(p, n, &t.u.zframe, err); break;
     default: rc = df_error_set(err, DF_EINTERNAL, "body kind %d has no decoder", (int)k); break;
     }
     if (rc)
@@ -98,6 +100,7 @@ void df_msg_any_free(df_msg_any *m)
     case DF_BODY_STATS: df_msg_stats_free(&m->u.stats); break;
     case DF_BODY_DEVICE_LIST: df_msg_device_list_free(&m->u.device_list); break;
     case DF_BODY_PEER_LIST: df_msg_peer_list_free(&m->u.peer_list); break;
+    case DF_BODY_QDISP: df_msg_qdisp_free(&m->u.qdisp); break;
     default: break;
     }
 }
@@ -130,6 +133,8 @@ int df_msg_any_encode(const df_msg_any *m, df_buf *out, df_error *e)
     case DF_BODY_SNAPSHOT_REQ: return df_msg_snapshot_req_encode(&m->u.snapshot_req, out, e);
     case DF_BODY_DISP: return df_msg_disp_encode(&m->u.disp, out, e);
     case DF_BODY_PROGRESS: return df_msg_progress_encode(&m->u.progress, out, e);
+    case DF_BODY_QDISP: return df_msg_qdisp_encode(&m->u.qdisp, out, e);
+    case DF_BODY_ZFRAME: return df_msg_zframe_encode(&m->u.zframe, out, e);
     case DF_BODY_STATS_REQ: return df_msg_stats_req_encode(&m->u.stats_req, out, e);
     case DF_BODY_STATS: return df_msg_stats_encode(&m->u.stats, out, e);
     case DF_BODY_SHM_INFO: return df_msg_shm_info_encode(&m->u.shm_info, out, e);

@@ -6,24 +6,73 @@
 #include "proto/codec_util.h"
 #include "proto/messages.h"
 
+/* ---- optional stream-encoding trailer of hello and hello_reply: u8 stream_encoding,
+ * u8 reserved, f64 error_bound (PROTOCOL.md 4.2); present iff bytes remain after the name */
+#define STREAM_TRAILER 10
+
+int df_msg_stream_enc_check(uint8_t has, uint8_t enc, double e, const char *msg, df_error *err)
+{
+    if (!has)
+        return enc || e != 0 ? df_error_set(err, DF_EINVAL, "%s: stream_encoding set without "
+                                            "has_stream", msg) : DF_OK;
+    if (enc & ~DF_STREAM_ENC_ALL)
+        return df_error_set(err, DF_EINVAL, "%s: unknown stream_encoding bits 0x%x (known: 1 "
+                            "quantized, 2 zstd)", msg, (unsigned)(enc & ~DF_STREAM_ENC_ALL));
+    if (enc & DF_STREAM_ENC_QUANTIZED) {
+        if (!(e >= DF_STREAM_ERROR_LO && e <= DF_STREAM_ERROR_HI))
+            return df_error_set(err, DF_EINVAL, "%s: error_bound %g of a quantized stream must "
+                                "be finite and in [%g, %g] mesh units", msg, e,
+                                DF_STREAM_ERROR_LO, DF_STREAM_ERROR_HI);
+    } else if (e != 0) {
+        return df_error_set(err, DF_EINVAL, "%s: error_bound %g without stream_encoding "
+                            "QUANTIZED (must be 0)", msg, e);
+    }
+    return DF_OK;
+}
+
+static void stream_put(df_buf *out, uint8_t has, uint8_t enc, double e)
+{
+    if (!has)
+        return;
+    df_buf_put_u8(out, enc);
+    df_buf_put_u8(out, 0);
+    df_buf_put_f64(out, e);
+}
+
+static void stream_get(df_rd *r, uint8_t *has, uint8_t *enc, double *e)
+{
+    *has = r->rc == DF_OK && r->off < r->n;
+    *enc = 0;
+    *e = 0;
+    if (!*has)
+        return;
+    *enc = df_rd_u8(r, "stream_encoding");
+    df_rd_reserved8(r, "reserved");
+    *e = df_rd_f64(r, "error_bound");
+}
+
 /* ---- hello: u16 min_version, u16 max_version, u32 features, str client_name */
 static int hello_check(const df_msg_hello *m, df_error *err)
 {
     if (m->min_version < 1 || m->max_version < m->min_version)
         return df_error_set(err, DF_EINVAL, "hello: versions %u..%u: need 1 <= min <= max",
                             m->min_version, m->max_version);
-    return df_check_str(m->client_name, DF_MAX_NAME_LEN, "hello", "client_name", err);
+    int rc = df_check_str(m->client_name, DF_MAX_NAME_LEN, "hello", "client_name", err);
+    return rc ? rc : df_msg_stream_enc_check(m->has_stream, m->stream_encoding, m->error_bound,
+                                             "hello", err);
 }
 
 int df_msg_hello_encode(const df_msg_hello *m, df_buf *out, df_error *err)
 {
     int rc = hello_check(m, err);
-    if (rc || (rc = df_enc_reserve(out, 8 + df_str_size(m->client_name), "hello", err)))
+    if (rc || (rc = df_enc_reserve(out, 8 + df_str_size(m->client_name) +
+                                           (m->has_stream ? STREAM_TRAILER : 0), "hello", err)))
         return rc;
     df_buf_put_u16(out, m->min_version);
     df_buf_put_u16(out, m->max_version);
     df_buf_put_u32(out, m->features);
     df_put_str(out, m->client_name);
+    stream_put(out, m->has_stream, m->stream_encoding, m->error_bound);
     return DF_OK;
 }
 
@@ -36,6 +85,7 @@ int df_msg_hello_decode(const uint8_t *p, size_t n, df_msg_hello *m, df_error *e
     t.max_version = df_rd_u16(&r, "max_version");
     t.features = df_rd_u32(&r, "features");
     df_rd_str(&r, t.client_name, DF_MAX_NAME_LEN, "client_name");
+    stream_get(&r, &t.has_stream, &t.stream_encoding, &t.error_bound);
     int rc = df_rd_end(&r);
     if (rc || (rc = hello_check(&t, err)))
         return rc;
@@ -69,13 +119,17 @@ static int hello_reply_check(const df_msg_hello_reply *m, df_error *err)
     if (m->auth_required > 1)
         return df_error_set(err, DF_EINVAL, "hello_reply: auth_required %u not 0/1",
                             m->auth_required);
-    return df_check_str(m->server_name, DF_MAX_NAME_LEN, "hello_reply", "server_name", err);
+    int rc = df_check_str(m->server_name, DF_MAX_NAME_LEN, "hello_reply", "server_name", err);
+    return rc ? rc : df_msg_stream_enc_check(m->has_stream, m->stream_encoding, m->error_bound,
+                                             "hello_reply", err);
 }
 
 int df_msg_hello_reply_encode(const df_msg_hello_reply *m, df_buf *out, df_error *err)
 {
     int rc = hello_reply_check(m, err);
-    if (rc || (rc = df_enc_reserve(out, 46 + df_str_size(m->server_name), "hello_reply", err)))
+    if (rc || (rc = df_enc_reserve(out, 46 + df_str_size(m->server_name) +
+                                           (m->has_stream ? STREAM_TRAILER : 0), "hello_reply",
+                                   err)))
         return rc;
     df_buf_put_u16(out, m->version);
     df_buf_put_u16(out, m->server_max_version);
@@ -90,6 +144,7 @@ int df_msg_hello_reply_encode(const df_msg_hello_reply *m, df_buf *out, df_error
     df_buf_put_u8(out, m->auth_required);
     df_buf_put_u8(out, 0);
     df_put_str(out, m->server_name);
+    stream_put(out, m->has_stream, m->stream_encoding, m->error_bound);
     return DF_OK;
 }
 
@@ -111,6 +166,7 @@ int df_msg_hello_reply_decode(const uint8_t *p, size_t n, df_msg_hello_reply *m,
     t.auth_required = df_rd_u8(&r, "auth_required");
     df_rd_reserved8(&r, "reserved");
     df_rd_str(&r, t.server_name, DF_MAX_NAME_LEN, "server_name");
+    stream_get(&r, &t.has_stream, &t.stream_encoding, &t.error_bound);
     int rc = df_rd_end(&r);
     if (rc || (rc = hello_reply_check(&t, err)))
         return rc;

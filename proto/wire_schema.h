@@ -130,6 +130,9 @@
     X(BRUSH_CURSOR, 0x0085, brush_cursor, NONE, NONE, BRUSH_CURSOR) /* rate-limited */       \
     X(DEVICE_STATE, 0x0086, device_state, NONE, NONE, DEVICE_INFO) /* a device changed */    \
     X(WORK_PROGRESS, 0x0087, work_progress, NONE, NONE, WORK_PROGRESS) /* opt-in, 4.37 */    \
+    /* negotiated stream encodings (hello stream_encoding, PROTOCOL.md 4.40, 4.41) */           \
+    X(QDISP, 0x0088, qdisp, NONE, NONE, QDISP)      /* one version, quantized delta */       \
+    X(ZFRAME, 0x0089, zframe, NONE, NONE, ZFRAME)   /* a zstd-compressed event frame */      \
     X(ERROR, 0x00FF, error, NONE, NONE, NONE) /* error body not tied to a request type */
 
 /* ------------------------------------------------------------------------------ feature bits
@@ -277,6 +280,14 @@
     X(EDIT, 1u << 1) /* its principal holds the edit right on the session */                 \
     X(SHM, 1u << 2)  /* it streams through the shared-memory ring (STREAM_SHM) */
 #define DF_WIRE_TRANSPORTS(X) X(UNIX, 1) X(TCP, 2) /* the socket it is connected through */
+/* the range of a quantized stream's error_bound (f64, mesh units) */
+#define DF_STREAM_ERROR_LO 1e-30
+#define DF_STREAM_ERROR_HI 1e30
+/* hello / hello_reply `stream_encoding` (DF_STREAM_ENC_*; PROTOCOL.md 4.2, 4.40, 4.41): how the
+ * connection's displacement stream travels. 0 (no bit) is exact float32, the default. */
+#define DF_WIRE_STREAM_ENCS(X)                                                               \
+    X(QUANTIZED, 1u << 0) /* QDISP events: deltas quantized to 2 x error_bound */           \
+    X(ZSTD, 1u << 1)      /* stream events may come as ZFRAME (zstd) */
 
 /* Every enum list: X(list macro, C prefix, Python class, kind) for tools that walk them all. */
 #define DF_WIRE_ENUMS(X)                                                                     \
@@ -309,7 +320,8 @@
     X(DF_WIRE_WORK_STAGES, DF_STAGE_, WorkStage, enum)                                       \
     X(DF_WIRE_WORK_OPTS, DF_WORK_OPT_, WorkOpt, flags)                                       \
     X(DF_WIRE_PEER_FLAGS, DF_PEER_, PeerFlag, flags)                                         \
-    X(DF_WIRE_TRANSPORTS, DF_TRANSPORT_, Transport, enum)
+    X(DF_WIRE_TRANSPORTS, DF_TRANSPORT_, Transport, enum)                                    \
+    X(DF_WIRE_STREAM_ENCS, DF_STREAM_ENC_, StreamEnc, flags)
 
 /* ------------------------------------------------------------------------------- defaults
  * The brush every client starts from (df_msg_brush_defaults, Python Brush()): GRAB, 3D, falloff

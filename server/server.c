@@ -19,6 +19,7 @@
 #include "server/exec/pool.h"
 #include "server/net/sd.h"
 #include "server/session/session.h"
+#include "server/session/stream_lag.h"
 #include "server/net/shm.h"
 #include "server/store/restore.h"
 #include "server/net/tls.h"
@@ -30,6 +31,7 @@ static void on_check(uv_check_t *h)
     df_server *srv = h->data;
     srv->inline_spent_ns = 0; /* a new loop iteration: a new inline budget (job.h) */
     df_conn_admit_waiting(srv); /* accepted at max_clients (guard.h) */
+    df_stream_lag_poll(srv);    /* coalesced versions of drained subscribers (stream_lag.h) */
     df_conn_flush_all(srv, 0);
 }
 
@@ -37,6 +39,14 @@ static void on_sweep(uv_timer_t *t)
 {
     df_server *srv = t->data;
     df_conn_sweep(srv);
+    uint64_t now = uv_now(srv->loop); /* per-client output rate (stats client.<id>.bytes_per_s) */
+    for (df_conn *c = srv->conns; c; c = c->next) {
+        uint64_t dt = now - c->rate_ms;
+        if (c->rate_ms && dt)
+            c->bytes_per_s = (double)(c->outq.total_bytes - c->rate_bytes) * 1000.0 / (double)dt;
+        c->rate_bytes = c->outq.total_bytes;
+        c->rate_ms = now;
+    }
     /* Mark the subscribers of this sweep (no per-connection bookkeeping in the sessions). */
     uint64_t epoch = ++srv->sweep_epoch;
     for (df_session *s = srv->sessions; s; s = s->next)

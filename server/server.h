@@ -85,6 +85,12 @@ typedef struct df_conn {
     int pending;             /* requests accepted and not yet answered */
     int hello_done;          /* a HELLO succeeded (required before most requests) */
     char name[DF_MAX_NAME_LEN + 1]; /* the client_name of its HELLO ("" before / when none) */
+    uint8_t stream_enc;      /* DF_STREAM_ENC_* bits of its HELLO (0: exact float32) */
+    double stream_err;       /* QUANTIZED: the error bound E of its HELLO (mesh units) */
+    uint64_t coalesced;      /* stream versions folded into a coalesced one (stream_lag.h) */
+    double bytes_per_s;      /* bytes written per second over the last sweep period */
+    uint64_t rate_bytes;     /* outq.total_bytes at the last sweep */
+    uint64_t rate_ms;        /* uv_now() at the last sweep */
     struct df_upload *upload;/* mesh upload in progress (chunked load), or NULL */
     uint64_t bytes_in;
     int refused;             /* refused at admission (guard.h): closes quietly */
@@ -152,6 +158,7 @@ typedef struct df_server {
     int refuse_logged;       /* a refusal was logged at refuse_log_ms */
     uint64_t refuse_log_ms, refuse_suppressed; /* refusal log rate limit (guard.h) */
     uint64_t sweep_epoch;
+    int lagging_subs;        /* subscriptions being coalesced (stream_lag.h), all sessions */
     df_stats stats;
     uint64_t last_change_session; /* session of a client's last change request or subscribe
                                    * (df_job_is_change): unbound HID devices drive it */

@@ -30,6 +30,7 @@ typedef struct df_stats {
     uint64_t moves_preempted;     /* moves ended early for a request queued behind them */
     uint64_t moves_orphaned;      /* moves ended because their requester disconnected */
     uint64_t versions;            /* versions broadcast, all sessions */
+    uint64_t stream_coalesced;    /* versions folded into coalesced ones (stream_lag.h) */
     uint64_t resync_replays;      /* FROM_VERSION subscribes answered from the resync ring */
     uint64_t resync_snapshots;    /* ... answered with a snapshot (too old, ahead, not kept) */
     uint64_t shm_frames;          /* broadcast frames copied into a shared-memory ring */

@@ -1,5 +1,5 @@
 /* cmd_session.c — deformctl commands about the daemon and its sessions: ping, load, list,
- * close, stats, watch. */
+ * close, stats (watch: cmd_watch.c). */
 #include <inttypes.h>
 #include <limits.h>
 #include <stdlib.h>
@@ -250,176 +250,6 @@ static int run_stats(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     return CTL_EXIT_OK;
 }
 
-/* ---- watch --------------------------------------------------------------------------- */
-typedef struct watch_state {
-    const ctl_ctx *ctx;
-    uint64_t session;
-    uint64_t rows;       /* rows of the version being received (sum over chunks) */
-    long printed;        /* complete versions printed */
-    int closed;          /* session closed event seen */
-    int bad;             /* a malformed event was received */
-    long lost;           /* frames lost to the shared-memory ring (--shm) */
-} watch_state;
-
-static void watch_line(watch_state *w, const df_msg_disp *d, const df_msg_progress *p)
-{
-    const ctl_ctx *ctx = w->ctx;
-    if (ctx->json) {
-        printf("{\"session\":%" PRIu64 ",\"version\":%" PRIu64 ",\"kind\":\"%s\",\"vertices\":%"
-               PRIu64 ",\"encoding\":\"%s\"", d->session_id, d->version, ctl_change_name(d->kind),
-               w->rows, d->encoding == DF_DISP_SPARSE ? "sparse" : "dense");
-        if (p) {
-            printf(",\"iteration\":%u,\"residual\":", p->iteration);
-            ctl_json_num(stdout, p->residual);
-            printf(",\"objective\":");
-            ctl_json_num(stdout, p->objective);
-            printf(",\"final\":%s", p->final ? "true" : "false");
-        }
-        printf("}\n");
-    } else {
-        printf("version %" PRIu64 " %s %" PRIu64 " vertices", d->version, ctl_change_name(d->kind),
-               w->rows);
-        if (p)
-            printf(" iteration %u residual %.3g objective %.9g%s", p->iteration, p->residual,
-                   p->objective, p->final ? " final" : "");
-        printf("\n");
-    }
-    fflush(stdout);
-    w->printed++;
-}
-
-static void watch_event(void *user, const df_frame_header *h, const uint8_t *payload)
-{
-    watch_state *w = user;
-    int last = !(h->flags & DF_FLAG_MORE);
-    if (h->type == DF_MSG_SESSION_CLOSED) {
-        df_msg_session_ref r;
-        if (df_msg_session_ref_decode(payload, h->payload_len, &r, NULL) == DF_OK &&
-            r.session_id == w->session) {
-            w->closed = 1;
-            if (w->ctx->json)
-                printf("{\"session\":%" PRIu64 ",\"kind\":\"closed\"}\n", r.session_id);
-            else
-                printf("session %" PRIu64 " closed\n", r.session_id);
-            fflush(stdout);
-        }
-    } else if (h->type == DF_MSG_BRUSH_STATE || h->type == DF_MSG_BRUSH_CURSOR) {
-        df_msg_brush_state s;
-        df_msg_brush_cursor k;
-        int rc = h->type == DF_MSG_BRUSH_STATE
-                     ? df_msg_brush_state_decode(payload, h->payload_len, &s, NULL)
-                     : df_msg_brush_cursor_decode(payload, h->payload_len, &k, NULL);
-        if (rc != DF_OK)
-            w->bad = 1;
-        else if (h->type == DF_MSG_BRUSH_STATE && s.session_id == w->session)
-            ctl_brush_state_print(w->ctx, &s, 1);
-        else if (h->type == DF_MSG_BRUSH_CURSOR && k.session_id == w->session)
-            ctl_brush_cursor_print(w->ctx, &k);
-    } else if (h->type == DF_MSG_DEVICE_STATE) { /* a device that drives this session */
-        df_msg_device_info *dv = malloc(sizeof *dv);
-        if (!dv || df_msg_device_info_decode(payload, h->payload_len, dv, NULL) != DF_OK)
-            w->bad = dv != NULL;
-        else
-            ctl_device_state_print(w->ctx, dv);
-        free(dv);
-    } else if (h->type == DF_MSG_SHM_REF) { /* --shm: a frame overwritten before it was read */
-        w->lost++;
-        w->rows = 0;
-        if (w->ctx->json)
-            printf("{\"session\":%" PRIu64 ",\"kind\":\"lost\"}\n", w->session);
-        else
-            printf("lost a frame (the shared-memory ring overtook this watcher)\n");
-        fflush(stdout);
-    } else if (h->type == DF_MSG_DISPLACEMENT) {
-        df_msg_disp d;
-        if (df_msg_disp_decode(payload, h->payload_len, &d, NULL) != DF_OK) {
-            w->bad = 1;
-            return;
-        }
-        if (d.session_id == w->session) {
-            w->rows += d.count;
-            if (last) {
-                watch_line(w, &d, NULL);
-                w->rows = 0;
-            }
-        }
-        df_msg_disp_free(&d);
-    } else if (h->type == DF_MSG_PROGRESS) {
-        df_msg_progress p;
-        if (df_msg_progress_decode(payload, h->payload_len, &p, NULL) != DF_OK) {
-            w->bad = 1;
-            return;
-        }
-        if (p.disp.session_id == w->session) {
-            w->rows += p.disp.count;
-            if (last) {
-                watch_line(w, &p.disp, &p);
-                w->rows = 0;
-            }
-        }
-        df_msg_progress_free(&p);
-    }
-}
-
-static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
-{
-    long long count = 0, from = -1;
-    df_error e;
-    if (a->val[CTL_NGLOBAL] &&
-        dc_cli_int(a->val[CTL_NGLOBAL], "--count", 1, 1000000000, &count, &e))
-        return ctl_usage_error(ctx, cmd, e.msg);
-    if (a->val[CTL_NGLOBAL + 2] &&
-        dc_cli_int(a->val[CTL_NGLOBAL + 2], "--from-version", 0, LLONG_MAX, &from, &e))
-        return ctl_usage_error(ctx, cmd, e.msg);
-    if (a->val[CTL_NGLOBAL + 1] && ctx->tcp)
-        return ctl_usage_error(ctx, cmd, "--shm needs the daemon's Unix socket, not --tcp");
-    df_client *c = ctl_connect(ctx, cmd);
-    if (!c)
-        return CTL_EXIT_SERVER;
-    watch_state w = {ctx, 0, 0, 0, 0, 0, 0};
-    df_msg_session_info info;
-    int rc = ctl_session_id(c, a->pos[0], &w.session, &e);
-    if (rc == DF_OK) {
-        df_client_set_event_callback(c, watch_event, &w);
-        rc = from >= 0 ? df_client_subscribe_from(c, w.session, (uint64_t)from, &info, &e)
-                       : df_client_subscribe(c, w.session, 0, &info, &e);
-    }
-    if (rc == DF_OK && a->val[CTL_NGLOBAL + 1]) /* --shm */
-        rc = df_client_stream_shm(c, w.session, NULL, &e);
-    if (rc == DF_OK && ctx->json) { /* subscribed: events from here on are printed */
-        printf("{\"session\":%" PRIu64 ",\"kind\":\"watching\",\"name\":", w.session);
-        ctl_json_str(stdout, info.name);
-        printf(",\"version\":%" PRIu64 ",\"shm\":%s", info.version,
-               a->val[CTL_NGLOBAL + 1] ? "true" : "false");
-        if (from >= 0)
-            printf(",\"from_version\":%lld", from);
-        printf("}\n");
-        fflush(stdout);
-    } else if (rc == DF_OK) {
-        printf("watching session %" PRIu64 " (%s) at version %" PRIu64 "%s", w.session,
-               info.name[0] ? info.name : "-", info.version,
-               a->val[CTL_NGLOBAL + 1] ? " through shared memory" : "");
-        if (from >= 0) /* the versions after it (or a snapshot) print first */
-            printf(", resyncing from version %lld", from);
-        printf("\n");
-        fflush(stdout);
-    }
-    while (rc == DF_OK && !w.closed && !w.bad && (count == 0 || w.printed < count)) {
-        int n = df_client_pump(c, -1, &e);
-        if (n < 0)
-            rc = n;
-    }
-    if (rc == DF_OK && w.bad)
-        rc = df_error_set(&e, DF_EFORMAT, "malformed event from the server");
-    if (rc) {
-        rc = ctl_fail(ctx, cmd, c, &e);
-        df_client_close(c);
-        return rc;
-    }
-    df_client_close(c);
-    return CTL_EXIT_OK;
-}
-
 static const dc_cli_opt PLAIN_OPTS[] = {CTL_GLOBAL_OPTS};
 static const dc_cli_opt LOAD_OPTS[] = {
     CTL_GLOBAL_OPTS,
@@ -433,16 +263,6 @@ static const dc_cli_opt LOAD_OPTS[] = {
 static const dc_cli_opt STATS_OPTS[] = {
     CTL_GLOBAL_OPTS,
     {"session", 1, "--session SESSION  stats of one session (id or name) instead of the daemon"},
-};
-static const dc_cli_opt WATCH_OPTS[] = {
-    CTL_GLOBAL_OPTS,
-    {"count", 1, "--count N          exit after N versions (default: until the session closes;"
-                 " brush\n                     events print but do not count)"},
-    {"shm", 0, "--shm              read the stream from the daemon's shared-memory ring (Unix "
-               "socket, same host)"},
-    {"from-version", 1, "--from-version V   resync from version V first: the versions after "
-                        "V as broadcast, or one\n                     snapshot when the daemon "
-                        "no longer keeps them (they count for --count)"},
 };
 #define N(x) ((int)(sizeof x / sizeof x[0]))
 
@@ -462,9 +282,5 @@ const ctl_cmd ctl_cmds_session[] = {
     {"stats", "stats [--session SESSION]",
      "Print the daemon's (or one session's) counters, one 'key value' per line.", STATS_OPTS,
      N(STATS_OPTS), 0, run_stats},
-    {"watch", "watch SESSION [--count N] [--shm] [--from-version V]",
-     "Subscribe to a session and print one line per version (version, kind, vertices changed) "
-     "and per brush_state / brush_cursor event (--count counts versions only).",
-     WATCH_OPTS, N(WATCH_OPTS), 1, run_watch},
     {NULL, NULL, NULL, NULL, 0, 0, NULL},
 };

@@ -48,6 +48,11 @@ int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const d
 
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
 {
+    return ctl_connect_enc(ctx, cmd, 0, 0);
+}
+
+df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, uint8_t enc, double bound)
+{
     df_error e;
     df_error_clear(&e);
     df_client *c = NULL;
@@ -64,8 +69,8 @@ df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
     if (ctx->tcp) {
         /* --tls-ca, else $DEFORMD_TLS_CA: TLS whenever a CA is given */
         const char *ca = ctx->tls_ca ? ctx->tls_ca : getenv("DEFORMD_TLS_CA");
-        rc = df_client_connect_tcp_tls(ctx->host, ctx->port, "deformctl", ca && ca[0] ? ca : NULL,
-                                       &c, &e);
+        rc = df_client_connect_enc(NULL, ctx->host, ctx->port, ca && ca[0] ? ca : NULL,
+                                   "deformctl", enc, bound, &c, &e);
     } else {
         char path[256];
         const char *p = ctx->socket;
@@ -76,7 +81,7 @@ df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
             }
             p = path;
         }
-        rc = df_client_connect_unix(p, "deformctl", &c, &e);
+        rc = df_client_connect_enc(p, NULL, 0, NULL, "deformctl", enc, bound, &c, &e);
     }
     if (rc == DF_OK && key_len) rc = df_client_authenticate(c, key, key_len, &e);
     else if (rc == DF_OK && df_client_server_info(c)->auth_required)

@@ -55,7 +55,8 @@ typedef struct ctl_cmd {
 } ctl_cmd;
 
 /* Command tables of each group (cmd_*.c). */
-extern const ctl_cmd ctl_cmds_session[];   /* ping load list close stats watch */
+extern const ctl_cmd ctl_cmds_session[];   /* ping load list close stats */
+extern const ctl_cmd ctl_cmds_watch[];     /* watch (cmd_watch.c) */
 extern const ctl_cmd ctl_cmds_brush[];     /* brush */
 extern const ctl_cmd ctl_cmds_handles[];   /* handles move */
 extern const ctl_cmd ctl_cmds_mesh[];      /* get undo redo reset-rest */
@@ -114,6 +115,10 @@ int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const d
 /* Connects per the global options (main has already checked and split them); on failure
  * prints the error and returns NULL: the caller exits CTL_EXIT_SERVER. */
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd);
+/* ctl_connect asking in the hello for stream encoding `enc` (DF_STREAM_ENC_* bits, 0 exact)
+ * with error bound `bound` (mesh units, QUANTIZED only): `watch --encoding`. */
+df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, uint8_t enc, double bound);
+
 
 /* Resolves SESSION (a decimal id, or else a session name looked up with open session) into
  * *id. Returns DF_OK or an error (printed by the caller via ctl_fail); an empty SESSION is

@@ -18,7 +18,7 @@
 #include "client/deformctl/ctl.h"
 #include "proto/auth_mac.h"
 
-static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_brush, ctl_cmds_handles,
+static const ctl_cmd *const GROUPS[] = {ctl_cmds_session, ctl_cmds_watch, ctl_cmds_brush, ctl_cmds_handles,
                                         ctl_cmds_mesh, ctl_cmds_brush_state, ctl_cmds_devices,
                                         ctl_cmds_access,
 

@@ -15,6 +15,7 @@
 #include "server/session/session.h"
 #include "server/net/shm.h"
 #include "server/session/stream.h"
+#include "server/session/stream_enc.h"
 #include "server/text.h"
 
 #define DF_SERVER_NAME "deformd 0.1"
@@ -57,6 +58,12 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
         df_conn_close_after_flush(c, "hello: no common protocol version"); /* PROTOCOL.md 4.2b */
         return DF_OK;
     }
+    uint8_t enc = m.has_stream ? m.stream_encoding : 0;
+    double e = m.has_stream ? m.error_bound : 0;
+    if (c->hello_done && (enc != c->stream_enc || e != c->stream_err))
+        return df_error_set(err, DF_ESTATE, "hello: the stream encoding is fixed by the first "
+                            "hello of a connection (%u, error %g); reconnect to change it",
+                            c->stream_enc, c->stream_err);
     c->want_owners = (m.features & DF_HELLO_WANT_OWNERS) != 0; /* cluster.h listing */
     const df_server_config *cfg = &c->srv->cfg;
     df_msg_hello_reply r;
@@ -84,6 +91,16 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
     if (m.client_name[0])
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
     c->hello_done = 1;
+    c->stream_enc = enc;
+    c->stream_err = e;
+    r.has_stream = m.has_stream; /* only a hello with the trailer gets one back (4.2b) */
+    r.stream_encoding = enc;
+    r.error_bound = e;
+    if (enc)
+        df_log(DF_LOG_DEBUG, "client %llu: stream encoding %s%s%s, error %g",
+               (unsigned long long)c->id, enc & DF_STREAM_ENC_QUANTIZED ? "quantized" : "",
+               enc == (DF_STREAM_ENC_QUANTIZED | DF_STREAM_ENC_ZSTD) ? "+" : "",
+               enc & DF_STREAM_ENC_ZSTD ? "zstd" : "", e);
     snprintf(c->name, sizeof c->name, "%s", m.client_name);
     df_req_reply_hello_reply(rq, &r);
     return DF_OK;
@@ -211,7 +228,9 @@ static int stream_shm_decode(const df_req *r, const uint8_t *p, void *body, uint
 {
     const char *why = r->c->is_tcp ? "needs a Unix-socket connection on the daemon's host"
                       : r->srv->cfg.shm_ring_bytes == 0 ? "disabled (shm_ring_bytes = 0)"
-                                                        : NULL;
+                      : r->c->stream_enc ? "the ring carries exact frames only; this connection "
+                                           "negotiated a stream encoding in its hello"
+                                         : NULL;
     if (why) return df_error_set(err, DF_EUNSUPPORTED, "stream_shm: %s", why);
     return df_job_decode_ref(r, p, body, sid, err);
 }
@@ -244,11 +263,13 @@ static void resync(df_job *j, uint64_t from)
 {
     df_session *s = j->s;
     uint64_t cur = atomic_load(&s->version);
-    if (from != cur && !df_resync_covers(&s->resync, from, cur)) {
+    /* the ring keeps exact frames: a quantized connection always resyncs from a snapshot */
+    int quant = (j->req.c->stream_enc & DF_STREAM_ENC_QUANTIZED) != 0;
+    if (quant || (from != cur && !df_resync_covers(&s->resync, from, cur))) {
         s->srv->stats.resync_snapshots++;
         df_log(DF_LOG_DEBUG, "session %llu: resync from version %llu: snapshot of %llu (%s)",
                (unsigned long long)s->id, (unsigned long long)from, (unsigned long long)cur,
-               from > cur ? "ahead of the session" : "not kept");
+               quant ? "quantized stream" : from > cur ? "ahead of the session" : "not kept");
         send_snapshot(j);
         return;
     }
@@ -260,9 +281,20 @@ static void resync(df_job *j, uint64_t from)
     }
 }
 
+/* df_session_subscribe, then the quantized group of the connection's encoding (stream_enc.h) */
+static int subscribe_enc(df_session *s, df_conn *c, df_error *err)
+{
+    int was = 0;
+    for (int i = 0; i < s->nsubs && !was; i++) was = s->subs[i] == c;
+    int rc = df_session_subscribe(s, c, err);
+    if (rc == DF_OK && (rc = df_stream_enc_join(s, c, err)) != DF_OK && !was)
+        df_session_unsubscribe(s, c);
+    return rc;
+}
+
 static void subscribe_done(df_job *j)
 {
-    if (!join(j, df_session_subscribe)) return;
+    if (!join(j, subscribe_enc)) return;
     df_session *s = j->s;
     const sub_req *b = j->body;
     df_msg_session_info info;

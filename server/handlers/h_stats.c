@@ -131,6 +131,16 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
             put(&st, "pool.long_lane", pc.heavy_max);
             put(&st, "pool.long_waits", (double)pc.heavy_waits);
         }
+        /* per client: output rate over the last second, versions coalesced (stream_lag.h) */
+        put(&st, "stream_coalesced_versions", (double)x->stream_coalesced);
+        for (df_conn *k = srv->conns; k; k = k->next) {
+            if (!k->hello_done || k->closing) continue;
+            char key[DF_MAX_STATS_KEY_LEN + 1];
+            snprintf(key, sizeof key, "client.%llu.bytes_per_s", (unsigned long long)k->id);
+            put(&st, key, k->bytes_per_s);
+            snprintf(key, sizeof key, "client.%llu.coalesced", (unsigned long long)k->id);
+            put(&st, key, (double)k->coalesced);
+        }
     } else {
         int strokes = 0;
         for (df_stroke *k = s->strokes; k; k = k->next) strokes++;

@@ -1,5 +1,7 @@
 /* session.c — session registry, subscribers, strokes (see session.h). */
 #include "server/session/session.h"
+#include "server/session/stream_enc.h"
+#include "server/session/stream_lag.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -286,10 +288,13 @@ void df_session_destroy(df_session *s)
             break;
         }
     srv->n_sessions--;
+    for (int i = 0; i < s->nsubs; i++) df_stream_lag_release(s, i);
     for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
     free(s->subs);
     free(s->sub_shm);
+    free(s->sub_lag);
     df_shm_destroy(s->shm);
+    df_stream_enc_free(s);
     df_brush_state_release(s);
     while (s->strokes) {
         df_stroke *st = s->strokes;
@@ -334,6 +339,7 @@ void df_session_close(df_session *s)
         df_session_broadcast(s, f);
         df_sbuf_unref(f);
     }
+    for (int i = 0; i < s->nsubs; i++) df_stream_lag_release(s, i);
     for (int i = 0; i < s->nsubs; i++) df_conn_unref(s->subs[i]);
     s->nsubs = s->nshm = 0;
 }
@@ -353,10 +359,14 @@ int df_session_subscribe(df_session *s, df_conn *c, df_error *err)
         uint8_t *f = realloc(s->sub_shm, (size_t)nc);
         if (!f) return df_error_set(err, DF_ENOMEM, "out of memory");
         s->sub_shm = f;
+        df_sublag *l = realloc(s->sub_lag, (size_t)nc * sizeof *l);
+        if (!l) return df_error_set(err, DF_ENOMEM, "out of memory");
+        s->sub_lag = l;
         s->capsubs = nc;
     }
     df_conn_ref(c);
     s->sub_shm[s->nsubs] = 0;
+    memset(&s->sub_lag[s->nsubs], 0, sizeof s->sub_lag[0]);
     s->subs[s->nsubs++] = c;
     return DF_OK;
 }
@@ -366,9 +376,13 @@ int df_session_unsubscribe(df_session *s, df_conn *c)
     for (int i = 0; i < s->nsubs; i++)
         if (s->subs[i] == c) {
             s->nshm -= s->sub_shm[i];
+            df_stream_lag_release(s, i);
             memmove(s->subs + i, s->subs + i + 1, (size_t)(s->nsubs - i - 1) * sizeof *s->subs);
             memmove(s->sub_shm + i, s->sub_shm + i + 1, (size_t)(s->nsubs - i - 1));
+            memmove(s->sub_lag + i, s->sub_lag + i + 1,
+                    (size_t)(s->nsubs - i - 1) * sizeof *s->sub_lag);
             s->nsubs--;
+            df_stream_enc_prune(s);
             df_conn_unref(c);
             return 1;
         }
@@ -412,6 +426,14 @@ static df_sbuf *shm_ref_for(df_session *s, df_sbuf *frame)
     return ref;
 }
 
+/* 1 when a subscriber negotiated a stream encoding (stream_enc.h). */
+static int any_encoded(df_conn *const *subs, int n)
+{
+    for (int i = 0; i < n; i++)
+        if (subs[i]->stream_enc) return 1;
+    return 0;
+}
+
 void df_session_broadcast(df_session *s, df_sbuf *frame)
 {
     /* df_conn_send may drop a subscriber (closing it unsubscribes it): iterate over a copy. */
@@ -431,12 +453,32 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
         df_conn_ref(subs[i]);
     }
     df_sbuf *ref = shm_ref_for(s, frame);
+    /* negotiated encodings (stream_enc.h): every quantized group follows every stream frame,
+     * whoever of its subscribers is still open */
+    df_enc_variants vs = {.n = 0};
+    int encoded = s->nqg > 0 || any_encoded(subs, n);
+    if (encoded && df_stream_enc_applies(frame)) {
+        df_stream_enc_follow(s, frame, &vs);
+    } else {
+        encoded = 0;
+    }
     for (int i = 0; i < n; i++) {
         int by_ref = ref && shm[i];
-        if (!subs[i]->closing && df_conn_send(subs[i], by_ref ? ref : frame) == DF_OK && by_ref)
+        if (encoded && subs[i]->stream_enc && !subs[i]->closing) {
+            /* its variant, or coalesced when it cannot keep up (stream_lag.h) */
+            int j = 0;
+            while (j < s->nsubs && s->subs[j] != subs[i]) j++;
+            if (j < s->nsubs) df_stream_lag_send(s, j, frame, &vs);
+            df_conn_unref(subs[i]);
+            continue;
+        }
+        df_sbuf *f = by_ref ? df_sbuf_ref(ref) : df_sbuf_ref(frame);
+        if (!subs[i]->closing && df_conn_send(subs[i], f) == DF_OK && by_ref)
             s->srv->stats.shm_refs++;
+        df_sbuf_unref(f);
         df_conn_unref(subs[i]);
     }
+    df_stream_enc_variants_clear(&vs);
     df_sbuf_unref(ref);
     if (subs != local) free(subs);
     if (shm != local_shm) free(shm);

@@ -113,6 +113,9 @@ typedef struct df_session {
     uint8_t *sub_shm;            /* sub_shm[i]: subs[i] reads frames from `shm` (STREAM_SHM) */
     int nsubs, capsubs, nshm;    /* nshm: subscribers with sub_shm set */
     struct df_shm_ring *shm;     /* shared-memory stream ring, made by the first STREAM_SHM */
+    struct df_sublag *sub_lag;   /* sub_lag[i]: subs[i]'s coalescing state (stream_lag.h) */
+    struct df_qgroup *qg;        /* quantized stream groups, one per error bound (stream_enc.h) */
+    int nqg;
     struct df_job *jhead, *jtail;/* queued jobs, not started */
     struct df_job *running;      /* the head job while it runs (or NULL) */
     df_stroke *strokes;

@@ -2,6 +2,7 @@
 with results checked against a reference Kelvinlet grab and the daemon's own snapshots."""
 import math
 import os
+import re
 
 import pytest
 
@@ -486,7 +487,10 @@ def test_stats_daemon_wide_and_per_session(daemon, grid):
     with open(os.path.join(os.path.dirname(__file__), "..", "..", "proto", "PROTOCOL.md")) as f:
         spec = f.read()
     prefixes = {"cache.kelvinlet_lu", "cache.admm_chol"}  # written "`x.hits` / `.misses`"
-    for key in sorted(set(s) | set(ss)):
+    # per-connection keys are written `client.<id>.NAME`
+    per_client = {re.sub(r"^client\.\d+\.", "client.<id>.", k) for k in s}
+    assert "client.<id>.bytes_per_s" in per_client, sorted(s)
+    for key in sorted(per_client | set(ss)):
         head = key.rsplit(".", 1)[0]
         assert "`%s`" % key in spec or (head in prefixes and "`." + key.rsplit(".", 1)[1] + "`"
                                          in spec), "stats key %r is not in PROTOCOL.md" % key

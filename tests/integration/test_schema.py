@@ -253,6 +253,7 @@ ENUM_FIELDS = [
     ("4.37", "stage", "WorkStage", False, ()),
     ("4.38", "flags", "PeerFlag", True, ()),
     ("4.38", "transport", "Transport", False, ()),
+    ("4.2 ", "stream_encoding", "StreamEnc", True, ()),
 ]
 
 

@@ -16,6 +16,7 @@ from . import messages as m
 from . import progress as pg
 from . import schema
 from . import stream as st
+from . import stream_enc as se
 from .wire import ProtocolError, Reader, pack_str
 
 
@@ -25,6 +26,8 @@ class Hello:
     max_version: int
     features: int
     client_name: str
+    stream_encoding: Optional[int] = None   # None: no trailer (the original layout, 4.2)
+    error_bound: float = 0.0
 
 
 @dataclass
@@ -97,7 +100,17 @@ def decode_empty(p: bytes) -> None:
 def decode_hello(p: bytes) -> Hello:
     r = Reader(p, "hello")
     lo, hi, feat = r.take("HHI")
-    return _end(r, Hello(lo, hi, feat, r.str()))
+    h = Hello(lo, hi, feat, r.str())
+    if r.off < len(r.p):                       # the optional stream-encoding trailer
+        enc, res, bound = r.take("BBd")
+        if res:
+            raise ProtocolError("hello: reserved %d is not 0" % res)
+        try:
+            m.check_stream_encoding(enc, bound)
+        except ValueError as e:
+            raise ProtocolError(str(e)) from None
+        h.stream_encoding, h.error_bound = enc, bound
+    return _end(r, h)
 
 
 def decode_auth(p: bytes) -> Tuple[int, bytes]:
@@ -199,7 +212,45 @@ def encode_hello_reply(h: m.HelloReply) -> bytes:
     return struct.pack("<HHIIIIIIQQBB", h.version, h.server_max_version, h.features,
                        h.max_frame_payload, h.max_mesh_vertices, h.max_mesh_elements,
                        h.max_pending_requests, h.max_sessions, h.max_mesh_bytes,
-                       h.max_client_queue_bytes, h.auth_required, 0) + pack_str(h.server_name)
+                       h.max_client_queue_bytes, h.auth_required, 0) + pack_str(h.server_name) + (
+        struct.pack("<BBd", h.stream_encoding, 0, h.error_bound) if h.has_stream else b"")
+
+
+def encode_qdisp(q: se.QDisp) -> bytes:
+    """A qdisp body (PROTOCOL.md 4.40) of q's rows."""
+    rows = bytearray()
+
+    def varint(v: int) -> None:
+        while v >= 0x80:
+            rows.append((v & 0x7F) | 0x80)
+            v >>= 7
+        rows.append(v)
+
+    prev = -1
+    for j, i in enumerate(q.idx):
+        varint(i - prev - 1)
+        prev = i
+        for k in range(3):
+            d = q.dq[3 * j + k]
+            varint(2 * d if d >= 0 else -2 * d - 1)   # zigzag
+    return struct.pack("<QQQBBHIIId", q.session_id, q.version, q.base_version, q.kind, 0, 0, q.nv,
+                       q.count, len(rows), q.step) + bytes(rows)
+
+
+def decode_zframe(p: bytes) -> Tuple[int, int, bytes]:
+    """A zframe body (4.41): (inner_type, raw_len, zstd bytes), not decompressed."""
+    r = Reader(p, "zframe")
+    inner, res, raw_len, zlen = r.take("HHII")
+    z = r.raw(zlen)
+    if res or inner not in (m.DISPLACEMENT, m.PROGRESS, m.QDISP) or zlen < 1 or \
+            raw_len > m.MAX_FRAME_PAYLOAD:
+        raise ProtocolError("zframe: inner type 0x%x reserved %d raw_len %d zlen %d"
+                            % (inner, res, raw_len, zlen))
+    return _end(r, (inner, raw_len, z))
+
+
+def encode_zframe(z: Tuple[int, int, bytes]) -> bytes:
+    return struct.pack("<HHII", z[0], 0, z[1], len(z[2])) + z[2]
 
 
 def encode_session_info(s: m.SessionInfo) -> bytes:
@@ -252,7 +303,8 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "empty": (decode_empty, lambda _: b""),
     "error": (m.decode_error, encode_error),
     "hello": (decode_hello, lambda h: m.encode_hello(h.min_version, h.max_version, h.features,
-                                                     h.client_name)),
+                                                     h.client_name, h.stream_encoding,
+                                                     h.error_bound)),
     "hello_reply": (m.decode_hello_reply, encode_hello_reply),
     "auth": (decode_auth, lambda a: m.encode_auth(*a)),
     "ping": (bytes, bytes),
@@ -301,6 +353,9 @@ BODY_CODECS: Dict[str, Tuple[Callable[[bytes], Any], Callable[[Any], bytes]]] = 
     "work_progress": (pg.decode_work_progress, pg.encode_work_progress),
     # session peers
     "peer_list": (pr.decode_peer_list, pr.encode_peer_list),
+    # negotiated stream encodings (PROTOCOL.md 4.40, 4.41)
+    "qdisp": (se.decode_qdisp, encode_qdisp),
+    "zframe": (decode_zframe, encode_zframe),
 }
 
 

@@ -48,6 +48,7 @@ from . import peers as pr
 from . import progress as pg
 from . import schema
 from . import stream as st
+from . import stream_enc as se
 from .poll import PollMixin
 from .stream import ShmRing
 from .errors import EMOVED, ConnectionClosed, DeformdError, error_name, moved_address
@@ -102,7 +103,7 @@ class ShmLost:
     kind_name: str = "shm_lost"
 
 
-Event = Union[st.Disp, st.Progress, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor,
+Event = Union[st.Disp, st.Progress, se.QDisp, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor,
               pg.WorkProgress]
 # A progress callback (load_mesh, load_file, set_handles, move_handles): one WorkProgress a call.
 ProgressFn = Callable[[pg.WorkProgress], None]
@@ -112,16 +113,18 @@ class Client(PollMixin):
 
     def __init__(self, sock: socket.socket, timeout: float = DEFAULT_TIMEOUT_S,
                  hello: bool = True, name: str = "deformd-python", key: Optional[bytes] = None,
-                 key_file: Optional[str] = None) -> None:
+                 key_file: Optional[str] = None, encoding: Optional[int] = None,
+                 error: float = 0.0) -> None:
         """With `key` (bytes) or `key_file` (a path, auth.load_key) the connection authenticates
         right after HELLO (authenticate); without, a server that requires AUTH answers other
-        requests EPROTO_AUTH."""
+        requests EPROTO_AUTH. `encoding` / `error`: the stream encoding asked in HELLO (hello())."""
         self.sock = sock
         self.timeout = timeout
         self._decoder = fr.FrameDecoder()
         self._frames: Deque[fr.Frame] = deque()   # received, not yet consumed
         self._events: Deque[Event] = deque()      # complete events, oldest first
         self._partial: Dict[Tuple[int, int, int], List] = {}  # (type, session, version) -> chunks
+        self._wire: Dict[Tuple[int, int, int], int] = {}  # ... -> wire bytes of those chunks
         self._next_id = 1
         self._pending: Dict[int, List[fr.Frame]] = {}   # sent, not awaited: frames so far
         self._done: Dict[int, List[fr.Frame]] = {}      # complete replies not yet collected
@@ -137,12 +140,13 @@ class Client(PollMixin):
         self.follow_moved = True
         self.moves = 0                               # redirects followed so far
         self._name, self._key = name, key
+        self._encoding, self._error = encoding, error  # asked again after a redirect
         self._ssl_context: Optional[ssl.SSLContext] = None
         try:
             if key_file is not None and key is None:
                 key = auth.load_key(key_file)
             if hello:
-                self.server = self.hello(name)
+                self.server = self.hello(name, encoding, error)
                 if key is not None:
                     self.authenticate(key)
         except BaseException:
@@ -153,7 +157,8 @@ class Client(PollMixin):
     @classmethod
     def connect_unix(cls, path: str, timeout: float = DEFAULT_TIMEOUT_S, hello: bool = True,
                      name: str = "deformd-python", key: Optional[bytes] = None,
-                     key_file: Optional[str] = None) -> "Client":
+                     key_file: Optional[str] = None, encoding: Optional[int] = None,
+                     error: float = 0.0) -> "Client":
         s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         s.settimeout(timeout)
         try:
@@ -161,14 +166,15 @@ class Client(PollMixin):
         except OSError:
             s.close()
             raise
-        return cls(s, timeout, hello, name, key, key_file)
+        return cls(s, timeout, hello, name, key, key_file, encoding, error)
 
     @classmethod
     def connect_tcp(cls, host: str, port: int, timeout: float = DEFAULT_TIMEOUT_S,
                     hello: bool = True, name: str = "deformd-python",
                     key: Optional[bytes] = None, key_file: Optional[str] = None,
                     tls_ca: Optional[str] = None, ssl_context: Optional[ssl.SSLContext] = None,
-                    server_hostname: Optional[str] = None) -> "Client":
+                    server_hostname: Optional[str] = None, encoding: Optional[int] = None,
+                    error: float = 0.0) -> "Client":
         """With `tls_ca` (a PEM file of the CA that signed the daemon's tls_cert) or a ready
         `ssl_context`, the connection is TLS (the daemon's tls_cert / tls_key): the certificate
         is verified against the CA and must name `server_hostname` (default: `host`); failures
@@ -185,13 +191,13 @@ class Client(PollMixin):
         except BaseException:
             s.close()
             raise
-        c = cls(s, timeout, hello, name, key, key_file)
+        c = cls(s, timeout, hello, name, key, key_file, encoding, error)
         c._ssl_context = ssl_context
         return c
 
     def move_to(self, host: str, port: int) -> None:
         """Replaces the connection by a new one to the daemon at host:port (TCP, with this
-        client's name, key and TLS context), HELLO and AUTH done: the cluster redirect (EMOVED).
+        client's name, key, TLS context and stream encoding), HELLO and AUTH done: the cluster redirect (EMOVED).
         Replies and events not yet read from the old connection, and its subscriptions and
         shared-memory rings, are dropped: subscribe again on the new daemon."""
         s = socket.create_connection((host, port), timeout=self.timeout)
@@ -214,7 +220,7 @@ class Client(PollMixin):
         self._work_cbs.clear()
         old.close()
         self.authenticated = False
-        self.server = self.hello(self._name)
+        self.server = self.hello(self._name, self._encoding, self._error)
         if self._key is not None:
             self.authenticate(self._key)
         self.moves += 1
@@ -315,8 +321,10 @@ class Client(PollMixin):
         return self._frames.popleft()
 
     # ------------------------------------------------------------------ events
-    def _take_event_frame(self, f: fr.Frame) -> None:
-        """Assembles stream chunks; completed events go to the event queue. An SHM_REF is
+    def _take_event_frame(self, f: fr.Frame, wire: int = 0) -> None:
+        """Assembles stream chunks; completed events go to the event queue (a version's Disp /
+        QDisp has .wire_bytes: the bytes its frames took on the wire, `wire` for a frame that
+        came inside a ZFRAME). An SHM_REF is
         replaced by the frame it references in the shared-memory ring (or a ShmLost event).
         A WORK_PROGRESS event goes to its request's progress callback (else to the queue)."""
         if f.type == m.WORK_PROGRESS and f.is_event:
@@ -347,6 +355,22 @@ class Client(PollMixin):
         if f.type == m.DEVICE_STATE:    # devices (HID): a DeviceInfo event
             self._events.append(dv.decode_device_info(f.payload))
             return
+        wire = wire or fr.HEADER_SIZE + len(f.payload)
+        if f.type == m.ZFRAME:      # a compressed stream event (hello stream_encoding ZSTD)
+            self._take_event_frame(se.unwrap_zframe(f), wire)
+            return
+        if f.type == m.QDISP:       # a quantized version delta (hello stream_encoding QUANTIZED)
+            q = se.decode_qdisp(f.payload)
+            key = (f.type, q.session_id, q.version)
+            chunks = self._partial.setdefault(key, [])
+            chunks.append(q)
+            self._wire[key] = self._wire.get(key, 0) + wire
+            if not f.more:
+                del self._partial[key]
+                ev = se.join_qdisp(chunks)
+                ev.wire_bytes = self._wire.pop(key)
+                self._events.append(ev)
+            return
         if f.type == m.DISPLACEMENT:
             d = st.decode_disp(f.payload)
             key = (f.type, d.session_id, d.version)
@@ -354,9 +378,12 @@ class Client(PollMixin):
                 return
             chunks = self._partial.setdefault(key, [])
             chunks.append(d)
+            self._wire[key] = self._wire.get(key, 0) + wire
             if not f.more:
                 del self._partial[key]
-                self._events.append(st.join_disp(chunks))
+                ev = st.join_disp(chunks)
+                ev.wire_bytes = self._wire.pop(key, 0)
+                self._events.append(ev)
             return
         if f.type == m.PROGRESS:
             p = st.decode_progress(f.payload)
@@ -365,10 +392,12 @@ class Client(PollMixin):
                 return
             chunks = self._partial.setdefault(key, [])
             chunks.append(p)
+            self._wire[key] = self._wire.get(key, 0) + wire
             if not f.more:
                 del self._partial[key]
                 p0 = chunks[0]
                 p0.disp = st.join_disp([c.disp for c in chunks])
+                p0.disp.wire_bytes = self._wire.pop(key, 0)
                 self._events.append(p0)
             return
         if f.is_error:
@@ -524,10 +553,15 @@ class Client(PollMixin):
             self._work_cbs.pop(rid, None)
 
     # ------------------------------------------------------------------ handshake
-    def hello(self, name: str = "deformd-python") -> m.HelloReply:
-        self.server = m.decode_hello_reply(
-            self._one(m.HELLO, m.encode_hello(1, fr.PROTO_VERSION, schema.HELLO_WANT_OWNERS,
-                                              name)))
+    def hello(self, name: str = "deformd-python", encoding: Optional[int] = None,
+              error: float = 0.0) -> m.HelloReply:
+        """HELLO (asking for the cluster's owners trailer of LIST_SESSIONS). `encoding`
+        (StreamEnc bits, m.STREAM_ENCODINGS) and `error` (the absolute error bound of QUANTIZED,
+        mesh units) ask for a stream encoding (PROTOCOL.md 4.2); None sends the original hello
+        (exact float32 stream). A bad request is refused by the daemon (DeformdError EINVAL)."""
+        body = m.encode_hello(1, fr.PROTO_VERSION, schema.HELLO_WANT_OWNERS, name, encoding,
+                              error)
+        self.server = m.decode_hello_reply(self._one(m.HELLO, body))
         return self.server
 
     def auth(self, method: int, token: bytes) -> Tuple[int, bytes]:

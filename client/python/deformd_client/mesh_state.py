@@ -10,6 +10,7 @@ from typing import Optional
 
 from . import messages as m
 from . import stream as st
+from . import stream_enc as se
 
 
 class OutOfSync(RuntimeError):
@@ -31,6 +32,7 @@ class MeshState:
             self.positions = array("f", map(operator.add, self.base, self.disp))
         self.version = version
         self.applied = 0
+        self.quant: Optional[se.QuantState] = None   # made by the first QDisp (4.40)
 
     @classmethod
     def sync(cls, client, session_id: int) -> "MeshState":
@@ -55,6 +57,8 @@ class MeshState:
             return False
         if isinstance(d, st.Progress):
             d = d.disp
+        if isinstance(d, se.QDisp):
+            return self._apply_q(d)
         if d.nv != self.nv:
             raise ValueError("frame for %d vertices, replica has %d" % (d.nv, self.nv))
         if d.kind != m.CHANGE_SNAPSHOT:
@@ -84,6 +88,31 @@ class MeshState:
                     u[3 * i + c] = v
                     x[3 * i + c] = base[3 * i + c] + v
         self.version = d.version
+        self.applied += 1
+        self.quant = None   # exact displacements: a later QDisp starts from K of these
+        return True
+
+    def _apply_q(self, q: "se.QDisp") -> bool:
+        """A quantized version delta (a client connected with stream encoding QUANTIZED): the
+        shown displacements become fl32(step * K), within the error bound of the exact ones."""
+        if q.nv != self.nv:
+            raise ValueError("frame for %d vertices, replica has %d" % (q.nv, self.nv))
+        if q.version <= self.version:
+            return False
+        if q.base_version != self.version:
+            raise OutOfSync("frame %d applies to version %d, replica is at %d"
+                            % (q.version, q.base_version, self.version))
+        if self.quant is None or self.quant.step != q.step:
+            self.quant = se.QuantState(q.step, self.disp)
+        changed = self.quant.apply(q, self.disp)
+        u, x, base = self.disp, self.positions, self.base
+        if changed is None:
+            self.positions = array("f", map(operator.add, base, u))
+        else:
+            for i in changed:
+                for c in range(3):
+                    x[3 * i + c] = base[3 * i + c] + u[3 * i + c]
+        self.version = q.version
         self.applied += 1
         return True
 

@@ -14,7 +14,7 @@ from .schema import SHM_HEADER_BYTES, SHM_MAGIC, SHM_MIN_CAPACITY  # noqa: F401
 from .schema import (MAX_AFFINE_SETS, MAX_HANDLES, MAX_PATH_LEN, BrushParam,  # noqa: F401
                      BrushType, ChangeKind, DispEncoding, Energy, Feature, Format, GetMeshFlag,
                      Integrator, LoadOpt, LoadSource, WorkOpt, MeshKind, MeshSection, MoveStatus, MsgType,
-                     PinFlag, SubscribeFlag)
+                     PinFlag, StreamEnc, SubscribeFlag)
 from .wire import ProtocolError, Reader, enum_value, f64_rows, pack_str, u32_array, vec
 
 # ------------------------------------------------------------------ numbers (schema.py)
@@ -48,6 +48,10 @@ MOVE_STATUS_NAMES = {int(k): k.name.lower() for k in MoveStatus}
 globals().update({"SECTION_" + k.name: k for k in MeshSection})
 GET_MESH_REST, GET_MESH_BASE = GetMeshFlag.REST, GetMeshFlag.BASE
 SUBSCRIBE_SNAPSHOT = SubscribeFlag.SNAPSHOT
+STREAM_ENC_QUANTIZED, STREAM_ENC_ZSTD = StreamEnc.QUANTIZED, StreamEnc.ZSTD
+# `deformctl watch --encoding` / Client(encoding=...) names of the stream encodings
+STREAM_ENCODINGS = {"exact": 0, "quantized": StreamEnc.QUANTIZED, "zstd": StreamEnc.ZSTD,
+                    "quantized+zstd": StreamEnc.QUANTIZED | StreamEnc.ZSTD}
 SUBSCRIBE_FROM_VERSION = SubscribeFlag.FROM_VERSION
 ELEM_SIZE = {MeshKind.POLYLINE: 2, MeshKind.TRIANGLE: 3, MeshKind.TET: 4}
 
@@ -67,21 +71,57 @@ class HelloReply:
     max_client_queue_bytes: int
     auth_required: int
     server_name: str
+    has_stream: bool = False        # the optional stream-encoding trailer was present (4.2b)
+    stream_encoding: int = 0        # StreamEnc bits granted (0: exact float32)
+    error_bound: float = 0.0        # QUANTIZED: the absolute error bound E, mesh units
+
+
+def check_stream_encoding(encoding: int, error_bound: float, msg: str = "hello") -> None:
+    """Raises ValueError unless (encoding, error_bound) is a valid stream encoding request
+    (PROTOCOL.md 4.2): StreamEnc bits only; with QUANTIZED a finite bound in
+    [STREAM_ERROR_LO, STREAM_ERROR_HI], without it 0."""
+    if encoding & ~int(StreamEnc.QUANTIZED | StreamEnc.ZSTD):
+        raise ValueError("%s: unknown stream_encoding bits 0x%x" % (msg, encoding))
+    if encoding & StreamEnc.QUANTIZED:
+        if not (schema.STREAM_ERROR_LO <= error_bound <= schema.STREAM_ERROR_HI):
+            raise ValueError("%s: error_bound %r of a quantized stream must be finite and in "
+                             "[%g, %g] mesh units" % (msg, error_bound, schema.STREAM_ERROR_LO,
+                                                      schema.STREAM_ERROR_HI))
+    elif error_bound != 0:
+        raise ValueError("%s: error_bound %r without QUANTIZED must be 0" % (msg, error_bound))
 
 
 def encode_hello(min_version: int = 1, max_version: int = 1, features: int = 0,
-                 client_name: str = "") -> bytes:
-    return struct.pack("<HHI", min_version, max_version, features) + pack_str(client_name)
+                 client_name: str = "", stream_encoding: Optional[int] = None,
+                 error_bound: float = 0.0) -> bytes:
+    """stream_encoding None: no trailer (the original layout, exact stream); else the
+    10-byte trailer u8 stream_encoding, u8 reserved, f64 error_bound (PROTOCOL.md 4.2)."""
+    out = struct.pack("<HHI", min_version, max_version, features) + pack_str(client_name)
+    if stream_encoding is not None:
+        out += struct.pack("<BBd", stream_encoding, 0, error_bound)
+    return out
 
 
 def decode_hello_reply(p: bytes) -> HelloReply:
     r = Reader(p, "hello_reply")
     v = r.take("HHIIIIIIQQBB")
     name = r.str()
+    trailer = None
+    if r.off < len(r.p):
+        trailer = r.take("BBd")
     r.end()
     if v[10] > 1 or v[11]:
         raise ProtocolError("hello_reply: auth_required %d / reserved %d" % (v[10], v[11]))
-    return HelloReply(v[0], v[1], Feature(v[2]), *v[3:11], server_name=name)
+    h = HelloReply(v[0], v[1], Feature(v[2]), *v[3:11], server_name=name)
+    if trailer is not None:
+        if trailer[1]:
+            raise ProtocolError("hello_reply: reserved %d is not 0" % trailer[1])
+        try:
+            check_stream_encoding(trailer[0], trailer[2], "hello_reply")
+        except ValueError as e:
+            raise ProtocolError(str(e)) from None
+        h.has_stream, h.stream_encoding, h.error_bound = True, StreamEnc(trailer[0]), trailer[2]
+    return h
 
 
 def encode_auth(method: int, token: bytes) -> bytes:

@@ -98,6 +98,8 @@ class MsgType(IntEnum):
     BRUSH_CURSOR = 0x0085
     DEVICE_STATE = 0x0086      # devices (HID)
     WORK_PROGRESS = 0x0087     # opt-in progress of long work (PROTOCOL.md 4.37)
+    QDISP = 0x0088             # quantized version delta (stream encoding, PROTOCOL.md 4.40)
+    ZFRAME = 0x0089            # zstd-compressed stream event (PROTOCOL.md 4.41)
     ERROR = 0x00FF
 
 
@@ -151,6 +153,8 @@ BODIES: Dict[MsgType, Bodies] = {
     MsgType.DEVICE_VIEW: Bodies("device_view", "empty", None),
     MsgType.DEVICE_STATE: Bodies(None, None, "device_info"),
     MsgType.WORK_PROGRESS: Bodies(None, None, "work_progress"),
+    MsgType.QDISP: Bodies(None, None, "qdisp"),
+    MsgType.ZFRAME: Bodies(None, None, "zframe"),
     MsgType.ERROR: Bodies(None, None, None),
 }
 
@@ -384,6 +388,17 @@ class WorkOpt(IntFlag):
     """handles / handle_move `options` (optional trailing u32)."""
     PROGRESS = 1 << 0  # WORK_PROGRESS events of this request
     KELVINLET_GUESS = 1 << 1  # handle_move: seed ADMM with the Kelvinlet guess
+
+
+class StreamEnc(IntFlag):
+    """hello / hello_reply `stream_encoding` (optional trailer, PROTOCOL.md 4.2); 0 = exact."""
+    QUANTIZED = 1 << 0  # QDISP events: deltas quantized to 2 x error_bound
+    ZSTD = 1 << 1       # stream events may come as ZFRAME (zstd)
+
+
+# the range of a quantized stream's error_bound (DF_STREAM_ERROR_LO / _HI)
+STREAM_ERROR_LO = 1e-30
+STREAM_ERROR_HI = 1e30
 
 
 # The AUTH exchange's sizes and MAC contexts (DF_AUTH_* of wire_schema.h; auth.py uses them).

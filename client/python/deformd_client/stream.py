@@ -5,7 +5,7 @@ import mmap
 import os
 import struct
 from array import array
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence
 
 from . import frame as fr
@@ -31,6 +31,8 @@ class Disp:
     count: int
     idx: Optional[array]   # array('I') of count vertex indices (SPARSE), else None
     xyz: array             # array('f') of 3*count displacement components
+    # bytes its frames took on the wire (Client events; 0 elsewhere); not part of equality
+    wire_bytes: int = field(default=0, compare=False)
 
     @property
     def kind_name(self) -> str:

@@ -17,9 +17,9 @@ typedef struct sample {
 } sample;
 
 enum { N_SAMPLES_BASE = 42, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
-       N_SAMPLES_WORK = 4, N_SAMPLES_PEERS = 3,
+       N_SAMPLES_WORK = 4, N_SAMPLES_PEERS = 3, N_SAMPLES_STREAM = 5,
        N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS +
-                   N_SAMPLES_WORK + N_SAMPLES_PEERS };
+                   N_SAMPLES_WORK + N_SAMPLES_PEERS + N_SAMPLES_STREAM };
 
 static const uint8_t sample_blob[] = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
 static double sample_pinned[6] = {0.1, 0.2, 0.3, -1.5, 2.5, 1e-3};
@@ -122,11 +122,11 @@ static inline void build_samples(sample *s)
         }                                                                                        \
         k++;                                                                                     \
     } while (0)
-    df_msg_hello hello = {1, 3, DF_FEAT_KELVINLET, "deformctl"};
+    df_msg_hello hello = {1, 3, DF_FEAT_KELVINLET, "deformctl", 0, 0, 0};
     ADD("hello", DF_MSG_HELLO, 0, df_msg_hello_encode(&hello, out, &e));
     df_msg_hello_reply hr = {1, 1, DF_FEAT_KELVINLET | DF_FEAT_ADMM, DF_MAX_FRAME_PAYLOAD,
                              DF_MAX_MESH_VERTICES, DF_MAX_MESH_ELEMENTS, 64, 16,
-                             DF_MAX_MESH_BYTES, 256u << 20, 0, "deformd 0.1"};
+                             DF_MAX_MESH_BYTES, 256u << 20, 0, "deformd 0.1", 0, 0, 0};
     ADD("hello_reply", DF_MSG_HELLO, DF_FLAG_REPLY, df_msg_hello_reply_encode(&hr, out, &e));
     const uint8_t tok[4] = {9, 8, 7, 6};
     df_msg_auth auth = {2, 4, tok};
@@ -320,6 +320,26 @@ static inline void build_samples(sample *s)
     df_msg_peer_list pl0 = {0, NULL};
     ADD("peer_list_empty", DF_MSG_SESSION_PEERS, DF_FLAG_REPLY,
         df_msg_peer_list_encode(&pl0, out, &e));
+    /* negotiated stream encodings: hello / hello_reply with the trailer, qdisp, zframe */
+    df_msg_hello hq = {1, 1, 0, "remote", 1, DF_STREAM_ENC_QUANTIZED | DF_STREAM_ENC_ZSTD, 1e-5};
+    ADD("hello_stream", DF_MSG_HELLO, 0, df_msg_hello_encode(&hq, out, &e));
+    df_msg_hello_reply hrq = hr;
+    hrq.has_stream = 1;
+    hrq.stream_encoding = DF_STREAM_ENC_ZSTD;
+    ADD("hello_reply_stream", DF_MSG_HELLO, DF_FLAG_REPLY,
+        df_msg_hello_reply_encode(&hrq, out, &e));
+    int64_t qd_dq[9] = {1, -1, 0, 300, -70000, 5, 0, 0, -(1ll << 40)};
+    df_msg_qdisp qd = {42, 8, 7, DF_CHANGE_BRUSH, 100, 3, 2e-5, sample_sparse_idx, qd_dq};
+    ADD("qdisp", DF_MSG_QDISP, DF_FLAG_EVENT, df_msg_qdisp_encode(&qd, out, &e));
+    df_msg_qdisp qe = {42, 9, 8, DF_CHANGE_HANDLE_MOVE, 100, 0, 1e-3, NULL, NULL};
+    ADD("qdisp_empty", DF_MSG_QDISP, DF_FLAG_EVENT | DF_FLAG_MORE,
+        df_msg_qdisp_encode(&qe, out, &e));
+    /* a real zstd frame of 16 zero bytes (zstd -c of /dev/zero, head -c 16) */
+    static const uint8_t zbytes[] = {0x28, 0xb5, 0x2f, 0xfd, 0x04, 0x58, 0x45, 0x00, 0x00,
+                                     0x10, 0x00, 0x00, 0x01, 0x00, 0x32, 0xc0, 0x02, 0x32,
+                                     0x7c, 0x24, 0x16};
+    df_msg_zframe zf = {DF_MSG_DISPLACEMENT, 16, sizeof zbytes, zbytes};
+    ADD("zframe", DF_MSG_ZFRAME, DF_FLAG_EVENT, df_msg_zframe_encode(&zf, out, &e));
 #undef ADD
     if (k != N_SAMPLES) {
         fprintf(stderr, "built %d samples, expected %d\n", k, N_SAMPLES);
