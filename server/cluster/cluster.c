@@ -128,22 +128,29 @@ void df_cluster_schedule_drop(df_cluster *cl, uint64_t id, const char *why)
     }
 }
 
+/* Every owned lease renewed in one pipelined round trip (one fsync of the AOF for all). */
 static void on_renew(uv_timer_t *h)
 {
     df_cluster *cl = h->data;
-    for (size_t i = 0; i < cl->n_owned; i++) {
-        df_owned *o = &cl->owned[i];
-        if (o->dropping) continue;
-        df_error e;
-        int r = df_lease_renew(cl->r, o->id, o->token, cl->ttl_ms, &e);
-        if (r == 0) df_cluster_schedule_drop(cl, o->id, "its lease was lost (fenced)");
-        else if (r < 0) {
-            df_log(DF_LOG_WARN, "cluster: renewing the lease of session %" PRIu64 ": %s", o->id,
-                   e.msg);
-            if (r != DF_EIO) continue;
-            break; /* Redis unreachable: the others would time out too; next tick */
-        }
+    size_t n = cl->n_owned;
+    if (!n) return;
+    uint64_t *ids = malloc(n * sizeof *ids);
+    const char **tokens = malloc(n * sizeof *tokens);
+    int *ok = malloc(n * sizeof *ok);
+    df_error e;
+    int rc = ids && tokens && ok ? DF_OK : df_error_set(&e, DF_ENOMEM, "out of memory");
+    for (size_t i = 0; rc == DF_OK && i < n; i++) {
+        ids[i] = cl->owned[i].id;
+        tokens[i] = cl->owned[i].token;
     }
+    if (rc == DF_OK) rc = df_lease_renew_many(cl->r, n, ids, tokens, cl->ttl_ms, ok, &e);
+    if (rc != DF_OK) /* Redis unreachable: retried at the next tick */
+        df_log(DF_LOG_WARN, "cluster: renewing %zu lease(s): %s", n, e.msg);
+    for (size_t i = 0; rc == DF_OK && i < n; i++)
+        if (!ok[i]) df_cluster_schedule_drop(cl, ids[i], "its lease was lost (fenced)");
+    free(ids);
+    free(tokens);
+    free(ok);
 }
 
 const char *df_cluster_advertise(const df_server *srv)
@@ -201,6 +208,7 @@ int df_cluster_start(df_server *srv, df_error *err)
     }
     srv->cluster = cl;
     srv->store_ops = &df_cluster_store_ops;
+    srv->session_route = df_cluster_route;
     uv_timer_init(srv->loop, &cl->renew);
     cl->renew.data = cl;
     int period = cl->ttl_ms / 3 > 0 ? cl->ttl_ms / 3 : 1;
@@ -235,6 +243,7 @@ void df_cluster_stop(df_server *srv)
     uv_timer_stop(&cl->renew);
     uv_idle_stop(&cl->drop);
     srv->cluster = NULL;
+    srv->session_route = NULL;
     srv->store_ops = srv->store ? &df_store_journal_ops : NULL;
     df_redis_free(cl->r);
     free(cl->owned);
