@@ -203,7 +203,7 @@ def reconnect(cl, sid, k):
     return poll_until(attempt, "a new owner serving session %d" % sid)
 
 
-KILLS = 5
+KILLS = 10
 
 
 def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon):
@@ -211,8 +211,13 @@ def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon)
     cl = Cluster(r, 3)
     shadow = make_daemon()
     s = None
+    watcher = None
     try:
         s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        # a subscriber on another daemon (redirected to the owner), resyncing after each failover
+        replica = MeshState(s.X)
+        watcher = cl.daemons[1].tcp_client()
+        watcher.subscribe(s.sid)
         times = []
         for kill in range(KILLS):
             target = s.acked + 5 + kill      # versions acknowledged before the kill
@@ -242,12 +247,31 @@ def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon)
             times.append(time.monotonic() - t_kill)
             s.after_failover(s.w.get_mesh(s.sid).version)
             s.check(s.w)
+            try:                              # what reached it before its daemon died
+                for ev in watcher.events(timeout=0.2):
+                    if isinstance(ev, Disp):
+                        replica.apply(ev)
+            except (ConnectionError, OSError):
+                pass                          # the owner it was redirected to is gone
+            watcher.close()
+            watcher = reconnect(cl, s.sid, kill + 1)
+            watcher.subscribe(s.sid, from_version=replica.version)
         for _ in range(8):                   # the last owner keeps serving
             s.step()
         s.check(s.w)
+        final = s.w.get_mesh(s.sid)
+        for ev in watcher.events(timeout=5.0):
+            if isinstance(ev, Disp):
+                replica.apply(ev)
+            if replica.version == final.version:
+                break
+        assert replica.version == final.version
+        assert replica.tobytes() == final.positions.tobytes(), "the subscriber diverged"
         print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
               % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
     finally:
+        if watcher:
+            watcher.close()
         if s:
             s.w.close()
             s.sh.close()
