@@ -167,6 +167,32 @@ int df_cluster_next_id(df_server *srv, df_error *err)
     return rc;
 }
 
+/* Logs the Redis server's persistence: the cluster's durability (cluster.h). A Redis without
+ * AOF loses every session at its restart; appendfsync everysec up to a second of acknowledged
+ * changes at a crash of its machine. CONFIG may be renamed or refused: then nothing is said. */
+static void log_persistence(df_redis *r)
+{
+    const char *keys[2] = {"appendonly", "appendfsync"};
+    char val[2][32] = {"", ""};
+    for (int k = 0; k < 2; k++) {
+        redisReply *rep = NULL;
+        df_error e;
+        if (df_redis_cmdv(r, &rep, &e, 3, "CONFIG", "GET", keys[k]) != DF_OK) return;
+        if (rep->type == REDIS_REPLY_ARRAY && rep->elements == 2 &&
+            rep->element[1]->type == REDIS_REPLY_STRING)
+            snprintf(val[k], sizeof val[k], "%s", rep->element[1]->str);
+        df_redis_reply_free(rep);
+    }
+    if (!val[0][0]) return;
+    if (strcmp(val[0], "yes") != 0)
+        df_log(DF_LOG_WARN, "cluster: redis %s has appendonly %s: a restart of Redis loses the "
+               "sessions (set appendonly yes, appendfsync always)", df_redis_addr(r), val[0]);
+    else if (strcmp(val[1], "always") != 0)
+        df_log(DF_LOG_WARN, "cluster: redis %s has appendfsync %s: a crash of its machine may "
+               "lose acknowledged changes (appendfsync always keeps every one)",
+               df_redis_addr(r), val[1]);
+}
+
 int df_cluster_start(df_server *srv, df_error *err)
 {
     const df_server_config *cfg = &srv->cfg;
@@ -216,6 +242,7 @@ int df_cluster_start(df_server *srv, df_error *err)
     uv_unref((uv_handle_t *)&cl->renew);
     uv_idle_init(srv->loop, &cl->drop);
     cl->drop.data = cl;
+    log_persistence(cl->r);
     df_log(DF_LOG_INFO, "cluster: redis %s, advertised as %s, lease %d ms",
            df_redis_addr(cl->r), cl->advertise, cl->ttl_ms);
     return DF_OK;

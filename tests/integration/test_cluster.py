@@ -360,3 +360,26 @@ def test_redis_killed_and_restarted_with_aof_loses_nothing_acknowledged(tmp_path
             s.sh.close()
         cl.stop()
         r.stop()
+
+
+def test_start_refused_without_redis_and_warned_of_weak_persistence(tmp_path):
+    """A daemon whose Redis does not answer refuses to start, naming it; one whose Redis would
+    lose acknowledged changes (appendfsync everysec) says so at start."""
+    from conftest import DEFORMD, free_tcp_port
+    port = free_tcp_port()
+    conf = tmp_path / "d.conf"
+    conf.write_text("store = %s\ncluster = redis://127.0.0.1:%d\nadvertise = 127.0.0.1:1\n"
+                    % (tmp_path / "l.db", port))
+    out = subprocess.run([DEFORMD, "--foreground", "--config", str(conf), "--socket",
+                          str(tmp_path / "s.sock")], capture_output=True, text=True, timeout=30)
+    assert out.returncode != 0
+    assert "cluster redis 127.0.0.1:%d: cannot connect" % port in out.stderr, out.stderr
+    r = Redis(str(tmp_path))
+    redis_cmd(r.port, "CONFIG", "SET", "appendfsync", "everysec")
+    cl = Cluster(r, 1)
+    try:
+        assert "has appendfsync everysec: a crash of its machine may lose acknowledged" \
+            in cl.daemons[0].log()
+    finally:
+        cl.stop()
+        r.stop()
