@@ -383,3 +383,34 @@ def test_start_refused_without_redis_and_warned_of_weak_persistence(tmp_path):
     finally:
         cl.stop()
         r.stop()
+
+
+def test_takeover_onto_a_daemon_with_a_session_of_the_same_name(tmp_path):
+    """Names are per daemon: the new owner already holding a session of that name still takes
+    the session over, under its name, at its last acknowledged state."""
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 2)
+    try:
+        d0, d1 = cl.daemons
+        data = grid_obj(8, 8)
+        X = obj_bytes_positions(data)
+        with d0.unix_client() as a, d1.unix_client() as b:
+            s0 = a.load_mesh(data, fmt=".obj", name="same").session_id
+            s1 = b.load_mesh(data, fmt=".obj", name="same").session_id
+            v = a.stroke(s0, brush_of(X, 3)).version
+            want = a.get_mesh(s0).positions.tobytes()
+        cl.kill9(d0)
+
+        def served():
+            with d1.tcp_client(timeout=5.0) as c:
+                c.follow_moved = False
+                return c.get_mesh(s0)
+        m0 = poll_until(served, "d1 taking session %d over" % s0)
+        assert (m0.version, m0.positions.tobytes()) == (v, want)
+        with d1.unix_client() as c:
+            names = {i.session_id: (i.name, i.owner) for i in c.list_sessions()}
+        here = "127.0.0.1:%d" % d1.tcp_port
+        assert names[s0] == ("same", here) and names[s1] == ("same", here)
+    finally:
+        cl.stop()
+        r.stop()
