@@ -414,3 +414,33 @@ def test_takeover_onto_a_daemon_with_a_session_of_the_same_name(tmp_path):
     finally:
         cl.stop()
         r.stop()
+
+
+def test_redirect_authenticates_with_the_same_key(tmp_path):
+    """Daemons with a key_file: a redirected Python client and deformctl authenticate on the owner
+    with the key they used on the first daemon."""
+    import secrets
+    from deformd_client import Client
+    kf = tmp_path / "cluster.key"
+    kf.write_text(secrets.token_hex(32) + "\n")
+    os.chmod(kf, 0o600)
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 2, "key_file = %s\n" % kf)
+    try:
+        d0, d1 = cl.daemons
+        data = grid_obj(8, 8)
+        with d0.unix_client() as a:
+            sid = a.load_mesh(data, fmt=".obj").session_id
+        with Client.connect_tcp("127.0.0.1", d1.tcp_port, key_file=str(kf)) as c:
+            assert c.get_mesh(sid).version == 0
+            assert c.moves == 1 and c.authenticated and owner_port(c) == d0.tcp_port
+        out = subprocess.run([DEFORMCTL, "--tcp", "127.0.0.1:%d" % d1.tcp_port, "--key-file",
+                              str(kf), "brush", str(sid), "--type", "grab", "--center", "0,0,0", "--move",
+                              "0,0,0.1", "--radius", "0.5"],
+                             capture_output=True, text=True, timeout=30)
+        assert out.returncode == 0, out.stderr
+        with d0.unix_client() as a:
+            assert a.get_mesh(sid).version == 1
+    finally:
+        cl.stop()
+        r.stop()
