@@ -180,6 +180,11 @@ typedef struct df_server {
     struct df_store *store;       /* the durable store (server/store/store.h), NULL: none */
     const df_store_ops *store_ops;/* its entry points (journal.h), NULL: none */
     struct df_cluster *cluster;   /* cluster mode (server/cluster/cluster.h), NULL: off */
+    /* Cluster mode's routing of a request for a session this daemon does not hold
+     * (cluster.h df_cluster_route: redirect or take over), set by df_cluster_start; NULL: off.
+     * A hook so that exec/ (below cluster/) reaches it. Loop thread. */
+    int (*session_route)(struct df_server *srv, uint64_t id, struct df_session **out,
+                         df_error *err);
 } df_server;
 
 /* The server's memory budget (membudget.h) with its caps taken from srv->cfg (memory_max_mb,

@@ -128,22 +128,29 @@ void df_cluster_schedule_drop(df_cluster *cl, uint64_t id, const char *why)
     }
 }
 
+/* Every owned lease renewed in one pipelined round trip (one fsync of the AOF for all). */
 static void on_renew(uv_timer_t *h)
 {
     df_cluster *cl = h->data;
-    for (size_t i = 0; i < cl->n_owned; i++) {
-        df_owned *o = &cl->owned[i];
-        if (o->dropping) continue;
-        df_error e;
-        int r = df_lease_renew(cl->r, o->id, o->token, cl->ttl_ms, &e);
-        if (r == 0) df_cluster_schedule_drop(cl, o->id, "its lease was lost (fenced)");
-        else if (r < 0) {
-            df_log(DF_LOG_WARN, "cluster: renewing the lease of session %" PRIu64 ": %s", o->id,
-                   e.msg);
-            if (r != DF_EIO) continue;
-            break; /* Redis unreachable: the others would time out too; next tick */
-        }
+    size_t n = cl->n_owned;
+    if (!n) return;
+    uint64_t *ids = malloc(n * sizeof *ids);
+    const char **tokens = malloc(n * sizeof *tokens);
+    int *ok = malloc(n * sizeof *ok);
+    df_error e;
+    int rc = ids && tokens && ok ? DF_OK : df_error_set(&e, DF_ENOMEM, "out of memory");
+    for (size_t i = 0; rc == DF_OK && i < n; i++) {
+        ids[i] = cl->owned[i].id;
+        tokens[i] = cl->owned[i].token;
     }
+    if (rc == DF_OK) rc = df_lease_renew_many(cl->r, n, ids, tokens, cl->ttl_ms, ok, &e);
+    if (rc != DF_OK) /* Redis unreachable: retried at the next tick */
+        df_log(DF_LOG_WARN, "cluster: renewing %zu lease(s): %s", n, e.msg);
+    for (size_t i = 0; rc == DF_OK && i < n; i++)
+        if (!ok[i]) df_cluster_schedule_drop(cl, ids[i], "its lease was lost (fenced)");
+    free(ids);
+    free(tokens);
+    free(ok);
 }
 
 const char *df_cluster_advertise(const df_server *srv)
@@ -158,6 +165,32 @@ int df_cluster_next_id(df_server *srv, df_error *err)
     int rc = df_rlog_new_id(srv->cluster->r, &id, err);
     if (rc == DF_OK) srv->next_session_id = id - 1;
     return rc;
+}
+
+/* Logs the Redis server's persistence: the cluster's durability (cluster.h). A Redis without
+ * AOF loses every session at its restart; appendfsync everysec up to a second of acknowledged
+ * changes at a crash of its machine. CONFIG may be renamed or refused: then nothing is said. */
+static void log_persistence(df_redis *r)
+{
+    const char *keys[2] = {"appendonly", "appendfsync"};
+    char val[2][32] = {"", ""};
+    for (int k = 0; k < 2; k++) {
+        redisReply *rep = NULL;
+        df_error e;
+        if (df_redis_cmdv(r, &rep, &e, 3, "CONFIG", "GET", keys[k]) != DF_OK) return;
+        if (rep->type == REDIS_REPLY_ARRAY && rep->elements == 2 &&
+            rep->element[1]->type == REDIS_REPLY_STRING)
+            snprintf(val[k], sizeof val[k], "%s", rep->element[1]->str);
+        df_redis_reply_free(rep);
+    }
+    if (!val[0][0]) return;
+    if (strcmp(val[0], "yes") != 0)
+        df_log(DF_LOG_WARN, "cluster: redis %s has appendonly %s: a restart of Redis loses the "
+               "sessions (set appendonly yes, appendfsync always)", df_redis_addr(r), val[0]);
+    else if (strcmp(val[1], "always") != 0)
+        df_log(DF_LOG_WARN, "cluster: redis %s has appendfsync %s: a crash of its machine may "
+               "lose acknowledged changes (appendfsync always keeps every one)",
+               df_redis_addr(r), val[1]);
 }
 
 int df_cluster_start(df_server *srv, df_error *err)
@@ -201,6 +234,7 @@ int df_cluster_start(df_server *srv, df_error *err)
     }
     srv->cluster = cl;
     srv->store_ops = &df_cluster_store_ops;
+    srv->session_route = df_cluster_route;
     uv_timer_init(srv->loop, &cl->renew);
     cl->renew.data = cl;
     int period = cl->ttl_ms / 3 > 0 ? cl->ttl_ms / 3 : 1;
@@ -208,6 +242,7 @@ int df_cluster_start(df_server *srv, df_error *err)
     uv_unref((uv_handle_t *)&cl->renew);
     uv_idle_init(srv->loop, &cl->drop);
     cl->drop.data = cl;
+    log_persistence(cl->r);
     df_log(DF_LOG_INFO, "cluster: redis %s, advertised as %s, lease %d ms",
            df_redis_addr(cl->r), cl->advertise, cl->ttl_ms);
     return DF_OK;
@@ -235,6 +270,7 @@ void df_cluster_stop(df_server *srv)
     uv_timer_stop(&cl->renew);
     uv_idle_stop(&cl->drop);
     srv->cluster = NULL;
+    srv->session_route = NULL;
     srv->store_ops = srv->store ? &df_store_journal_ops : NULL;
     df_redis_free(cl->r);
     free(cl->owned);

@@ -69,6 +69,48 @@ int df_lease_renew(df_redis *r, uint64_t id, const char *value, int ttl_ms, df_e
     return ok;
 }
 
+int df_lease_renew_many(df_redis *r, size_t n, const uint64_t *ids, const char *const *tokens,
+                        int ttl_ms, int *ok, df_error *err)
+{
+    if (!n) return DF_OK;
+    char ttl[16];
+    snprintf(ttl, sizeof ttl, "%d", ttl_ms);
+    char (*keys)[64] = malloc(n * sizeof *keys);
+    const char **args = malloc(6 * n * sizeof *args);
+    size_t *lens = malloc(6 * n * sizeof *lens);
+    const char *const **argv = malloc(n * sizeof *argv);
+    const size_t **argvlen = malloc(n * sizeof *argvlen);
+    int *argc = malloc(n * sizeof *argc);
+    redisReply **rep = malloc(n * sizeof *rep);
+    int rc = DF_OK;
+    if (!keys || !args || !lens || !argv || !argvlen || !argc || !rep)
+        rc = df_error_set(err, DF_ENOMEM, "out of memory");
+    for (size_t i = 0; rc == DF_OK && i < n; i++) {
+        df_lease_key(ids[i], "lease", keys[i], sizeof keys[i]);
+        const char *a[6] = {"EVAL", k_renew, "1", keys[i], tokens[i], ttl};
+        for (int k = 0; k < 6; k++) {
+            args[6 * i + k] = a[k];
+            lens[6 * i + k] = strlen(a[k]);
+        }
+        argv[i] = &args[6 * i];
+        argvlen[i] = &lens[6 * i];
+        argc[i] = 6;
+    }
+    if (rc == DF_OK) rc = df_redis_pipeline(r, n, argc, argv, argvlen, rep, err);
+    for (size_t i = 0; rc == DF_OK && i < n; i++) {
+        ok[i] = rep[i]->type == REDIS_REPLY_INTEGER && rep[i]->integer == 1;
+        df_redis_reply_free(rep[i]);
+    }
+    free(keys);
+    free(args);
+    free(lens);
+    free(argv);
+    free(argvlen);
+    free(argc);
+    free(rep);
+    return rc;
+}
+
 int df_lease_get(df_redis *r, uint64_t id, char *value, df_error *err)
 {
     char kl[64];

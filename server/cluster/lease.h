@@ -36,6 +36,12 @@ int df_lease_acquire(df_redis *r, uint64_t id, const char *addr, int ttl_ms, cha
  * lease expired or another daemon holds it), or DF_EIO / DF_EINTERNAL. */
 int df_lease_renew(df_redis *r, uint64_t id, const char *value, int ttl_ms, df_error *err);
 
+/* df_lease_renew of n leases in one pipelined round trip: ok[i] = 1 (renewed) or 0 (lost) for
+ * session ids[i] held under tokens[i]. Errors: DF_EIO (Redis unreachable: ok untouched),
+ * DF_ENOMEM; an unexpected reply counts as lost. */
+int df_lease_renew_many(df_redis *r, size_t n, const uint64_t *ids, const char *const *tokens,
+                        int ttl_ms, int *ok, df_error *err);
+
 /* The current lease value of session id into `value` (cap DF_LEASE_VALUE_MAX). Returns 1 (a
  * lease), 0 (none), or DF_EIO / DF_EINTERNAL. */
 int df_lease_get(df_redis *r, uint64_t id, char *value, df_error *err);

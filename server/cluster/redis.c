@@ -77,6 +77,34 @@ int df_redis_cmd(df_redis *r, int argc, const char **argv, const size_t *argvlen
     return DF_OK;
 }
 
+int df_redis_pipeline(df_redis *r, size_t n, const int *argc, const char *const *const *argv,
+                      const size_t *const *argvlen, redisReply **out, df_error *err)
+{
+    for (size_t i = 0; i < n; i++) out[i] = NULL;
+    int rc = connect_now(r, err);
+    if (rc != DF_OK) return rc;
+    for (size_t i = 0; i < n && rc == DF_OK; i++)
+        if (redisAppendCommandArgv(r->ctx, argc[i], (const char **)argv[i], argvlen[i]) !=
+            REDIS_OK)
+            rc = DF_EIO;
+    for (size_t i = 0; i < n && rc == DF_OK; i++) {
+        void *rep = NULL;
+        if (redisGetReply(r->ctx, &rep) != REDIS_OK || !rep) rc = DF_EIO;
+        out[i] = rep;
+    }
+    if (rc != DF_OK) {
+        df_error_set(err, DF_EIO, "cluster redis %s: pipeline of %zu: %s", r->addr, n,
+                     r->ctx->errstr[0] ? r->ctx->errstr : "connection lost");
+        for (size_t i = 0; i < n; i++) {
+            df_redis_reply_free(out[i]);
+            out[i] = NULL;
+        }
+        redisFree(r->ctx);
+        r->ctx = NULL;
+    }
+    return rc;
+}
+
 int df_redis_cmdv(df_redis *r, redisReply **out, df_error *err, int argc, ...)
 {
     const char *argv[16];

@@ -39,6 +39,13 @@ int df_redis_cmd(df_redis *r, int argc, const char **argv, const size_t *argvlen
 /* df_redis_cmd of NUL-terminated strings. */
 int df_redis_cmdv(df_redis *r, struct redisReply **out, df_error *err, int argc, ...);
 
+/* Sends n commands at once (pipelined: one round trip, and with appendfsync always one fsync
+ * for the batch), command i of argc[i] strings argv[i] of lengths argvlen[i]; out[i] gets its
+ * reply (free each with df_redis_reply_free; NULL after an error). Errors: as df_redis_cmd
+ * (every out[i] is then NULL). */
+int df_redis_pipeline(df_redis *r, size_t n, const int *argc, const char *const *const *argv,
+                      const size_t *const *argvlen, struct redisReply **out, df_error *err);
+
 /* Frees a reply (NULL-safe). */
 void df_redis_reply_free(struct redisReply *rep);
 

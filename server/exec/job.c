@@ -1,5 +1,4 @@
 /* job.c — per-session FIFO of jobs on the libuv pool (see job.h). */
-#include "server/cluster/cluster.h"
 #include "server/exec/job.h"
 
 #include <stddef.h>
@@ -72,8 +71,8 @@ int df_job_request(df_req *r, const uint8_t *p, const df_job_kind *kind, df_erro
     uint64_t sid = 0;
     int rc = kind->decode(r, p, body, &sid, err);
     df_session *s = NULL;
-    if (rc == DF_OK && !(s = df_session_find(r->srv, sid)) && r->srv->cluster)
-        rc = df_cluster_route(r->srv, sid, &s, err); /* redirect or take over (cluster.h) */
+    if (rc == DF_OK && !(s = df_session_find(r->srv, sid)) && r->srv->session_route)
+        rc = r->srv->session_route(r->srv, sid, &s, err); /* redirect or take over */
     else if (rc == DF_OK && !s)
         rc = df_error_set(err, DF_ENOTFOUND, "%s: no session %llu", df_msg_type_name(r->type),
                           (unsigned long long)sid);

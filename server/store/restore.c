@@ -122,9 +122,13 @@ static int restore_one(df_server *srv, df_store *st, sqlite3_stmt *q, df_error *
     }
     df_session *s;
     srv->next_session_id = id - 1; /* df_session_create gives it back its id */
-    if ((rc = df_session_create(srv, &m, name, &s, &e)) != DF_OK)
+    /* a name held by another session here (cluster mode's takeover: names are per daemon,
+     * server/cluster/cluster.h) does not refuse it: the session keeps its name */
+    int dup = df_session_find_name(srv, name) != NULL;
+    if ((rc = df_session_create(srv, &m, dup ? "" : name, &s, &e)) != DF_OK)
         return df_error_set(err, rc, "store %s: session %llu '%s': %s", df_store_path(st),
                             (unsigned long long)id, name, e.msg);
+    if (dup) snprintf(s->name, sizeof s->name, "%s", name);
     atomic_store(&s->version, (uint64_t)sqlite3_column_int64(q, 7)); /* before any write */
     uint64_t n_changes = 0;
     size_t pb = 24 * (size_t)s->nv;

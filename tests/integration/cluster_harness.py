@@ -114,6 +114,10 @@ class Cluster:
 
     def stop(self) -> None:
         for d in self.daemons:
+            if d.proc.poll() is not None:    # died during the test: its log tells why
+                print("daemon on port %d exited with %s:\n%s" % (d.tcp_port, d.proc.returncode,
+                                                                d.log()[-3000:]))
+        for d in self.daemons:
             if d.proc.poll() is None and d.proc.returncode is None:
                 try:
                     os.kill(d.proc.pid, signal.SIGCONT)   # a test may have stopped it

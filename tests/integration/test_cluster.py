@@ -203,7 +203,7 @@ def reconnect(cl, sid, k):
     return poll_until(attempt, "a new owner serving session %d" % sid)
 
 
-KILLS = 5
+KILLS = 10
 
 
 def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon):
@@ -211,8 +211,13 @@ def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon)
     cl = Cluster(r, 3)
     shadow = make_daemon()
     s = None
+    watcher = None
     try:
         s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        # a subscriber on another daemon (redirected to the owner), resyncing after each failover
+        replica = MeshState(s.X)
+        watcher = cl.daemons[1].tcp_client()
+        watcher.subscribe(s.sid)
         times = []
         for kill in range(KILLS):
             target = s.acked + 5 + kill      # versions acknowledged before the kill
@@ -242,12 +247,31 @@ def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon)
             times.append(time.monotonic() - t_kill)
             s.after_failover(s.w.get_mesh(s.sid).version)
             s.check(s.w)
+            try:                              # what reached it before its daemon died
+                for ev in watcher.events(timeout=0.2):
+                    if isinstance(ev, Disp):
+                        replica.apply(ev)
+            except (ConnectionError, OSError):
+                pass                          # the owner it was redirected to is gone
+            watcher.close()
+            watcher = reconnect(cl, s.sid, kill + 1)
+            watcher.subscribe(s.sid, from_version=replica.version)
         for _ in range(8):                   # the last owner keeps serving
             s.step()
         s.check(s.w)
+        final = s.w.get_mesh(s.sid)
+        for ev in watcher.events(timeout=5.0):
+            if isinstance(ev, Disp):
+                replica.apply(ev)
+            if replica.version == final.version:
+                break
+        assert replica.version == final.version
+        assert replica.tobytes() == final.positions.tobytes(), "the subscriber diverged"
         print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
               % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
     finally:
+        if watcher:
+            watcher.close()
         if s:
             s.w.close()
             s.sh.close()
@@ -334,5 +358,89 @@ def test_redis_killed_and_restarted_with_aof_loses_nothing_acknowledged(tmp_path
         if s:
             s.w.close()
             s.sh.close()
+        cl.stop()
+        r.stop()
+
+
+def test_start_refused_without_redis_and_warned_of_weak_persistence(tmp_path):
+    """A daemon whose Redis does not answer refuses to start, naming it; one whose Redis would
+    lose acknowledged changes (appendfsync everysec) says so at start."""
+    from conftest import DEFORMD, free_tcp_port
+    port = free_tcp_port()
+    conf = tmp_path / "d.conf"
+    conf.write_text("store = %s\ncluster = redis://127.0.0.1:%d\nadvertise = 127.0.0.1:1\n"
+                    % (tmp_path / "l.db", port))
+    out = subprocess.run([DEFORMD, "--foreground", "--config", str(conf), "--socket",
+                          str(tmp_path / "s.sock")], capture_output=True, text=True, timeout=30)
+    assert out.returncode != 0
+    assert "cluster redis 127.0.0.1:%d: cannot connect" % port in out.stderr, out.stderr
+    r = Redis(str(tmp_path))
+    redis_cmd(r.port, "CONFIG", "SET", "appendfsync", "everysec")
+    cl = Cluster(r, 1)
+    try:
+        assert "has appendfsync everysec: a crash of its machine may lose acknowledged" \
+            in cl.daemons[0].log()
+    finally:
+        cl.stop()
+        r.stop()
+
+
+def test_takeover_onto_a_daemon_with_a_session_of_the_same_name(tmp_path):
+    """Names are per daemon: the new owner already holding a session of that name still takes
+    the session over, under its name, at its last acknowledged state."""
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 2)
+    try:
+        d0, d1 = cl.daemons
+        data = grid_obj(8, 8)
+        X = obj_bytes_positions(data)
+        with d0.unix_client() as a, d1.unix_client() as b:
+            s0 = a.load_mesh(data, fmt=".obj", name="same").session_id
+            s1 = b.load_mesh(data, fmt=".obj", name="same").session_id
+            v = a.stroke(s0, brush_of(X, 3)).version
+            want = a.get_mesh(s0).positions.tobytes()
+        cl.kill9(d0)
+
+        def served():
+            with d1.tcp_client(timeout=5.0) as c:
+                c.follow_moved = False
+                return c.get_mesh(s0)
+        m0 = poll_until(served, "d1 taking session %d over" % s0)
+        assert (m0.version, m0.positions.tobytes()) == (v, want)
+        with d1.unix_client() as c:
+            names = {i.session_id: (i.name, i.owner) for i in c.list_sessions()}
+        here = "127.0.0.1:%d" % d1.tcp_port
+        assert names[s0] == ("same", here) and names[s1] == ("same", here)
+    finally:
+        cl.stop()
+        r.stop()
+
+
+def test_redirect_authenticates_with_the_same_key(tmp_path):
+    """Daemons with a key_file: a redirected Python client and deformctl authenticate on the owner
+    with the key they used on the first daemon."""
+    import secrets
+    from deformd_client import Client
+    kf = tmp_path / "cluster.key"
+    kf.write_text(secrets.token_hex(32) + "\n")
+    os.chmod(kf, 0o600)
+    r = Redis(str(tmp_path))
+    cl = Cluster(r, 2, "key_file = %s\n" % kf)
+    try:
+        d0, d1 = cl.daemons
+        data = grid_obj(8, 8)
+        with d0.unix_client() as a:
+            sid = a.load_mesh(data, fmt=".obj").session_id
+        with Client.connect_tcp("127.0.0.1", d1.tcp_port, key_file=str(kf)) as c:
+            assert c.get_mesh(sid).version == 0
+            assert c.moves == 1 and c.authenticated and owner_port(c) == d0.tcp_port
+        out = subprocess.run([DEFORMCTL, "--tcp", "127.0.0.1:%d" % d1.tcp_port, "--key-file",
+                              str(kf), "brush", str(sid), "--type", "grab", "--center", "0,0,0", "--move",
+                              "0,0,0.1", "--radius", "0.5"],
+                             capture_output=True, text=True, timeout=30)
+        assert out.returncode == 0, out.stderr
+        with d0.unix_client() as a:
+            assert a.get_mesh(sid).version == 1
+    finally:
         cl.stop()
         r.stop()

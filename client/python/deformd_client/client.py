@@ -584,6 +584,7 @@ class Client(PollMixin):
             raise auth.AuthError("auth: the server did not prove that it knows the key "
                                  "(connection closed)")
         self.authenticated = True
+        self._key = key      # a cluster redirect (move_to) authenticates with it again
 
     def ping(self, data: bytes = b"") -> bytes:
         """Echo; returns the bytes the daemon sent back."""

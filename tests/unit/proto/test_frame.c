@@ -245,8 +245,9 @@ static void test_error_names(void **state)
     int valid = 0;
     for (int c = -200; c <= 0; c++)
         valid += df_proto_error_valid(c);
-    assert_int_equal(valid, 12 + 11); /* DF_EINVAL .. DF_EPERM, EPROTO_* */
+    assert_int_equal(valid, 13 + 11); /* DF_EINVAL .. DF_EMOVED, EPROTO_* */
     assert_string_equal(df_proto_error_name(DF_EEXIST), "EEXIST");
+    assert_string_equal(df_proto_error_name(DF_EMOVED), "EMOVED");
     assert_string_equal(df_msg_type_name(DF_MSG_HANDLES_MOVE), "handles_move");
     assert_string_equal(df_msg_type_name(0x1234), "unknown");
 }

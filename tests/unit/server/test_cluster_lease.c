@@ -143,6 +143,26 @@ static void test_acquire_renew_and_epochs(void **state)
     df_redis_free(r);
 }
 
+static void test_renew_many_in_one_round_trip(void **state)
+{
+    (void)state;
+    df_redis *r = connect_or_skip();
+    char t[3][DF_LEASE_VALUE_MAX];
+    uint64_t ids[3] = {401, 402, 403};
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(df_lease_acquire(r, ids[i], "127.0.0.1:1111", 10000, t[i], NULL), 1);
+    char other[DF_LEASE_VALUE_MAX];
+    assert_int_equal(df_lease_acquire(r, 402, "127.0.0.1:1111", 10000, other, NULL), 1);
+    const char *tokens[3] = {t[0], t[1], t[2]}; /* t[1] is stale now */
+    int ok[3] = {-1, -1, -1};
+    assert_int_equal(df_lease_renew_many(r, 3, ids, tokens, 10000, ok, NULL), DF_OK);
+    assert_int_equal(ok[0], 1);
+    assert_int_equal(ok[1], 0);
+    assert_int_equal(ok[2], 1);
+    assert_int_equal(df_lease_renew_many(r, 0, ids, tokens, 10000, ok, NULL), DF_OK);
+    df_redis_free(r);
+}
+
 static void test_fenced_append_after_expiry(void **state)
 {
     (void)state;
@@ -241,6 +261,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_acquire_renew_and_epochs),
+        cmocka_unit_test(test_renew_many_in_one_round_trip),
         cmocka_unit_test(test_fenced_append_after_expiry),
         cmocka_unit_test(test_snapshot_read_and_close),
         cmocka_unit_test(test_bad_url_and_unreachable_server),
