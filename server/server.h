@@ -86,6 +86,8 @@ typedef struct df_conn {
     int hello_done;          /* a HELLO succeeded (required before most requests) */
     char name[DF_MAX_NAME_LEN + 1]; /* the client_name of its HELLO ("" before / when none) */
     uint8_t stream_enc;      /* DF_STREAM_ENC_* bits of its HELLO (0: exact float32) */
+    uint8_t stream_neg;      /* its HELLO carried the stream trailer (any encoding, 0 too):
+                              * its stream is coalesced when it cannot keep up (stream_lag.h) */
     double stream_err;       /* QUANTIZED: the error bound E of its HELLO (mesh units) */
     uint64_t coalesced;      /* stream versions folded into a coalesced one (stream_lag.h) */
     double bytes_per_s;      /* bytes written per second over the last sweep period */

@@ -92,6 +92,7 @@ int df_h_hello(df_req *rq, const uint8_t *p, df_error *err)
         df_log(DF_LOG_DEBUG, "client %llu is '%s'", (unsigned long long)c->id, m.client_name);
     c->hello_done = 1;
     c->stream_enc = enc;
+    c->stream_neg = m.has_stream;
     c->stream_err = e;
     r.has_stream = m.has_stream; /* only a hello with the trailer gets one back (4.2b) */
     r.stream_encoding = enc;

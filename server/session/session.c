@@ -430,7 +430,7 @@ static df_sbuf *shm_ref_for(df_session *s, df_sbuf *frame)
 static int any_encoded(df_conn *const *subs, int n)
 {
     for (int i = 0; i < n; i++)
-        if (subs[i]->stream_enc) return 1;
+        if (subs[i]->stream_enc || subs[i]->stream_neg) return 1;
     return 0;
 }
 
@@ -464,7 +464,8 @@ void df_session_broadcast(df_session *s, df_sbuf *frame)
     }
     for (int i = 0; i < n; i++) {
         int by_ref = ref && shm[i];
-        if (encoded && subs[i]->stream_enc && !subs[i]->closing) {
+        if (encoded && (subs[i]->stream_enc || subs[i]->stream_neg) && !by_ref &&
+            !subs[i]->closing) {
             /* its variant, or coalesced when it cannot keep up (stream_lag.h) */
             int j = 0;
             while (j < s->nsubs && s->subs[j] != subs[i]) j++;

@@ -175,7 +175,7 @@ int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs
     size_t limit = c->outq.limit;
     int head = chunk_head(frame, &k);
     int quant = (c->stream_enc & DF_STREAM_ENC_QUANTIZED) != 0;
-    if (!c->stream_enc || !head ||
+    if (!(c->stream_enc || c->stream_neg) || !head ||
         (!l->lagging && (l->mid || c->outq.bytes < DF_LAG_HI(limit))) ||
         (!l->lagging && lag_start(s, l, quant, k.base) != DF_OK)) {
         l->mid = head && !k.last; /* before the send: a drop unsubscribes (l then is gone) */

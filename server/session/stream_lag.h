@@ -1,7 +1,8 @@
 /* stream_lag.h — coalescing of the stream for subscribers that cannot keep up (issue 16,
  * PROTOCOL.md 6.3 "Bandwidth"): an extension of the output-queue backpressure of server/net/
- * (outq.h: a client over output_queue_limit is dropped) for connections that negotiated a stream
- * encoding in their hello.
+ * (outq.h: a client over output_queue_limit is dropped) for connections whose hello carried the
+ * stream-encoding trailer (any encoding, exact included; df_conn.stream_neg), when they are not
+ * on the shared-memory ring.
  *
  * When such a subscriber's output queue holds DF_LAG_HI(limit) bytes or more as the first chunk
  * of a version is broadcast, it starts lagging: from that version on its stream frames are not
