@@ -271,7 +271,13 @@ def encode_load_reply(s: m.SessionInfo) -> bytes:
 
 
 def encode_session_list(items: Sequence[m.SessionInfo]) -> bytes:
-    return struct.pack("<I", len(items)) + b"".join(encode_session_info(s) for s in items)
+    """The list, and the owners trailer when the decoded list had one (has_owners) or any item
+    names an owner (PROTOCOL.md 4.10)."""
+    out = struct.pack("<I", len(items)) + b"".join(encode_session_info(s) for s in items)
+    if getattr(items, "has_owners", False) or any(s.owner is not None for s in items):
+        out += struct.pack("<I", len(items)) + b"".join(
+            struct.pack("<Q", s.session_id) + pack_str(s.owner or "") for s in items)
+    return out
 
 
 def encode_ack(a: m.Ack) -> bytes:

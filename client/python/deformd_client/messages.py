@@ -248,13 +248,20 @@ def decode_load_reply(p: bytes) -> SessionInfo:
     return s
 
 
+class SessionList(list):
+    """A decoded session_list: a list of SessionInfo; has_owners is True when the body carried
+    the owners trailer (PROTOCOL.md 4.10; also for an empty list, so it re-encodes exactly)."""
+    has_owners: bool = False
+
+
 def decode_session_list(p: bytes) -> List[SessionInfo]:
     """The list, and (a cluster daemon, to a client whose HELLO set HELLO_WANT_OWNERS) the
-    owners trailer into each item's .owner."""
+    owners trailer into each item's .owner (SessionList.has_owners)."""
     r = Reader(p, "session_list")
     n = r.take("I")
-    out = [_read_session_info(r) for _ in range(n)]
+    out = SessionList(_read_session_info(r) for _ in range(n))
     if r.off < len(p):
+        out.has_owners = True
         if r.take("I") != n:
             raise ProtocolError("session_list: owners trailer count is not the list's")
         for s in out:
