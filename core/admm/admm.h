@@ -368,6 +368,13 @@ typedef struct df_admm_polish_result {
 int df_admm_polish(df_admm *s, const df_admm_polish_params *params, df_admm_polish_result *res,
                    df_error *err);
 
+/* The relative KKT residual of DF_ADMM_POLISH_KKT (above) at arbitrary positions V (nv x 3; handles
+ * and affine rows are not checked), with the free set = the vertices off rest (V_i != Vrest_i) or
+ * with w a_i = 0, the rest set = the others, handles and followers excluded: for comparing ADMM's
+ * iterates with the polish. Errors: DF_EINVAL (NULL, NaN), DF_EUNSUPPORTED (as df_admm_polish),
+ * DF_ESTATE (an inverted Neo-Hookean element at V), DF_ENOMEM. Positions unchanged. */
+int df_admm_kkt(df_admm *s, const double *V, double *kkt, df_error *err);
+
 /* Frees the solver. NULL-safe. */
 void df_admm_free(df_admm *s);
 

@@ -314,6 +314,53 @@ static void classify(pn *P, double support_tol)
     collect_support(P);
 }
 
+static int check_supported(const df_admm *s, df_error *err)
+{
+    if (s->kind != DF_MESH_TET || (s->p.energy != DF_ADMM_NEOHOOKEAN && s->p.energy != DF_ADMM_ARAP &&
+                                   s->p.energy != DF_ADMM_ACAP))
+        return df_error_set(err, DF_EUNSUPPORTED, "admm_polish: only tet meshes with the arap, acap or "
+                            "neohookean energy are supported (spokes-and-rims triangle energies, cloth "
+                            "and polylines are not)");
+    return DF_OK;
+}
+
+int df_admm_kkt(df_admm *s, const double *V, double *kkt, df_error *err)
+{
+    if (!s || !V || !kkt) return df_error_set(err, DF_EINVAL, "admm_kkt: NULL argument");
+    int rc = check_supported(s, err);
+    if (rc) return rc;
+    for (int64_t i = 0; i < 3 * (int64_t)s->nv; i++)
+        if (!isfinite(V[i])) return df_error_set(err, DF_EINVAL, "admm_kkt: vertex %d is not finite", (int)(i / 3));
+    rc = admm_pn_cache(s, err);
+    if (rc) return rc;
+    pn P;
+    memset(&P, 0, sizeof(P));
+    P.s = s;
+    P.tol = PN_DEFAULT_TOL;
+    size_t nv3 = 3 * (size_t)s->nv;
+    P.V = malloc(nv3 * sizeof(double));
+    P.g = malloc(nv3 * sizeof(double));
+    P.gl = malloc(nv3 * sizeof(double));
+    P.fmag = malloc((size_t)s->nv * sizeof(double));
+    P.viol = malloc((size_t)s->nv * sizeof(double));
+    P.cls = malloc((size_t)s->nv);
+    if (!P.V || !P.g || !P.gl || !P.fmag || !P.viol || !P.cls) {
+        pn_free(&P);
+        return df_error_set(err, DF_ENOMEM, "admm_kkt: out of memory");
+    }
+    memcpy(P.V, V, nv3 * sizeof(double));
+    for (int32_t i = 0; i < s->nv; i++)
+        P.cls[i] = (s->fo_flag && s->fo_flag[i]) ? CLS_FIXED
+                   : (!(s->p.w * s->a[i] > 0) || memcmp(V + 3 * (size_t)i, s->Vrest + 3 * (size_t)i, 3 * sizeof(double)))
+                   ? CLS_FREE : CLS_REST;
+    for (int32_t h = 0; h < s->nh; h++) P.cls[s->hidx[h]] = CLS_FIXED;
+    rc = measure(&P, err);
+    if (rc == DF_EINTERNAL) rc = df_error_set(err, DF_ESTATE, "admm_kkt: inverted element at V");
+    if (!rc) *kkt = P.kkt;
+    pn_free(&P);
+    return rc;
+}
+
 int df_admm_polish(df_admm *s, const df_admm_polish_params *params, df_admm_polish_result *res, df_error *err)
 {
     if (!s) return df_error_set(err, DF_EINVAL, "admm_polish: NULL solver");
@@ -325,17 +372,14 @@ int df_admm_polish(df_admm *s, const df_admm_polish_params *params, df_admm_poli
         return df_error_set(err, DF_EINVAL, "admm_polish: tol and support_tol must be finite, support_tol >= 0");
     if (prm.max_iters <= 0) prm.max_iters = PN_DEFAULT_ITERS;
     if (!(prm.tol > 0)) prm.tol = PN_DEFAULT_TOL;
-    if (s->kind != DF_MESH_TET || (s->p.energy != DF_ADMM_NEOHOOKEAN && s->p.energy != DF_ADMM_ARAP &&
-                                   s->p.energy != DF_ADMM_ACAP))
-        return df_error_set(err, DF_EUNSUPPORTED, "admm_polish: only tet meshes with the arap, acap or "
-                            "neohookean energy are supported (spokes-and-rims triangle energies, cloth "
-                            "and polylines are not)");
+    int rc = check_supported(s, err);
+    if (rc) return rc;
     for (int32_t h = 0; h < s->nh; h++)
         if (memcmp(s->Vout + 3 * (size_t)s->hidx[h], s->target_req + 3 * (size_t)h, 3 * sizeof(double)))
             return df_error_set(err, DF_ESTATE, "admm_polish: handle %d (vertex %d) is not at its target "
                                 "(targets set but not yet reached, e.g. damped Neo-Hookean steps pending): "
                                 "run ADMM further first", (int)h, (int)s->hidx[h]);
-    int rc = admm_pn_cache(s, err);
+    rc = admm_pn_cache(s, err);
     if (rc) return rc;
     double t0 = admm_now();
     df_admm_polish_result r;
