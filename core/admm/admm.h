@@ -293,7 +293,8 @@ void df_admm_get_degenerate(const df_admm *s, df_admm_degenerate *out);
  *         exactly sparse copy of V - Vrest; support_tol 0: Z_i != 0), every vertex when w a_i = 0
  *         (w = 0: full space), and affine vertices whose rest position violates their constraint;
  *   rest: V_i = Vrest_i exactly (the ADMM result's V_i, off rest by the primal residual only, is
- *         snapped back first).
+ *         snapped back first; Neo-Hookean: the vertices of an element that snapping would invert
+ *         keep ADMM's positions and join the support instead).
  * Affine-constrained vertices are polished in the null space of their constraint rows (Newton
  * steps projected per vertex), so A V_t = b holds as after ADMM (to roundoff).
  *

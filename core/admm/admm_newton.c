@@ -13,7 +13,8 @@
 #define PN_TAU 0.9           /* fraction to the boundary (first inverting step) */
 #define PN_ARMIJO 1e-4
 #define PN_ROUNDOFF 1e-12    /* changes below this relative to |E| are roundoff */
-#define PN_SNAP_REL 1e-6     /* free vertices within this times s of rest may snap back */
+#define PN_SNAP_REL 1e-1     /* free vertices within this times s of rest may snap back */
+#define PN_SNAP_MIN 1e-7     /* (smallest threshold tried) */
 #define PN_GROW_FRAC 0.1     /* grow by the violators within this fraction of the worst */
 #define PN_VIOL_REL 1e-3     /* a violation counts when above this times tol * scale */
 
@@ -133,34 +134,42 @@ static int32_t grow(pn *P)
     return 0;
 }
 
-/* snaps free vertices that came within PN_SNAP_REL s of rest back to rest when E does not rise */
+/* snaps free vertices back to rest that are within PN_SNAP_REL s of it and satisfy the subgradient
+ * condition there by the current elastic gradient (|g_el,i| <= w a_i: they would stay), when that
+ * does not raise E; on a rise, tries again with the threshold / 10 (down to PN_SNAP_MIN s) */
 static int32_t shrink(pn *P)
 {
     df_admm *s = P->s;
     size_t nv3 = 3 * (size_t)s->nv;
-    int32_t n = 0;
-    memcpy(P->Vt, P->V, nv3 * sizeof(double));
-    for (int32_t i = 0; i < s->nv; i++) {
-        if (P->cls[i] != CLS_FREE || !(s->p.w * s->a[i] > 0) || !rest_feasible(s, i)) continue;
-        double r2 = 0;
-        for (int k = 0; k < 3; k++) {
-            double d = P->V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k];
-            r2 += d * d;
+    for (double thr = PN_SNAP_REL; thr >= PN_SNAP_MIN; thr *= 0.1) {
+        int32_t n = 0;
+        memcpy(P->Vt, P->V, nv3 * sizeof(double));
+        for (int32_t i = 0; i < s->nv; i++) {
+            double wa = s->p.w * s->a[i];
+            if (P->cls[i] != CLS_FREE || !(wa > 0) || !rest_feasible(s, i)) continue;
+            const double *g = P->g + 3 * (size_t)i;
+            if (sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) > wa) continue;
+            double r2 = 0;
+            for (int k = 0; k < 3; k++) {
+                double d = P->V[3 * (size_t)i + k] - s->Vrest[3 * (size_t)i + k];
+                r2 += d * d;
+            }
+            if (sqrt(r2) >= thr * s->p.s) continue;
+            memcpy(P->Vt + 3 * (size_t)i, s->Vrest + 3 * (size_t)i, 3 * sizeof(double));
+            n++;
         }
-        if (sqrt(r2) >= PN_SNAP_REL * s->p.s) continue;
-        memcpy(P->Vt + 3 * (size_t)i, s->Vrest + 3 * (size_t)i, 3 * sizeof(double));
-        n++;
+        if (n == 0) return 0;
+        double ft = objective(s, P->Vt, NULL, NULL);
+        if (!(ft <= P->f)) continue;
+        for (int32_t i = 0; i < s->nv; i++)
+            if (P->cls[i] == CLS_FREE && memcmp(P->Vt + 3 * (size_t)i, P->V + 3 * (size_t)i, 3 * sizeof(double)))
+                P->cls[i] = CLS_REST;
+        memcpy(P->V, P->Vt, nv3 * sizeof(double));
+        P->f = ft;
+        collect_support(P);
+        return n;
     }
-    if (n == 0) return 0;
-    double ft = objective(s, P->Vt, NULL, NULL);
-    if (!(ft <= P->f)) return 0;
-    for (int32_t i = 0; i < s->nv; i++)
-        if (P->cls[i] == CLS_FREE && memcmp(P->Vt + 3 * (size_t)i, P->V + 3 * (size_t)i, 3 * sizeof(double)))
-            P->cls[i] = CLS_REST;
-    memcpy(P->V, P->Vt, nv3 * sizeof(double));
-    P->f = ft;
-    collect_support(P);
-    return n;
+    return 0;
 }
 
 /* the Newton matrix: exact, else projected, else projected + growing shift */
@@ -234,6 +243,12 @@ static int newton(pn *P, const df_admm_polish_params *prm, df_admm_polish_result
     for (;;) {
         int rc = measure(P, err);
         if (rc) return rc;
+        int32_t snapped = shrink(P);
+        if (snapped > 0) {
+            r->removed += snapped;
+            rc = measure(P, err);
+            if (rc) return rc;
+        }
         record(P, r, r->iterations, t0);
         if (P->kkt < P->tol) { r->converged = 1; break; }
         if (!prm->no_grow && P->nviol > 0 && (P->rr >= P->rf || P->rf < P->tol * P->scale) && rounds < maxit) {
@@ -285,7 +300,6 @@ static int newton(pn *P, const df_admm_polish_params *prm, df_admm_polish_result
         memcpy(P->V, P->Vt, nv3 * sizeof(double));
         P->f = ft;
         r->iterations++;
-        r->removed += shrink(P);
     }
     return DF_OK;
 }
@@ -311,6 +325,26 @@ static void classify(pn *P, double support_tol)
     for (int32_t h = 0; h < s->nh; h++) P->cls[s->hidx[h]] = CLS_FIXED;
     for (int32_t i = 0; i < s->nv; i++)
         if (P->cls[i] == CLS_REST) memcpy(P->V + 3 * (size_t)i, s->Vrest + 3 * (size_t)i, 3 * sizeof(double));
+    /* Neo-Hookean: snapping may invert an element next to the support (an unconverged ADMM's V is
+     * off Z by its primal residual): such elements' snapped vertices go back to ADMM's positions
+     * and into the support, until no element is inverted (ADMM's own V is uninverted) */
+    for (int changed = s->p.energy == DF_ADMM_NEOHOOKEAN; changed;) {
+        changed = 0;
+        for (int32_t e = 0; e < s->ne; e++) {
+            const int32_t *el = s->E + (size_t)e * 4;
+            double F[9];
+            admm_newton_element_F(s, P->V, e, F);
+            double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+                       F[2] * (F[3] * F[7] - F[4] * F[6]);
+            if (J > 0) continue;
+            for (int a = 0; a < 4; a++)
+                if (P->cls[el[a]] == CLS_REST) {
+                    P->cls[el[a]] = CLS_FREE;
+                    memcpy(P->V + 3 * (size_t)el[a], s->Vout + 3 * (size_t)el[a], 3 * sizeof(double));
+                    changed = 1;
+                }
+        }
+    }
     collect_support(P);
 }
 

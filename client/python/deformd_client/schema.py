@@ -363,6 +363,7 @@ class WorkOpt(IntFlag):
     """handles / handle_move `options` (optional trailing u32)."""
     PROGRESS = 1 << 0  # WORK_PROGRESS events of this request
     KELVINLET_GUESS = 1 << 1  # handle_move: seed ADMM with the Kelvinlet guess
+    POLISH = 1 << 2  # handle_move: projected Newton after ADMM (df_admm_polish)
 
 
 # The AUTH exchange's sizes and MAC contexts (DF_AUTH_* of wire_schema.h; auth.py uses them).
