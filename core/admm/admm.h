@@ -321,8 +321,10 @@ void df_admm_get_degenerate(const df_admm *s, df_admm_degenerate *out);
  * i.e. the net force relative to the forces that balance there (invariant to the length unit and
  * the energy scale). A rest vertex violating the subgradient condition wants to move: the support
  * grows (the worst violators, >= 0.1 x the largest violation, get a first-order step off rest) and
- * Newton continues; a free vertex that comes within 1e-6 s of rest is snapped back to rest when
- * that does not raise E. */
+ * Newton continues; free vertices within 0.1 s of rest whose elastic gradient satisfies the
+ * subgradient condition (they would stay at rest) are snapped back to rest when that does not
+ * raise E (else the same with the distance threshold / 10, down to 1e-7 s). `violations` counts
+ * the rest vertices with max(0, |g_el,i| - w a_i) > 1e-3 tol scale. */
 #define DF_ADMM_POLISH_HIST 64       /* per-iteration history kept in df_admm_polish_result */
 #define DF_ADMM_POLISH_MAX_ITERS 10000
 

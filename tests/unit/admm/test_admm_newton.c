@@ -142,6 +142,106 @@ static void test_density_hessian(void **st)
         }
 }
 
+static double mdet(const double F[9])
+{
+    return F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) + F[2] * (F[3] * F[7] - F[4] * F[6]);
+}
+
+/* the inversion-safe step bound against a dense scan of det(F + t D) */
+static void test_det_step(void **st)
+{
+    (void)st;
+    srand(11);
+    int finite = 0;
+    for (int trial = 0; trial < 200; trial++) {
+        double F[9], D[9];
+        do {
+            for (int k = 0; k < 9; k++) F[k] = (k % 4 == 0 ? 1.0 : 0.0) + 0.4 * (2.0 * rand() / RAND_MAX - 1.0);
+        } while (!(mdet(F) > 0.05));
+        for (int k = 0; k < 9; k++) D[k] = 1.5 * (2.0 * rand() / RAND_MAX - 1.0);
+        double t = admm_newton_det_step(F, D, 2.0);
+        double end = isfinite(t) ? t : 2.0, G[9];
+        for (int q = 0; q < 2000; q++) { /* positive everywhere before t */
+            double a = end * q / 2000.0 * (1 - 1e-9);
+            for (int k = 0; k < 9; k++) G[k] = F[k] + a * D[k];
+            assert_true(mdet(G) > 0);
+        }
+        if (isfinite(t)) { /* a root: det vanishes at t and is not positive just past it */
+            finite++;
+            assert_true(t > 0 && t <= 2.0);
+            for (int k = 0; k < 9; k++) G[k] = F[k] + t * D[k];
+            assert_true(fabs(mdet(G)) <= 1e-9 * (1 + fabs(mdet(F))));
+            for (int k = 0; k < 9; k++) G[k] = F[k] + t * (1 + 1e-6) * D[k];
+            assert_true(mdet(G) <= 1e-12);
+        }
+    }
+    assert_true(finite > 20 && finite < 200); /* both cases were exercised */
+}
+
+/* df_admm_kkt: above the target at ADMM's positions, below after the polish; refusals */
+static void test_kkt_function(void **st)
+{
+    (void)st;
+    df_mesh m;
+    int32_t *h;
+    int nh;
+    double *tg;
+    tu_bar3d_handles(&m, &h, &nh, &tg);
+    df_admm *s = make(&m, DF_ADMM_NEOHOOKEAN, 0.0, 0.01, 5e5, h, nh, tg);
+    df_error err;
+    assert_int_equal(df_admm_run(s, &(df_admm_budget){30, 0, 0, NULL, NULL}, NULL, &err), DF_OK);
+    double k0 = -1, k1 = -1;
+    assert_int_equal(df_admm_kkt(s, df_admm_positions(s), &k0, &err), DF_OK);
+    df_admm_polish_result pr;
+    assert_int_equal(df_admm_polish(s, NULL, &pr, &err), DF_OK);
+    assert_int_equal(df_admm_kkt(s, df_admm_positions(s), &k1, &err), DF_OK);
+    assert_true(k0 > 1e-6);
+    assert_true(k1 < 1e-9);
+    assert_true(fabs(k1 - pr.kkt) <= 1e-3 * pr.kkt + 1e-15);
+    double *V = malloc((size_t)m.nv * 24);
+    memcpy(V, df_admm_positions(s), (size_t)m.nv * 24);
+    V[3 * 20] = NAN;
+    assert_int_equal(df_admm_kkt(s, V, &k1, &err), DF_EINVAL);
+    assert_int_equal(df_admm_kkt(s, NULL, &k1, &err), DF_EINVAL);
+    free(V);
+    df_admm_free(s);
+    tu_free(&m); free(h); free(tg);
+}
+
+/* Neo-Hookean with a strong locality weight from a rough ADMM start (10 iterations: V off Z by a
+ * large primal residual): converges, nothing inverted, and to the
+ * objective reached from a 300-iteration start */
+static void test_rough_start_nh(void **st)
+{
+    (void)st;
+    df_mesh m = tu_bar3d(12, 2, 2, 6.0, 1.0, 1.0);
+    int32_t h[64];
+    double tg[64 * 3];
+    int nh = 0;
+    for (int32_t i = 0; i < m.nv; i++)
+        if (m.V[3 * i] == 6.0 || m.V[3 * i] == 0.0) {
+            h[nh] = i;
+            memcpy(tg + 3 * nh, m.V + 3 * i, 24);
+            if (m.V[3 * i] == 6.0) tg[3 * nh + 1] += 0.4;
+            nh++;
+        }
+    double E[2];
+    for (int pass = 0; pass < 2; pass++) {
+        df_admm *s = make(&m, DF_ADMM_NEOHOOKEAN, 2e4, 0.01, 5e6, h, nh, tg);
+        df_error err;
+        assert_int_equal(df_admm_run(s, &(df_admm_budget){pass ? 300 : 10, 0, 0, NULL, NULL}, NULL, &err), DF_OK);
+        df_admm_polish_result pr;
+        assert_int_equal(df_admm_polish(s, &(df_admm_polish_params){200, 0, 0, 0}, &pr, &err), DF_OK);
+        assert_true(pr.converged && pr.kkt < 1e-9);
+        assert_int_equal(count_inverted(&m, df_admm_positions(s)), 0);
+        for (int k = 0; k < pr.hist_n; k++) assert_true(isfinite(pr.hist_objective[k]));
+        E[pass] = pr.objective;
+        df_admm_free(s);
+    }
+    assert_true(fabs(E[0] - E[1]) <= 1e-9 * E[1]);
+    tu_free(&m);
+}
+
 /* w = 0: every non-handle vertex free */
 static void full_space(df_admm_energy en, double rho)
 {
@@ -338,6 +438,9 @@ int main(void)
         cmocka_unit_test(test_locality_arap),
         cmocka_unit_test(test_affine_kept),
         cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_det_step),
+        cmocka_unit_test(test_kkt_function),
+        cmocka_unit_test(test_rough_start_nh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
