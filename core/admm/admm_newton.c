@@ -191,7 +191,8 @@ static int model(pn *P, df_admm_polish_result *r, df_error *err)
             shift = (dmax > 0 ? dmax : 1.0) * 1e-10 * pow(10.0, attempt - 2);
         }
         double ta = admm_now();
-        admm_pn_assemble(s, P->V, project, shift);
+        if (admm_pn_assemble(s, P->V, project, shift))
+            return df_error_set(err, DF_ENOMEM, "admm_polish: out of memory (Hessian assembly)");
         r->t_assemble += admm_now() - ta;
         ta = admm_now();
         rc = admm_pn_factor(s, &pd, err);

@@ -65,8 +65,9 @@ int admm_pn_cache(df_admm *s, df_error *err);
 int admm_pn_prepare(df_admm *s, const int32_t *sup, int32_t n, long *analyses, df_error *err);
 
 /* Assembles the Newton matrix on the prepared support at V (the model of df_admm_polish:
- * project = 0 exact, 1 projected), affine blocks projected, plus shift * I. */
-void admm_pn_assemble(df_admm *s, const double *V, int project, double shift);
+ * project = 0 exact, 1 projected), affine blocks projected, plus shift * I. Returns 0, or -1 when
+ * out of memory (a work buffer). */
+int admm_pn_assemble(df_admm *s, const double *V, int project, double shift);
 
 /* Numeric factorization: *pd = 1 when positive definite. DF_EINTERNAL on a CHOLMOD failure. */
 int admm_pn_factor(df_admm *s, int *pd, df_error *err);

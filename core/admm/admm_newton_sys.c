@@ -230,13 +230,13 @@ static void project_blocks(const df_admm *s, const int32_t *el, double *K)
     }
 }
 
-void admm_pn_assemble(df_admm *s, const double *V, int project, double shift)
+int admm_pn_assemble(df_admm *s, const double *V, int project, double shift)
 {
     admm_polish_cache *c = s->polish;
     memset(c->H->x, 0, (size_t)((int *)c->H->p)[c->H->ncol] * sizeof(double));
     double *K = malloc((size_t)PN_CHUNK * 144 * sizeof(double));
     int32_t *list = malloc((size_t)PN_CHUNK * sizeof(int32_t));
-    if (!K || !list) { free(K); free(list); return; } /* left zero: the factorization fails */
+    if (!K || !list) { free(K); free(list); return -1; }
     for (int32_t e0 = 0; e0 < s->ne;) {
         int32_t m = 0; /* next batch of elements with a support corner */
         for (; e0 < s->ne && m < PN_CHUNK; e0++) {
@@ -296,6 +296,7 @@ void admm_pn_assemble(df_admm *s, const double *V, int project, double shift)
         for (int kk = 0; kk < 3; kk++)
             for (int l = 0; l <= kk; l++) add_entry(c, 3 * j + l, 3 * j + kk, B[3 * l + kk] + (l == kk ? shift : 0.0));
     }
+    return 0;
 }
 
 int admm_pn_factor(df_admm *s, int *pd, df_error *err)

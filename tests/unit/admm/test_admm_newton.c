@@ -4,8 +4,10 @@
  * <= ADMM's (and <= a 20x longer ADMM run's), no inverted element ever accepted; with w > 0 the
  * vertices left at rest satisfy the subgradient condition |grad E_elastic,i| <= w a_i (checked by
  * finite differences of df_admm_evaluate); affine constraints keep holding; the symbolic analysis
- * is reused for an unchanged support; unsupported energies and bad states are refused with the
- * solver unchanged. */
+ * is reused for an unchanged support; the inversion-safe step bound matches a dense scan of
+ * det(F + t D); df_admm_kkt agrees with the polish; a rough Neo-Hookean start (10 ADMM iterations,
+ * strong locality) reaches the same optimum as a 300-iteration one; unsupported energies and bad
+ * states are refused with the solver unchanged. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -290,6 +292,7 @@ static void full_space(df_admm_energy en, double rho)
 
 static void test_full_space_nh(void **st) { (void)st; full_space(DF_ADMM_NEOHOOKEAN, 5e5); }
 static void test_full_space_arap(void **st) { (void)st; full_space(DF_ADMM_ARAP, 0.1); }
+static void test_full_space_acap(void **st) { (void)st; full_space(DF_ADMM_ACAP, 0.1); }
 
 /* w > 0 on a longer bar pulled at one end: part of it stays at rest; the subgradient condition
  * holds there (finite differences of the elastic energy) */
@@ -434,6 +437,7 @@ int main(void)
         cmocka_unit_test(test_density_hessian),
         cmocka_unit_test(test_full_space_nh),
         cmocka_unit_test(test_full_space_arap),
+        cmocka_unit_test(test_full_space_acap),
         cmocka_unit_test(test_locality_nh),
         cmocka_unit_test(test_locality_arap),
         cmocka_unit_test(test_affine_kept),
