@@ -15,6 +15,8 @@
 #define PN_ROUNDOFF 1e-12    /* changes below this relative to |E| are roundoff */
 #define PN_SNAP_REL 1e-1     /* free vertices within this times s of rest may snap back */
 #define PN_SNAP_MIN 1e-7     /* (smallest threshold tried) */
+#define PN_REAIM_REL 1e-3    /* free violators this close to rest (times s) may be re-aimed */
+#define PN_REAIM_COS 0.99    /* ... unless already pointing along -g_el within this cosine */
 #define PN_GROW_FRAC 0.1     /* grow by the violators within this fraction of the worst */
 #define PN_VIOL_REL 1e-3     /* a violation counts when above this times tol * scale */
 
@@ -172,6 +174,46 @@ static int32_t shrink(pn *P)
     return 0;
 }
 
+/* re-aims free vertices stuck next to rest: within PN_REAIM_REL s of it, violating the subgradient
+ * condition there (|g_el,i| > w a_i: they want out) but not pointing along -g_el (the SC-L1
+ * term's tangential curvature w a_i (1 - r/s) / r makes turning them a crawl): they jump to rest -
+ * t g_el / |g_el| (t as for a new support vertex, at least their distance), halved until E
+ * decreases; returns the number moved */
+static int32_t reaim(pn *P)
+{
+    df_admm *s = P->s;
+    size_t nv3 = 3 * (size_t)s->nv;
+    memset(P->D, 0, nv3 * sizeof(double));
+    int32_t n = 0;
+    for (int32_t i = 0; i < s->nv; i++) {
+        double wa = s->p.w * s->a[i];
+        if (P->cls[i] != CLS_FREE || !(wa > 0)) continue;
+        const double *g = P->g + 3 * (size_t)i, *x = P->V + 3 * (size_t)i, *x0 = s->Vrest + 3 * (size_t)i;
+        double ng = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]), d[3], r = 0, dg = 0;
+        if (!(ng > wa)) continue;
+        for (int k = 0; k < 3; k++) { d[k] = x[k] - x0[k]; r += d[k] * d[k]; dg += d[k] * g[k]; }
+        r = sqrt(r);
+        if (r >= PN_REAIM_REL * s->p.s || (r > 0 && -dg >= PN_REAIM_COS * r * ng)) continue;
+        double k = vertex_stiffness(s, i), t = k > 0 ? (ng - wa) / k : s->p.s;
+        if (t > s->p.s) t = s->p.s;
+        if (t < r) t = r;
+        for (int q = 0; q < 3; q++) P->D[3 * (size_t)i + q] = x0[q] - t * g[q] / ng - x[q];
+        n++;
+    }
+    if (n == 0) return 0;
+    for (int h = 0; h < 30; h++) {
+        double a = ldexp(1.0, -h);
+        for (size_t q = 0; q < nv3; q++) P->Vt[q] = P->V[q] + a * P->D[q];
+        double ft = objective(s, P->Vt, NULL, NULL);
+        if (isfinite(ft) && ft < P->f) {
+            memcpy(P->V, P->Vt, nv3 * sizeof(double));
+            P->f = ft;
+            return n;
+        }
+    }
+    return 0;
+}
+
 /* the Newton matrix: exact, else projected, else projected + growing shift */
 static int model(pn *P, df_admm_polish_result *r, df_error *err)
 {
@@ -247,6 +289,10 @@ static int newton(pn *P, const df_admm_polish_params *prm, df_admm_polish_result
         int32_t snapped = shrink(P);
         if (snapped > 0) {
             r->removed += snapped;
+            rc = measure(P, err);
+            if (rc) return rc;
+        }
+        if (reaim(P) > 0) {
             rc = measure(P, err);
             if (rc) return rc;
         }
