@@ -323,7 +323,9 @@ void df_admm_get_degenerate(const df_admm *s, df_admm_degenerate *out);
  * grows (the worst violators, >= 0.1 x the largest violation, get a first-order step off rest) and
  * Newton continues; free vertices within 0.1 s of rest whose elastic gradient satisfies the
  * subgradient condition (they would stay at rest) are snapped back to rest when that does not
- * raise E (else the same with the distance threshold / 10, down to 1e-7 s). `violations` counts
+ * raise E (else the same with the distance threshold / 10, down to 1e-7 s); free vertices within
+ * 1e-3 s of rest that violate it (they want out) but do not point along -g_el,i are re-aimed: moved
+ * to rest + t (-g_el,i / |g_el,i|) as a new support vertex (when E decreases). `violations` counts
  * the rest vertices with max(0, |g_el,i| - w a_i) > 1e-3 tol scale. */
 #define DF_ADMM_POLISH_HIST 64       /* per-iteration history kept in df_admm_polish_result */
 #define DF_ADMM_POLISH_MAX_ITERS 10000
