@@ -6,7 +6,8 @@
  * finite differences of df_admm_evaluate); affine constraints keep holding; the symbolic analysis
  * is reused for an unchanged support; the inversion-safe step bound matches a dense scan of
  * det(F + t D); df_admm_kkt agrees with the polish; a rough Neo-Hookean start (10 ADMM iterations,
- * strong locality) reaches the same optimum as a 300-iteration one; unsupported energies and bad
+ * strong locality) reaches the same optimum as a 300-iteration one; a follower (duplicated vertex
+ * in a zero-volume tet) ends on its twin at the clean mesh's optimum; unsupported energies and bad
  * states are refused with the solver unchanged. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -244,6 +245,58 @@ static void test_rough_start_nh(void **st)
     tu_free(&m);
 }
 
+/* a duplicated vertex in a zero-volume tet (a follower): polished with the rest, placed on its
+ * twin, the optimum that of the mesh without them */
+static void test_follower(void **st)
+{
+    (void)st;
+    df_mesh m;
+    int32_t *h;
+    int nh;
+    double *tg;
+    tu_bar3d_handles(&m, &h, &nh, &tg);
+    int32_t c = -1, n1 = -1, n2 = -1;
+    for (int32_t i = 0; i < m.nv; i++) {
+        const double *x = m.V + 3 * i;
+        if (x[0] == 1.5 && x[1] == 0.5 && x[2] == 0.5) c = i;
+        if (x[0] == 2.0 && x[1] == 0.5 && x[2] == 0.5) n1 = i;
+        if (x[0] == 1.5 && x[1] == 1.0 && x[2] == 0.5) n2 = i;
+    }
+    assert_true(c >= 0 && n1 >= 0 && n2 >= 0);
+    df_mesh d = m;
+    d.nv = m.nv + 1;
+    d.ne = m.ne + 1;
+    d.V = malloc((size_t)d.nv * 24);
+    d.E = malloc((size_t)d.ne * 16);
+    memcpy(d.V, m.V, (size_t)m.nv * 24);
+    memcpy(d.V + 3 * m.nv, m.V + 3 * c, 24);
+    memcpy(d.E, m.E, (size_t)m.ne * 16);
+    int32_t ex[4] = {m.nv, c, n1, n2};
+    memcpy(d.E + 4 * m.ne, ex, 16);
+    double E[2];
+    for (int k = 0; k < 2; k++) {
+        df_admm *s = make(k ? &d : &m, DF_ADMM_NEOHOOKEAN, 0.0, 0.01, 5e5, h, nh, tg);
+        df_error err;
+        df_admm_degenerate dg;
+        df_admm_get_degenerate(s, &dg);
+        assert_int_equal(dg.followers, k ? 1 : 0);
+        assert_int_equal(df_admm_run(s, &(df_admm_budget){60, 0, 0, NULL, NULL}, NULL, &err), DF_OK);
+        df_admm_polish_result pr;
+        assert_int_equal(df_admm_polish(s, NULL, &pr, &err), DF_OK);
+        assert_true(pr.converged);
+        E[k] = pr.objective;
+        const double *V = df_admm_positions(s);
+        if (k) {
+            assert_true(tu_dist(V + 3 * m.nv, V + 3 * c) <= 1e-12);
+            assert_true(tu_dist(V + 3 * c, m.V + 3 * c) > 1e-3); /* the twin did move */
+        }
+        df_admm_free(s);
+    }
+    assert_true(fabs(E[0] - E[1]) <= 1e-10 * E[0]);
+    free(d.V); free(d.E);
+    tu_free(&m); free(h); free(tg);
+}
+
 /* w = 0: every non-handle vertex free */
 static void full_space(df_admm_energy en, double rho)
 {
@@ -445,6 +498,7 @@ int main(void)
         cmocka_unit_test(test_det_step),
         cmocka_unit_test(test_kkt_function),
         cmocka_unit_test(test_rough_start_nh),
+        cmocka_unit_test(test_follower),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
