@@ -136,7 +136,7 @@ _Static_assert(DF_WKIND_POLYLINE == (int)DF_MESH_POLYLINE && DF_WKIND_TRIANGLE =
 #define DF_CURSOR_FLAGS_ALL (0u DF_WIRE_CURSOR_FLAGS(DF_X_OR))
 #define DF_WORK_OPTS_ALL (0u DF_WIRE_WORK_OPTS(DF_X_OR))
 #define DF_STREAM_ENC_ALL (0u DF_WIRE_STREAM_ENCS(DF_X_OR))
-/* the options bits valid in handles and brush_begin (KELVINLET_GUESS is handle_move only) */
+/* the options bits valid in handles and brush_begin (KELVINLET_GUESS, POLISH: handle_move only) */
 #define DF_WORK_OPTS_NOT_MOVE ((uint32_t)DF_WORK_OPT_PROGRESS)
 #define DF_STAGE_MAX (0 DF_WIRE_WORK_STAGES(DF_X_COUNT)) /* stages this build sends: 1..MAX */
 #define DF_ORIGIN_MAX (0 DF_WIRE_ORIGINS(DF_X_COUNT) - 1)    /* origins are 0..DF_ORIGIN_MAX */

@@ -242,10 +242,11 @@
     X(SOLVE, 4)     /* handles move: ADMM iterations of the budget */
 
 /* handles `options`, handle_move `options` (optional trailing u32, DF_WORK_OPT_*); brush_begin
- * `options`. KELVINLET_GUESS is valid in handle_move only (elsewhere EPROTO_RESERVED). */
+ * `options`. KELVINLET_GUESS and POLISH are valid in handle_move only (elsewhere EPROTO_RESERVED). */
 #define DF_WIRE_WORK_OPTS(X)                                                                 \
     X(PROGRESS, 1u << 0)        /* WORK_PROGRESS events of this request */                   \
-    X(KELVINLET_GUESS, 1u << 1) /* handle_move: seed ADMM with the Kelvinlet guess */
+    X(KELVINLET_GUESS, 1u << 1) /* handle_move: seed ADMM with the Kelvinlet guess */        \
+    X(POLISH, 1u << 2)          /* handle_move: projected Newton after ADMM (df_admm_polish) */
 
 /* devices (HID, issue 11): device_info `class`, `backend`, `state` (PROTOCOL.md 4.30) */
 #define DF_WIRE_DEV_CLASSES(X)                                                               \

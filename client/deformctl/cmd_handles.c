@@ -123,7 +123,8 @@ static int run_handles(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     return CTL_EXIT_OK;
 }
 
-enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_PROGRESS, M_KGUESS, M_COUNT };
+enum { M_TARGETS = CTL_NGLOBAL, M_HANDLES, M_ITERS, M_MS, M_EVERY, M_PROGRESS, M_KGUESS, M_POLISH,
+       M_COUNT };
 
 static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     CTL_GLOBAL_OPTS,
@@ -137,6 +138,8 @@ static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     {"progress", 1, CTL_PROGRESS_HELP},
     {"kelvinlet-guess", 0, "--kelvinlet-guess  start the solver from the Kelvinlet field of the "
                            "handles' move"},
+    {"polish", 0, "--polish           after ADMM, polish by projected Newton to a relative KKT "
+                  "residual of 1e-9 (tet meshes: arap, acap, neohookean)"},
 };
 
 static const char *status_name(unsigned s)
@@ -244,7 +247,8 @@ static int run_move(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     ctl_progress_init(&pr, ctx->prog, cmd->name, pmode, stderr);
     df_client_set_event_callback(c, ctl_progress_event, &pr);
     m.options = (ctl_progress_wanted(&pr) ? DF_WORK_OPT_PROGRESS : 0) |
-                (a->val[M_KGUESS] ? DF_WORK_OPT_KELVINLET_GUESS : 0);
+                (a->val[M_KGUESS] ? DF_WORK_OPT_KELVINLET_GUESS : 0) |
+                (a->val[M_POLISH] ? DF_WORK_OPT_POLISH : 0);
     rc = df_client_handles_move(c, &m, &r, &e);
     ctl_progress_finish(&pr);
     free(targets);
@@ -287,7 +291,7 @@ const ctl_cmd ctl_cmds_handles[] = {
      1, run_handles},
     {"move",
      "move SESSION --targets FILE [--handles FILE] [--max-iters N] [--max-ms MS]\n"
-     "       [--progress-every N] [--progress MODE] [--kelvinlet-guess]",
+     "       [--progress-every N] [--progress MODE] [--kelvinlet-guess] [--polish]",
      "Move the handles to their targets; waits for the final iterate and prints iterations, "
      "residual, objective.",
      MOVE_OPTS, M_COUNT, 1, run_move},

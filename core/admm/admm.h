@@ -278,6 +278,108 @@ void df_admm_get_stats(const df_admm *s, df_admm_stats *out);
 /* Copies the solver's degenerate-element counts (header comment). NULL-safe (zeroes `out`). */
 void df_admm_get_degenerate(const df_admm *s, df_admm_degenerate *out);
 
+/* ---- second-order polish (core/admm/admm_newton.c) ----
+ *
+ * df_admm_polish: after ADMM has found the support (the vertices that moved), minimizes the same
+ * objective E(V) = E_elastic(V) + sum_i w a_i ||V_i - Vrest_i||_SC-L1 by projected Newton on the
+ * moved set, to a tight KKT residual (ADMM alone converges only linearly and stalls for
+ * Neo-Hookean). Covered: tet meshes with ARAP, ACAP or NEOHOOKEAN (per-element energies). Not
+ * covered (DF_EUNSUPPORTED): triangle / polyline meshes (spokes-and-rims ARAP / ACAP, CLOTH,
+ * POLYLINE).
+ *
+ * Variables. Handles stay at their targets. Vertices of degenerate elements only (followers, a_i
+ * = 0 and no energy) are placed after the polish as df_admm_run does. Every other vertex is either
+ *   free  (the support): V_i is polished; initially the vertices with |Z_i| > support_tol (ADMM's
+ *         exactly sparse copy of V - Vrest; support_tol 0: Z_i != 0), every vertex when w a_i = 0
+ *         (w = 0: full space), and affine vertices whose rest position violates their constraint;
+ *   rest: V_i = Vrest_i exactly (the ADMM result's V_i, off rest by the primal residual only, is
+ *         snapped back first; Neo-Hookean: the vertices of an element that snapping would invert
+ *         keep ADMM's positions and join the support instead).
+ * Affine-constrained vertices are polished in the null space of their constraint rows (Newton
+ * steps projected per vertex), so A V_t = b holds as after ADMM (to roundoff).
+ *
+ * Newton model per iteration: the element Hessians d2E_e / dV2 = vol_e G_e^T (d2Psi/dF2) G_e plus
+ * the SC-L1 term's 3x3 blocks w a_i [(1 - r/s)/r (I - n n^T) - (1/s) n n^T] (r = |V_i - Vrest_i|
+ * < s, n the direction; 0 beyond s) on the free set. The exact Hessian is tried first (sparse
+ * Cholesky, CHOLMOD, symbolic analysis cached in the solver for the same support); when it is not
+ * positive definite the model is projected: each element's 9x9 d2Psi/dF2 with its negative
+ * eigenvalues clamped to 0 (Neo-Hookean: Jacobi eigen-decomposition when its Cholesky fails;
+ * ARAP / ACAP: the analytic twist-mode eigenvalues 1 - 2 k / (sg_a + sg_b), k = 1 or tr S / 3) and
+ * the SC-L1 term's concave radial curvature -w a_i / s dropped (left to the line search); a still
+ * singular model gets a growing diagonal shift. Step: Neo-Hookean steps stop short of inversion by
+ * a fraction to the boundary (0.9 of the largest step keeping every det F_e > 0, exact cubic in
+ * the step), then backtracking (halving, Armijo c = 1e-4) on the true objective; a step whose
+ * predicted and actual changes are both below 1e-12 |E| (roundoff) is accepted as is.
+ *
+ * KKT residual (relative, DF_ADMM_POLISH_KKT): with g the gradient of E (elastic + SC-L1, projected
+ * per affine vertex), g_el its elastic part,
+ *   r_free = sqrt(sum_{i free} |g_i|^2),
+ *   r_rest = sqrt(sum_{i rest} max(0, |g_el,i| - w a_i)^2)   (subgradient condition at V_i = Vrest_i),
+ *   scale  = sqrt(sum_{i free or rest} m_i^2), m_i = sum over the terms touching i (each element
+ *            with a corner at i, the SC-L1 term of i) of the magnitude of that term's gradient at i,
+ *   kkt    = sqrt(r_free^2 + r_rest^2) / scale            (0 when both are 0)
+ * i.e. the net force relative to the forces that balance there (invariant to the length unit and
+ * the energy scale). A rest vertex violating the subgradient condition wants to move: the support
+ * grows (the worst violators, >= 0.1 x the largest violation, get a first-order step off rest) and
+ * Newton continues; free vertices within 0.1 s of rest whose elastic gradient satisfies the
+ * subgradient condition (they would stay at rest) are snapped back to rest when that does not
+ * raise E (else the same with the distance threshold / 10, down to 1e-7 s); free vertices within
+ * 1e-3 s of rest that violate it (they want out) but do not point along -g_el,i are re-aimed: moved
+ * to rest + t (-g_el,i / |g_el,i|) as a new support vertex (when E decreases). `violations` counts
+ * the rest vertices with max(0, |g_el,i| - w a_i) > 1e-3 tol scale. */
+#define DF_ADMM_POLISH_HIST 64       /* per-iteration history kept in df_admm_polish_result */
+#define DF_ADMM_POLISH_MAX_ITERS 10000
+
+typedef struct df_admm_polish_params {
+    int max_iters;         /* Newton iterations; <= 0: 50 (at most DF_ADMM_POLISH_MAX_ITERS) */
+    double tol;            /* stop when kkt < tol; <= 0: 1e-9 */
+    double support_tol;    /* initial support: |Z_i| > support_tol (mesh units); 0 (default): Z_i != 0 */
+    int no_grow;           /* 1: never add rest vertices (violations are only reported) */
+} df_admm_polish_params;
+
+typedef struct df_admm_polish_result {
+    int iterations;        /* Newton steps taken */
+    int converged;         /* 1 when kkt < tol at the end */
+    double objective_admm; /* E at the solver's positions before the polish */
+    double objective;      /* E after (elastic + locality) */
+    double elastic, locality;
+    double kkt;            /* final relative KKT residual (header comment) */
+    double kkt_free, kkt_rest; /* r_free / scale, r_rest / scale */
+    double scale;          /* the force scale (energy / length) */
+    int32_t support;       /* free (polished) vertices at the end */
+    int32_t added;         /* rest vertices moved into the support (subgradient violations) */
+    int32_t removed;       /* free vertices snapped back to rest */
+    int32_t violations;    /* rest vertices still violating the subgradient condition at the end */
+    int projected;         /* iterations whose exact Hessian was not positive definite */
+    int shifted;           /* iterations that needed a diagonal shift on top of the projection */
+    int line_search_fail;  /* 1 when the last line search found no decrease (stopped there) */
+    long analyses, factorizations; /* CHOLMOD calls of this polish */
+    int hist_n;            /* entries in the history: min(iterations + 1, DF_ADMM_POLISH_HIST) */
+    double hist_objective[DF_ADMM_POLISH_HIST]; /* [0]: start (after snapping), [k]: after step k */
+    double hist_kkt[DF_ADMM_POLISH_HIST];
+    double hist_time[DF_ADMM_POLISH_HIST];      /* seconds since the call began */
+    double t_assemble, t_factor, t_line, t_total; /* seconds */
+} df_admm_polish_result;
+
+/* Polishes the solver's current positions (df_admm_positions) as described above and makes the
+ * result the solver's positions as df_admm_set_positions does (ADMM state of the changed vertices
+ * restarted; the next df_admm_run continues from the polished shape). `params` may be NULL
+ * (defaults); `res` may be NULL. Not converging within max_iters is not an error (res->converged
+ * 0). Errors: DF_EINVAL (NULL solver, max_iters > DF_ADMM_POLISH_MAX_ITERS, NaN or negative tol /
+ * support_tol), DF_EUNSUPPORTED (not a tet mesh with ARAP, ACAP or NEOHOOKEAN), DF_ESTATE (handles
+ * not at their requested targets, e.g. damped Neo-Hookean steps pending: run ADMM further first; or
+ * an inverted element in the start shape), DF_ENOMEM, DF_EINTERNAL (CHOLMOD failure); the solver is
+ * unchanged on error. Thread: as df_admm_run (OpenMP inside, the solver used by one thread). */
+int df_admm_polish(df_admm *s, const df_admm_polish_params *params, df_admm_polish_result *res,
+                   df_error *err);
+
+/* The relative KKT residual of DF_ADMM_POLISH_KKT (above) at arbitrary positions V (nv x 3; handles
+ * and affine rows are not checked), with the free set = the vertices off rest (V_i != Vrest_i) or
+ * with w a_i = 0, the rest set = the others, handles and followers excluded: for comparing ADMM's
+ * iterates with the polish. Errors: DF_EINVAL (NULL, NaN), DF_EUNSUPPORTED (as df_admm_polish),
+ * DF_ESTATE (an inverted Neo-Hookean element at V), DF_ENOMEM. Positions unchanged. */
+int df_admm_kkt(df_admm *s, const double *V, double *kkt, df_error *err);
+
 /* Frees the solver. NULL-safe. */
 void df_admm_free(df_admm *s);
 

@@ -337,6 +337,7 @@ void df_admm_get_stats(const df_admm *s, df_admm_stats *out)
 void df_admm_free(df_admm *s)
 {
     if (!s) return;
+    admm_polish_free(s);
     admm_free_system(s);
     if (s->cc_started) cholmod_finish(&s->cc);
     admm_free_operators(s);

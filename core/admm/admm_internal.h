@@ -103,6 +103,7 @@ struct df_admm {
     double E_last;           /* objective of Vout, NAN when unknown */
     double el_last, lo_last; /* its elastic and locality parts, NAN when unknown */
     admm_anderson aa;
+    struct admm_polish_cache *polish; /* df_admm_polish's CHOLMOD pattern/analysis (admm_newton.c) */
 };
 
 /* admm_setup.c: operators for the current Vrest (element gradients, spokes and rims, a_i,
@@ -155,6 +156,9 @@ int admm_aa_init(admm_anderson *aa, int m, int64_t n);
 void admm_aa_free(admm_anderson *aa);
 void admm_aa_reset(admm_anderson *aa);
 int admm_aa_step(admm_anderson *aa, const double *x_before, double *state);
+
+/* admm_newton.c: frees the polish cache (NULL-safe) */
+void admm_polish_free(df_admm *s);
 
 /* admm_params.c */
 int admm_validate_params(const df_admm_params *p, df_error *err);

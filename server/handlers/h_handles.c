@@ -399,6 +399,11 @@ static int move_setup(df_job *j)
                             r->mv.n_targets, hs->nh);
     int rc = targets_check(s, hs, r->mv.targets, &j->err);
     if (rc != DF_OK) return rc;
+    if ((r->mv.options & DF_WORK_OPT_POLISH) &&
+        (s->mesh.kind != DF_MESH_TET || hs->params.energy == DF_ADMM_CLOTH ||
+         hs->params.energy == DF_ADMM_POLYLINE))
+        return df_error_set(&j->err, DF_EUNSUPPORTED, "handles_move: option POLISH needs a tet "
+                            "mesh with the arap, acap or neohookean energy; nothing changed");
     if (!hs->solver) { /* evicted: rebuilt into the change, cached by the commit */
         rc = build_solver(s, hs, &j->change.solver, &r->work, &j->err);
         if (rc != DF_OK) return rc;
@@ -420,6 +425,35 @@ static int move_setup(df_job *j)
     r->uf_prev = s->uf; /* its iterates are encoded one from the other (publish_iterate) */
     r->version = atomic_load(&s->version);
     return rc;
+}
+
+/* Option POLISH (PROTOCOL.md 4.16): projected Newton on the moved set after the ADMM iterations
+ * (df_admm_polish with its defaults: relative KKT residual 1e-9, at most 50 steps), in the move's
+ * last slice. Skipped, the move ending as ADMM left it, when the polish's start is not valid
+ * (DF_ESTATE: handles not on their targets yet, damped Neo-Hookean steps pending). The result then
+ * reports the polish: iterations + its Newton steps, its objective, its KKT residual; converged
+ * when that is below its tolerance, else budget. */
+static int polish_move(df_job *j)
+{
+    hs_req *r = j->body;
+    df_admm_polish_result pr;
+    df_error perr;
+    int rc = df_admm_polish(r->solver, NULL, &pr, &perr);
+    if (rc == DF_ESTATE) {
+        df_log(DF_LOG_INFO, "session %llu: move polish skipped: %s",
+               (unsigned long long)j->s->id, perr.msg);
+        return DF_OK;
+    }
+    if (rc != DF_OK) {
+        j->err = perr;
+        return rc;
+    }
+    r->res.iterations += pr.iterations;
+    r->res.objective = pr.objective;
+    r->res.residual = pr.kkt;
+    r->res.converged = pr.converged;
+    r->status = pr.converged ? DF_MOVE_CONVERGED : DF_MOVE_BUDGET;
+    return DF_OK;
 }
 
 /* Work of HANDLES_MOVE (one time slice): reads the session, runs the solver (the handle set's
@@ -475,6 +509,10 @@ static void move_work(df_job *j)
     else if (r->res.converged) r->status = DF_MOVE_CONVERGED;
     else if (r->res.stop == DF_ADMM_STOP_CALLBACK) r->status = DF_MOVE_SUPERSEDED;
     else r->status = DF_MOVE_BUDGET;
+    if (rc == DF_OK && (r->mv.options & DF_WORK_OPT_POLISH) && r->status != DF_MOVE_SUPERSEDED) {
+        rc = polish_move(j);
+        if (rc != DF_OK) r->status = DF_MOVE_FAILED;
+    }
     j->change.move_ms = (double)(uv_hrtime() - r->t0) / 1e6;
     int prc = publish_iterate(j, df_admm_positions(r->solver), r->res.iterations,
                               r->res.objective, r->res.residual, r->status, 1);

@@ -247,8 +247,8 @@ ENUM_FIELDS = [
     ("4.3 auth", "method", "AuthMethod", False, ()),
     ("4.36", "mode", "AccessMode", False, ()),
     ("4.35", "flags", "AccessFlag", True, ()),
-    ("4.12", "options", "WorkOpt", True, ("KELVINLET_GUESS",)),  # handle_move only
-    ("4.15", "options", "WorkOpt", True, ("KELVINLET_GUESS",)),  # handle_move only
+    ("4.12", "options", "WorkOpt", True, ("KELVINLET_GUESS", "POLISH")),  # handle_move only
+    ("4.15", "options", "WorkOpt", True, ("KELVINLET_GUESS", "POLISH")),  # handle_move only
     ("4.16", "options", "WorkOpt", True, ()),
     ("4.37", "stage", "WorkStage", False, ()),
     ("4.38", "flags", "PeerFlag", True, ()),

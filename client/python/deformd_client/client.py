@@ -813,14 +813,17 @@ class Client(PollMixin):
                      max_iters: int = 0, max_ms: int = 0, progress_every: int = 0,
                      timeout: Optional[float] = None,
                      progress: Optional["ProgressFn"] = None,
-                     kelvinlet_guess: bool = False) -> m.MoveResult:
+                     kelvinlet_guess: bool = False, polish: bool = False) -> m.MoveResult:
         """Moves the handles to `targets` (one xyz per handle) and waits for the final result;
         progress iterates (and displacement frames) are queued as events. progress: a callback
         for the "solve" stage (iterations of the budget) and a solver rebuild ("factorize"); see
         the module doc. kelvinlet_guess: the solver starts from the Kelvinlet field of the
-        handles' move (option bit KELVINLET_GUESS, PROTOCOL.md 4.16)."""
+        handles' move (option bit KELVINLET_GUESS, PROTOCOL.md 4.16). polish: after ADMM, a
+        projected-Newton polish to a relative KKT residual of 1e-9 (option bit POLISH; tet
+        meshes with arap, acap or neohookean; the result's residual is then its KKT residual)."""
         opts = (pg.WORK_OPT_PROGRESS if progress is not None else 0) | (
-            int(m.WorkOpt.KELVINLET_GUESS) if kelvinlet_guess else 0)
+            int(m.WorkOpt.KELVINLET_GUESS) if kelvinlet_guess else 0) | (
+            int(m.WorkOpt.POLISH) if polish else 0)
         rid = self.send(m.HANDLES_MOVE, m.encode_handle_move(
             session_id, targets, max_iters, max_ms, progress_every, opts or None))
         return m.decode_move_result(self._wait_with_progress(rid, progress, timeout))

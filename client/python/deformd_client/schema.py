@@ -388,6 +388,7 @@ class WorkOpt(IntFlag):
     """handles / handle_move `options` (optional trailing u32)."""
     PROGRESS = 1 << 0  # WORK_PROGRESS events of this request
     KELVINLET_GUESS = 1 << 1  # handle_move: seed ADMM with the Kelvinlet guess
+    POLISH = 1 << 2  # handle_move: projected Newton after ADMM (df_admm_polish)
 
 
 class StreamEnc(IntFlag):
