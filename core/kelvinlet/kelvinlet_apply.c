@@ -390,13 +390,21 @@ static void integrate_block(const fplan *plans, int moving, int steps, int rk4, 
     blk x0[3] __attribute__((aligned(64))), d[3] __attribute__((aligned(64)));
     blk pos[3] __attribute__((aligned(64))), k[3] __attribute__((aligned(64)));
     blk acc[3] __attribute__((aligned(64)));
-    for (int j = 0; j < BLOCK; j++) {
-        int jj = j < cnt ? j : cnt - 1;     /* pad with the last point */
-        for (int a = 0; a < 3; a++) {
-            x0[a][j] = in[3 * jj + a];
-            d[a][j] = 0.0f;
+    if (cnt == BLOCK) {                     /* full block: a vectorized transpose */
+#pragma omp simd
+        for (int j = 0; j < BLOCK; j++) {
+            x0[0][j] = in[3 * j];
+            x0[1][j] = in[3 * j + 1];
+            x0[2][j] = in[3 * j + 2];
+        }
+    } else {
+        for (int j = 0; j < BLOCK; j++) {
+            int jj = j < cnt ? j : cnt - 1; /* pad with the last point */
+            for (int a = 0; a < 3; a++)
+                x0[a][j] = in[3 * jj + a];
         }
     }
+    memset(d, 0, sizeof d);
     for (int st = 0; st < steps; st++) {
         const fplan *pl = moving ? &plans[st] : &plans[0];
         if (!rk4) {
@@ -433,9 +441,24 @@ static void integrate_block(const fplan *plans, int moving, int steps, int rk4, 
                 d[a][j] += acc[a][j] * (1.0f / 6.0f);
         }
     }
-    for (int j = 0; j < cnt; j++)
-        for (int a = 0; a < 3; a++)
-            out[3 * j + a] = want_disp ? d[a][j] : x0[a][j] + d[a][j];
+    if (!want_disp)
+        for (int a = 0; a < 3; a++) {
+#pragma omp simd
+            for (int j = 0; j < BLOCK; j++)
+                d[a][j] += x0[a][j];
+        }
+    if (cnt == BLOCK) {
+#pragma omp simd
+        for (int j = 0; j < BLOCK; j++) {
+            out[3 * j] = d[0][j];
+            out[3 * j + 1] = d[1][j];
+            out[3 * j + 2] = d[2][j];
+        }
+    } else {
+        for (int j = 0; j < cnt; j++)
+            for (int a = 0; a < 3; a++)
+                out[3 * j + a] = d[a][j];
+    }
 }
 
 /* ---- drivers ---------------------------------------------------------------------------- */
