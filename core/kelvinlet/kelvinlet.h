@@ -203,9 +203,11 @@ typedef struct df_kelvinlet_pins {
     int flags;               /* DF_KELVINLET_PIN_* bit set, non-zero              */
     double radius, ratio, nu;/* kernel of the pinned loads (same rules as brushes) */
     int order;
-    int threads;             /* OpenMP threads of the K_pp assembly (create/update):
+    int threads;             /* OpenMP threads of the K_pp assembly and LU (create/update):
                                 0 = OpenMP's default, n > 0 = at most n, 1 = serial;
-                                not part of the pinned set's identity */
+                                fewer on an oversubscribed machine (OpenMP dynamic
+                                adjustment; libgomp: CPUs minus the 15-minute load
+                                average); not part of the pinned set's identity */
 } df_kelvinlet_pins;
 
 /* Opaque solver; not thread-safe (one per session/stroke owner). Every other function of this
@@ -217,6 +219,9 @@ typedef struct df_kelvinlet_constraints df_kelvinlet_constraints;
  * LU's trailing updates are shared by the same team, OpenBLAS runs on one thread meanwhile
  * (its process-wide thread count is lowered to 1 for the call and restored), so its pool and
  * the OpenMP team no longer compete, and the factors are the same bits on any thread count.
+ * The team is trimmed on an oversubscribed machine (the calling thread's OpenMP dynamic
+ * adjustment is enabled for the call and restored): a team member waiting for a core made
+ * the 2-thread set-up slower than the 1-thread one.
  * Errors: DF_EINVAL (bad numbers, n = 0, flags 0), DF_ELIMIT (n > MAX_PINS), DF_ENOMEM,
  * DF_ESINGULAR (duplicated / coincident pins or numerically singular K_pp); *out untouched. */
 int df_kelvinlet_constraints_create(const df_kelvinlet_pins *pins, df_kelvinlet_constraints **out,
