@@ -110,6 +110,9 @@ static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *s
         o->kT = (float)(4.0 * b - 2.0 * a); /* trace: (4b - 2a)(sq + xq2) t r              */
     }
     o->lcoef = (float)(b - a);
+    /* y_i = del_i / (s + eps_1^2) <= del_i / eps_1^2 = (eps_i / eps_1)^2 - 1 */
+    o->lsmall = k->dim == 2 && (k->order == 2 || k->order == 3)
+                && k->eps[k->order - 1] * k->eps[k->order - 1] / x0 - 1.0 <= LSMALL_Y;
 }
 
 static int build_plan(const df_kelvinlet_prepared *p, double h, fplan *pl, df_error *err)
@@ -313,14 +316,14 @@ static inline __attribute__((always_inline)) void eval_block(const fplan *pl, bl
         if (S->dim == 2) {
             if (!S->affine) {
                 switch (S->order) {
-                case 1: grab2(S, 1, p, u); break;
-                case 2: grab2(S, 2, p, u); break;
-                case 3: grab2(S, 3, p, u); break;
-                case 4: grab2(S, 4, p, u); break;
-                case 5: grab2(S, 5, p, u); break;
-                case 6: grab2(S, 6, p, u); break;
-                case 7: grab2(S, 7, p, u); break;
-                default: grab2(S, 8, p, u); break;
+                case 1: grab2(S, 1, 0, p, u); break;
+                case 2: S->lsmall ? grab2(S, 2, 1, p, u) : grab2(S, 2, 0, p, u); break;
+                case 3: S->lsmall ? grab2(S, 3, 1, p, u) : grab2(S, 3, 0, p, u); break;
+                case 4: grab2(S, 4, 0, p, u); break;
+                case 5: grab2(S, 5, 0, p, u); break;
+                case 6: grab2(S, 6, 0, p, u); break;
+                case 7: grab2(S, 7, 0, p, u); break;
+                default: grab2(S, 8, 0, p, u); break;
                 }
             } else {
                 switch (S->order) {
@@ -390,13 +393,21 @@ static void integrate_block(const fplan *plans, int moving, int steps, int rk4, 
     blk x0[3] __attribute__((aligned(64))), d[3] __attribute__((aligned(64)));
     blk pos[3] __attribute__((aligned(64))), k[3] __attribute__((aligned(64)));
     blk acc[3] __attribute__((aligned(64)));
-    for (int j = 0; j < BLOCK; j++) {
-        int jj = j < cnt ? j : cnt - 1;     /* pad with the last point */
-        for (int a = 0; a < 3; a++) {
-            x0[a][j] = in[3 * jj + a];
-            d[a][j] = 0.0f;
+    if (cnt == BLOCK) {                     /* full block: a vectorized transpose */
+#pragma omp simd
+        for (int j = 0; j < BLOCK; j++) {
+            x0[0][j] = in[3 * j];
+            x0[1][j] = in[3 * j + 1];
+            x0[2][j] = in[3 * j + 2];
+        }
+    } else {
+        for (int j = 0; j < BLOCK; j++) {
+            int jj = j < cnt ? j : cnt - 1; /* pad with the last point */
+            for (int a = 0; a < 3; a++)
+                x0[a][j] = in[3 * jj + a];
         }
     }
+    memset(d, 0, sizeof d);
     for (int st = 0; st < steps; st++) {
         const fplan *pl = moving ? &plans[st] : &plans[0];
         if (!rk4) {
@@ -433,9 +444,24 @@ static void integrate_block(const fplan *plans, int moving, int steps, int rk4, 
                 d[a][j] += acc[a][j] * (1.0f / 6.0f);
         }
     }
-    for (int j = 0; j < cnt; j++)
-        for (int a = 0; a < 3; a++)
-            out[3 * j + a] = want_disp ? d[a][j] : x0[a][j] + d[a][j];
+    if (!want_disp)
+        for (int a = 0; a < 3; a++) {
+#pragma omp simd
+            for (int j = 0; j < BLOCK; j++)
+                d[a][j] += x0[a][j];
+        }
+    if (cnt == BLOCK) {
+#pragma omp simd
+        for (int j = 0; j < BLOCK; j++) {
+            out[3 * j] = d[0][j];
+            out[3 * j + 1] = d[1][j];
+            out[3 * j + 2] = d[2][j];
+        }
+    } else {
+        for (int j = 0; j < cnt; j++)
+            for (int a = 0; a < 3; a++)
+                out[3 * j + a] = d[a][j];
+    }
 }
 
 /* ---- drivers ---------------------------------------------------------------------------- */

@@ -176,7 +176,14 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
     if (!t->pts || !t->lu || !t->ipiv)
         return df_error_set(err, DF_ENOMEM, "kelvinlet constraints: out of memory (%zu DoF)", m);
     memcpy(t->pts, pins->points, 3 * pins->n * sizeof *t->pts);
-    /* Column-major: column (pin q, dof c) holds the functionals at every pin p. */
+    /* Column-major: column (pin q, dof c) holds the functionals at every pin p. The assembly
+     * and the LU let OpenMP trim their team on an oversubscribed machine (dynamic adjustment,
+     * this thread's setting only, restored below): a team member waiting for a core made the
+     * 2-thread set-up slower than the 1-thread one under load. The bits do not depend on it. */
+#ifdef _OPENMP
+    const int dyn = omp_get_dynamic();
+    omp_set_dynamic(1);
+#endif
     const int nt = assembly_threads(pins);
 #pragma omp parallel for schedule(dynamic, 4) if (pins->n >= 32 && nt > 1) num_threads(nt)
     for (size_t col = 0; col < m; col++) {
@@ -191,6 +198,9 @@ static int factorize(const df_kelvinlet_pins *pins, const df_kelvinlet_kernel *k
     double anorm = LAPACKE_dlange(LAPACK_COL_MAJOR, '1', t->m, t->m, t->lu, t->m);
     /* the LU on the assembly's team, OpenBLAS on one thread (kelvinlet_lu.c) */
     lapack_int info = dfk_lu_factor(t->m, t->lu, t->ipiv, nt);
+#ifdef _OPENMP
+    omp_set_dynamic(dyn);
+#endif
     t->nfact++;
     double rcond = 0.0;
     dfk_blas_serial_begin();

@@ -280,7 +280,8 @@ static void test_singular_and_unsupported(void **state)
 }
 
 /* pins.threads: the K_pp assembly on 1 thread (and on 2) gives the loads of the default team bit
- * for bit, and the call leaves the process's OpenMP setting and OpenBLAS thread count alone
+ * for bit, and the call leaves the OpenMP settings (thread count, dynamic adjustment) and the
+ * OpenBLAS thread count alone
  * (the LU runs with OpenBLAS on one thread and restores the count, also on a refused set). */
 static void test_pin_threads_do_not_change_bits(void **state)
 {
@@ -296,6 +297,7 @@ static void test_pin_threads_do_not_change_bits(void **state)
     df_kelvinlet_constraints_free(cs);
 #ifdef _OPENMP
     int nt = omp_get_max_threads();
+    omp_set_dynamic(0);   /* create enables dynamic adjustment for its own call only */
 #endif
     openblas_set_num_threads(2);
     int nb = openblas_get_num_threads();
@@ -307,6 +309,7 @@ static void test_pin_threads_do_not_change_bits(void **state)
         assert_memory_equal(f.ext, ref.ext, ref.nsrc * sizeof *ref.ext);
 #ifdef _OPENMP
         assert_int_equal(omp_get_max_threads(), nt);
+        assert_int_equal(omp_get_dynamic(), 0);
 #endif
         assert_int_equal(openblas_get_num_threads(), nb);
         df_kelvinlet_prepared_free(&f);
