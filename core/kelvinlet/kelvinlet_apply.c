@@ -110,9 +110,6 @@ static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *s
         o->kT = (float)(4.0 * b - 2.0 * a); /* trace: (4b - 2a)(sq + xq2) t r              */
     }
     o->lcoef = (float)(b - a);
-    /* y_i = del_i / (s + eps_1^2) <= del_i / eps_1^2 = (eps_i / eps_1)^2 - 1 */
-    o->lsmall = k->dim == 2 && (k->order == 2 || k->order == 3)
-                && k->eps[k->order - 1] * k->eps[k->order - 1] / x0 - 1.0 <= LSMALL_Y;
 }
 
 static int build_plan(const df_kelvinlet_prepared *p, double h, fplan *pl, df_error *err)
@@ -316,14 +313,14 @@ static inline __attribute__((always_inline)) void eval_block(const fplan *pl, bl
         if (S->dim == 2) {
             if (!S->affine) {
                 switch (S->order) {
-                case 1: grab2(S, 1, 0, p, u); break;
-                case 2: S->lsmall ? grab2(S, 2, 1, p, u) : grab2(S, 2, 0, p, u); break;
-                case 3: S->lsmall ? grab2(S, 3, 1, p, u) : grab2(S, 3, 0, p, u); break;
-                case 4: grab2(S, 4, 0, p, u); break;
-                case 5: grab2(S, 5, 0, p, u); break;
-                case 6: grab2(S, 6, 0, p, u); break;
-                case 7: grab2(S, 7, 0, p, u); break;
-                default: grab2(S, 8, 0, p, u); break;
+                case 1: grab2(S, 1, p, u); break;
+                case 2: grab2(S, 2, p, u); break;
+                case 3: grab2(S, 3, p, u); break;
+                case 4: grab2(S, 4, p, u); break;
+                case 5: grab2(S, 5, p, u); break;
+                case 6: grab2(S, 6, p, u); break;
+                case 7: grab2(S, 7, p, u); break;
+                default: grab2(S, 8, p, u); break;
                 }
             } else {
                 switch (S->order) {

@@ -34,8 +34,6 @@ typedef struct fsrc {
     float K[9], D[9], t;   /* affine F split: skew K, symmetric traceless D, trace/dim t */
     float kK, kD1, kD2, kDq, kT; /* affine coefficients (see affine3 / grab2, affine2)   */
     float lcoef;           /* 2D: (b - a) sum_i w_i ln(s + eps_i^2)                     */
-    int lsmall;            /* 2D, orders 2-3: every y_i = del_i / (s + eps_1^2) <= LSMALL_Y,
-                              so ln(1 + y_i) needs no range reduction (sums2)             */
     double dx[MO], ddel[MO], dw[MO], dwd[MO]; /* the same in double (orders >= 4, 2D)    */
 } fsrc;
 
@@ -102,15 +100,6 @@ DFK_AI double vlog_fin(double e, double f, double t)
     return e * ln2_hi - ((hf - (t * (hf + R) + e * ln2_lo)) - f);
 }
 
-/* ln(1 + y) for 0 <= y <= LSMALL_Y given r ~= 1 / (2 + y): fdlibm's kernel on f = y itself
- * (t = y / (2 + y) <= 0.2, just past the minimax range 0.1716, where the dropped terms stay
- * below 1e-12 of the result), no rounded 1 + y, so no correction term either. */
-#define LSMALL_Y 0.5
-DFK_AI double vlog1p_small(double y, double r)
-{
-    return vlog_fin(0.0, y, y * r);
-}
-
 /* In-place reciprocals of v[0..n) (positive, normal, product within double range) with one
  * division (Montgomery's trick: prefix products, one reciprocal, back-substitution); each
  * result within a few ulp of 1/v[i]. */
@@ -138,8 +127,8 @@ DFK_AI void recip_batch(const int n, double *v)
  * become ln(1 + del_i q_1) = ln(u_i) + (y_i - (u_i - 1)) / u_i for the rounded
  * u_i = 1 + y_i, y_i = del_i q_1 (u_i - 1 is exact: the correction keeps tiny y_i accurate).
  * Two divisions per point whatever the order: one for every q_i, one for the logarithms. */
-DFK_AI void sums2(const fsrc *S, const int order, const int want_lg, const int small, double s,
-                  double *sq, double *sq2, double *xq, double *xq2, double *lg)
+DFK_AI void sums2(const fsrc *S, const int order, const int want_lg, double s, double *sq,
+                  double *sq2, double *xq, double *xq2, double *lg)
 {
     const double x1 = S->dx[0], p1 = s + x1;
     if (order == 1) {
@@ -186,20 +175,6 @@ DFK_AI void sums2(const fsrc *S, const int order, const int want_lg, const int s
     if (!want_lg)
         return;
     double y[MO], u[MO], e[MO], f[MO], den[MO];
-    if (small) {  /* S->lsmall: every y_i in [0, LSMALL_Y] */
-#pragma GCC unroll 8
-        for (int i = 1; i < order; i++) {
-            y[i] = S->ddel[i] * q1;
-            den[i - 1] = 2.0 + y[i];
-        }
-        recip_batch(order - 1, den);
-        double l = 0.0;
-#pragma GCC unroll 8
-        for (int i = 1; i < order; i++)
-            l += S->dw[i] * vlog1p_small(y[i], den[i - 1]);
-        *lg = l;
-        return;
-    }
 #pragma GCC unroll 8
     for (int i = 1; i < order; i++) {
         y[i] = S->ddel[i] * q1;
@@ -217,8 +192,7 @@ DFK_AI void sums2(const fsrc *S, const int order, const int want_lg, const int s
 }
 
 /* 2D grab load (z untouched): u += (lcoef lg + kA3 xq) f + kB sq (r.f) r. */
-DFK_AI void grab2(const fsrc *S, const int order, const int small, blk *restrict p,
-                  blk *restrict u)
+DFK_AI void grab2(const fsrc *S, const int order, blk *restrict p, blk *restrict u)
 {
     const float cx = S->c[0], cy = S->c[1], fx = S->f[0], fy = S->f[1];
     const double lc = S->lcoef, kA3 = S->kA3, kB = S->kB;
@@ -226,7 +200,7 @@ DFK_AI void grab2(const fsrc *S, const int order, const int small, blk *restrict
     for (int j = 0; j < BLOCK; j++) {
         float rx = p[0][j] - cx, ry = p[1][j] - cy;
         double s = (double)rx * rx + (double)ry * ry, sq, sq2, xq, xq2, lg;
-        sums2(S, order, 1, small, s, &sq, &sq2, &xq, &xq2, &lg);
+        sums2(S, order, 1, s, &sq, &sq2, &xq, &xq2, &lg);
         float A = (float)(lc * lg + kA3 * xq);
         float rf = (float)(kB * sq) * (rx * fx + ry * fy);
         u[0][j] += A * fx + rf * rx;
@@ -245,7 +219,7 @@ DFK_AI void affine2(const fsrc *S, const int order, blk *restrict p, blk *restri
     for (int j = 0; j < BLOCK; j++) {
         float rx = p[0][j] - cx, ry = p[1][j] - cy;
         double s = (double)rx * rx + (double)ry * ry, sq, sq2, xq, xq2, lg;
-        sums2(S, order, 0, 0, s, &sq, &sq2, &xq, &xq2, &lg);
+        sums2(S, order, 0, s, &sq, &sq2, &xq, &xq2, &lg);
         double base = sq + xq2;
         float cK = (float)(kK * base), cT = (float)(kT * base * t);
         float cD = (float)(kD1 * sq + kD2 * xq2), cQ = (float)(kDq * sq2);
