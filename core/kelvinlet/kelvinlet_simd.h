@@ -60,14 +60,11 @@ DFK_AI double rsqd(double x)
     return y;
 }
 
-/* ln(x) for a positive normal double, within a few ulp: x = m 2^e with m in [sqrt(1/2),
- * sqrt(2)), ln m = 2 atanh(t), t = (m - 1)/(m + 1), |t| <= 0.1716, as in fdlibm's log (its
- * degree-14 minimax polynomial); e ln 2 in two parts (ln2_hi has 11 trailing zero bits:
- * e * ln2_hi is exact). The exponent becomes a double through the 2^52 trick (integer ops
- * only). Split in two so that callers can share one division among several logarithms and
- * reciprocals (a vector division costs as much as the rest of the logarithm):
- * vlog_split returns f = m - 1 and the exponent e; vlog_fin(e, f, t) with t ~= f / (2 + f). */
-DFK_AI double vlog_split(double x, double *e_out)
+/* ln(x) for a positive normal double, within ~1 ulp: x = m 2^e with m in [sqrt(1/2), sqrt(2)),
+ * ln m = 2 atanh(t), t = (m - 1)/(m + 1), |t| <= 0.1716, as in fdlibm's log (its degree-14
+ * minimax polynomial); e ln 2 in two parts (ln2_hi has 11 trailing zero bits: e * ln2_hi is
+ * exact). The exponent becomes a double through the 2^52 trick (integer ops only). */
+DFK_AI double vlog(double x)
 {
     uint64_t bits, eb, mb;
     memcpy(&bits, &x, sizeof bits);
@@ -79,15 +76,10 @@ DFK_AI double vlog_split(double x, double *e_out)
     double m, e;
     memcpy(&m, &mb, sizeof m);
     memcpy(&e, &eb, sizeof e);
-    *e_out = e - (4503599627370496.0 + 1023.0);                /* the unbiased exponent */
-    return m - 1.0;
-}
-
-DFK_AI double vlog_fin(double e, double f, double t)
-{
+    e -= 4503599627370496.0 + 1023.0;                          /* the unbiased exponent */
     /* fdlibm's split: ln(1 + f) = f - f^2/2 + t (f^2/2 + R), t = f / (2 + f), R ~ 2 t^2/3 +
-     * 2 t^4/5 + ...: f and f^2/2 carry the result, t only the small rest. */
-    double hf = 0.5 * f * f, z = t * t;
+     * 2 t^4/5 + ...: f and f^2/2 carry the result, the rounded division only the small rest. */
+    double f = m - 1.0, hf = 0.5 * f * f, t = f / (2.0 + f), z = t * t;
     /* fdlibm's minimax coefficients (e_log.c Lg1..Lg7): |error| < 2^-58.45 on this range */
     double R = z * (6.666666666666735130e-01 +
                z * (3.999999999940941908e-01 +
@@ -100,94 +92,45 @@ DFK_AI double vlog_fin(double e, double f, double t)
     return e * ln2_hi - ((hf - (t * (hf + R) + e * ln2_lo)) - f);
 }
 
-/* In-place reciprocals of v[0..n) (positive, normal, product within double range) with one
- * division (Montgomery's trick: prefix products, one reciprocal, back-substitution); each
- * result within a few ulp of 1/v[i]. */
-DFK_AI void recip_batch(const int n, double *v)
+/* ln(1 + y), y >= 0, given inv ~= 1/(1 + y): ln(u) of the rounded u = 1 + y plus the
+ * correction (y - (u - 1)) / u of that rounding (u - 1 is exact), accurate for tiny y too. */
+DFK_AI double vlog1p(double y, double inv)
 {
-    double pre[MO + 1];
-    pre[0] = v[0];
-#pragma GCC unroll 16
-    for (int i = 1; i < n; i++)
-        pre[i] = pre[i - 1] * v[i];
-    double r = 1.0 / pre[n - 1];
-#pragma GCC unroll 16
-    for (int i = n - 1; i > 0; i--) {
-        double vi = v[i];
-        v[i] = r * pre[i - 1];
-        r *= vi;
-    }
-    v[0] = r;
+    double u = 1.0 + y;
+    return vlog(u) + (y - (u - 1.0)) * inv;
 }
 
 /* 2D multi-scale sums at squared distance s, in double, with q_i = 1/(s + eps_i^2):
  * sq = sum w q, sq2 = sum w q^2, xq = sum w eps^2 q, xq2 = sum w eps^2 q^2,
- * lg = sum w ln(s + eps^2) (want_lg = 0: lg untouched). For order >= 2 the weights sum to 0
- * and the differences q_i - q_1 = -del_i q_i q_1 are exact in form (as in 3D); ln terms
- * become ln(1 + del_i q_1) = ln(u_i) + (y_i - (u_i - 1)) / u_i for the rounded
- * u_i = 1 + y_i, y_i = del_i q_1 (u_i - 1 is exact: the correction keeps tiny y_i accurate).
- * Two divisions per point whatever the order: one for every q_i, one for the logarithms. */
-DFK_AI void sums2(const fsrc *S, const int order, const int want_lg, double s, double *sq,
-                  double *sq2, double *xq, double *xq2, double *lg)
+ * lg = sum w ln(s + eps^2). For order >= 2 the weights sum to 0 and the differences
+ * q_i - q_1 = -del_i q_i q_1 are exact in form (as in 3D); ln terms become ln(1 + del_i q_1). */
+DFK_AI void sums2(const fsrc *S, const int order, double s, double *sq, double *sq2, double *xq,
+                  double *xq2, double *lg)
 {
-    const double x1 = S->dx[0], p1 = s + x1;
+    const double x1 = S->dx[0], p1 = s + x1, q1 = 1.0 / p1;
     if (order == 1) {
-        if (!want_lg) {
-            const double q1 = 1.0 / p1;
-            *sq = q1;
-            *sq2 = q1 * q1;
-            *xq = x1 * q1;
-            *xq2 = x1 * (q1 * q1);
-            return;
-        }
-        double e, f = vlog_split(p1, &e), v[2] = {p1, 2.0 + f};
-        recip_batch(2, v);
-        const double q1 = v[0];
         *sq = q1;
         *sq2 = q1 * q1;
         *xq = x1 * q1;
         *xq2 = x1 * (q1 * q1);
-        *lg = vlog_fin(e, f, f * v[1]);
+        *lg = vlog(p1);
         return;
     }
-    double q[MO], p[MO];
-#pragma GCC unroll 8
-    for (int i = 0; i < order; i++) {
-        p[i] = s + S->dx[i];
-        q[i] = p[i];
-    }
-    recip_batch(order, q);
-    const double q1 = q[0];
-    double a1 = 0.0, a2 = 0.0, t1 = 0.0, t2 = 0.0;
+    double a1 = 0.0, a2 = 0.0, t1 = 0.0, t2 = 0.0, l = 0.0;
 #pragma GCC unroll 8
     for (int i = 1; i < order; i++) {
-        double qi = q[i];
+        double qi = 1.0 / (s + S->dx[i]);
         double d1 = -S->ddel[i] * qi * q1, d2 = d1 * (qi + q1);
         a1 += S->dw[i] * d1;
         a2 += S->dw[i] * d2;
         t1 += S->dwd[i] * (order >= 3 ? d1 : qi);
         t2 += S->dwd[i] * (order >= 3 ? d2 : qi * qi);
+        l += S->dw[i] * vlog1p(S->ddel[i] * q1, p1 * qi);
     }
     *sq = a1;
     *sq2 = a2;
     *xq = x1 * a1 + t1;
     *xq2 = x1 * a2 + t2;
-    if (!want_lg)
-        return;
-    double y[MO], u[MO], e[MO], f[MO], den[MO];
-#pragma GCC unroll 8
-    for (int i = 1; i < order; i++) {
-        y[i] = S->ddel[i] * q1;
-        u[i] = 1.0 + y[i];
-        f[i] = vlog_split(u[i], &e[i]);
-        den[i - 1] = 2.0 + f[i];
-    }
-    recip_batch(order - 1, den);
-    double l = 0.0;
-#pragma GCC unroll 8
-    for (int i = 1; i < order; i++)   /* 1 / u_i = p_1 q_i */
-        l += S->dw[i] * (vlog_fin(e[i], f[i], f[i] * den[i - 1])
-                         + (y[i] - (u[i] - 1.0)) * (p1 * q[i]));
     *lg = l;
 }
 
@@ -200,7 +143,7 @@ DFK_AI void grab2(const fsrc *S, const int order, blk *restrict p, blk *restrict
     for (int j = 0; j < BLOCK; j++) {
         float rx = p[0][j] - cx, ry = p[1][j] - cy;
         double s = (double)rx * rx + (double)ry * ry, sq, sq2, xq, xq2, lg;
-        sums2(S, order, 1, s, &sq, &sq2, &xq, &xq2, &lg);
+        sums2(S, order, s, &sq, &sq2, &xq, &xq2, &lg);
         float A = (float)(lc * lg + kA3 * xq);
         float rf = (float)(kB * sq) * (rx * fx + ry * fy);
         u[0][j] += A * fx + rf * rx;
@@ -219,7 +162,7 @@ DFK_AI void affine2(const fsrc *S, const int order, blk *restrict p, blk *restri
     for (int j = 0; j < BLOCK; j++) {
         float rx = p[0][j] - cx, ry = p[1][j] - cy;
         double s = (double)rx * rx + (double)ry * ry, sq, sq2, xq, xq2, lg;
-        sums2(S, order, 0, s, &sq, &sq2, &xq, &xq2, &lg);
+        sums2(S, order, s, &sq, &sq2, &xq, &xq2, &lg);
         double base = sq + xq2;
         float cK = (float)(kK * base), cT = (float)(kT * base * t);
         float cD = (float)(kD1 * sq + kD2 * xq2), cQ = (float)(kDq * sq2);
