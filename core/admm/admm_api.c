@@ -258,6 +258,7 @@ int df_admm_set_positions(df_admm *s, const double *V, int32_t *n_changed, df_er
     }
     if (n_changed) *n_changed = changed;
     if (changed == 0) return DF_OK;
+    admm_active_stale(s); /* changed vertices may lie outside the active region */
     if (s->W) /* element duals of elements touching a changed vertex */
         for (int32_t e = 0; e < s->ne; e++) {
             const int32_t *el = s->E + (size_t)e * s->esz;
@@ -338,6 +339,7 @@ void df_admm_free(df_admm *s)
 {
     if (!s) return;
     admm_free_system(s);
+    admm_active_free(s);
     if (s->cc_started) cholmod_finish(&s->cc);
     admm_free_operators(s);
     admm_free_degenerate(s);
