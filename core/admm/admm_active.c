@@ -95,6 +95,11 @@ int admm_act_init(df_admm *s, df_error *err)
         if (!s->act) return df_error_set(err, DF_ENOMEM, "admm_run: out of memory (active set)");
     }
     admm_active *a = s->act;
+    if (!s->cc_started) { /* the whole-mesh system was deferred (admm_active_defers) */
+        cholmod_start(&s->cc);
+        s->cc.print = 0;
+        s->cc_started = 1;
+    }
     a->band = s->p.active_band > 0 ? s->p.active_band : DF_ADMM_ACTIVE_BAND;
     a->check_every = s->p.active_check_every > 0 ? s->p.active_check_every : DF_ADMM_ACTIVE_CHECK;
     size_t nv = (size_t)s->nv, nm = s->family == ADMM_FAM_ELEMENT ? (size_t)s->ne : nv;

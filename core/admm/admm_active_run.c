@@ -326,6 +326,15 @@ static int unsupported(const df_admm *s)
            (s->family == ADMM_FAM_ELEMENT && s->q != 3) || s->deg.followers > 0 || s->deg.at_rest > 0;
 }
 
+int admm_active_defers(const df_admm *s) { return s->p.active && !unsupported(s); }
+
+/* the whole-mesh system for a full run (deferred by df_admm_create in active mode) */
+static int full_system(df_admm *s, df_error *err)
+{
+    if (s->L) return DF_OK;
+    return admm_build_system_affine(s, s->aff, s->naff, err);
+}
+
 static int too_big(const df_admm *s) { return s->act->nr > DF_ADMM_ACTIVE_MAX_FRAC * (double)s->nv; }
 
 /* the rest of the call by the full solve (a region too large to pay off) */
@@ -334,7 +343,10 @@ static int finish_full(df_admm *s, const df_admm_budget *budget, double tstart, 
     admm_active *a = s->act;
     a->valid = 0;
     a->st.fallbacks++;
-    if (a->kfhp_dirty) { admm_update_kfhp(s); a->kfhp_dirty = 0; }
+    int rc = full_system(s, err);
+    if (rc) return rc;
+    admm_update_kfhp(s);
+    a->kfhp_dirty = 0;
     df_admm_budget b;
     memset(&b, 0, sizeof(b));
     if (budget) b = *budget;
@@ -347,7 +359,7 @@ static int finish_full(df_admm *s, const df_admm_budget *budget, double tstart, 
     }
     df_admm_result r2;
     a->bypass = 1;
-    int rc = df_admm_run(s, &b, &r2, err);
+    rc = df_admm_run(s, &b, &r2, err);
     a->bypass = 0;
     if (rc) return rc;
     r->iterations += r2.iterations;
@@ -371,7 +383,11 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
 {
     *handled = 0;
     if (s->act && s->act->bypass) return DF_OK;
-    if (!s->act && !(s->act = calloc(1, sizeof(admm_active)))) return DF_OK; /* full solve */
+    if (!s->act && !(s->act = calloc(1, sizeof(admm_active)))) { /* no memory: the full solve */
+        int rc = full_system(s, err);
+        *handled = rc != DF_OK;
+        return rc;
+    }
     admm_active *a = s->act;
     if (unsupported(s)) {
         a->st.fallbacks++;

@@ -153,6 +153,9 @@ double admm_dual_update(df_admm *s);
 int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, int *handled,
                     df_error *err);
 void admm_active_stale(df_admm *s);
+/* 1 when df_admm_create may skip the whole-mesh factorization (params.active and the features
+ * the active mode covers); the full system is then built by the first full run */
+int admm_active_defers(const df_admm *s);
 void admm_active_free(df_admm *s);
 
 /* admm_energy.c: objective pieces at positions V; elastic is +inf for inverted NH elements.
