@@ -13,7 +13,9 @@
 
 void admm_active_stale(df_admm *s)
 {
-    if (s && s->act) s->act->valid = 0;
+    if (!s) return;
+    s->act_dirty = 1;
+    if (s->act) s->act->valid = 0;
 }
 
 static void free_factor(df_admm *s)
@@ -34,7 +36,7 @@ void admm_active_free(df_admm *s)
     free_factor(s);
     free(a->adj_ptr); free(a->adj); free(a->hmap); free(a->in); free(a->depth); free(a->rv);
     free(a->fr); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
-    free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->stamp); free(a->tstamp);
+    free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp);
     free(a->snapU); free(a->snapZ); free(a->snapW); free(a->snapRX); free(a->va);
     free(a);
     s->act = NULL;
@@ -132,6 +134,8 @@ int admm_act_init(df_admm *s, df_error *err)
         for (int32_t e = 0; e < s->ne; e++) a->gam3_all += 3.0 * s->gam[e];
     return DF_OK;
 }
+
+int admm_active_prepare(df_admm *s, df_error *err) { return admm_act_init(s, err); }
 
 static uint32_t next_stamp(admm_active *a, uint32_t *arr, size_t n)
 {
@@ -341,7 +345,21 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
         }
     }
     for (int32_t f = 0; f < a->nrf && !rc; f++) rc |= push(&kff, f, f, s->p.rho);
-    a->ncp = cpl.n;
+    /* couplings to the outside (at rest, constant while the region stands) summed into kout;
+     * those to handles (targets change) kept in the cp list */
+    free(a->kout);
+    a->kout = rc ? NULL : calloc((size_t)a->nrf * 3, sizeof(double));
+    if (!a->kout) rc = 1;
+    int64_t nh = 0;
+    for (int64_t t = 0; t < cpl.n && !rc; t++) {
+        int32_t v = cpl.j[t];
+        if (a->hmap[v] >= 0) {
+            cpl.i[nh] = cpl.i[t]; cpl.j[nh] = v; cpl.v[nh] = cpl.v[t]; nh++;
+            continue;
+        }
+        for (int c = 0; c < 3; c++) a->kout[cpl.i[t] + (size_t)c * a->nrf] += cpl.v[t] * s->Vrest[3 * (size_t)v + c];
+    }
+    a->ncp = nh;
     a->cp_f = cpl.i; a->cp_v = cpl.j; a->cp_val = cpl.v;
     if (rc) {
         free(kff.i); free(kff.j); free(kff.v);
@@ -357,10 +375,20 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
     cholmod_sparse *K = cholmod_triplet_to_sparse(T, (size_t)T->nnz, &s->cc);
     cholmod_free_triplet(&T, &s->cc);
     if (!K) return df_error_set(err, DF_ENOMEM, "admm_run: CHOLMOD out of memory");
+    /* a region is small and refactored as it grows: AMD only (no METIS / nested-dissection
+     * trials) and a simplicial factor (solved with 3 right-hand sides, like the full system's);
+     * the common's settings are restored for the whole-mesh system */
+    int nm = s->cc.nmethods, sn = s->cc.supernodal, ord = s->cc.method[0].ordering;
+    s->cc.nmethods = 1;
+    s->cc.method[0].ordering = CHOLMOD_AMD;
+    s->cc.supernodal = CHOLMOD_SIMPLICIAL;
     a->L = cholmod_analyze(K, &s->cc);
     s->st.analyses++;
+    int ok = a->L && cholmod_factorize(K, a->L, &s->cc);
+    s->cc.nmethods = nm;
+    s->cc.supernodal = sn;
+    s->cc.method[0].ordering = ord;
     if (!a->L) { cholmod_free_sparse(&K, &s->cc); return df_error_set(err, DF_EINTERNAL, "admm_run: cholmod_analyze failed (status %d)", s->cc.status); }
-    int ok = cholmod_factorize(K, a->L, &s->cc);
     s->st.factorizations++;
     cholmod_free_sparse(&K, &s->cc);
     if (!ok || s->cc.status == CHOLMOD_NOT_POSDEF || a->L->minor < a->L->n)
@@ -375,8 +403,10 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
 int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra, df_error *err)
 {
     admm_active *a = s->act;
-    int stale = !a->valid;
-    if (stale) fresh = 1;
+    /* stale: no region yet or the state may be off rest outside it (act_dirty): then everything
+     * outside the new region is put at rest (O(mesh), once); a pristine solver is at rest already */
+    if (!a->valid) fresh = 1;
+    int stale = !a->valid && s->act_dirty;
     int32_t old_n = 0;
     if (fresh) { /* keep the old region in fr (rebuilt below) to snap the vertices leaving it */
         old_n = a->nr;
@@ -423,8 +453,9 @@ int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra,
             if (!a->emark[e]) memset(s->W + 9 * (size_t)e, 0, 9 * sizeof(double));
     if (stale || fresh) { s->E_last = NAN; s->el_last = s->lo_last = NAN; }
     a->valid = 1;
+    s->act_dirty = 0;
     int rc = factor_sub(s, a, err);
-    if (rc) { a->valid = 0; return rc; }
+    if (rc) { admm_active_stale(s); return rc; }
     a->st.region_vertices = a->nr;
     a->st.region_elements = a->nae;
     return admm_act_buffers(s, err);

@@ -33,9 +33,10 @@ typedef struct admm_active {
     /* sub-system on the region's free vertices (region minus handles) */
     int32_t nrf, *rfv;       /* free region vertex list */
     int32_t *rfidx;          /* nv: index in rfv or -1 */
-    int64_t ncp;             /* couplings K(free region vertex, fixed vertex) */
-    int32_t *cp_f, *cp_v;    /* free index, fixed vertex (handle or outside) */
+    int64_t ncp;             /* couplings K(free region vertex, handle) */
+    int32_t *cp_f, *cp_v;    /* free index, handle vertex */
     double *cp_val;
+    double *kout;            /* nrf x 3 (column-major): K(free, outside) Vrest(outside) */
     cholmod_factor *L;
     cholmod_dense *rhs, *sol, *sol_y, *sol_e;
     double rho_fact;         /* rho of the factor */

@@ -81,12 +81,11 @@ static void act_rhs(df_admm *s)
         }
         for (int k = 0; k < 3; k++) {
             size_t o = 3 * (size_t)v + k;
-            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]);
+            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - a->kout[f + (size_t)k * nf];
         }
     }
     for (int64_t t = 0; t < a->ncp; t++) {
-        int32_t h = a->hmap[a->cp_v[t]];
-        const double *p = h >= 0 ? s->target + 3 * (size_t)h : s->Vrest + 3 * (size_t)a->cp_v[t];
+        const double *p = s->target + 3 * (size_t)a->hmap[a->cp_v[t]];
         for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * p[k];
     }
 }
@@ -144,7 +143,6 @@ static int act_global(df_admm *s, df_error *err)
         memset(rhs, 0, (size_t)nf * 3 * sizeof(double));
         for (int64_t t = 0; t < a->ncp; t++) {
             int32_t h = a->hmap[a->cp_v[t]];
-            if (h < 0) continue;
             for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * s->damp_dp[3 * (size_t)h + k];
         }
         int rc = admm_act_solve(s, &x, err);
@@ -341,7 +339,7 @@ static int too_big(const df_admm *s) { return s->act->nr > DF_ADMM_ACTIVE_MAX_FR
 static int finish_full(df_admm *s, const df_admm_budget *budget, double tstart, df_admm_result *r, df_error *err)
 {
     admm_active *a = s->act;
-    a->valid = 0;
+    admm_active_stale(s);
     a->st.fallbacks++;
     int rc = full_system(s, err);
     if (rc) return rc;
@@ -391,7 +389,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     admm_active *a = s->act;
     if (unsupported(s)) {
         a->st.fallbacks++;
-        a->valid = 0;
+        admm_active_stale(s);
         if (a->kfhp_dirty) { admm_update_kfhp(s); a->kfhp_dirty = 0; }
         return DF_OK;
     }
@@ -405,7 +403,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     if (rc) return rc;
     a = s->act;
     if (!a->valid) {
-        admm_act_support(s, 1);
+        admm_act_support(s, s->act_dirty); /* pristine (at rest since create): the handles only */
         a->st.rebuilds++;
         rc = admm_act_build(s, 1, NULL, 0, err);
     } else {
@@ -507,7 +505,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         int32_t nf = admm_act_certify(s);
         if (nf > 0 || admm_act_needs_grow(s)) {
             a->nsup += nf;
-            if (grow(s, nf > 0, err, &rc)) a->valid = 1; /* too big: the next run falls back */
+            (void)grow(s, nf > 0, err, &rc); /* too big: the next run falls back at its start */
         }
     }
     if (r.iterations == 0 && rc == DF_OK) {

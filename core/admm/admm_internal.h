@@ -104,6 +104,8 @@ struct df_admm {
     double el_last, lo_last; /* its elastic and locality parts, NAN when unknown */
     admm_anderson aa;
     struct admm_active *act; /* active-set mode state (admm_active.h), NULL until first used */
+    int act_dirty;           /* the state outside the active region may be off rest (a full run or
+                                set_positions since create / the last region build) */
 };
 
 /* admm_setup.c: operators for the current Vrest (element gradients, spokes and rims, a_i,
@@ -156,6 +158,9 @@ void admm_active_stale(df_admm *s);
 /* 1 when df_admm_create may skip the whole-mesh factorization (params.active and the features
  * the active mode covers); the full system is then built by the first full run */
 int admm_active_defers(const df_admm *s);
+/* builds the active mode's mesh-sized tables (vertex graph, maps) at create: O(mesh), once.
+ * Errors: DF_ENOMEM. */
+int admm_active_prepare(df_admm *s, df_error *err);
 void admm_active_free(df_admm *s);
 
 /* admm_energy.c: objective pieces at positions V; elastic is +inf for inverted NH elements.
