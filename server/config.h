@@ -195,6 +195,8 @@ typedef struct df_server_config {
     char store_path[DF_CONFIG_PATH_MAX];  /* config `store`: "" = the default, "none", a path */
     int durability;              /* 0 full, 1 normal, 2 off (store.h DF_DURABILITY_*) */
     int store_max_mb;            /* store file cap, MiB (0 = none) */
+    int admm_active;             /* 1: handle sets solve in the active-set mode (admm.h
+                                    DF_ADMM_ACTIVE), default 0 */
 } df_server_config;
 
 /* Fills `cfg` with the defaults; the socket path comes from `xdg_runtime_dir` (may be NULL or "",

@@ -58,6 +58,7 @@ static void act_rhs(df_admm *s)
 {
     admm_active *a = s->act;
     const int32_t nf = a->nrf;
+    if (nf == 0) return; /* every region vertex is a handle */
     double *rhs = a->rhs->x;
     const double rho = s->p.rho;
     #pragma omp parallel for schedule(static) num_threads(s->nthreads)
