@@ -14,6 +14,11 @@
 #define ADMM_BUDGET_MARGIN 1.05 /* as admm_run.c */
 #define ADMM_DAMP_HALVINGS 7    /* as admm_damp.c */
 #define ADMM_DAMP_MAX_STALL 2
+/* a region's loops fork threads only when they have this much work: an OpenMP fork/join (a futex
+ * wake-up with the passive wait policy) costs tens of microseconds, a whole light loop over a
+ * small region less */
+#define ACT_PAR_HEAVY 1024      /* elements / cells with a local solve (polar, SVD, prox) */
+#define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
 
 static inline void el_F(const df_admm *s, const double *V, int32_t e, double F[9])
 {
@@ -32,10 +37,10 @@ static void act_local_x(df_admm *s)
 {
     admm_active *a = s->act;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads)
+        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
         for (int32_t k = 0; k < a->nae; k++) admm_local_x_one(s, a->ae[k]);
     } else {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
         for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
     }
 }
@@ -61,7 +66,7 @@ static void act_rhs(df_admm *s)
     if (nf == 0) return; /* every region vertex is a handle */
     double *rhs = a->rhs->x;
     const double rho = s->p.rho;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (nf >= ACT_PAR_LIGHT)
     for (int32_t f = 0; f < nf; f++) {
         int32_t v = a->rfv[f];
         double b[3] = {0, 0, 0};
@@ -95,7 +100,7 @@ static int any_inverted(const df_admm *s)
 {
     const admm_active *a = s->act;
     int bad = 0;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(| : bad)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(| : bad) if (a->nae >= ACT_PAR_LIGHT)
     for (int32_t k = 0; k < a->nae; k++) {
         double F[9];
         el_F(s, s->V, a->ae[k], F);
@@ -187,7 +192,7 @@ static double act_dual(df_admm *s)
     admm_active *a = s->act;
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
             double F[9];
@@ -212,7 +217,7 @@ static double act_elastic(const df_admm *s)
     const double *V = s->Vout;
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             double F[9];
             el_F(s, V, a->ae[k], F);
@@ -220,7 +225,7 @@ static double act_elastic(const df_admm *s)
         }
         return E;
     }
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_HEAVY)
     for (int32_t k = 0; k < a->nae; k++) {
         int32_t i = a->ae[k];
         double R[9];
@@ -297,7 +302,7 @@ static void act_measure(const df_admm *s, double *pri, double *dual)
     }
     if (s->family == ADMM_FAM_ELEMENT) {
         double ra = 0, rb = 0, rc = 0, rd = 0, re = 0;
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : ra, rb, rc, rd, re)
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : ra, rb, rc, rd, re) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t el = a->ae[k];
             const double g = s->gam[el];
