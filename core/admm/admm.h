@@ -151,8 +151,9 @@ typedef struct df_admm_params {
  * feature that falls back) df_admm_create builds no whole-mesh factorization; the first full run
  * builds it. df_admm_stats counts the region analyses, factorizations and solves too.
  * Exactness: converged results equal the full solve's (objective ~1e-14 relative in the tests);
- * a fixed number of iterations is not the same computation as the full solve's (its far field
- * moves by round-off-sized amounts that feed back), so after e.g. 20 iterations the objectives
+ * a fixed number of iterations is not the same computation as the full solve's (there the
+ * global step's decaying response moves the far field a little in every iteration, which feeds
+ * back; it vanishes at convergence), so after e.g. 20 iterations the objectives
  * differ by ~1e-6 relative with the default band and ~1e-8 with 6 rings (make bench:
  * bench_local). */
 #define DF_ADMM_ACTIVE_BAND 3
