@@ -186,6 +186,24 @@ int admm_act_needs_grow(const df_admm *s)
     return 0;
 }
 
+int32_t admm_act_fresh_size(df_admm *s)
+{
+    admm_active *a = s->act;
+    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
+    int32_t qh = 0, qt = 0;
+    for (int32_t k = 0; k < a->nsup; k++)
+        if (a->stamp[a->sup[k]] != g) { a->stamp[a->sup[k]] = g; a->work[qt++] = a->sup[k]; }
+    for (int lev = 0; lev < a->band; lev++) { /* level by level: no distance array needed */
+        int32_t end = qt;
+        for (; qh < end; qh++) {
+            int32_t v = a->work[qh];
+            for (int32_t p = a->adj_ptr[v]; p < a->adj_ptr[v + 1]; p++)
+                if (a->stamp[a->adj[p]] != g) { a->stamp[a->adj[p]] = g; a->work[qt++] = a->adj[p]; }
+        }
+    }
+    return qt;
+}
+
 static void snap_vertex(df_admm *s, int32_t i)
 {
     size_t o = 3 * (size_t)i;

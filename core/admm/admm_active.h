@@ -55,6 +55,8 @@ int admm_act_init(df_admm *s, df_error *err);                 /* allocates s->ac
 int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra, df_error *err);
 /* support scan over the region (or, stale, the whole mesh) into act->sup */
 void admm_act_support(df_admm *s, int whole);
+/* size of the region a fresh build from act->sup would have (support grown by band rings) */
+int32_t admm_act_fresh_size(df_admm *s);
 /* 1 when a support vertex lies within band - 1 rings of the region's edge or outside it */
 int admm_act_needs_grow(const df_admm *s);
 /* far-field certificate: appends the failing fringe vertices to act->sup after its nsup entries

@@ -19,6 +19,8 @@
  * small region less */
 #define ACT_PAR_HEAVY 1024      /* elements / cells with a local solve (polar, SVD, prox) */
 #define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
+/* a run starts from a fresh region when the current one is this many times larger than needed */
+#define ACT_SHRINK 2
 
 static inline void el_F(const df_admm *s, const double *V, int32_t e, double F[9])
 {
@@ -415,7 +417,12 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     } else {
         admm_act_support(s, 0);
         if (admm_act_needs_grow(s)) { a->st.grows++; rc = admm_act_build(s, 0, NULL, 0, err); }
-        else if (a->rho_fact != s->p.rho) rc = admm_act_build(s, 0, NULL, 0, err); /* rho changed: refactor */
+        else if ((int64_t)ACT_SHRINK * admm_act_fresh_size(s) < a->nr) {
+            /* the support shrank (a drag back): rebuild from it; the vertices leaving the region
+             * go exactly to rest (they are off it by no more than the iterations' residual) */
+            a->st.rebuilds++;
+            rc = admm_act_build(s, 1, NULL, 0, err);
+        } else if (a->rho_fact != s->p.rho) rc = admm_act_build(s, 0, NULL, 0, err); /* rho changed: refactor */
     }
     if (rc) return rc;
     if (too_big(s)) {

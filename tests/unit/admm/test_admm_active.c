@@ -2,7 +2,7 @@
  * the element family) and a planar triangle grid (ARAP, spokes and rims), a drag solved in active
  * mode and converged equals the full solve (params.active = 0) within 1e-8 relative objective and
  * 1e-8 positions; the vertices outside the region stay bitwise at rest; the region grows when the
- * handle drags further; with a band of one ring only the far-field certificate can grow the region
+ * handle drags further and shrinks when it comes back; with a band of one ring only the far-field certificate can grow the region
  * and it does; set_positions and reset_rest keep working in active mode (same result as the full
  * solve); affine constraints fall back to the full solve (bit-identical to it); bad parameters are
  * refused. Expected values come from the full solve of the same problem. */
@@ -255,13 +255,26 @@ static void test_region_grows_with_drag(void **state)
     run(act, 20000);
     df_admm_active_stats st1, st2;
     df_admm_get_active_stats(act, &st1);
-    set_drag(full, &sc, 1.5); /* drag further: the support spreads into the band */
-    set_drag(act, &sc, 1.5);
+    set_drag(full, &sc, 2.0); /* drag further: the support spreads into the band */
+    set_drag(act, &sc, 2.0);
     df_admm_result rf = run(full, 20000), ra = run(act, 20000);
     df_admm_get_active_stats(act, &st2);
     assert_true(st2.grows > st1.grows);
     assert_true(st2.region_vertices > st1.region_vertices);
     assert_true(st2.support > st1.support);
+    assert_same(full, act, &rf, &ra, sc.m.nv);
+    check_far_field(act, &sc);
+    /* and back: the support shrinks, the next run rebuilds a smaller region from it */
+    set_drag(full, &sc, 0.2);
+    set_drag(act, &sc, 0.2);
+    run(full, 20000);
+    run(act, 20000);
+    rf = run(full, 20000); /* the first run's end shows the shrunk support, the next shrinks */
+    ra = run(act, 20000);
+    df_admm_active_stats st3;
+    df_admm_get_active_stats(act, &st3);
+    assert_true(st3.rebuilds > st2.rebuilds);
+    assert_true(st3.region_vertices < st2.region_vertices);
     assert_same(full, act, &rf, &ra, sc.m.nv);
     check_far_field(act, &sc);
     df_admm_free(full);
