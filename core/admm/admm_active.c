@@ -37,7 +37,7 @@ void admm_active_free(df_admm *s)
     free(a->adj_ptr); free(a->adj); free(a->hmap); free(a->in); free(a->depth); free(a->rv);
     free(a->fr); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
     free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp);
-    free(a->snapU); free(a->snapZ); free(a->snapW); free(a->snapRX); free(a->va);
+    free(a->va);
     free(a);
     s->act = NULL;
 }
@@ -484,20 +484,10 @@ int admm_act_buffers(df_admm *s, df_error *err)
     admm_active *a = s->act;
     if (a->nr > a->cap_v) {
         int64_t c = a->nr + a->nr / 2;
-        free(a->snapU); free(a->snapZ); free(a->va);
-        a->snapU = malloc((size_t)c * 3 * sizeof(double));
-        a->snapZ = malloc((size_t)c * 3 * sizeof(double));
+        free(a->va);
         a->va = malloc((size_t)c * 3 * sizeof(double));
-        a->cap_v = c;
-        if (!a->snapU || !a->snapZ || !a->va) { a->cap_v = 0; return df_error_set(err, DF_ENOMEM, "admm_run: out of memory (active buffers)"); }
-    }
-    if (s->family == ADMM_FAM_ELEMENT && a->nae > a->cap_e) {
-        int64_t c = a->nae + a->nae / 2;
-        free(a->snapW); free(a->snapRX);
-        a->snapW = malloc((size_t)c * 9 * sizeof(double));
-        a->snapRX = malloc((size_t)c * 9 * sizeof(double));
-        a->cap_e = c;
-        if (!a->snapW || !a->snapRX) { a->cap_e = 0; return df_error_set(err, DF_ENOMEM, "admm_run: out of memory (active buffers)"); }
+        a->cap_v = a->va ? c : 0;
+        if (!a->va) return df_error_set(err, DF_ENOMEM, "admm_run: out of memory (active buffers)");
     }
     return DF_OK;
 }

@@ -42,9 +42,9 @@ typedef struct admm_active {
     double rho_fact;         /* rho of the factor */
     /* residual scale of the elements outside (constant 3 sum gam_e |I|^2 of the far field) */
     double gam3_all, gam3_ae; /* over all elements, over the region's elements */
-    /* per-run buffers sized to the region */
-    int64_t cap_v, cap_e;
-    double *snapU, *snapZ, *snapW, *snapRX, *va;
+    /* damped steps: the undamped global solution on the region (nr x 3, capacity cap_v) */
+    int64_t cap_v;
+    double *va;
     df_admm_active_stats st;
 } admm_active;
 

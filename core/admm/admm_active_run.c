@@ -35,28 +35,58 @@ static inline void el_F(const df_admm *s, const double *V, int32_t e, double F[9
     }
 }
 
-static void act_local_x(df_admm *s)
+/* The residuals of the stop test (admm_resid.c's, over the region) are summed inside the
+ * kernels from each item's old and new values, without snapshots: squared norms of r, A x, z, s
+ * and y in the penalty metric. */
+typedef struct act_acc {
+    double r2, ax2, z2, s2, y2;
+} act_acc;
+
+static void act_local_x(df_admm *s, act_acc *acc)
 {
     admm_active *a = s->act;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
-        for (int32_t k = 0; k < a->nae; k++) admm_local_x_one(s, a->ae[k]);
+        double s2 = 0, z2 = 0;
+        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) reduction(+ : s2, z2) if (a->nae >= ACT_PAR_HEAVY)
+        for (int32_t k = 0; k < a->nae; k++) {
+            int32_t e = a->ae[k];
+            double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
+            memcpy(old, RX, sizeof(old));
+            admm_local_x_one(s, e);
+            for (int c = 0; c < 9; c++) {
+                double d = RX[c] - old[c];
+                ds += d * d;
+                dz += RX[c] * RX[c];
+            }
+            s2 += s->gam[e] * ds;
+            z2 += s->gam[e] * dz;
+        }
+        acc->s2 += s2;
+        acc->z2 += z2;
     } else {
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
         for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
     }
 }
 
-static void act_local_z(df_admm *s)
+static void act_local_z(df_admm *s, act_acc *acc)
 {
     const admm_active *a = s->act;
     const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
+    double s2 = 0, z2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
         size_t o = 3 * (size_t)a->rv[k];
-        double x[3];
+        double x[3], old[3] = {s->Z[o], s->Z[o + 1], s->Z[o + 2]};
         for (int c = 0; c < 3; c++) x[c] = s->V[o + c] - s->Vrest[o + c] + s->U[o + c];
         df_admm_scl1_prox(x, w * s->a[a->rv[k]], sth, rho, s->Z + o);
+        for (int c = 0; c < 3; c++) {
+            double d = s->Z[o + c] - old[c];
+            s2 += d * d;
+            z2 += s->Z[o + c] * s->Z[o + c];
+        }
     }
+    acc->s2 += rho * s2;
+    acc->z2 += rho * z2;
 }
 
 /* right-hand side of the region's free vertices: element (cell) pieces, rho (Vrest + Z - U), minus
@@ -189,26 +219,40 @@ static int act_global(df_admm *s, df_error *err)
 
 /* duals on the region; element family: also the elastic energy of the new V over the region's
  * elements (the outside is exactly at rest: zero energy) */
-static double act_dual(df_admm *s)
+static double act_dual(df_admm *s, act_acc *acc)
 {
     admm_active *a = s->act;
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
+        double r2 = 0, ax2 = 0, y2 = 0;
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
-            double F[9];
+            double F[9], er = 0, ea = 0, ey = 0;
             el_F(s, s->V, e, F);
             double *W = s->W + 9 * (size_t)e;
             const double *RX = s->RX + 9 * (size_t)e;
-            for (int c = 0; c < 9; c++) W[c] += F[c] - RX[c];
+            for (int c = 0; c < 9; c++) {
+                double dw = F[c] - RX[c];
+                W[c] += dw;
+                er += dw * dw; ea += F[c] * F[c]; ey += W[c] * W[c]; /* R X + dW = F */
+            }
+            r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
             E += admm_element_energy_F(s, e, F);
         }
+        acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
     }
+    double r2 = 0, ax2 = 0, y2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
         size_t o = 3 * (size_t)a->rv[k];
-        for (int c = 0; c < 3; c++) s->U[o + c] += s->V[o + c] - s->Vrest[o + c] - s->Z[o + c];
+        for (int c = 0; c < 3; c++) {
+            double du = s->V[o + c] - s->Vrest[o + c] - s->Z[o + c], ax = s->Z[o + c] + du;
+            s->U[o + c] += du;
+            r2 += du * du; ax2 += ax * ax; y2 += s->U[o + c] * s->U[o + c];
+        }
     }
+    const double rho = s->p.rho;
+    acc->r2 += rho * r2; acc->ax2 += rho * ax2; acc->y2 += rho * y2;
     return E;
 }
 
@@ -260,22 +304,6 @@ static double act_locality(const df_admm *s)
     return s->p.w * L;
 }
 
-static void act_snapshot(df_admm *s)
-{
-    admm_active *a = s->act;
-    for (int32_t k = 0; k < a->nr; k++) {
-        size_t o = 3 * (size_t)a->rv[k];
-        memcpy(a->snapU + 3 * (size_t)k, s->U + o, 3 * sizeof(double));
-        memcpy(a->snapZ + 3 * (size_t)k, s->Z + o, 3 * sizeof(double));
-    }
-    if (s->family == ADMM_FAM_ELEMENT)
-        for (int32_t k = 0; k < a->nae; k++) {
-            size_t o = 9 * (size_t)a->ae[k];
-            memcpy(a->snapW + 9 * (size_t)k, s->W + o, 9 * sizeof(double));
-            memcpy(a->snapRX + 9 * (size_t)k, s->RX + o, 9 * sizeof(double));
-        }
-}
-
 static double ratio(double num2, double den2)
 {
     if (num2 == 0.0) return 0.0;
@@ -283,46 +311,16 @@ static double ratio(double num2, double den2)
     return sqrt(num2 / den2);
 }
 
-/* admm_resid.c's residuals over the region; the outside adds gam_e |I|^2 per element to |A x|^2
- * and |z|^2 (R_e X_e = I there) and nothing else */
-static void act_measure(const df_admm *s, double *pri, double *dual)
+/* relative primal and dual residuals (admm.h DF_ADMM_RESIDUAL); the outside adds gam_e |I|^2 per
+ * element to |A x|^2 and |z|^2 (R_e X_e = F_e = I there) and nothing else */
+static void act_measure(const df_admm *s, const act_acc *acc, double *pri, double *dual)
 {
     const admm_active *a = s->act;
-    const double rho = s->p.rho;
-    double r2 = 0, ax2 = 0, z2 = 0, s2 = 0, y2 = 0;
-    {
-        double ra = 0, rb = 0, rc = 0, rd = 0, re = 0;
-        for (int32_t k = 0; k < a->nr; k++) {
-            size_t o = 3 * (size_t)a->rv[k];
-            for (int c = 0; c < 3; c++) {
-                double du = s->U[o + c] - a->snapU[3 * (size_t)k + c], dz = s->Z[o + c] - a->snapZ[3 * (size_t)k + c];
-                double ax = s->Z[o + c] + du;
-                ra += du * du; rb += ax * ax; rc += s->Z[o + c] * s->Z[o + c]; rd += dz * dz; re += s->U[o + c] * s->U[o + c];
-            }
-        }
-        r2 += rho * ra; ax2 += rho * rb; z2 += rho * rc; s2 += rho * rd; y2 += rho * re;
-    }
-    if (s->family == ADMM_FAM_ELEMENT) {
-        double ra = 0, rb = 0, rc = 0, rd = 0, re = 0;
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : ra, rb, rc, rd, re) if (a->nae >= ACT_PAR_LIGHT)
-        for (int32_t k = 0; k < a->nae; k++) {
-            int32_t el = a->ae[k];
-            const double g = s->gam[el];
-            const double *W = s->W + 9 * (size_t)el, *W0 = a->snapW + 9 * (size_t)k;
-            const double *RX = s->RX + 9 * (size_t)el, *RX0 = a->snapRX + 9 * (size_t)k;
-            double ea = 0, eb = 0, ec = 0, ed = 0, ee = 0;
-            for (int c = 0; c < 9; c++) {
-                double dw = W[c] - W0[c], drx = RX[c] - RX0[c], f = RX[c] + dw;
-                ea += dw * dw; eb += f * f; ec += RX[c] * RX[c]; ed += drx * drx; ee += W[c] * W[c];
-            }
-            ra += g * ea; rb += g * eb; rc += g * ec; rd += g * ed; re += g * ee;
-        }
-        double far = a->gam3_all - a->gam3_ae;
-        if (far < 0) far = 0;
-        r2 += ra; ax2 += rb + far; z2 += rc + far; s2 += rd; y2 += re;
-    }
-    *pri = ratio(r2, ax2 > z2 ? ax2 : z2);
-    *dual = ratio(s2, y2);
+    double far = s->family == ADMM_FAM_ELEMENT ? a->gam3_all - a->gam3_ae : 0.0;
+    if (far < 0) far = 0;
+    double ax2 = acc->ax2 + far, z2 = acc->z2 + far;
+    *pri = ratio(acc->r2, ax2 > z2 ? ax2 : z2);
+    *dual = ratio(acc->s2, acc->y2);
 }
 
 /* the features the active mode does not cover (admm.h DF_ADMM_ACTIVE) */
@@ -450,20 +448,20 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             double mean_ms = (tn - t_loop) * 1e3 / it, est = mean_ms > last_ms ? mean_ms : last_ms;
             if (el_ms + est * ADMM_BUDGET_MARGIN > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
         }
-        act_snapshot(s);
+        act_acc acc = {0, 0, 0, 0, 0};
         double t0 = admm_now();
-        act_local_x(s);
+        act_local_x(s, &acc);
         double t1 = admm_now();
-        act_local_z(s);
+        act_local_z(s, &acc);
         double t2 = admm_now();
         act_rhs(s);
         rc = act_global(s, err);
         if (rc) break;
-        double ef = act_dual(s);
+        double ef = act_dual(s, &acc);
         double t3 = admm_now();
         r.t_local1 += t1 - t0; r.t_local2 += t2 - t1; r.t_global += t3 - t2;
         double pri, dual;
-        act_measure(s, &pri, &dual);
+        act_measure(s, &acc, &pri, &dual);
         int hold = s->damp && !isfinite(ef) && isfinite(s->E_last) && isfinite(s->el_last);
         if (!hold)
             for (int32_t k = 0; k < a->nr; k++)
