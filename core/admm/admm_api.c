@@ -206,7 +206,9 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
                           "admm: rho = %g must exceed w max(a_i) / s = %g (SC-L1 prox would be nonconvex)",
                           s->p.rho, s->p.w * s->max_a / s->p.s);
     /* active-set mode: the whole-mesh factorization waits until a full run needs it */
-    if (!rc) rc = admm_active_defers(s) ? admm_active_prepare(s, err) : admm_build_system_affine(s, s->aff, s->naff, err);
+    if (!rc)
+        rc = admm_active_defers(s) ? admm_active_prepare(s, err)
+                                   : admm_build_system_affine(s, s->aff, s->naff, err);
     if (!rc && s->p.accelerate && admm_aa_init(&s->aa, s->p.anderson_m, s->n_state))
         rc = df_error_set(err, DF_ENOMEM, "admm: out of memory (Anderson history)");
     s->aa.nthreads = s->nthreads;
