@@ -32,6 +32,7 @@ void df_config_defaults(df_server_config *cfg, const char *xdg_runtime_dir)
     cfg->threads = DF_CONFIG_DEFAULT_THREADS;
     cfg->spin_us = DF_CONFIG_DEFAULT_SPIN_US;
     cfg->inline_us = DF_CONFIG_DEFAULT_INLINE_US;
+    cfg->admm_active = 0;
     cfg->cursor_hz = DF_CONFIG_DEFAULT_CURSOR_HZ;
     cfg->shm_total_bytes = DF_CONFIG_DEFAULT_SHM_TOTAL;
     cfg->max_upload_mb = DF_CONFIG_DEFAULT_MAX_UPLOAD_MB;
@@ -190,6 +191,7 @@ static const int_key k_int_keys[] = {
     {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
     {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
     {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
+    {"admm_active", offsetof(df_server_config, admm_active), 0, 1},
     {"cursor_hz", offsetof(df_server_config, cursor_hz), 0, DF_CONFIG_MAX_CURSOR_HZ},
     {"max_upload_mb", offsetof(df_server_config, max_upload_mb), 1,
      DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},
@@ -486,7 +488,8 @@ static const char k_usage[] =
     "                      can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
     "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us, cursor_hz, shm_ring_bytes,\n"
+    "                      max_sessions, threads, spin_us, inline_us, admm_active, cursor_hz,\n"
+    "                      shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
     "                      history_replay_ms, resync_ring_mb, memory_max_mb, tcp_insecure,\n"
     "                      socket_mode, socket_group, handshake_timeout_s, idle_timeout_s,\n"

@@ -36,6 +36,7 @@ static void note_restart(const df_server_config *cur, const df_server_config *n)
     DF_RESTART_KEY(cur->threads != n->threads, "threads");
     DF_RESTART_KEY(cur->spin_us != n->spin_us, "spin_us");
     DF_RESTART_KEY(cur->inline_us != n->inline_us, "inline_us");
+    DF_RESTART_KEY(cur->admm_active != n->admm_active, "admm_active");
     DF_RESTART_KEY(cur->cache_memory_mb != n->cache_memory_mb, "cache_memory_mb");
     DF_RESTART_KEY(cur->max_mesh_vertices != n->max_mesh_vertices, "max_mesh_vertices");
     DF_RESTART_KEY(cur->shm_ring_bytes != n->shm_ring_bytes, "shm_ring_bytes");

@@ -116,7 +116,49 @@ typedef struct df_admm_params {
     double strain_max;     /* CLOTH: upper limit of the stretch singular values; default 1.1 */
     double bending;        /* CLOTH: bending stiffness (energy units * length^2); default 1e-3 */
     int threads;           /* OpenMP threads of the solver's kernels; 0 (default): OpenMP's default */
+    /* Active-set iterations (DF_ADMM_ACTIVE below); 0 fields mean the defaults. */
+    int active;            /* 1: iterate on the active region only; 0: full solve (default) */
+    int active_band;       /* rings of the band around the support, >= 1; 0: DF_ADMM_ACTIVE_BAND */
+    int active_check_every;/* far-field certificate every k iterations; 0: DF_ADMM_ACTIVE_CHECK */
 } df_admm_params;
+
+/* DF_ADMM_ACTIVE — active-set mode (params.active = 1; core/admm/admm_active*.c). SC-L1 leaves the
+ * optimum exactly at rest away from the edit, so df_admm_run iterates only over the region
+ * R = support grown by `active_band` rings of the mesh's vertex graph (support: vertices with
+ * Z_i != 0, handles whose target or position differs from rest, vertices set by
+ * df_admm_set_positions), with every vertex outside R held exactly (bitwise) at rest:
+ * V = Vout = Vrest, Z = U = 0, W_e = 0 on elements with no vertex in R. Each iteration is the
+ * ADMM iteration of the problem restricted to R (Dirichlet at rest on the outside vertices): local
+ * steps on the elements (per-vertex energies: the cells) touching R, the SC-L1 prox and duals on R,
+ * and the global step on R's free vertices with the principal submatrix of the global matrix,
+ * analyzed and factorized by CHOLMOD when R changes (cached while R and rho are unchanged). Cost
+ * per iteration: proportional to |R|, not to the mesh.
+ * Growth: when a support vertex comes within active_band - 1 rings of R's edge, R grows to its
+ * union with the support grown by active_band rings (refactor). Certificate (every
+ * active_check_every iterations, before reporting convergence and at the end of every run): the
+ * restricted optimum is the full one iff every outside vertex i satisfies the SC-L1 subgradient
+ * condition |grad_i E_elastic(V)| <= w a_i (its rest position is optimal); only vertices next to R
+ * can have a nonzero force (the elements of the others are exactly at rest), so those are checked;
+ * the failing ones join the support and R grows. Convergence is reported only when certified.
+ * Energies and features: ARAP / ACAP (tets and triangles), Neo-Hookean (with damped handle steps),
+ * polylines. Fallback to the full solve (same results, full cost; counted in
+ * df_admm_active_stats.fallbacks): cloth, affine constraints, Anderson acceleration, degenerate
+ * elements with followers or isolated vertices, and a region above DF_ADMM_ACTIVE_MAX_FRAC of the
+ * vertices (then the run finishes with full iterations). df_admm_set_positions and
+ * df_admm_reset_rest work in both modes: after them (and after any full run) the next active run
+ * takes the support from Z != 0 and puts every vertex outside the new region exactly at rest (a
+ * change of the order of the full solve's far-field round-off). With params.active (and no
+ * feature that falls back) df_admm_create builds no whole-mesh factorization; the first full run
+ * builds it. df_admm_stats counts the region analyses, factorizations and solves too.
+ * Exactness: converged results equal the full solve's (objective ~1e-14 relative in the tests);
+ * a fixed number of iterations is not the same computation as the full solve's (there the
+ * global step's decaying response moves the far field a little in every iteration, which feeds
+ * back; it vanishes at convergence), so after e.g. 20 iterations the objectives
+ * differ by ~1e-6 relative with the default band and ~1e-8 with 6 rings (make bench:
+ * bench_local). */
+#define DF_ADMM_ACTIVE_BAND 3
+#define DF_ADMM_ACTIVE_CHECK 10
+#define DF_ADMM_ACTIVE_MAX_FRAC 0.5
 
 /* Fills `p` with the defaults for `energy` (w 1e-4, s 0.01, rho 0.1, tol 1e-11, max_iters 500,
  * E 1e7, nu 0.45, a_i = 1, no acceleration, Anderson m 5, cloth limits [0.9, 1.1], bending 1e-3;
@@ -274,6 +316,23 @@ typedef struct df_admm_stats {
 
 /* Copies the lifetime counters. NULL-safe (zeroes `out` for a NULL solver). */
 void df_admm_get_stats(const df_admm *s, df_admm_stats *out);
+
+/* Counters of the active-set mode (DF_ADMM_ACTIVE). */
+typedef struct df_admm_active_stats {
+    long runs;             /* df_admm_run calls done in active mode */
+    long fallbacks;        /* df_admm_run calls (or their rest) done by the full solve instead */
+    long grows;            /* region growths (each one refactorization) */
+    long check_grows;      /* growths asked by the far-field certificate */
+    long checks;           /* certificates evaluated */
+    long rebuilds;         /* regions rebuilt from the support (first run, after set_positions,
+                              reset_rest or a full run) */
+    int32_t region_vertices;   /* |R| now (0 when no region) */
+    int32_t region_elements;   /* elements (per-vertex energies: cells) iterated on */
+    int32_t support;           /* support size at the end of the last active run */
+} df_admm_active_stats;
+
+/* Copies the active-set counters. NULL-safe (zeroes `out` for a NULL solver). */
+void df_admm_get_active_stats(const df_admm *s, df_admm_active_stats *out);
 
 /* Copies the solver's degenerate-element counts (header comment). NULL-safe (zeroes `out`). */
 void df_admm_get_degenerate(const df_admm *s, df_admm_degenerate *out);

@@ -205,7 +205,10 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
         rc = df_error_set(err, DF_EINVAL,
                           "admm: rho = %g must exceed w max(a_i) / s = %g (SC-L1 prox would be nonconvex)",
                           s->p.rho, s->p.w * s->max_a / s->p.s);
-    if (!rc) rc = admm_build_system_affine(s, s->aff, s->naff, err);
+    /* active-set mode: the whole-mesh factorization waits until a full run needs it */
+    if (!rc)
+        rc = admm_active_defers(s) ? admm_active_prepare(s, err)
+                                   : admm_build_system_affine(s, s->aff, s->naff, err);
     if (!rc && s->p.accelerate && admm_aa_init(&s->aa, s->p.anderson_m, s->n_state))
         rc = df_error_set(err, DF_ENOMEM, "admm: out of memory (Anderson history)");
     s->aa.nthreads = s->nthreads;
@@ -258,6 +261,7 @@ int df_admm_set_positions(df_admm *s, const double *V, int32_t *n_changed, df_er
     }
     if (n_changed) *n_changed = changed;
     if (changed == 0) return DF_OK;
+    admm_active_stale(s); /* changed vertices may lie outside the active region */
     if (s->W) /* element duals of elements touching a changed vertex */
         for (int32_t e = 0; e < s->ne; e++) {
             const int32_t *el = s->E + (size_t)e * s->esz;
@@ -339,6 +343,7 @@ void df_admm_free(df_admm *s)
     if (!s) return;
     admm_polish_free(s);
     admm_free_system(s);
+    admm_active_free(s);
     if (s->cc_started) cholmod_finish(&s->cc);
     admm_free_operators(s);
     admm_free_degenerate(s);

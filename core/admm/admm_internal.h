@@ -104,6 +104,9 @@ struct df_admm {
     double el_last, lo_last; /* its elastic and locality parts, NAN when unknown */
     admm_anderson aa;
     struct admm_polish_cache *polish; /* df_admm_polish's CHOLMOD pattern/analysis (admm_newton.c) */
+    struct admm_active *act; /* active-set mode state (admm_active.h), NULL until first used */
+    int act_dirty;           /* the state outside the active region may be off rest (a full run or
+                                set_positions since create / the last region build) */
 };
 
 /* admm_setup.c: operators for the current Vrest (element gradients, spokes and rims, a_i,
@@ -135,13 +138,31 @@ int admm_solve_rhs(df_admm *s, int with_b, const double **x, df_error *err);
  * requested ones by the largest step (1, 1/2, ...) that leaves no element of V inverted */
 int admm_global_step(df_admm *s, df_error *err);
 
-/* admm_local.c: local steps and the global right-hand side. */
+/* admm_local.c: local steps and the global right-hand side. admm_local_x_one: local step 1 of
+ * element e (R_e X_e) and its right-hand side pieces Ce (element family only). */
+void admm_local_x_one(df_admm *s, int32_t e);
 void admm_local_x(df_admm *s);
 void admm_local_z(df_admm *s);
 void admm_assemble_rhs(df_admm *s);
 /* dual updates; for the element family also returns sum_e E_e(F_e(V)) (the elastic energy of V
  * without bending, from the same F_e), else 0 */
 double admm_dual_update(df_admm *s);
+
+/* admm_active.c: the active-set mode (admm.h DF_ADMM_ACTIVE). admm_active_run runs df_admm_run
+ * in active mode and sets *handled = 1, or sets *handled = 0 (then the caller runs the full solve,
+ * after which the active state is marked stale); admm_active_stale marks the state outside the
+ * region as possibly not at rest (df_admm_set_positions); admm_active_free frees it (before
+ * cholmod_finish). */
+int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, int *handled,
+                    df_error *err);
+void admm_active_stale(df_admm *s);
+/* 1 when df_admm_create may skip the whole-mesh factorization (params.active and the features
+ * the active mode covers); the full system is then built by the first full run */
+int admm_active_defers(const df_admm *s);
+/* builds the active mode's mesh-sized tables (vertex graph, maps) at create: O(mesh), once.
+ * Errors: DF_ENOMEM. */
+int admm_active_prepare(df_admm *s, df_error *err);
+void admm_active_free(df_admm *s);
 
 /* admm_energy.c: objective pieces at positions V; elastic is +inf for inverted NH elements.
  * admm_fit_vertex: best s_i R_i (row-major 3x3) of vertex i's cell at V (ACAP: s_i analytic). */

@@ -57,6 +57,12 @@ static void local_x_element(df_admm *s)
     }
 }
 
+void admm_local_x_one(df_admm *s, int32_t e)
+{
+    local_x_element_one(s, e);
+    element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);
+}
+
 static void local_x_element_one(df_admm *s, int32_t e)
 {
     const df_admm_energy en = s->p.energy;

@@ -33,6 +33,12 @@ int admm_validate_params(const df_admm_params *p, df_error *err)
         if (!(p->poisson > -1.0 && p->poisson < 0.5)) return df_error_set(err, DF_EINVAL, "admm: Poisson ratio %g outside (-1, 0.5)", p->poisson);
     }
     if (p->threads < 0 || p->threads > 1024) return df_error_set(err, DF_EINVAL, "admm: threads = %d outside [0, 1024]", p->threads);
+    if (p->active < 0 || p->active > 1) return df_error_set(err, DF_EINVAL, "admm: active = %d must be 0 or 1", p->active);
+    if (p->active_band < 0 || p->active_band > 64)
+        return df_error_set(err, DF_EINVAL, "admm: active_band = %d outside [0, 64] (0: default)", p->active_band);
+    if (p->active_check_every < 0 || p->active_check_every > DF_ADMM_MAX_ITERS_LIMIT)
+        return df_error_set(err, DF_EINVAL, "admm: active_check_every = %d outside [0, %d] (0: default)",
+                            p->active_check_every, DF_ADMM_MAX_ITERS_LIMIT);
     if (p->accelerate && (p->anderson_m < 1 || p->anderson_m > DF_ADMM_MAX_ANDERSON))
         return df_error_set(err, DF_EINVAL, "admm: anderson_m = %d outside [1, %d]", p->anderson_m, DF_ADMM_MAX_ANDERSON);
     if (p->energy == DF_ADMM_CLOTH) {

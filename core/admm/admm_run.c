@@ -43,6 +43,10 @@ static int iterate(df_admm *s, df_admm_result *r, double *el_fused, df_error *er
 int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, df_error *err)
 {
     if (!s) return df_error_set(err, DF_EINVAL, "admm_run: NULL solver");
+    if (s->p.active) { /* active-set mode (admm_active_run.c); 0 handled: full solve below */
+        int handled = 0, arc = admm_active_run(s, budget, res, &handled, err);
+        if (handled) return arc;
+    }
     df_admm_result r;
     memset(&r, 0, sizeof(r));
     r.residual = INFINITY;

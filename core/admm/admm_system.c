@@ -97,6 +97,7 @@ static int assemble(df_admm *s, trip *kff, trip *cpl, const int32_t *hmap)
 
 void admm_update_kfhp(df_admm *s)
 {
+    if (!s->KfhP) return; /* not built yet (active-set mode builds it before a full run) */
     int32_t nf = s->nfree;
     memset(s->KfhP, 0, (size_t)nf * 3 * sizeof(double));
     for (int64_t t = 0; t < s->ncpl; t++) {

@@ -70,8 +70,9 @@ static int build_solver(const df_session *s, const df_handleset *hs, df_admm **o
     df_mesh m = s->mesh;
     m.V = s->rest;
     df_work_report(w, DF_STAGE_FACTORIZE, 0, 1, 0, 1);
-    int rc = df_admm_create(&m, &hs->params, hs->handles, hs->nh, hs->affine, hs->n_affine, out,
-                            err);
+    df_admm_params p = hs->params;
+    p.active = s->srv->cfg.admm_active; /* config admm_active: the active-set mode */
+    int rc = df_admm_create(&m, &p, hs->handles, hs->nh, hs->affine, hs->n_affine, out, err);
     if (rc == DF_OK) df_work_report(w, DF_STAGE_FACTORIZE, 1, 1, 1, 1);
     return rc;
 }

@@ -187,6 +187,15 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "cache.bytes", (double)v->cache_bytes);
         put(&st, "brush.last_ms", v->brush_last_ms);
         put(&st, "move.last_ms", v->move_last_ms);
+        /* active-set mode (config admm_active, admm.h DF_ADMM_ACTIVE) of the cached solver */
+        put(&st, "admm.active", srv->cfg.admm_active);
+        put(&st, "admm.active_runs", (double)v->act.runs);
+        put(&st, "admm.active_fallbacks", (double)v->act.fallbacks);
+        put(&st, "admm.active_region_vertices", v->act.region_vertices);
+        put(&st, "admm.active_region_elements", v->act.region_elements);
+        put(&st, "admm.active_support", v->act.support);
+        put(&st, "admm.active_region_grows", (double)v->act.grows);
+        put(&st, "admm.active_check_grows", (double)v->act.check_grows);
     }
     df_req_reply_stats(r, &st);
     return DF_OK;

@@ -592,4 +592,5 @@ void df_session_seen_sync(df_session *s)
     v->cache_bytes = (s->hs ? s->hs->solver_bytes : 0) + s->kc_bytes;
     v->brush_last_ms = s->brush_last_ms;
     v->move_last_ms = s->move_last_ms;
+    df_admm_get_active_stats(s->hs ? s->hs->solver : NULL, &v->act);
 }

@@ -96,6 +96,7 @@ typedef struct df_session_seen {
     int kc_cached;               /* s->kc != NULL */
     size_t cache_bytes;          /* solver_bytes + kc_bytes */
     double brush_last_ms, move_last_ms;
+    df_admm_active_stats act;    /* the solver's active-set counters (zero without a solver) */
 } df_session_seen;
 
 typedef struct df_session {

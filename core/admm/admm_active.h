@@ -1,0 +1,69 @@
+/* admm_active.h — private state of the active-set mode (admm.h DF_ADMM_ACTIVE), shared by
+ * admm_active.c (region, sub-system, certificate) and admm_active_run.c (restricted iterations).
+ * Not part of the public API. */
+#ifndef DF_ADMM_ACTIVE_H
+#define DF_ADMM_ACTIVE_H
+
+#include <cholmod.h>
+#include <stdint.h>
+
+#include "core/admm/admm_internal.h"
+
+typedef struct admm_active {
+    int valid;               /* region built and every vertex outside it exactly at rest */
+    int band, check_every;
+    /* vertex graph (CSR, built once): vertices sharing an element / a spokes-and-rims entry */
+    int32_t *adj_ptr, *adj;
+    int32_t *hmap;           /* nv: handle index or -1 */
+    /* region */
+    uint8_t *in;             /* nv: 1 in the region */
+    int32_t *depth;          /* nv: hops to the nearest outside vertex (region), 0 outside */
+    int32_t nr, *rv;         /* region vertices */
+    int32_t nfr, *fr;        /* fringe: outside vertices next to the region */
+    int32_t nae, *ae, *ae2;  /* elements touching the region (vertex family: cells of region and
+                                fringe vertices); ae2: scratch of the same size */
+    uint8_t *emark;          /* ne (element family) or nv (cells): 1 when in ae */
+    int32_t *work;           /* nv scratch (BFS queue) */
+    uint32_t *stamp, gen;    /* nv visit stamps (no clearing per pass) */
+    uint32_t *tstamp, tgen;  /* spokes-and-rims entry stamps (vertex family) */
+    int kfhp_dirty;          /* handle targets moved by a damped step: the full system's K_fh P is
+                                stale (refreshed before any full run) */
+    int bypass;              /* set while the active run finishes with the full solve */
+    int32_t nsup, *sup;      /* support (scratch list, nv) */
+    /* sub-system on the region's free vertices (region minus handles) */
+    int32_t nrf, *rfv;       /* free region vertex list */
+    int32_t *rfidx;          /* nv: index in rfv or -1 */
+    int64_t ncp;             /* couplings K(free region vertex, handle) */
+    int32_t *cp_f, *cp_v;    /* free index, handle vertex */
+    double *cp_val;
+    double *kout;            /* nrf x 3 (column-major): K(free, outside) Vrest(outside) */
+    cholmod_factor *L;
+    cholmod_dense *rhs, *sol, *sol_y, *sol_e;
+    double rho_fact;         /* rho of the factor */
+    /* residual scale of the elements outside (constant 3 sum gam_e |I|^2 of the far field) */
+    double gam3_all, gam3_ae; /* over all elements, over the region's elements */
+    /* damped steps: the undamped global solution on the region (nr x 3, capacity cap_v) */
+    int64_t cap_v;
+    double *va;
+    df_admm_active_stats st;
+} admm_active;
+
+/* admm_active.c */
+int admm_act_init(df_admm *s, df_error *err);                 /* allocates s->act (once) */
+/* (re)builds the region: fresh (from the support only; vertices leaving it are snapped to rest)
+ * or grown (union with the current region); refactors. extra (n) joins the support. */
+int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra, df_error *err);
+/* support scan over the region (or, stale, the whole mesh) into act->sup */
+void admm_act_support(df_admm *s, int whole);
+/* size of the region a fresh build from act->sup would have (support grown by band rings) */
+int32_t admm_act_fresh_size(df_admm *s);
+/* 1 when a support vertex lies within band - 1 rings of the region's edge or outside it */
+int admm_act_needs_grow(const df_admm *s);
+/* far-field certificate: appends the failing fringe vertices to act->sup after its nsup entries
+ * (nsup unchanged) and returns their number */
+int32_t admm_act_certify(df_admm *s);
+/* sub-system solve: rhs already in act->rhs; *x the nrf x 3 column-major answer */
+int admm_act_solve(df_admm *s, const double **x, df_error *err);
+int admm_act_buffers(df_admm *s, df_error *err);
+
+#endif

@@ -1,0 +1,531 @@
+/* admm_active_run.c — df_admm_run in active-set mode (admm.h DF_ADMM_ACTIVE): the ADMM iteration
+ * restricted to the active region (local steps on its elements or cells, SC-L1 prox and duals on
+ * its vertices, the global step on its free vertices with the region's factor, Neo-Hookean damped
+ * handle steps), the same scale-invariant stop test as the full solve (admm.h DF_ADMM_RESIDUAL;
+ * the far field adds its constant share sum gam_e |I|^2 to the residual scales), region growth,
+ * the far-field certificate, and the fallback to the full solve. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/admm/admm_active.h"
+#include "core/admm/scl1.h"
+
+#define ADMM_BUDGET_MARGIN 1.05 /* as admm_run.c */
+#define ADMM_DAMP_HALVINGS 7    /* as admm_damp.c */
+#define ADMM_DAMP_MAX_STALL 2
+/* a region's loops fork threads only when they have this much work: an OpenMP fork/join (a futex
+ * wake-up with the passive wait policy) costs tens of microseconds, a whole light loop over a
+ * small region less */
+#define ACT_PAR_HEAVY 1024      /* elements / cells with a local solve (polar, SVD, prox) */
+#define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
+/* a run starts from a fresh region when the current one is this many times larger than needed */
+#define ACT_SHRINK 2
+
+static inline void el_F(const df_admm *s, const double *V, int32_t e, double F[9])
+{
+    const int32_t *el = s->E + (size_t)e * s->esz;
+    const double *g = s->grad + (size_t)e * s->esz * 3;
+    memset(F, 0, 9 * sizeof(double));
+    for (int a = 0; a < s->esz; a++) {
+        const double *x = V + 3 * (size_t)el[a];
+        const double *ga = g + 3 * a;
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * ga[c];
+    }
+}
+
+/* The residuals of the stop test (admm_resid.c's, over the region) are summed inside the
+ * kernels from each item's old and new values, without snapshots: squared norms of r, A x, z, s
+ * and y in the penalty metric. */
+typedef struct act_acc {
+    double r2, ax2, z2, s2, y2;
+} act_acc;
+
+static void act_local_x(df_admm *s, act_acc *acc)
+{
+    admm_active *a = s->act;
+    if (s->family == ADMM_FAM_ELEMENT) {
+        double s2 = 0, z2 = 0;
+        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) reduction(+ : s2, z2) if (a->nae >= ACT_PAR_HEAVY)
+        for (int32_t k = 0; k < a->nae; k++) {
+            int32_t e = a->ae[k];
+            double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
+            memcpy(old, RX, sizeof(old));
+            admm_local_x_one(s, e);
+            for (int c = 0; c < 9; c++) {
+                double d = RX[c] - old[c];
+                ds += d * d;
+                dz += RX[c] * RX[c];
+            }
+            s2 += s->gam[e] * ds;
+            z2 += s->gam[e] * dz;
+        }
+        acc->s2 += s2;
+        acc->z2 += z2;
+    } else {
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
+        for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
+    }
+}
+
+static void act_local_z(df_admm *s, act_acc *acc)
+{
+    const admm_active *a = s->act;
+    const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
+    double s2 = 0, z2 = 0;
+    for (int32_t k = 0; k < a->nr; k++) {
+        size_t o = 3 * (size_t)a->rv[k];
+        double x[3], old[3] = {s->Z[o], s->Z[o + 1], s->Z[o + 2]};
+        for (int c = 0; c < 3; c++) x[c] = s->V[o + c] - s->Vrest[o + c] + s->U[o + c];
+        df_admm_scl1_prox(x, w * s->a[a->rv[k]], sth, rho, s->Z + o);
+        for (int c = 0; c < 3; c++) {
+            double d = s->Z[o + c] - old[c];
+            s2 += d * d;
+            z2 += s->Z[o + c] * s->Z[o + c];
+        }
+    }
+    acc->s2 += rho * s2;
+    acc->z2 += rho * z2;
+}
+
+/* right-hand side of the region's free vertices: element (cell) pieces, rho (Vrest + Z - U), minus
+ * the couplings to the fixed vertices (handles at their applied targets, the outside at rest) */
+static void act_rhs(df_admm *s)
+{
+    admm_active *a = s->act;
+    const int32_t nf = a->nrf;
+    if (nf == 0) return; /* every region vertex is a handle */
+    double *rhs = a->rhs->x;
+    const double rho = s->p.rho;
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (nf >= ACT_PAR_LIGHT)
+    for (int32_t f = 0; f < nf; f++) {
+        int32_t v = a->rfv[f];
+        double b[3] = {0, 0, 0};
+        if (s->family == ADMM_FAM_ELEMENT) {
+            for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
+                const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
+                b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
+            }
+        } else {
+            for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
+                int32_t se = s->in_ent[p];
+                int32_t t = (se > 0 ? se : -se) - 1;
+                double sign = se > 0 ? 1.0 : -1.0;
+                const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
+                double w = sign * s->sr_w[t];
+                for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
+            }
+        }
+        for (int k = 0; k < 3; k++) {
+            size_t o = 3 * (size_t)v + k;
+            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - a->kout[f + (size_t)k * nf];
+        }
+    }
+    for (int64_t t = 0; t < a->ncp; t++) {
+        const double *p = s->target + 3 * (size_t)a->hmap[a->cp_v[t]];
+        for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * p[k];
+    }
+}
+
+static int any_inverted(const df_admm *s)
+{
+    const admm_active *a = s->act;
+    int bad = 0;
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(| : bad) if (a->nae >= ACT_PAR_LIGHT)
+    for (int32_t k = 0; k < a->nae; k++) {
+        double F[9];
+        el_F(s, s->V, a->ae[k], F);
+        double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+                   F[2] * (F[3] * F[7] - F[4] * F[6]);
+        bad |= !(J > 0);
+    }
+    return bad;
+}
+
+/* V = va + t x on the region's free vertices, handles at target + t dp (admm_damp.c) */
+static void place(df_admm *s, const double *x, double t)
+{
+    admm_active *a = s->act;
+    int32_t nf = a->nrf;
+    for (int32_t k = 0; k < a->nr; k++) {
+        int32_t v = a->rv[k], f = a->rfidx[v];
+        if (f < 0) continue;
+        for (int c = 0; c < 3; c++) s->V[3 * (size_t)v + c] = a->va[3 * (size_t)k + c] + t * x[f + (size_t)c * nf];
+    }
+    for (int32_t h = 0; h < s->nh; h++)
+        for (int c = 0; c < 3; c++)
+            s->V[3 * (size_t)s->hidx[h] + c] = s->target[3 * (size_t)h + c] + t * s->damp_dp[3 * (size_t)h + c];
+}
+
+/* the global step on the region (admm_damp.c's damped handle steps for Neo-Hookean) */
+static int act_global(df_admm *s, df_error *err)
+{
+    admm_active *a = s->act;
+    int32_t nf = a->nrf;
+    const double *x = NULL;
+    if (nf > 0) {
+        int rc = admm_act_solve(s, &x, err);
+        if (rc) return rc;
+        for (int32_t f = 0; f < nf; f++) {
+            double *v = s->V + 3 * (size_t)a->rfv[f];
+            v[0] = x[f]; v[1] = x[f + nf]; v[2] = x[f + 2 * (size_t)nf];
+        }
+    }
+    for (int32_t h = 0; h < s->nh; h++) memcpy(s->V + 3 * (size_t)s->hidx[h], s->target + 3 * (size_t)h, 3 * sizeof(double));
+    if (!s->damp || !s->tgt_pending) return DF_OK;
+    for (int32_t k = 0; k < a->nr; k++) memcpy(a->va + 3 * (size_t)k, s->V + 3 * (size_t)a->rv[k], 3 * sizeof(double));
+    for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++) s->damp_dp[i] = s->target_req[i] - s->target[i];
+    if (nf > 0) {
+        double *rhs = a->rhs->x;
+        memset(rhs, 0, (size_t)nf * 3 * sizeof(double));
+        for (int64_t t = 0; t < a->ncp; t++) {
+            int32_t h = a->hmap[a->cp_v[t]];
+            for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * s->damp_dp[3 * (size_t)h + k];
+        }
+        int rc = admm_act_solve(s, &x, err);
+        if (rc) { place(s, x ? x : rhs, 0.0); return rc; }
+    }
+    double t = 1.0;
+    int found = 0;
+    for (int k = 0; k <= ADMM_DAMP_HALVINGS; k++, t *= 0.5) {
+        place(s, x, t);
+        if (!any_inverted(s)) { found = 1; break; }
+    }
+    if (!found) {
+        t *= 2.0;
+        place(s, x, 0.0);
+        int va_bad = any_inverted(s);
+        if (!va_bad && s->damp_stall < ADMM_DAMP_MAX_STALL) {
+            t = 0.0;
+            s->damp_stall++;
+        } else {
+            if (va_bad) t = 1.0;
+            s->damp_stall = 0;
+        }
+        place(s, x, t);
+    } else {
+        s->damp_stall = 0;
+    }
+    if (t == 1.0) {
+        memcpy(s->target, s->target_req, (size_t)s->nh * 3 * sizeof(double));
+        s->tgt_pending = 0;
+    } else {
+        for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++) s->target[i] += t * s->damp_dp[i];
+    }
+    a->kfhp_dirty = 1;
+    return DF_OK;
+}
+
+/* duals on the region; element family: also the elastic energy of the new V over the region's
+ * elements (the outside is exactly at rest: zero energy) */
+static double act_dual(df_admm *s, act_acc *acc)
+{
+    admm_active *a = s->act;
+    double E = 0;
+    if (s->family == ADMM_FAM_ELEMENT) {
+        double r2 = 0, ax2 = 0, y2 = 0;
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
+        for (int32_t k = 0; k < a->nae; k++) {
+            int32_t e = a->ae[k];
+            double F[9], er = 0, ea = 0, ey = 0;
+            el_F(s, s->V, e, F);
+            double *W = s->W + 9 * (size_t)e;
+            const double *RX = s->RX + 9 * (size_t)e;
+            for (int c = 0; c < 9; c++) {
+                double dw = F[c] - RX[c];
+                W[c] += dw;
+                er += dw * dw; ea += F[c] * F[c]; ey += W[c] * W[c]; /* R X + dW = F */
+            }
+            r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
+            E += admm_element_energy_F(s, e, F);
+        }
+        acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
+    }
+    double r2 = 0, ax2 = 0, y2 = 0;
+    for (int32_t k = 0; k < a->nr; k++) {
+        size_t o = 3 * (size_t)a->rv[k];
+        for (int c = 0; c < 3; c++) {
+            double du = s->V[o + c] - s->Vrest[o + c] - s->Z[o + c], ax = s->Z[o + c] + du;
+            s->U[o + c] += du;
+            r2 += du * du; ax2 += ax * ax; y2 += s->U[o + c] * s->U[o + c];
+        }
+    }
+    const double rho = s->p.rho;
+    acc->r2 += rho * r2; acc->ax2 += rho * ax2; acc->y2 += rho * y2;
+    return E;
+}
+
+/* elastic energy of Vout over the region's elements or cells; locality over the region */
+static double act_elastic(const df_admm *s)
+{
+    const admm_active *a = s->act;
+    const double *V = s->Vout;
+    double E = 0;
+    if (s->family == ADMM_FAM_ELEMENT) {
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
+        for (int32_t k = 0; k < a->nae; k++) {
+            double F[9];
+            el_F(s, V, a->ae[k], F);
+            E += admm_element_energy_F(s, a->ae[k], F);
+        }
+        return E;
+    }
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_HEAVY)
+    for (int32_t k = 0; k < a->nae; k++) {
+        int32_t i = a->ae[k];
+        double R[9];
+        admm_fit_vertex(s, V, i, R);
+        for (int32_t t = s->sr_ptr[i]; t < s->sr_ptr[i + 1]; t++) {
+            const double *xa = V + 3 * (size_t)s->sr_a[t], *xb = V + 3 * (size_t)s->sr_b[t];
+            const double *dr = s->sr_d + 3 * (size_t)t;
+            double r2 = 0;
+            for (int r = 0; r < 3; r++) {
+                double d = R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2] - (xb[r] - xa[r]);
+                r2 += d * d;
+            }
+            E += 0.5 * s->sr_w[t] * r2;
+        }
+    }
+    return E;
+}
+
+static double act_locality(const df_admm *s)
+{
+    const admm_active *a = s->act;
+    if (s->p.w == 0.0) return 0.0;
+    double L = 0;
+    for (int32_t k = 0; k < a->nr; k++) {
+        int32_t i = a->rv[k];
+        double d[3];
+        for (int c = 0; c < 3; c++) d[c] = s->Vout[3 * (size_t)i + c] - s->Vrest[3 * (size_t)i + c];
+        L += s->a[i] * df_admm_scl1_value(d, s->p.s);
+    }
+    return s->p.w * L;
+}
+
+static double ratio(double num2, double den2)
+{
+    if (num2 == 0.0) return 0.0;
+    if (!(den2 > 0.0)) return INFINITY;
+    return sqrt(num2 / den2);
+}
+
+/* relative primal and dual residuals (admm.h DF_ADMM_RESIDUAL); the outside adds gam_e |I|^2 per
+ * element to |A x|^2 and |z|^2 (R_e X_e = F_e = I there) and nothing else */
+static void act_measure(const df_admm *s, const act_acc *acc, double *pri, double *dual)
+{
+    const admm_active *a = s->act;
+    double far = s->family == ADMM_FAM_ELEMENT ? a->gam3_all - a->gam3_ae : 0.0;
+    if (far < 0) far = 0;
+    double ax2 = acc->ax2 + far, z2 = acc->z2 + far;
+    *pri = ratio(acc->r2, ax2 > z2 ? ax2 : z2);
+    *dual = ratio(acc->s2, acc->y2);
+}
+
+/* the features the active mode does not cover (admm.h DF_ADMM_ACTIVE) */
+static int unsupported(const df_admm *s)
+{
+    return s->naff > 0 || s->p.accelerate || s->bl_ptr || s->p.energy == DF_ADMM_CLOTH ||
+           (s->family == ADMM_FAM_ELEMENT && s->q != 3) || s->deg.followers > 0 || s->deg.at_rest > 0;
+}
+
+int admm_active_defers(const df_admm *s) { return s->p.active && !unsupported(s); }
+
+/* the whole-mesh system for a full run (deferred by df_admm_create in active mode) */
+static int full_system(df_admm *s, df_error *err)
+{
+    if (s->L) return DF_OK;
+    return admm_build_system_affine(s, s->aff, s->naff, err);
+}
+
+static int too_big(const df_admm *s) { return s->act->nr > DF_ADMM_ACTIVE_MAX_FRAC * (double)s->nv; }
+
+/* the rest of the call by the full solve (a region too large to pay off) */
+static int finish_full(df_admm *s, const df_admm_budget *budget, double tstart, df_admm_result *r, df_error *err)
+{
+    admm_active *a = s->act;
+    admm_active_stale(s);
+    a->st.fallbacks++;
+    int rc = full_system(s, err);
+    if (rc) return rc;
+    admm_update_kfhp(s);
+    a->kfhp_dirty = 0;
+    df_admm_budget b;
+    memset(&b, 0, sizeof(b));
+    if (budget) b = *budget;
+    int maxit = budget && budget->max_iters > 0 ? budget->max_iters : s->p.max_iters;
+    b.max_iters = maxit - r->iterations;
+    if (b.max_iters <= 0) return DF_OK;
+    if (b.max_ms > 0) {
+        b.max_ms -= (admm_now() - tstart) * 1e3;
+        if (b.max_ms <= 0) { r->stop = DF_ADMM_STOP_TIME; return DF_OK; }
+    }
+    df_admm_result r2;
+    a->bypass = 1;
+    rc = df_admm_run(s, &b, &r2, err);
+    a->bypass = 0;
+    if (rc) return rc;
+    r->iterations += r2.iterations;
+    r->objective = r2.objective; r->elastic = r2.elastic; r->locality = r2.locality;
+    r->residual = r2.residual; r->converged = r2.converged; r->stop = r2.stop;
+    r->t_local1 += r2.t_local1; r->t_local2 += r2.t_local2; r->t_global += r2.t_global; r->t_other += r2.t_other;
+    return DF_OK;
+}
+
+/* grows the region by the support in act->sup (+ failing fringe vertices); 1 when it got too big */
+static int grow(df_admm *s, int by_check, df_error *err, int *rc)
+{
+    admm_active *a = s->act;
+    a->st.grows++;
+    if (by_check) a->st.check_grows++;
+    *rc = admm_act_build(s, 0, NULL, 0, err);
+    return !*rc && too_big(s);
+}
+
+int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, int *handled, df_error *err)
+{
+    *handled = 0;
+    if (s->act && s->act->bypass) return DF_OK;
+    if (!s->act && !(s->act = calloc(1, sizeof(admm_active)))) { /* no memory: the full solve */
+        int rc = full_system(s, err);
+        *handled = rc != DF_OK;
+        return rc;
+    }
+    admm_active *a = s->act;
+    if (unsupported(s)) {
+        a->st.fallbacks++;
+        admm_active_stale(s);
+        if (a->kfhp_dirty) { admm_update_kfhp(s); a->kfhp_dirty = 0; }
+        return DF_OK;
+    }
+    *handled = 1;
+    df_admm_result r;
+    memset(&r, 0, sizeof(r));
+    r.residual = INFINITY;
+    r.stop = DF_ADMM_STOP_ITERS;
+    double tstart = admm_now();
+    int rc = admm_act_init(s, err);
+    if (rc) return rc;
+    a = s->act;
+    if (!a->valid) {
+        admm_act_support(s, s->act_dirty); /* pristine (at rest since create): the handles only */
+        a->st.rebuilds++;
+        rc = admm_act_build(s, 1, NULL, 0, err);
+    } else {
+        admm_act_support(s, 0);
+        if (admm_act_needs_grow(s)) { a->st.grows++; rc = admm_act_build(s, 0, NULL, 0, err); }
+        else if ((int64_t)ACT_SHRINK * admm_act_fresh_size(s) < a->nr) {
+            /* the support shrank (a drag back): rebuild from it; the vertices leaving the region
+             * go exactly to rest (they are off it by no more than the iterations' residual) */
+            a->st.rebuilds++;
+            rc = admm_act_build(s, 1, NULL, 0, err);
+        } else if (a->rho_fact != s->p.rho) rc = admm_act_build(s, 0, NULL, 0, err); /* rho changed: refactor */
+    }
+    if (rc) return rc;
+    if (too_big(s)) {
+        rc = finish_full(s, budget, tstart, &r, err);
+        r.t_total = admm_now() - tstart;
+        if (res) *res = r;
+        return rc;
+    }
+    a->st.runs++;
+    int maxit = budget && budget->max_iters > 0 ? budget->max_iters : s->p.max_iters;
+    double max_ms = budget ? budget->max_ms : 0;
+    int every = budget && budget->progress ? budget->progress_every : 0;
+    const double sq_tol = sqrt(s->p.tol);
+    double E_prev = s->E_last;
+    if (!isfinite(E_prev)) {
+        double el0 = act_elastic(s), lo0 = act_locality(s);
+        E_prev = el0 + lo0;
+        s->E_last = E_prev; s->el_last = el0; s->lo_last = lo0;
+    }
+    double t_loop = admm_now(), t_it = t_loop, last_ms = 0.0;
+    int certified = 0, fell_back = 0;
+    for (int it = 0; it < maxit; it++) {
+        if (it > 0 && max_ms > 0) {
+            double tn = admm_now(), el_ms = (tn - tstart) * 1e3;
+            double mean_ms = (tn - t_loop) * 1e3 / it, est = mean_ms > last_ms ? mean_ms : last_ms;
+            if (el_ms + est * ADMM_BUDGET_MARGIN > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
+        }
+        act_acc acc = {0, 0, 0, 0, 0};
+        double t0 = admm_now();
+        act_local_x(s, &acc);
+        double t1 = admm_now();
+        act_local_z(s, &acc);
+        double t2 = admm_now();
+        act_rhs(s);
+        rc = act_global(s, err);
+        if (rc) break;
+        double ef = act_dual(s, &acc);
+        double t3 = admm_now();
+        r.t_local1 += t1 - t0; r.t_local2 += t2 - t1; r.t_global += t3 - t2;
+        double pri, dual;
+        act_measure(s, &acc, &pri, &dual);
+        int hold = s->damp && !isfinite(ef) && isfinite(s->E_last) && isfinite(s->el_last);
+        if (!hold)
+            for (int32_t k = 0; k < a->nr; k++)
+                memcpy(s->Vout + 3 * (size_t)a->rv[k], s->V + 3 * (size_t)a->rv[k], 3 * sizeof(double));
+        double ta = admm_now();
+        double el = hold ? s->el_last : s->family == ADMM_FAM_ELEMENT ? ef : act_elastic(s);
+        double lo = hold ? s->lo_last : act_locality(s);
+        double E = hold ? s->E_last : el + lo;
+        r.iterations++;
+        s->st.iterations++;
+        r.elastic = el; r.locality = lo; r.objective = E;
+        if (!hold && isfinite(E) && isfinite(E_prev)) {
+            double dE = fabs(E - E_prev), rel = dE == 0.0 ? 0.0 : dE / fabs(E);
+            double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
+            r.residual = rel > pd ? rel : pd;
+            if (isnan(r.residual)) r.residual = INFINITY;
+        } else {
+            r.residual = INFINITY;
+        }
+        E_prev = E;
+        s->E_last = E; s->el_last = el; s->lo_last = lo;
+        int conv = r.residual < s->p.tol;
+        /* region: grow when the support nears the edge; certify the far field periodically and
+         * before reporting convergence */
+        admm_act_support(s, 0);
+        int need = admm_act_needs_grow(s), by_check = 0;
+        certified = 0;
+        if (!need && (conv || r.iterations % a->check_every == 0)) {
+            int32_t nf = admm_act_certify(s);
+            if (nf > 0) { a->nsup += nf; need = by_check = 1; }
+            else certified = 1;
+        }
+        if (need) {
+            conv = 0;
+            if (grow(s, by_check, err, &rc)) { fell_back = 1; break; }
+            if (rc) break;
+        }
+        r.t_other += admm_now() - ta;
+        double t_end = admm_now();
+        last_ms = (t_end - t_it) * 1e3;
+        t_it = t_end;
+        if (every > 0 && (r.iterations % every == 0 || conv || it == maxit - 1)) {
+            df_admm_progress pr = {r.iterations, E, r.residual, s->Vout, s->nv};
+            if (budget->progress(budget->user, &pr)) { r.stop = DF_ADMM_STOP_CALLBACK; break; }
+        }
+        if (conv) { r.converged = 1; r.stop = DF_ADMM_STOP_CONVERGED; break; }
+    }
+    if (!rc && fell_back) rc = finish_full(s, budget, tstart, &r, err);
+    else if (!rc && !certified && r.iterations > 0) {
+        /* certify the reported state; a failure grows the region for the next run */
+        admm_act_support(s, 0);
+        int32_t nf = admm_act_certify(s);
+        if (nf > 0 || admm_act_needs_grow(s)) {
+            a->nsup += nf;
+            (void)grow(s, nf > 0, err, &rc); /* too big: the next run falls back at its start */
+        }
+    }
+    if (r.iterations == 0 && rc == DF_OK) {
+        r.objective = E_prev;
+        r.elastic = s->el_last;
+        r.locality = s->lo_last;
+    }
+    if (s->act) a->st.support = a->nsup;
+    r.t_total = admm_now() - tstart;
+    if (res) *res = r;
+    return rc;
+}

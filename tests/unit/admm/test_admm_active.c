@@ -1,0 +1,433 @@
+/* Unit tests of the active-set mode (admm.h DF_ADMM_ACTIVE): on a tet grid (ARAP and Neo-Hookean,
+ * the element family) and a planar triangle grid (ARAP, spokes and rims), a drag solved in active
+ * mode and converged equals the full solve (params.active = 0) within 1e-8 relative objective and
+ * 1e-8 positions; the vertices outside the region stay bitwise at rest; the region grows when the
+ * handle drags further and shrinks when it comes back; with a band of one ring only the far-field certificate can grow the region
+ * and it does; set_positions and reset_rest keep working in active mode (same result as the full
+ * solve); affine constraints fall back to the full solve (bit-identical to it); bad parameters are
+ * refused. Expected values come from the full solve of the same problem. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "core/admm/admm.h"
+#include "tests/unit/admm/admm_test_util.h"
+
+typedef struct scene {
+    df_mesh m;
+    int32_t *h;
+    int nh;
+    double *tg;     /* rest positions of the handles */
+    uint8_t *drag;  /* per handle: 1 when dragged */
+    double hsp;     /* grid spacing */
+    double dir[3];  /* drag direction per unit of `amount` */
+} scene;
+
+/* tet grid n^3 over [0,1]^3: bottom face pinned, 3 x 3 patch at the top centre dragged up */
+static void tet_scene(scene *sc, int n)
+{
+    memset(sc, 0, sizeof(*sc));
+    sc->m = tu_bar3d(n, n, n, 1.0, 1.0, 1.0);
+    sc->hsp = 1.0 / n;
+    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
+    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
+    sc->drag = calloc((size_t)sc->m.nv, 1);
+    for (int32_t i = 0; i < sc->m.nv; i++) {
+        const double *x = sc->m.V + 3 * (size_t)i;
+        long ii = lround(x[0] * n), jj = lround(x[1] * n);
+        int top = x[2] == 1.0 && labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
+        if (top || x[2] == 0.0) {
+            sc->drag[sc->nh] = (uint8_t)top;
+            memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
+            sc->h[sc->nh++] = i;
+        }
+    }
+    sc->dir[2] = 1.0;
+}
+
+/* planar triangle grid n x n over [0,1]^2: left column pinned, 3 x 3 centre patch dragged in x, y */
+static void tri_scene(scene *sc, int n)
+{
+    memset(sc, 0, sizeof(*sc));
+    sc->m = tu_grid2d(n, n, 1.0, 1.0);
+    sc->hsp = 1.0 / n;
+    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
+    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
+    sc->drag = calloc((size_t)sc->m.nv, 1);
+    for (int32_t i = 0; i < sc->m.nv; i++) {
+        const double *x = sc->m.V + 3 * (size_t)i;
+        long ii = lround(x[0] * n), jj = lround(x[1] * n);
+        int mid = labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
+        if (mid || ii == 0) {
+            sc->drag[sc->nh] = (uint8_t)mid;
+            memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
+            sc->h[sc->nh++] = i;
+        }
+    }
+    sc->dir[0] = 0.8;
+    sc->dir[1] = 0.6;
+}
+
+static void scene_free(scene *sc)
+{
+    tu_free(&sc->m);
+    free(sc->h); free(sc->tg); free(sc->drag);
+}
+
+/* ARAP with w, s, rho scaled by the grid spacing (a support of a few rings) */
+static df_admm_params arap_params(const scene *sc, int active)
+{
+    df_admm_params p;
+    df_admm_params_default(&p, DF_ADMM_ARAP);
+    double h = sc->hsp;
+    if (sc->m.kind == DF_MESH_TET) { /* per-vertex stiffness ~ h: w ~ h^2 keeps the support in rings */
+        p.w = 0.5 * h * h;
+        p.rho = 6.0 * h;
+    } else { /* spokes and rims: stiffness ~ 1, w ~ h */
+        p.w = 0.5 * h;
+        p.rho = 6.0;
+    }
+    p.s = 0.25 * h;
+    p.tol = 1e-13;
+    p.max_iters = 20000;
+    p.threads = 1;
+    p.active = active;
+    return p;
+}
+
+static df_admm *make(const scene *sc, const df_admm_params *p)
+{
+    df_admm *s = NULL;
+    df_error err;
+    assert_int_equal(df_admm_create(&sc->m, p, sc->h, sc->nh, NULL, 0, &s, &err), DF_OK);
+    return s;
+}
+
+/* targets: dragged handles moved by amount * hsp along dir */
+static void set_drag(df_admm *s, const scene *sc, double amount)
+{
+    double *t = malloc((size_t)sc->nh * 3 * sizeof(double));
+    memcpy(t, sc->tg, (size_t)sc->nh * 3 * sizeof(double));
+    for (int k = 0; k < sc->nh; k++)
+        if (sc->drag[k])
+            for (int c = 0; c < 3; c++) t[3 * k + c] += amount * sc->hsp * sc->dir[c];
+    df_error err;
+    assert_int_equal(df_admm_set_targets(s, t, &err), DF_OK);
+    free(t);
+}
+
+static df_admm_result run(df_admm *s, int iters)
+{
+    df_admm_budget b = {.max_iters = iters};
+    df_admm_result r;
+    df_error err;
+    assert_int_equal(df_admm_run(s, &b, &r, &err), DF_OK);
+    return r;
+}
+
+static double max_diff(const double *a, const double *b, int32_t nv)
+{
+    double d = 0;
+    for (int32_t i = 0; i < nv; i++) d = fmax(d, tu_dist(a + 3 * (size_t)i, b + 3 * (size_t)i));
+    return d;
+}
+
+static int32_t count_moved(const df_admm *s, const df_mesh *m)
+{
+    const double *V = df_admm_positions(s);
+    int32_t n = 0;
+    for (int32_t i = 0; i < m->nv; i++)
+        if (memcmp(V + 3 * (size_t)i, m->V + 3 * (size_t)i, 3 * sizeof(double))) n++;
+    return n;
+}
+
+/* both converged: equal objectives (1e-8 relative, also re-evaluated from the positions) and
+ * positions (1e-8, mesh size 1) */
+static void assert_same(df_admm *full, df_admm *act, const df_admm_result *rf, const df_admm_result *ra, int32_t nv)
+{
+    assert_true(rf->converged);
+    assert_true(ra->converged);
+    assert_true(fabs(ra->objective - rf->objective) <= 1e-8 * fabs(rf->objective));
+    double el, lo;
+    df_error err;
+    assert_int_equal(df_admm_evaluate(act, df_admm_positions(act), &el, &lo, &err), DF_OK);
+    assert_true(fabs(el + lo - rf->objective) <= 1e-8 * fabs(rf->objective));
+    assert_true(max_diff(df_admm_positions(full), df_admm_positions(act), nv) <= 1e-8);
+}
+
+/* a drag of `steps` warm updates of 20 iterations, then converged, in both modes */
+static void drag_pair(const scene *sc, const df_admm_params *pf, const df_admm_params *pa, int steps, double step,
+                      df_admm **full, df_admm **act)
+{
+    *full = make(sc, pf);
+    *act = make(sc, pa);
+    for (int k = 1; k <= steps; k++) {
+        set_drag(*full, sc, step * k);
+        set_drag(*act, sc, step * k);
+        run(*full, 20);
+        run(*act, 20);
+    }
+    df_admm_result rf = run(*full, 20000), ra = run(*act, 20000);
+    assert_same(*full, *act, &rf, &ra, sc->m.nv);
+}
+
+static void check_far_field(const df_admm *act, const scene *sc)
+{
+    df_admm_active_stats st;
+    df_admm_get_active_stats(act, &st);
+    assert_true(st.runs > 0);
+    assert_int_equal(st.fallbacks, 0);
+    /* only region vertices may differ from rest; the rest of the mesh is bitwise at rest */
+    int32_t moved = count_moved(act, &sc->m);
+    assert_true(moved > 0);
+    assert_true(moved <= st.region_vertices);
+    assert_true(st.region_vertices < sc->m.nv / 2);
+}
+
+static void test_tet_arap_equals_full(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    df_admm *full, *act;
+    drag_pair(&sc, &pf, &pa, 4, 0.3, &full, &act);
+    check_far_field(act, &sc);
+    /* the full solve's far field is at rest up to round-off only: more vertices differ there */
+    assert_true(count_moved(full, &sc.m) > count_moved(act, &sc.m));
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+static void test_tri_arap_equals_full(void **state)
+{
+    (void)state;
+    scene sc;
+    tri_scene(&sc, 30);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    df_admm *full, *act;
+    drag_pair(&sc, &pf, &pa, 4, 0.3, &full, &act);
+    check_far_field(act, &sc);
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+static void test_tet_neohookean_equals_full(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params pf, pa;
+    df_admm_params_default(&pf, DF_ADMM_NEOHOOKEAN);
+    double h = sc.hsp;
+    /* the ARAP scaling times the Neo-Hookean stiffness scale mu + lambda */
+    double E = pf.youngs, nu = pf.poisson, stiff = E / (2 * (1 + nu)) + E * nu / ((1 + nu) * (1 - 2 * nu));
+    pf.w = 1.0 * h * h * stiff;
+    pf.s = 0.25 * h;
+    pf.rho = 10.0 * h * stiff;
+    pf.tol = 1e-13;
+    pf.max_iters = 20000;
+    pf.threads = 1;
+    pa = pf;
+    pa.active = 1;
+    df_admm *full, *act;
+    drag_pair(&sc, &pf, &pa, 3, 0.3, &full, &act);
+    check_far_field(act, &sc);
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+static void test_region_grows_with_drag(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
+    set_drag(full, &sc, 0.2);
+    set_drag(act, &sc, 0.2);
+    run(full, 20000);
+    run(act, 20000);
+    df_admm_active_stats st1, st2;
+    df_admm_get_active_stats(act, &st1);
+    set_drag(full, &sc, 2.0); /* drag further: the support spreads into the band */
+    set_drag(act, &sc, 2.0);
+    df_admm_result rf = run(full, 20000), ra = run(act, 20000);
+    df_admm_get_active_stats(act, &st2);
+    assert_true(st2.grows > st1.grows);
+    assert_true(st2.region_vertices > st1.region_vertices);
+    assert_true(st2.support > st1.support);
+    assert_same(full, act, &rf, &ra, sc.m.nv);
+    check_far_field(act, &sc);
+    /* and back: the support shrinks, the next run rebuilds a smaller region from it */
+    set_drag(full, &sc, 0.2);
+    set_drag(act, &sc, 0.2);
+    run(full, 20000);
+    run(act, 20000);
+    rf = run(full, 20000); /* the first run's end shows the shrunk support, the next shrinks */
+    ra = run(act, 20000);
+    df_admm_active_stats st3;
+    df_admm_get_active_stats(act, &st3);
+    assert_true(st3.rebuilds > st2.rebuilds);
+    assert_true(st3.region_vertices < st2.region_vertices);
+    assert_same(full, act, &rf, &ra, sc.m.nv);
+    check_far_field(act, &sc);
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+/* band 1: a support vertex is always >= 1 ring from the edge, so the depth rule never grows the
+ * region; the support spreading from the handles must be caught by the certificate */
+static void test_certificate_grows_region(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    pa.active_band = 1;
+    pa.active_check_every = 5;
+    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
+    set_drag(full, &sc, 2.0);
+    set_drag(act, &sc, 2.0);
+    df_admm_result rf = run(full, 20000), ra = run(act, 20000);
+    df_admm_active_stats st;
+    df_admm_get_active_stats(act, &st);
+    assert_true(st.check_grows > 0);
+    assert_int_equal(st.grows, st.check_grows);
+    assert_true(st.checks > st.check_grows); /* the last certificate passed */
+    assert_same(full, act, &rf, &ra, sc.m.nv);
+    check_far_field(act, &sc);
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+/* set_positions (e.g. an undo or a brush edit somewhere else) and reset_rest in active mode give the
+ * full solve's results */
+static void test_set_positions_and_reset_rest(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
+    set_drag(full, &sc, 0.5);
+    set_drag(act, &sc, 0.5);
+    run(full, 20000);
+    run(act, 20000);
+    /* an outside edit far from the region: a corner vertex of the top face pushed down */
+    double *V = malloc((size_t)sc.m.nv * 3 * sizeof(double));
+    memcpy(V, df_admm_positions(act), (size_t)sc.m.nv * 3 * sizeof(double));
+    int32_t corner = sc.m.nv - 1;
+    V[3 * (size_t)corner + 2] -= 0.5 * sc.hsp;
+    df_error err;
+    int32_t nch = 0;
+    assert_int_equal(df_admm_set_positions(full, V, NULL, &err), DF_OK);
+    assert_int_equal(df_admm_set_positions(act, V, &nch, &err), DF_OK);
+    assert_int_equal(nch, 1);
+    df_admm_active_stats st0, st1;
+    df_admm_get_active_stats(act, &st0);
+    df_admm_result rf = run(full, 20000), ra = run(act, 20000);
+    df_admm_get_active_stats(act, &st1);
+    assert_true(st1.rebuilds > st0.rebuilds);
+    assert_same(full, act, &rf, &ra, sc.m.nv);
+    /* sculpting: the current shape becomes the rest shape, then a new drag */
+    assert_int_equal(df_admm_reset_rest(full, &err), DF_OK);
+    assert_int_equal(df_admm_reset_rest(act, &err), DF_OK);
+    double *t = malloc((size_t)sc.nh * 3 * sizeof(double));
+    const double *P = df_admm_positions(act);
+    for (int k = 0; k < sc.nh; k++) {
+        memcpy(t + 3 * k, P + 3 * (size_t)sc.h[k], 3 * sizeof(double));
+        if (sc.drag[k]) t[3 * k + 2] += 0.4 * sc.hsp;
+    }
+    assert_int_equal(df_admm_set_targets(full, t, &err), DF_OK);
+    assert_int_equal(df_admm_set_targets(act, t, &err), DF_OK);
+    rf = run(full, 20000);
+    ra = run(act, 20000);
+    assert_same(full, act, &rf, &ra, sc.m.nv);
+    df_admm_active_stats st2;
+    df_admm_get_active_stats(act, &st2);
+    assert_true(st2.runs > 0);
+    free(t);
+    free(V);
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+/* affine constraints: the active mode falls back to the full solve, bit for bit */
+static void test_affine_falls_back(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 6);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    int32_t av[2];
+    int na = 0;
+    for (int32_t i = 0; i < sc.m.nv && na < 2; i++) /* two free vertices of the top face on x = 0 */
+        if (sc.m.V[3 * (size_t)i] == 0.0 && sc.m.V[3 * (size_t)i + 2] == 1.0) av[na++] = i;
+    df_admm_affine aff = {.n = 2, .verts = av, .m = 1, .A = {0, 0, 1}, .b = {1.0}};
+    df_admm *full = NULL, *act = NULL;
+    df_error err;
+    assert_int_equal(df_admm_create(&sc.m, &pf, sc.h, sc.nh, &aff, 1, &full, &err), DF_OK);
+    assert_int_equal(df_admm_create(&sc.m, &pa, sc.h, sc.nh, &aff, 1, &act, &err), DF_OK);
+    set_drag(full, &sc, 0.5);
+    set_drag(act, &sc, 0.5);
+    df_admm_result rf = run(full, 50), ra = run(act, 50);
+    assert_int_equal(rf.iterations, ra.iterations);
+    assert_memory_equal(&rf.objective, &ra.objective, sizeof(double));
+    assert_memory_equal(df_admm_positions(full), df_admm_positions(act), (size_t)sc.m.nv * 3 * sizeof(double));
+    df_admm_active_stats st;
+    df_admm_get_active_stats(act, &st);
+    assert_int_equal(st.runs, 0);
+    assert_int_equal(st.fallbacks, 1);
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(&sc);
+}
+
+static void test_bad_params(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 4);
+    df_admm_params p = arap_params(&sc, 1);
+    df_admm *s = NULL;
+    df_error err;
+    p.active = 2;
+    assert_int_equal(df_admm_create(&sc.m, &p, sc.h, sc.nh, NULL, 0, &s, &err), DF_EINVAL);
+    assert_non_null(strstr(err.msg, "active"));
+    p.active = 1;
+    p.active_band = -1;
+    assert_int_equal(df_admm_create(&sc.m, &p, sc.h, sc.nh, NULL, 0, &s, &err), DF_EINVAL);
+    assert_non_null(strstr(err.msg, "active_band"));
+    p.active_band = 0;
+    p.active_check_every = -3;
+    assert_int_equal(df_admm_create(&sc.m, &p, sc.h, sc.nh, NULL, 0, &s, &err), DF_EINVAL);
+    assert_null(s);
+    df_admm_active_stats st;
+    df_admm_get_active_stats(NULL, &st);
+    assert_int_equal(st.runs, 0);
+    scene_free(&sc);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_tet_arap_equals_full),
+        cmocka_unit_test(test_tri_arap_equals_full),
+        cmocka_unit_test(test_tet_neohookean_equals_full),
+        cmocka_unit_test(test_region_grows_with_drag),
+        cmocka_unit_test(test_certificate_grows_region),
+        cmocka_unit_test(test_set_positions_and_reset_rest),
+        cmocka_unit_test(test_affine_falls_back),
+        cmocka_unit_test(test_bad_params),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
