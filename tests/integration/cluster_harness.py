@@ -98,37 +98,56 @@ class RedisCluster:
     def __init__(self, dir: str, n: int = 3) -> None:
         if not REDIS or not REDIS_CLI:
             skip_or_fail("redis-server / redis-cli not installed (make deps installs them)")
+        self.dir = dir
         self.ports = [free_tcp_port() for _ in range(n)]
-        self.procs = []
-        self.logs = []
-        for p in self.ports:
-            d = os.path.join(dir, "node-%d" % p)
-            os.makedirs(d)
-            log = open(os.path.join(d, "redis.log"), "ab")
-            self.logs.append(log)
-            self.procs.append(subprocess.Popen(
-                [REDIS, "--port", str(p), "--bind", "127.0.0.1", "--save", "",
-                 "--appendonly", "yes", "--appendfsync", "always", "--dir", d,
-                 "--cluster-enabled", "yes", "--cluster-config-file", "nodes.conf",
-                 "--cluster-node-timeout", "5000",
-                 "--cluster-port", str(free_tcp_port())],     # not PORT + 10000 (may be > 65535)
-                stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT))
-        deadline = time.monotonic() + DEADLINE_S
-        for p, proc in zip(self.ports, self.procs):
-            while True:
-                try:
-                    if redis_cmd(p, "PING").startswith(b"+PONG"):
-                        break
-                except OSError:
-                    pass
-                assert proc.poll() is None, "redis-server exited"
-                assert time.monotonic() < deadline, "redis-server not ready"
-                time.sleep(0.02)
+        self.cports = [free_tcp_port() for _ in range(n)]  # not PORT + 10000 (may be > 65535)
+        self.procs = [None] * n
+        self.logs = [None] * n
+        for k in range(n):
+            os.makedirs(os.path.join(dir, "node-%d" % self.ports[k]))
+            self.start_node(k)
+        for k in range(n):
+            self.wait_ping(k)
         out = subprocess.run([REDIS_CLI, "--cluster", "create"] +
                              ["127.0.0.1:%d" % p for p in self.ports] +
                              ["--cluster-replicas", "0", "--cluster-yes"],
                              capture_output=True, text=True, timeout=60)
         assert out.returncode == 0, out.stdout + out.stderr
+        self.wait_ok()
+
+    def start_node(self, k: int) -> None:
+        """Starts node k in its dir (its AOF and nodes.conf: a restart rejoins as it was)."""
+        p = self.ports[k]
+        d = os.path.join(self.dir, "node-%d" % p)
+        self.logs[k] = open(os.path.join(d, "redis.log"), "ab")
+        self.procs[k] = subprocess.Popen(
+            [REDIS, "--port", str(p), "--bind", "127.0.0.1", "--save", "",
+             "--appendonly", "yes", "--appendfsync", "always", "--dir", d,
+             "--cluster-enabled", "yes", "--cluster-config-file", "nodes.conf",
+             "--cluster-node-timeout", "5000", "--cluster-port", str(self.cports[k])],
+            stdin=subprocess.DEVNULL, stdout=self.logs[k], stderr=subprocess.STDOUT)
+
+    def wait_ping(self, k: int) -> None:
+        deadline = time.monotonic() + DEADLINE_S
+        while True:
+            try:
+                if redis_cmd(self.ports[k], "PING").startswith(b"+PONG"):
+                    return
+            except OSError:
+                pass
+            assert self.procs[k].poll() is None, "redis-server exited"
+            assert time.monotonic() < deadline, "redis-server not ready"
+            time.sleep(0.02)
+
+    def kill9(self, k: int) -> None:
+        self.procs[k].kill()
+        self.procs[k].wait()
+        self.logs[k].close()
+
+    def restart(self, k: int) -> None:
+        """Node k started again after kill9 (same port, AOF, nodes.conf); waits for the cluster."""
+        self.start_node(k)
+        self.wait_ping(k)
         self.wait_ok()
 
     def wait_ok(self) -> None:
@@ -186,7 +205,8 @@ class RedisCluster:
                 proc.terminate()
                 proc.wait(30)
         for log in self.logs:
-            log.close()
+            if not log.closed:
+                log.close()
 
 
 class Cluster:

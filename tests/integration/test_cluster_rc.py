@@ -13,7 +13,9 @@ master of its key's hash slot, a session's keys (hash tag {ID}) sharing one slot
   exactly the acknowledged requests);
 - the session's slot migrated to another master while its owner writes (CLUSTER SETSLOT
   IMPORTING / MIGRATING, MIGRATE, SETSLOT NODE): writes during the migration follow -ASK, those
-  after it -MOVED, and nothing acknowledged is lost.
+  after it -MOVED, and nothing acknowledged is lost;
+- the master holding a session killed (-9) and restarted with its AOF: the change in the gap is
+  refused (EIO, not acknowledged), the daemons reconnect to it, nothing acknowledged is lost.
 Every wait polls with a deadline; nothing is timed."""
 import threading
 
@@ -234,6 +236,36 @@ def test_slot_migration_is_followed(rc, make_daemon):
         assert s.acked == v + 1 and owner_port(s.w) == owner.tcp_port
         s.check(s.w)
         assert "dropped from this daemon" not in owner.log()
+    finally:
+        if s:
+            s.w.close()
+            s.sh.close()
+        cl.stop()
+
+
+def test_master_killed_and_restarted_with_aof_loses_nothing_acknowledged(rc, make_daemon):
+    cl = Cluster(rc, 2)
+    shadow = make_daemon()
+    s = None
+    try:
+        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        for _ in range(10):
+            s.step()
+        k = rc.ports.index(rc.master_of("deformd:{%d}:lease" % s.sid))
+        rc.kill9(k)
+        try:                                  # its master down: refused, not acknowledged
+            s.step()
+            raise AssertionError("a change was acknowledged without its Redis master")
+        except DeformdError as e:
+            assert e.code == E.EIO, e
+        rc.restart(k)
+        s.w.close()
+        s.w = reconnect(cl, s.sid, 1)
+        s.after_failover(s.w.get_mesh(s.sid).version)
+        s.check(s.w)
+        for _ in range(8):
+            s.step()
+        s.check(s.w)
     finally:
         if s:
             s.w.close()
