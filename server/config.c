@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "proto/shm_ring.h"
+#include "server/cluster/slot.h"
 #include "server/log.h"
 #include "server/session/membudget.h"
 
@@ -260,9 +261,15 @@ int df_config_set(df_server_config *cfg, const char *key, const char *value, df_
         return DF_OK;
     }
     if (strcmp(key, "cluster") == 0) {
-        if (value[0] && (strncmp(value, "redis://", 8) != 0 || !strchr(value + 8, ':') ||
-                         strlen(value) >= sizeof cfg->cluster))
-            return df_error_set(err, DF_EINVAL, "cluster: '%s' is not redis://HOST:PORT", value);
+        df_redis_node_addr seeds[DF_REDIS_SEEDS_MAX];
+        size_t n;
+        if (strlen(value) >= sizeof cfg->cluster)
+            return df_error_set(err, DF_EINVAL, "cluster: longer than %d bytes",
+                                DF_CONFIG_PATH_MAX - 1);
+        if (value[0]) {
+            int rc = df_slot_parse_seeds(value, seeds, DF_REDIS_SEEDS_MAX, &n, err);
+            if (rc != DF_OK) return rc;
+        }
         strcpy(cfg->cluster, value);
         return DF_OK;
     }
@@ -500,7 +507,8 @@ static const char k_usage[] =
     "                      under systemd, else $XDG_STATE_HOME/deformd/deformd.db); 'none' =\n"
     "                      memory only (config: store, durability = full|normal|off,\n"
     "                      store_max_mb)\n"
-    "                      cluster mode (config only): cluster = redis://HOST:PORT,\n"
+    "                      cluster mode (config only): cluster = redis://HOST:PORT[,HOST:PORT...]\n"
+    "                      (one Redis, or seed nodes of a Redis Cluster),\n"
     "                      advertise = HOST:PORT, cluster_lease_ms (sessions leased in Redis,\n"
     "                      replicated to a Redis Stream, failed over to another daemon)\n"
     "  --foreground        do not daemonize (use under systemd and in tests)\n"

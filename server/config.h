@@ -86,8 +86,9 @@
  *                      checkpoints: survives kill -9, not a power loss), OFF
  *   store_max_mb       cap of the store file, MiB (0 = none, default): a change beyond it
  *                      fails like a full disk
- *   cluster            redis://HOST:PORT: cluster mode (server/cluster/cluster.h): sessions
- *                      are leased, replicated to Redis and failed over; "" (default): off
+ *   cluster            redis://HOST:PORT[,HOST:PORT...]: cluster mode (server/cluster/cluster.h):
+ *                      sessions are leased, replicated to Redis and failed over; one Redis,
+ *                      or seed nodes of a Redis Cluster (server/cluster/redis.h); "": off
  *   advertise          HOST:PORT other daemons redirect clients to (default: the tcp
  *                      listener's address); required with cluster
  *   cluster_lease_ms   session lease ttl, ms (default 3000, 300..600000)
@@ -200,7 +201,7 @@ typedef struct df_server_config {
     char store_path[DF_CONFIG_PATH_MAX];  /* config `store`: "" = the default, "none", a path */
     int durability;              /* 0 full, 1 normal, 2 off (store.h DF_DURABILITY_*) */
     int store_max_mb;            /* store file cap, MiB (0 = none) */
-    char cluster[DF_CONFIG_PATH_MAX];   /* config `cluster`: "redis://host:port", "" = off */
+    char cluster[DF_CONFIG_PATH_MAX];   /* config `cluster`: "redis://host:port[,...]", "" = off */
     char advertise[DF_CONFIG_PATH_MAX]; /* config `advertise`: "host:port" ("" = tcp's) */
     int cluster_lease_ms;        /* session lease ttl, ms */
     int admm_active;             /* 1: handle sets solve in the active-set mode (admm.h

@@ -1,7 +1,8 @@
 /* cluster.h — cluster mode (issue 15): many deformd daemons serve one studio's sessions
  * through one Redis, and a session survives the loss of its daemon.
  *
- * Config (config.h): cluster = redis://HOST:PORT turns it on; advertise = HOST:PORT is the
+ * Config (config.h): cluster = redis://HOST:PORT turns it on (or a comma-separated list of
+ * Redis Cluster seed nodes: redis.h routes each command to its key's slot master); advertise = HOST:PORT is the
  * address other daemons redirect clients to (default: the TCP listener's); cluster_lease_ms the
  * lease ttl. Without `cluster` nothing here runs and deformd is the single daemon it was.
  *

@@ -14,19 +14,20 @@ static const char k_append[] =
     "if redis.call('GET', KEYS[1]) ~= ARGV[1] then return redis.error_reply('FENCED') end\n"
     "return redis.call('XADD', KEYS[2], '*', 'v', ARGV[2], 'r', ARGV[3])\n";
 
-/* KEYS lease, snap, log, index; ARGV token, snap, id, info */
+/* KEYS lease, snap, log[, index]; ARGV token, snap, id, info. Without the index key (Redis
+ * Cluster: the index is in another slot) the caller sets the index entry after it. */
 static const char k_snapshot[] =
     "if redis.call('GET', KEYS[1]) ~= ARGV[1] then return redis.error_reply('FENCED') end\n"
     "redis.call('SET', KEYS[2], ARGV[2])\n"
     "redis.call('DEL', KEYS[3])\n"
-    "redis.call('HSET', KEYS[4], ARGV[3], ARGV[4])\n"
+    "if KEYS[4] then redis.call('HSET', KEYS[4], ARGV[3], ARGV[4]) end\n"
     "return 1\n";
 
-/* KEYS lease, snap, log, index, epoch; ARGV token, id */
+/* KEYS lease, snap, log, epoch[, index]; ARGV token, id. Index as k_snapshot. */
 static const char k_close[] =
     "if redis.call('GET', KEYS[1]) ~= ARGV[1] then return redis.error_reply('FENCED') end\n"
-    "redis.call('DEL', KEYS[1], KEYS[2], KEYS[3], KEYS[5])\n"
-    "redis.call('HDEL', KEYS[4], ARGV[2])\n"
+    "redis.call('DEL', KEYS[1], KEYS[2], KEYS[3], KEYS[4])\n"
+    "if KEYS[5] then redis.call('HDEL', KEYS[5], ARGV[2]) end\n"
     "return 1\n";
 
 #define INDEX_KEY "deformd:sessions"
@@ -41,6 +42,23 @@ static int fenced_reply(redisReply *rep, uint64_t id, const char *what, df_error
     else if (rep->type == REDIS_REPLY_ERROR)
         rc = df_error_set(err, DF_EINTERNAL, "cluster redis: session %" PRIu64 ": %s: %s", id,
                           what, rep->str);
+    df_redis_reply_free(rep);
+    return rc;
+}
+
+/* HSET INDEX_KEY sid info / HDEL INDEX_KEY sid (info NULL): the index entry written apart
+ * from the session's fenced script, in a Redis Cluster (its own slot). Errors: DF_EIO,
+ * DF_EINTERNAL (an error reply). */
+static int index_cmd(df_redis *r, const char *cmd, const char *sid, const char *info,
+                     df_error *err)
+{
+    redisReply *rep;
+    int rc = info ? df_redis_cmdv(r, &rep, err, 4, cmd, INDEX_KEY, sid, info)
+                  : df_redis_cmdv(r, &rep, err, 3, cmd, INDEX_KEY, sid);
+    if (rc != DF_OK) return rc;
+    if (rep->type == REDIS_REPLY_ERROR)
+        rc = df_error_set(err, DF_EINTERNAL, "cluster redis: %s %s %s: %s", cmd, INDEX_KEY, sid,
+                          rep->str);
     df_redis_reply_free(rep);
     return rc;
 }
@@ -68,13 +86,22 @@ int df_rlog_snapshot(df_redis *r, uint64_t id, const char *token, const char *in
     df_lease_key(id, "snap", ks, sizeof ks);
     df_lease_key(id, "log", kg, sizeof kg);
     snprintf(sid, sizeof sid, "%" PRIu64, id);
+    /* one Redis: the index entry in the same script; a Redis Cluster: after it (other slot) */
+    int split = df_redis_is_cluster(r);
     const char *argv[11] = {"EVAL", k_snapshot, "4", kl, ks, kg, INDEX_KEY, token,
                             (const char *)snap, sid, info};
     size_t lens[11] = {4, strlen(k_snapshot), 1, strlen(kl), strlen(ks), strlen(kg),
                        strlen(INDEX_KEY), strlen(token), len, strlen(sid), strlen(info)};
+    if (split) { /* numkeys 3, no index key */
+        argv[2] = "3";
+        memmove(&argv[6], &argv[7], 4 * sizeof *argv);
+        memmove(&lens[6], &lens[7], 4 * sizeof *lens);
+    }
     redisReply *rep;
-    int rc = df_redis_cmd(r, 11, argv, lens, &rep, err);
-    return rc != DF_OK ? rc : fenced_reply(rep, id, "writing a snapshot", err);
+    int rc = df_redis_cmd(r, split ? 10 : 11, argv, lens, &rep, err);
+    if (rc == DF_OK) rc = fenced_reply(rep, id, "writing a snapshot", err);
+    if (rc == DF_OK && split) rc = index_cmd(r, "HSET", sid, info, err);
+    return rc;
 }
 
 int df_rlog_close(df_redis *r, uint64_t id, const char *token, df_error *err)
@@ -86,9 +113,14 @@ int df_rlog_close(df_redis *r, uint64_t id, const char *token, df_error *err)
     df_lease_key(id, "epoch", ke, sizeof ke);
     snprintf(sid, sizeof sid, "%" PRIu64, id);
     redisReply *rep;
-    int rc = df_redis_cmdv(r, &rep, err, 10, "EVAL", k_close, "5", kl, ks, kg, INDEX_KEY, ke,
-                           token, sid);
-    return rc != DF_OK ? rc : fenced_reply(rep, id, "closing", err);
+    int split = df_redis_is_cluster(r);
+    int rc = split ? df_redis_cmdv(r, &rep, err, 9, "EVAL", k_close, "4", kl, ks, kg, ke,
+                                   token, sid)
+                   : df_redis_cmdv(r, &rep, err, 10, "EVAL", k_close, "5", kl, ks, kg, ke,
+                                   INDEX_KEY, token, sid);
+    if (rc == DF_OK) rc = fenced_reply(rep, id, "closing", err);
+    if (rc == DF_OK && split) rc = index_cmd(r, "HDEL", sid, NULL, err);
+    return rc;
 }
 
 void df_rlog_entries_free(df_rlog_entry *e, size_t n)

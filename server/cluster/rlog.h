@@ -8,6 +8,10 @@
  *   deformd:sessions    hash ID -> "KIND PLANAR NV NE VERSION OBSERVERS NAME" of each of the
  *                       cluster, as of its last snapshot (LIST_SESSIONS, list.c)
  *   deformd:next_id     INCR: the cluster's session ids (never reused)
+ * The two global keys are each read and written by single-key commands only, so in a Redis
+ * Cluster each simply lives on the master of its own slot (no shared hash tag is needed). There
+ * the index entry, in another slot than the session's keys, is written by its own HSET / HDEL
+ * right after the session's fenced script (one Redis: inside it, atomically).
  * Each write is one Lua script that first compares deformd:{ID}:lease with the writer's token
  * and fails with "FENCED" when it differs (the lease expired or another daemon took it): an
  * XADD for a change; SET snap + DEL log (the snapshot holds every change so far) for a

@@ -8,7 +8,9 @@ one redis-server (AOF, appendfsync always: nothing acknowledged is lost) on loop
   2. a fixed mix of small strokes (begin, 2 updates, end; 1600-vertex grids) on 30 sessions spread
      over 1, 2 and 3 daemons, one client thread per session: aggregate acknowledged versions/s, p99
      latency, and the Redis server's CPU time over the run (from /proc);
-  3. failover: kill -9 of a session's owner, then the time until another daemon serves it (a
+  3. the mix of 2. on 3 daemons over a Redis Cluster of 3 masters (sessions spread over the
+     masters by hash slot), to compare with 3 daemons over one Redis;
+  4. failover: kill -9 of a session's owner, then the time until another daemon serves it (a
      client polling the other daemons), with cluster_lease_ms 1000: target <= lease + 1 s.
 Every figure is measured on this shared 2-core machine: read them as such. Targets print
 "target ... MET|MISS"; the exit status is 0 when every measurement ran.
@@ -21,7 +23,7 @@ import tempfile
 import threading
 import time
 
-from cluster_harness import LEASE_MS, Cluster, Redis, redis_cmd
+from cluster_harness import LEASE_MS, Cluster, Redis, RedisCluster, redis_cmd
 from conftest import Daemon
 from deformd_client import Brush
 from helpers import grid_obj, obj_bytes_positions
@@ -55,7 +57,12 @@ def redis_cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def mix(cl, n_daemons):
+def redis_pids(r):
+    """The redis-server pids of a Redis or a RedisCluster."""
+    return [p.pid for p in r.procs] if hasattr(r, "procs") else [r.proc.pid]
+
+
+def mix(cl, n_daemons, label="one redis"):
     data = grid_obj(40, 40)
     X = obj_bytes_positions(data)
     sids = []
@@ -88,19 +95,20 @@ def mix(cl, n_daemons):
     threads = [threading.Thread(target=worker, args=(k,)) for k in range(SESSIONS)]
     for t in threads:
         t.start()
-    cpu0 = redis_cpu_s(cl.redis.proc.pid)
+    cpu0 = sum(redis_cpu_s(p) for p in redis_pids(cl.redis))
     start.wait()
     t0 = time.perf_counter()
     for t in threads:
         t.join(120)
     dt = time.perf_counter() - t0
-    cpu = redis_cpu_s(cl.redis.proc.pid) - cpu0
+    cpu = sum(redis_cpu_s(p) for p in redis_pids(cl.redis)) - cpu0
     if errors:
         raise RuntimeError(errors[:3])
     versions = SESSIONS * STROKES_EACH * 3
-    print("mix of small strokes, %d sessions on %d daemon(s): %.0f versions/s, %.0f requests/s, "
-          "p99 %.2f ms, redis CPU %.2f s over %.2f s (info)"
-          % (SESSIONS, n_daemons, versions / dt, len(lat) / dt, pct(lat, 0.99) * 1e3, cpu, dt))
+    print("mix of small strokes, %d sessions on %d daemon(s), %s: %.0f versions/s, %.0f "
+          "requests/s, p99 %.2f ms, redis CPU %.2f s over %.2f s (info)"
+          % (SESSIONS, n_daemons, label, versions / dt, len(lat) / dt, pct(lat, 0.99) * 1e3,
+             cpu, dt))
 
 
 def failover(cl):
@@ -171,6 +179,19 @@ def main():
         finally:
             cl.stop()
             redis.stop()
+        # the same mix over a Redis Cluster of 3 masters (each session's keys on its slot's
+        # master): on 2 shared cores, 3 redis-servers compete with the daemons for the CPU
+        rcdir = os.path.join(tmp, "redis-cluster")
+        os.mkdir(rcdir)
+        rc = RedisCluster(rcdir, 3)
+        try:
+            cl = Cluster(rc, 3)
+            try:
+                mix(cl, 3, "Redis Cluster of 3 masters")
+            finally:
+                cl.stop()
+        finally:
+            rc.stop()
     return 0
 
 

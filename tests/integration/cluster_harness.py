@@ -1,5 +1,6 @@
-"""Test harness of cluster mode (server/cluster/cluster.h): one redis-server and several deformd
-daemons on loopback ports, each daemon in a tmp dir of its own with its own local store.
+"""Test harness of cluster mode (server/cluster/cluster.h): one redis-server (or a Redis Cluster of
+several masters) and several deformd daemons on loopback ports, each daemon in a tmp dir of its own
+with its own local store.
 
 Redis runs with `--save '' --appendonly yes --appendfsync always` in a tmp dir, so that a kill -9
 of Redis loses nothing it acknowledged (the cluster's durability is Redis's AOF). Waits poll with a
@@ -78,23 +79,155 @@ class Redis:
         self.log.close()
 
 
+REDIS_CLI = shutil.which("redis-cli")
+
+
+def cli(port: int, *args: str) -> str:
+    """redis-cli -p port args... (raw output, stripped); raises on a failed run."""
+    out = subprocess.run([REDIS_CLI, "-h", "127.0.0.1", "-p", str(port), "--raw"] + list(args),
+                         capture_output=True, text=True, timeout=30)
+    assert out.returncode == 0, out.stderr
+    return out.stdout.strip()
+
+
+class RedisCluster:
+    """A Redis Cluster of `n` masters (no replicas) on free loopback ports, each redis-server
+    with its AOF (fsync always) and cluster config file in a dir of its own under `dir`; created
+    with `redis-cli --cluster create`, ready when every node says cluster_state:ok (polled)."""
+
+    def __init__(self, dir: str, n: int = 3) -> None:
+        if not REDIS or not REDIS_CLI:
+            skip_or_fail("redis-server / redis-cli not installed (make deps installs them)")
+        self.dir = dir
+        self.ports = [free_tcp_port() for _ in range(n)]
+        self.cports = [free_tcp_port() for _ in range(n)]  # not PORT + 10000 (may be > 65535)
+        self.procs = [None] * n
+        self.logs = [None] * n
+        for k in range(n):
+            os.makedirs(os.path.join(dir, "node-%d" % self.ports[k]))
+            self.start_node(k)
+        for k in range(n):
+            self.wait_ping(k)
+        out = subprocess.run([REDIS_CLI, "--cluster", "create"] +
+                             ["127.0.0.1:%d" % p for p in self.ports] +
+                             ["--cluster-replicas", "0", "--cluster-yes"],
+                             capture_output=True, text=True, timeout=60)
+        assert out.returncode == 0, out.stdout + out.stderr
+        self.wait_ok()
+
+    def start_node(self, k: int) -> None:
+        """Starts node k in its dir (its AOF and nodes.conf: a restart rejoins as it was)."""
+        p = self.ports[k]
+        d = os.path.join(self.dir, "node-%d" % p)
+        self.logs[k] = open(os.path.join(d, "redis.log"), "ab")
+        self.procs[k] = subprocess.Popen(
+            [REDIS, "--port", str(p), "--bind", "127.0.0.1", "--save", "",
+             "--appendonly", "yes", "--appendfsync", "always", "--dir", d,
+             "--cluster-enabled", "yes", "--cluster-config-file", "nodes.conf",
+             "--cluster-node-timeout", "5000", "--cluster-port", str(self.cports[k])],
+            stdin=subprocess.DEVNULL, stdout=self.logs[k], stderr=subprocess.STDOUT)
+
+    def wait_ping(self, k: int) -> None:
+        deadline = time.monotonic() + DEADLINE_S
+        while True:
+            try:
+                if redis_cmd(self.ports[k], "PING").startswith(b"+PONG"):
+                    return
+            except OSError:
+                pass
+            assert self.procs[k].poll() is None, "redis-server exited"
+            assert time.monotonic() < deadline, "redis-server not ready"
+            time.sleep(0.02)
+
+    def kill9(self, k: int) -> None:
+        self.procs[k].kill()
+        self.procs[k].wait()
+        self.logs[k].close()
+
+    def restart(self, k: int) -> None:
+        """Node k started again after kill9 (same port, AOF, nodes.conf); waits for the cluster."""
+        self.start_node(k)
+        self.wait_ping(k)
+        self.wait_ok()
+
+    def wait_ok(self) -> None:
+        """Polls until every node says cluster_state:ok and agrees on the slot owners."""
+        deadline = time.monotonic() + DEADLINE_S
+        while True:
+            infos = [cli(p, "CLUSTER", "INFO") for p in self.ports]
+            maps = [self.slot_ranges(p) for p in self.ports]
+            if all("cluster_state:ok" in i for i in infos) and all(m == maps[0] for m in maps):
+                return
+            assert time.monotonic() < deadline, "Redis Cluster not ok: %s" % infos
+            time.sleep(0.05)
+
+    @property
+    def url(self) -> str:
+        return "redis://" + ",".join("127.0.0.1:%d" % p for p in self.ports)
+
+    def seed(self, k: int) -> str:
+        """The url of node k alone (a seed that may own none of a session's slots)."""
+        return "redis://127.0.0.1:%d" % self.ports[k]
+
+    def node_ids(self) -> dict:
+        """port -> cluster node id (CLUSTER MYID)."""
+        return {p: cli(p, "CLUSTER", "MYID") for p in self.ports}
+
+    def slot_ranges(self, port: int) -> list:
+        """[(lo, hi, master port)] sorted, as node `port` sees them (CLUSTER NODES)."""
+        ranges = []
+        for line in cli(port, "CLUSTER", "NODES").splitlines():
+            f = line.split()
+            if "master" not in f[2]:
+                continue
+            mport = int(f[1].split("@")[0].rsplit(":", 1)[1])
+            for r in f[8:]:
+                if r.startswith("["):
+                    continue          # a slot being migrated / imported
+                lo, _, hi = r.partition("-")
+                ranges.append((int(lo), int(hi or lo), mport))
+        return sorted(ranges)
+
+    def keyslot(self, key: str) -> int:
+        return int(cli(self.ports[0], "CLUSTER", "KEYSLOT", key))
+
+    def master_of(self, key: str) -> int:
+        """The port of the master serving key's slot."""
+        s = self.keyslot(key)
+        for lo, hi, p in self.slot_ranges(self.ports[0]):
+            if lo <= s <= hi:
+                return p
+        raise AssertionError("slot %d unassigned" % s)
+
+    def stop(self) -> None:
+        for proc in self.procs:
+            if proc.poll() is None:
+                proc.terminate()
+                proc.wait(30)
+        for log in self.logs:
+            if not log.closed:
+                log.close()
+
+
 class Cluster:
     """`n` daemons sharing `redis`; daemons killed with kill9 are replaced by start()."""
 
-    def __init__(self, redis: Redis, n: int, extra: str = "") -> None:
+    def __init__(self, redis, n: int, extra: str = "", urls: Optional[List[str]] = None) -> None:
+        """redis: a Redis or a RedisCluster (its .url); urls: daemon k's `cluster` value instead
+        (e.g. one seed node each)."""
         self.redis = redis
         self.extra = extra
         self.tmps: List[tempfile.TemporaryDirectory] = []
         self.daemons: List[Daemon] = []
         self.dead: List[Daemon] = []
-        for _ in range(n):
-            self.daemons.append(self.start())
+        for k in range(n):
+            self.daemons.append(self.start(urls[k] if urls else None))
 
-    def start(self) -> Daemon:
+    def start(self, url: Optional[str] = None) -> Daemon:
         t = tempfile.TemporaryDirectory(prefix="deformd-cluster-")
         self.tmps.append(t)
         cfg = ("store = %s\ncluster = %s\ncluster_lease_ms = %d\n%s"
-               % (os.path.join(t.name, "local.db"), self.redis.url, LEASE_MS, self.extra))
+               % (os.path.join(t.name, "local.db"), url or self.redis.url, LEASE_MS, self.extra))
         return Daemon(t.name, cfg, tcp=True)
 
     def by_port(self, port: int) -> Optional[Daemon]:

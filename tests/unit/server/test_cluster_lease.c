@@ -257,6 +257,33 @@ static void test_bad_url_and_unreachable_server(void **state)
     df_redis_free(r);
 }
 
+/* A plain Redis (cluster support disabled) given as one seed is used as it is (the one-node
+ * mode: not a cluster); given with other seeds it is refused with a clear error. A dead first
+ * seed is skipped. */
+static void test_seed_list_of_a_plain_redis(void **state)
+{
+    (void)state;
+    df_redis *r = connect_or_skip();
+    struct redisReply *rep = NULL;
+    df_error e;
+    assert_int_equal(df_redis_cmdv(r, &rep, &e, 1, "PING"), DF_OK);
+    df_redis_reply_free(rep);
+    assert_int_equal(df_redis_is_cluster(r), 0);
+    df_redis_free(r);
+    char url[160];
+    snprintf(url, sizeof url, "%s,127.0.0.1:%d", g_url, g_port);
+    assert_int_equal(df_redis_new(url, &r, NULL), DF_OK);
+    assert_int_equal(df_redis_cmdv(r, &rep, &e, 1, "PING"), DF_EINVAL);
+    assert_null(rep);
+    assert_non_null(strstr(e.msg, "not a Redis Cluster node"));
+    df_redis_free(r);
+    int dead = free_port();
+    snprintf(url, sizeof url, "redis://127.0.0.1:%d,127.0.0.1:%d", dead, g_port);
+    assert_int_equal(df_redis_new(url, &r, NULL), DF_OK);
+    assert_int_equal(df_redis_cmdv(r, &rep, &e, 1, "PING"), DF_EINVAL); /* still 2 seeds */
+    df_redis_free(r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -265,6 +292,7 @@ int main(void)
         cmocka_unit_test(test_fenced_append_after_expiry),
         cmocka_unit_test(test_snapshot_read_and_close),
         cmocka_unit_test(test_bad_url_and_unreachable_server),
+        cmocka_unit_test(test_seed_list_of_a_plain_redis),
     };
     return cmocka_run_group_tests(tests, start_redis, stop_redis);
 }

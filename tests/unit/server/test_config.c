@@ -223,8 +223,16 @@ static void test_cluster_keys(void **state)
     assert_string_equal(c.cluster, "redis://10.0.0.5:6379");
     assert_string_equal(c.advertise, "host-a:7878");
     assert_int_equal(c.cluster_lease_ms, 1500);
+    /* a Redis Cluster: seed nodes, comma-separated (a repeated redis:// and spaces allowed) */
+    const char *seeds = "redis://10.0.0.5:7000,10.0.0.6:7001, redis://10.0.0.7:7002";
+    assert_int_equal(df_config_set(&c, "cluster", seeds, &e), DF_OK);
+    assert_string_equal(c.cluster, seeds);
+    assert_int_equal(df_config_set(&c, "cluster", "redis://10.0.0.5:6379", &e), DF_OK);
     /* bad values: a clear error naming the key, nothing changed */
     const char *bad[][2] = {{"cluster", "10.0.0.5:6379"}, {"cluster", "redis://nohost"},
+                            {"cluster", "redis://a:1,"}, {"cluster", "redis://a:1,,b:2"},
+                            {"cluster", "redis://a:1,b"}, {"cluster", "redis://a:1,b:70000"},
+                            {"cluster", "redis://a:1,:2"}, {"cluster", "redis://a:0"},
                             {"advertise", "nohost"}, {"advertise", ":7878"},
                             {"advertise", "h:"}, {"cluster_lease_ms", "299"},
                             {"cluster_lease_ms", "600001"}};
