@@ -416,6 +416,7 @@ int main(int argc, char **argv)
     printf("pig Neo-Hookean (target 2.0 s; paper 7.18 s for 500 its):\n");
     time_to_quality(&ex[1], &L[1], E500[1], T500[1], 2.0);
     for (int i = 0; i < 4; i++) unload(&L[i]);
+    ttq_table(ttq, 6);
     printf("== interactive drag\n");
     experiment teaser_nh = {"pig teaser Neo-Hookean", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01, 0, 0};
     experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0};
