@@ -117,11 +117,12 @@ typedef enum df_admm_energy {
  * give a factor sqrt(pri / dual) when pri > DF_ADMM_RHO_IMBALANCE dual or
  * dual > DF_ADMM_RHO_IMBALANCE pri (then < 1), else 1, at most DF_ADMM_RHO_MAX_STEP either way
  * (DF_ADMM_GAMMA_MAX_STEP for g); rho and g are multiplied by their factors (Boyd et al. 2011
- * sec. 3.4.1 residual balancing). Neo-Hookean: while the iterates are inverted (held, see
- * df_admm_run) no balancing happens; when they have been for a whole gap G, rho is multiplied by
- * DF_ADMM_RHO_INVERTED_STEP instead. A change is one numeric-only refactorization (the global
- * matrix is reassembled with the same pattern and factorized into the kept symbolic analysis; the
- * affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
+ * sec. 3.4.1 residual balancing). Neo-Hookean: no balancing after an inverted (held, see
+ * df_admm_run) iterate. (Raising rho while iterates stay inverted was tried: on the pig teaser it
+ * doubled rho 22 times and never reached the targets.) A change is one numeric-only refactorization (the global
+ * matrix is reassembled with the same pattern and factorized, supernodal, into a copy of the kept
+ * symbolic analysis, then converted to the simplicial LL^T the solves use, as at create; no new
+ * analysis; the affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
  * (U x rho_old / rho_new, W / g-factor) and the Anderson history is dropped. Changes are at least
  * G iterations apart (the first one too), G = max(DF_ADMM_RHO_MIN_GAP, ceil(DF_ADMM_RHO_COST x
  * the factorization's flops / an iteration's estimated flops)), so refactorizations cost at most
@@ -136,7 +137,6 @@ typedef enum df_admm_energy {
 #define DF_ADMM_RHO_MAX_STEP 10.0
 #define DF_ADMM_RHO_COST 5.0
 #define DF_ADMM_RHO_MIN_GAP 10
-#define DF_ADMM_RHO_INVERTED_STEP 2.0
 #define DF_ADMM_GAMMA_MIN 0.25
 #define DF_ADMM_GAMMA_MAX 4.0
 #define DF_ADMM_GAMMA_MAX_STEP 4.0

@@ -86,6 +86,7 @@ struct df_admm {
     cholmod_common cc;
     int cc_started;
     cholmod_factor *L;
+    cholmod_factor *Lsym;    /* adaptive penalties: copy of the supernodal symbolic analysis */
     cholmod_dense *rhs;      /* nfree x 3 column-major */
     cholmod_dense *sol, *sol_y, *sol_e; /* cholmod_solve2 result and workspaces, reused */
     /* affine constraints: Schur complement on top of the factorization */
@@ -111,7 +112,6 @@ struct df_admm {
     int rho_gap;             /* iterations between two penalty changes (refactorization cost) */
     int rho_wait;            /* iterations left before the next change may happen */
     double gscale;           /* element penalties: current gamma_e over the operators' gamma_e */
-    int hold_run;            /* consecutive iterations with an inverted (held) Neo-Hookean iterate */
     int broken;              /* a failed refactorization could not restore the affine system */
 };
 
@@ -141,7 +141,7 @@ int admm_global_solve(df_admm *s, df_error *err);
 int admm_solve_rhs(df_admm *s, int with_b, const double **x, df_error *err);
 
 /* admm_system.c: p.rho = rho_new and every gamma_e multiplied by gscale, K_ff reassembled (same
- * pattern) and refactored numerically into the analyzed L, K_fh P and the affine Schur complement
+ * pattern) and refactored numerically (supernodal, from the kept symbolic copy Lsym), K_fh P and the affine Schur complement
  * rebuilt; on error the old weights are restored (s->broken if even that fails) */
 int admm_system_refactor(df_admm *s, double rho_new, double gscale, df_error *err);
 

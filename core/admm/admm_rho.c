@@ -104,12 +104,9 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, int *changed, df_
 {
     *changed = 0;
     if (!s->rho_adaptive) return DF_OK;
-    s->hold_run = held ? s->hold_run + 1 : 0;
     if (s->rho_wait > 0) { s->rho_wait--; return DF_OK; }
     double rho = s->p.rho, fr = 1.0, fg = 1.0;
-    if (s->hold_run >= s->rho_gap) {
-        fr = DF_ADMM_RHO_INVERTED_STEP; /* inverted iterates for a whole gap: stiffen the Z block */
-    } else if (!held) {
+    if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
         fr = balance(rs->pri_z, rs->dual_z);
         if (s->family == ADMM_FAM_ELEMENT) {
             fg = balance(rs->pri_e, rs->dual_e);
@@ -139,7 +136,6 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, int *changed, df_
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     s->st.rho_changes++;
     s->rho_wait = s->rho_gap;
-    s->hold_run = 0;
     *changed = 1;
     return DF_OK;
 }

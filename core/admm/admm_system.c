@@ -38,6 +38,7 @@ void admm_free_system(df_admm *s)
 {
     if (s->cc_started) {
         if (s->L) cholmod_free_factor(&s->L, &s->cc);
+        if (s->Lsym) cholmod_free_factor(&s->Lsym, &s->cc);
         if (s->rhs) cholmod_free_dense(&s->rhs, &s->cc);
         if (s->sol) cholmod_free_dense(&s->sol, &s->cc);
         if (s->sol_y) cholmod_free_dense(&s->sol_y, &s->cc);
@@ -212,9 +213,25 @@ static int assemble_sparse(df_admm *s, cholmod_sparse **Ko, trip *cpl, df_error 
  * the first factorization L is simplicial LL^T and cholmod_factorize refactors it in place) */
 static int factor_numeric(df_admm *s, cholmod_sparse *K)
 {
-    int ok = cholmod_factorize(K, s->L, &s->cc);
+    if (!s->Lsym) { /* in place: cholmod_factorize refactors a simplicial L with cholmod_rowfac */
+        int ok = cholmod_factorize(K, s->L, &s->cc);
+        s->st.factorizations++;
+        return ok && s->cc.status != CHOLMOD_NOT_POSDEF && s->L->minor >= s->L->n ? 0 : -1;
+    }
+    /* from a copy of the kept supernodal symbolic analysis: a supernodal (BLAS) numeric
+     * factorization, then the same simplicial LL^T conversion as at build */
+    cholmod_factor *Ln = cholmod_copy_factor(s->Lsym, &s->cc);
+    if (!Ln) return -1;
+    int ok = cholmod_factorize(K, Ln, &s->cc);
     s->st.factorizations++;
-    return ok && s->cc.status != CHOLMOD_NOT_POSDEF && s->L->minor >= s->L->n ? 0 : -1;
+    if (!ok || s->cc.status == CHOLMOD_NOT_POSDEF || Ln->minor < Ln->n ||
+        (Ln->is_super && !cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, Ln, &s->cc))) {
+        cholmod_free_factor(&Ln, &s->cc);
+        return -1;
+    }
+    cholmod_free_factor(&s->L, &s->cc);
+    s->L = Ln;
+    return 0;
 }
 
 /* reassembles K with p.rho and gam, refactors numerically, replaces the coupling and K_fh P and
@@ -300,6 +317,11 @@ int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df
     s->L = cholmod_analyze(K, &s->cc);
     s->st.analyses++;
     if (!s->L) { cholmod_free_sparse(&K, &s->cc); return df_error_set(err, DF_EINTERNAL, "admm: cholmod_analyze failed (status %d)", s->cc.status); }
+    /* adaptive penalties: the symbolic analysis kept for the numeric refactorizations */
+    if (s->rho_adaptive && s->L->is_super && !(s->Lsym = cholmod_copy_factor(s->L, &s->cc))) {
+        cholmod_free_sparse(&K, &s->cc);
+        return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory");
+    }
     int ok = cholmod_factorize(K, s->L, &s->cc);
     s->st.factorizations++;
     cholmod_free_sparse(&K, &s->cc);
