@@ -112,7 +112,8 @@ typedef enum df_admm_energy {
  * After every iteration, per block, the relative residuals (Wohlberg 2017; penalty-free, so the
  * rule does not depend on the length unit or the energy scale) of the Z block
  *     pri_z = ||V - Vrest - Z|| / max(||V - Vrest||, ||Z||),   dual_z = ||Z_k - Z_k-1|| / ||U||
- * and of the element block (gamma_e metric, F_e(V) = R_e X_e; element-family energies only)
+ * and of the element block (gamma_e metric, F_e(V) = R_e X_e; element-family energies but
+ * Neo-Hookean, whose gamma_e is tied to its prox's curvature: g = 1 there)
  *     pri_e = ||F(V) - RX|| / max(||F(V)||, ||RX||),            dual_e = ||RX_k - RX_k-1|| / ||W||
  * give a factor sqrt(pri / dual) when pri > DF_ADMM_RHO_IMBALANCE dual or
  * dual > DF_ADMM_RHO_IMBALANCE pri (then < 1), else 1, at most DF_ADMM_RHO_MAX_STEP either way

@@ -108,7 +108,9 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, int *changed, df_
     double rho = s->p.rho, fr = 1.0, fg = 1.0;
     if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
         fr = balance(rs->pri_z, rs->dual_z);
-        if (s->family == ADMM_FAM_ELEMENT) {
+        /* element penalties: not for Neo-Hookean, whose gamma_e bounds its prox's curvature (with
+         * g = 0.25 the pig teaser never reached its targets) */
+        if (s->family == ADMM_FAM_ELEMENT && s->p.energy != DF_ADMM_NEOHOOKEAN) {
             fg = balance(rs->pri_e, rs->dual_e);
             if (fg > DF_ADMM_GAMMA_MAX_STEP) fg = DF_ADMM_GAMMA_MAX_STEP;
             if (fg < 1.0 / DF_ADMM_GAMMA_MAX_STEP) fg = 1.0 / DF_ADMM_GAMMA_MAX_STEP;
