@@ -33,12 +33,7 @@ typedef struct experiment {
     const char *label, *stem, *init;
     df_admm_energy energy;
     double rho, s;
-    double w;      /* 0: the paper's w = rho s / 10 */
-    int unit;      /* 1: mesh and targets scaled to a unit bounding box (largest side 1) */
 } experiment;
-
-/* the SC-L1 weight of an experiment */
-static double exp_w(const experiment *x) { return x->w > 0 ? x->w : x->rho * x->s / 10.0; }
 
 typedef struct loaded {
     df_mesh m;
@@ -74,17 +69,6 @@ static int load(const experiment *x, loaded *L)
     L->tg = malloc((size_t)L->nh * 3 * sizeof(double));
     for (int k = 0; k < L->nh; k++) memcpy(L->tg + 3 * k, T + 3 * (size_t)L->h[k], 24);
     free(T);
-    if (x->unit) { /* largest bounding-box side 1, about the origin of the box's corner */
-        double lo[3], hi[3];
-        for (int d = 0; d < 3; d++) lo[d] = hi[d] = L->m.V[d];
-        for (int32_t i = 0; i < L->m.nv; i++)
-            for (int d = 0; d < 3; d++) { lo[d] = fmin(lo[d], L->m.V[3 * (size_t)i + d]); hi[d] = fmax(hi[d], L->m.V[3 * (size_t)i + d]); }
-        double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
-        for (int32_t i = 0; i < L->m.nv; i++)
-            for (int d = 0; d < 3; d++) L->m.V[3 * (size_t)i + d] = (L->m.V[3 * (size_t)i + d] - lo[d]) / ext;
-        for (int k = 0; k < L->nh; k++)
-            for (int d = 0; d < 3; d++) L->tg[3 * k + d] = (L->tg[3 * k + d] - lo[d]) / ext;
-    }
     return 0;
 }
 
@@ -95,13 +79,12 @@ static void unload(loaded *L)
     free(L->tg);
 }
 
-/* the paper's w (= rho_paper s / 10) with ADMM penalty rho (0: the paper's rho; < 0: the default,
- * i.e. the adaptive penalty) */
+/* the paper's w (= rho_paper s / 10) with ADMM penalty rho (0: the paper's rho) */
 static df_admm *make(const experiment *x, const loaded *L, int accelerate, double rho)
 {
     df_admm_params p;
     df_admm_params_default(&p, x->energy);
-    p.rho = rho > 0 ? rho : rho < 0 ? p.rho : x->rho; p.s = x->s; p.w = exp_w(x);
+    p.rho = rho > 0 ? rho : x->rho; p.s = x->s; p.w = x->rho * x->s / 10.0;
     p.accelerate = accelerate;
     df_admm *s = NULL;
     df_error err;
@@ -113,25 +96,12 @@ static df_admm *make(const experiment *x, const loaded *L, int accelerate, doubl
 typedef struct quality {
     double target, t0, t_hit;
     int it_hit;
-    const loaded *L; /* when set: the handles must also be at their targets (Neo-Hookean damping
-                        lags them, with a lower objective meanwhile) */
 } quality;
-
-/* 1 when every handle of L is at its target in V (to 1e-9 of the coordinate's size) */
-static int handles_at(const loaded *L, const double *V)
-{
-    for (int k = 0; k < L->nh; k++)
-        for (int d = 0; d < 3; d++) {
-            double t = L->tg[3 * k + d];
-            if (fabs(V[3 * (size_t)L->h[k] + d] - t) > 1e-9 * (1.0 + fabs(t))) return 0;
-        }
-    return 1;
-}
 
 static int quality_cb(void *user, const df_admm_progress *pr)
 {
     quality *q = user;
-    if (pr->objective <= q->target * (1.0 + QUALITY_REL) && (!q->L || handles_at(q->L, pr->V))) {
+    if (pr->objective <= q->target * (1.0 + QUALITY_REL)) {
         q->t_hit = now() - q->t0;
         q->it_hit = pr->iteration;
         return 1;
@@ -174,13 +144,13 @@ static void time_to_quality(const experiment *x, const loaded *L, double E500, d
         double rho = variant >= 2 ? fast : x->rho;
         /* the machine is shared: best of 3 for the plain fast-penalty runs (a few seconds each) */
         int reps = variant == 2 ? 3 : 1;
-        quality q = {E500, 0, NAN, -1, NULL};
+        quality q = {E500, 0, NAN, -1};
         df_admm_result r;
         memset(&r, 0, sizeof(r));
         for (int rep = 0; rep < reps; rep++) {
             df_admm *s = make(x, L, acc, rho);
             if (!s) return;
-            quality qr = {E500, 0, NAN, -1, NULL};
+            quality qr = {E500, 0, NAN, -1};
             df_error err;
             qr.t0 = now();
             df_admm_run(s, &(df_admm_budget){acc ? 300 : 600, 0, 1, quality_cb, &qr}, &r, &err);
@@ -195,111 +165,6 @@ static void time_to_quality(const experiment *x, const loaded *L, double E500, d
         else
             printf("  %-26s did not reach it within %d its (%.3f s, E %.10g, %d accepted AA steps)\n", label,
                    r.iterations, r.t_total, r.objective, r.anderson_accepted);
-    }
-}
-
-/* ---- time to quality with defaults (issue 14 item 1) ---- */
-
-#define TTQ_CAP 1500   /* iteration cap of the default and 1.25 w/s runs */
-
-typedef struct trace {
-    double t0;
-    int n, cap;
-    double *E, *t;
-    const loaded *L;
-} trace;
-
-static int trace_cb(void *user, const df_admm_progress *pr)
-{
-    trace *tr = user;
-    if (tr->n < tr->cap) {
-        tr->E[tr->n] = handles_at(tr->L, pr->V) ? pr->objective : INFINITY;
-        tr->t[tr->n] = now() - tr->t0;
-        tr->n++;
-    }
-    return 0;
-}
-
-/* one run from rest to the targets with penalty rho (see make), default tolerance; *its / *sec:
- * first iteration (and its time) whose objective is within QUALITY_REL of target (target NAN: of
- * the run's own final objective, which then becomes *target); -1 when never */
-typedef struct ttq_run {
-    int its, ran, rho_changes;
-    double sec, E_end, rho_end;
-    df_admm_stop stop;
-} ttq_run;
-
-static ttq_run ttq_one(const experiment *x, const loaded *L, double rho, int cap, double *target)
-{
-    ttq_run o = {-1, 0, 0, NAN, NAN, NAN, 0};
-    df_admm *s = make(x, L, 0, rho);
-    if (!s) return o;
-    trace tr = {0, 0, cap, malloc((size_t)cap * sizeof(double)), malloc((size_t)cap * sizeof(double)), L};
-    df_admm_result r;
-    df_error err;
-    if (isnan(*target)) {
-        tr.t0 = now();
-        df_admm_run(s, &(df_admm_budget){cap, 0, 1, trace_cb, &tr}, &r, &err);
-        *target = r.objective;
-    } else {
-        quality q = {*target, now(), NAN, -1, L};
-        tr.t0 = q.t0;
-        df_admm_run(s, &(df_admm_budget){cap, 0, 1, quality_cb, &q}, &r, &err);
-        tr.n = 0;
-        if (q.it_hit > 0) { o.its = q.it_hit; o.sec = q.t_hit; }
-    }
-    for (int k = 0; k < tr.n && o.its < 0; k++)
-        if (tr.E[k] <= *target * (1.0 + QUALITY_REL)) { o.its = k + 1; o.sec = tr.t[k]; }
-    o.ran = r.iterations;
-    o.rho_changes = r.rho_changes;
-    o.E_end = r.objective;
-    o.rho_end = r.rho;
-    o.stop = r.stop;
-    free(tr.E);
-    free(tr.t);
-    df_admm_free(s);
-    return o;
-}
-
-static void ttq_cell(const ttq_run *o)
-{
-    if (o->its > 0) printf(" %5d %7.3f |", o->its, o->sec);
-    else printf(" %5s %7s |", "-", "-");
-}
-
-/* target: the defaults reach the reference objective (500 iterations at the paper's rho), and in
- * less time than rho = 1.25 w / s does (when that reaches it at all) */
-static void ttq_table(const experiment *ex, int n)
-{
-    printf("== time to quality with defaults: iterations and seconds to reach the objective of 500 iterations\n"
-           "   at the paper's rho (10 w / s) within %g relative; defaults = adaptive rho (DF_ADMM_RHO_RULE), default\n"
-           "   tol; other runs capped at %d its. Target: defaults reach it, and faster than rho = 1.25 w / s\n",
-           QUALITY_REL, TTQ_CAP);
-    printf("%-24s %-14s | %-13s | %-13s | %-13s | %s\n", "case", "E500", "paper rho", "1.25 w/s", "defaults",
-           "defaults: rho changes, final rho, stop");
-    for (int i = 0; i < n; i++) {
-        const experiment *x = &ex[i];
-        loaded L;
-        if (load(x, &L)) continue;
-        double target = NAN, w = exp_w(x);
-        ttq_run pap = ttq_one(x, &L, 10.0 * w / x->s, 500, &target);
-        ttq_run fast = ttq_one(x, &L, FAST_RHO_FACTOR * w / x->s, TTQ_CAP, &target);
-        ttq_run def = ttq_one(x, &L, -1, TTQ_CAP, &target);
-        printf("%-24s %-14.10g |", x->label, target);
-        ttq_cell(&pap);
-        ttq_cell(&fast);
-        ttq_cell(&def);
-        const char *why = def.stop == DF_ADMM_STOP_CONVERGED ? "converged" : def.stop == DF_ADMM_STOP_ITERS ? "cap"
-                          : "callback (reached)";
-        printf(" %d, %.4g, %s\n", def.rho_changes, def.rho_end, why);
-        int met = def.its > 0 && (fast.its < 0 || def.sec < fast.sec);
-        if (def.its > 0)
-            printf("  target %s: defaults reach E500 in %.3f s, 1.25 w/s %s%.3f s: %s\n", x->label, def.sec,
-                   fast.its > 0 ? "in " : "never (", fast.its > 0 ? fast.sec : NAN, met ? "MET" : "MISS");
-        else
-            printf("  target %s: defaults never reach E500 (%d its, E %.10g, %.2e above): MISS\n", x->label, def.ran,
-                   def.E_end, (def.E_end - target) / fabs(target));
-        unload(&L);
     }
 }
 
@@ -358,6 +223,7 @@ static void interactive(const experiment *x, int paper_rho)
 
 int main(int argc, char **argv)
 {
+    (void)argc;
     /* The machine running this is usually shared: OpenMP threads that spin-wait at barriers while
      * their partner is descheduled cost more than the parallel work saves. libgomp reads
      * OMP_WAIT_POLICY when it loads, so re-run once with the passive (sleeping) policy unless the
@@ -380,25 +246,11 @@ int main(int argc, char **argv)
 #else
     printf("bench_admm: built without OpenMP (serial kernels)\n");
 #endif
-    experiment ttq[6] = {
-        {"pig ARAP", "pig", "pig_init0.4.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0},
-        {"pig Neo-Hookean", "pig", "pig_init0.4.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01, 0, 0},
-        {"pig teaser Neo-Hookean", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01, 0, 0},
-        {"bar3 ARAP", "bar3", "bar3_init1.node", DF_ADMM_ARAP, 0.1, 0.1, 0, 0},
-        {"apple Neo-Hookean", "teaser_apple", "teaser_apple_init1.node", DF_ADMM_NEOHOOKEAN, 1e3, 0.01, 0, 0},
-        {"cat-like: unit pig NH", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 0, 0.01, 5.0, 1},
-    };
-    if (argc > 1 && strcmp(argv[1], "ttq") == 0) { /* only the time-to-quality table */
-        int only = argc > 2 ? atoi(argv[2]) : -1;
-        if (only >= 0 && only < 6) ttq_table(&ttq[only], 1);
-        else ttq_table(ttq, 6);
-        return 0;
-    }
     experiment ex[4] = {
-        {"pig ARAP", "pig", "pig_init0.4.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0},
-        {"pig Neo-Hookean", "pig", "pig_init0.4.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01, 0, 0},
-        {"bar3 ARAP", "bar3", "bar3_init1.node", DF_ADMM_ARAP, 0.1, 0.1, 0, 0},
-        {"apple Neo-Hookean", "teaser_apple", "teaser_apple_init1.node", DF_ADMM_NEOHOOKEAN, 1e3, 0.01, 0, 0},
+        {"pig ARAP", "pig", "pig_init0.4.node", DF_ADMM_ARAP, 0.1, 0.01},
+        {"pig Neo-Hookean", "pig", "pig_init0.4.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01},
+        {"bar3 ARAP", "bar3", "bar3_init1.node", DF_ADMM_ARAP, 0.1, 0.1},
+        {"apple Neo-Hookean", "teaser_apple", "teaser_apple_init1.node", DF_ADMM_NEOHOOKEAN, 1e3, 0.01},
     };
     printf("== Table 2 (500 plain ADMM iterations, times in seconds; paper: pig ARAP 4.03, pig NH 7.18, bar ARAP 5.65,"
            " apple NH 1.13 on 8 threads)\n");
@@ -416,10 +268,9 @@ int main(int argc, char **argv)
     printf("pig Neo-Hookean (target 2.0 s; paper 7.18 s for 500 its):\n");
     time_to_quality(&ex[1], &L[1], E500[1], T500[1], 2.0);
     for (int i = 0; i < 4; i++) unload(&L[i]);
-    ttq_table(ttq, 6);
     printf("== interactive drag\n");
-    experiment teaser_nh = {"pig teaser Neo-Hookean", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01, 0, 0};
-    experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0};
+    experiment teaser_nh = {"pig teaser Neo-Hookean", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01};
+    experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01};
     interactive(&teaser_arap, 0);
     interactive(&teaser_nh, 0);
     interactive(&teaser_nh, 1);
