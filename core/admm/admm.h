@@ -122,7 +122,11 @@ typedef enum df_admm_energy {
  * (DF_ADMM_GAMMA_MAX_STEP for g); rho and g are multiplied by their factors (Boyd et al. 2011
  * sec. 3.4.1 residual balancing). Neo-Hookean: no balancing after an inverted (held, see
  * df_admm_run) iterate. (Raising rho while iterates stay inverted was tried: on the pig teaser it
- * doubled rho 22 times and never reached the targets.) A change is one numeric-only refactorization (the global
+ * doubled rho 22 times and never reached the targets.) Stall watch: when the best stop residual
+ * (DF_ADMM_RESIDUAL) of a window of DF_ADMM_RHO_STALL_WINDOW non-inverted iterations is no better
+ * than the previous window's and above max(tol, DF_ADMM_RHO_STALL_MIN) (the iteration cycles: small penalties near c can, e.g. the table
+ * case w 2e-7 oscillated at 1e-6 relative forever at 1.25 c), the next change multiplies rho by
+ * DF_ADMM_RHO_STALL_STEP and raises the floor to it. A change is one numeric-only refactorization (the global
  * matrix is reassembled with the same pattern and factorized, supernodal, into a copy of the kept
  * symbolic analysis, then converted to the simplicial LL^T the solves use, as at create; no new
  * analysis; the affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
@@ -140,6 +144,9 @@ typedef enum df_admm_energy {
 #define DF_ADMM_RHO_MAX_STEP 10.0
 #define DF_ADMM_RHO_COST 5.0
 #define DF_ADMM_RHO_MIN_GAP 10
+#define DF_ADMM_RHO_STALL_WINDOW 200
+#define DF_ADMM_RHO_STALL_STEP 2.0
+#define DF_ADMM_RHO_STALL_MIN 1e-12
 #define DF_ADMM_GAMMA_MIN 0.25
 #define DF_ADMM_GAMMA_MAX 4.0
 #define DF_ADMM_GAMMA_MAX_STEP 4.0

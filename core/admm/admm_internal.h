@@ -109,6 +109,8 @@ struct df_admm {
     int rho_adaptive;        /* 1: residual balancing changes p.rho */
     double rho_floor;        /* smallest penalty the balancing may choose (> w max(a_i) / s) */
     double rho_ceil;         /* largest one */
+    int win_n, stall_pending;/* stall watch: iterations in the current window; a stall seen */
+    double win_best, win_prev; /* best stop residual of the current / previous window (-1: none) */
     int rho_gap;             /* iterations between two penalty changes (refactorization cost) */
     int rho_wait;            /* iterations left before the next change may happen */
     double gscale;           /* element penalties: current gamma_e over the operators' gamma_e */
@@ -152,7 +154,8 @@ int admm_system_refactor(df_admm *s, double rho_new, double gscale, df_error *er
 void admm_rho_init(df_admm *s);
 void admm_rho_set_gap(df_admm *s);
 struct admm_resid;
-int admm_rho_adapt(df_admm *s, const struct admm_resid *rs, int held, int *changed, df_error *err);
+int admm_rho_adapt(df_admm *s, const struct admm_resid *rs, int held, double resid, int *changed,
+                   df_error *err);
 
 /* admm_damp.c: the global step; for Neo-Hookean moves the applied handle targets towards the
  * requested ones by the largest step (1, 1/2, ...) that leaves no element of V inverted */

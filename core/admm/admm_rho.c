@@ -73,6 +73,7 @@ void admm_rho_init(df_admm *s)
     s->p.rho = rho0;
     s->rho_floor = conv > 0 ? DF_ADMM_RHO_FLOOR * conv : rho0 / DF_ADMM_RHO_RANGE;
     s->rho_ceil = rho0 * DF_ADMM_RHO_RANGE;
+    s->win_prev = -1.0;
 }
 
 void admm_rho_set_gap(df_admm *s)
@@ -100,13 +101,39 @@ static double balance(double pri, double dual)
     return 1.0;
 }
 
-int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, int *changed, df_error *err)
+/* stall watch: the best stop residual of each window of DF_ADMM_RHO_STALL_WINDOW iterations; 1
+ * when a window ended no better than the one before (the iteration cycles instead of converging) */
+static int stalled(df_admm *s, double resid)
+{
+    if (!(resid >= 0) || !isfinite(resid)) return 0;
+    if (s->win_n == 0 || resid < s->win_best) s->win_best = resid;
+    if (++s->win_n < DF_ADMM_RHO_STALL_WINDOW) return 0;
+    /* residuals at round-off level (or below tol) are no stall: the run is converged */
+    int st = s->win_prev >= 0 && s->win_best >= s->win_prev && s->win_best > DF_ADMM_RHO_STALL_MIN &&
+             s->win_best >= s->p.tol;
+    s->win_prev = s->win_best;
+    s->win_n = 0;
+    return st;
+}
+
+int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int *changed, df_error *err)
 {
     *changed = 0;
     if (!s->rho_adaptive) return DF_OK;
+    int stall = !held && stalled(s, resid);
+    if (stall) s->stall_pending = 1;
     if (s->rho_wait > 0) { s->rho_wait--; return DF_OK; }
     double rho = s->p.rho, fr = 1.0, fg = 1.0;
-    if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
+    if (s->stall_pending) {
+        /* no progress over a whole window: a stiffer Z block, and the floor follows (the balancing
+         * would otherwise lower it again) */
+        fr = DF_ADMM_RHO_STALL_STEP;
+        double f = rho * fr < s->rho_ceil ? rho * fr : s->rho_ceil;
+        if (f > s->rho_floor) s->rho_floor = f;
+        s->stall_pending = 0;
+        s->win_prev = -1.0; /* the next window starts a fresh comparison */
+        s->win_n = 0;
+    } else if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
         fr = balance(rs->pri_z, rs->dual_z);
         /* element penalties: not for Neo-Hookean, whose gamma_e bounds its prox's curvature (with
          * g = 0.25 the pig teaser never reached its targets) */

@@ -138,7 +138,7 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         if (s->rho_adaptive && it < maxit - 1) { /* adaptive penalty (admm_rho.c) */
             double tr = admm_now();
             int changed = 0;
-            rc = admm_rho_adapt(s, &rs, hold, &changed, err);
+            rc = admm_rho_adapt(s, &rs, hold, r.residual, &changed, err);
             if (rc) break;
             if (changed) { r.rho_changes++; r.t_refactor += admm_now() - tr; }
         }

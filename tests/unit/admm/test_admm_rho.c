@@ -3,7 +3,7 @@
  * and 1e3 (lengths) and with the energy scaled; the penalty never violates the convexity condition
  * rho > w max(a_i) / s and changes at most once per gap; an explicit rho never changes and runs
  * exactly as a fixed-rho solver; affine constraints hold through refactorizations; a tiny-energy
- * ARAP problem (the table case, w 2e-7) does not stop early. */
+ * ARAP problem (the table case, w 2e-7) neither stops early nor stalls. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -202,8 +202,8 @@ static void test_rho_validation(void **st)
     free_problem(&pb);
 }
 
-/* the table case: ARAP with w 2e-7 and a small move, objective ~1e-6: the default tolerance does
- * not stop the adaptive run before it reaches the reference objective */
+/* the table case: ARAP with w 2e-7 and a small move, objective ~1e-8: the default tolerance does
+ * not stop the adaptive run before it reaches the reference objective, and it converges */
 static void test_tiny_energy_does_not_stop_early(void **st)
 {
     (void)st;
@@ -219,10 +219,11 @@ static void test_tiny_energy_does_not_stop_early(void **st)
     printf("  tiny energy: reference E %.12g (%d its), adaptive E %.12g (%d its, %s, %d changes)\n", ref.objective,
            ref.iterations, ad.objective, ad.iterations, ad.converged ? "converged" : "cap", ad.rho_changes);
     assert_true(ref.objective > 0 && ref.objective < 1e-4);
-    /* within 1e-5: the SC-L1 objective is nonconvex, and the stationary points that fixed penalties
-     * of 2 .. 100 w / s reach on this problem lie ~9e-7 above the 10 w / s reference; the old stop
-     * test ended 7e-4 above on the authors' table */
-    assert_true(ad.objective <= ref.objective * (1.0 + 1e-5));
+    /* at rho near the convexity bound this problem cycles (the objective oscillating ~1e-6 relative,
+     * never converging); the stall watch raises rho until it converges, to the reference's level */
+    assert_true(ad.converged && ad.iterations < MAXIT);
+    assert_true(ad.rho > DF_ADMM_RHO_INIT_LOC * pb.p.w / pb.p.s); /* raised */
+    assert_true(ad.objective <= ref.objective * (1.0 + REL));
     free_problem(&pb);
 }
 
