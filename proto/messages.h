@@ -683,9 +683,9 @@ void df_msg_brush_values_defaults(df_msg_brush_values *v);
 void df_msg_brush_defaults(df_msg_brush *m);
 
 /* Fills `m` with the solver's defaults for `energy` (df_energy; 0 or unknown -> ARAP), from
- * core/admm/admm_defaults.h (the one place of them: w 1e-4, s 0.01, rho 0.1, tol 1e-11,
+ * core/admm/admm_defaults.h (the one place of them: w 1e-4, s 0.01, rho 0, tol 1e-11,
  * max_iters 500, E 1e7 Pa, Poisson 0.45, strain [0.9, 1.1], bending 1e-3, a_i = 1, no
- * acceleration, Anderson m 5; NEOHOOKEAN: rho 5e5, w 500). No handles (set n_handles/handles),
+ * acceleration, Anderson m 5; NEOHOOKEAN: w 500; rho 0 = adaptive). No handles (set n_handles/handles),
  * session_id 0. */
 void df_msg_handles_defaults(df_msg_handles *m, uint8_t energy);
 

@@ -70,8 +70,8 @@ static int handles_check(const df_msg_handles *m, df_error *err)
         return df_error_set(err, DF_EINVAL, "%s: w %g must be finite and >= 0", M, m->w);
     if (!isfinite(m->s) || !(m->s > 0))
         return df_error_set(err, DF_EINVAL, "%s: s %g must be finite and > 0", M, m->s);
-    if (!isfinite(m->rho) || !(m->rho > 0))
-        return df_error_set(err, DF_EINVAL, "%s: rho %g must be finite and > 0", M, m->rho);
+    if (!isfinite(m->rho) || m->rho < 0)
+        return df_error_set(err, DF_EINVAL, "%s: rho %g must be finite and >= 0 (0: adaptive)", M, m->rho);
     if (!isfinite(m->tol) || m->tol < 0)
         return df_error_set(err, DF_EINVAL, "%s: tol %g must be finite and >= 0", M, m->tol);
     if (!isfinite(m->youngs) || !(m->youngs > 0))

@@ -25,7 +25,7 @@ static const dc_cli_opt HANDLES_OPTS[H_COUNT] = {
     {"handles", 1, "--handles FILE     handle vertices, one 0-based index per line (required)"},
     {"w", 1, "--w W              SC-L1 locality weight >= 0 (default " S(DF_ADMM_DEFAULT_W) "; neohookean " S(DF_ADMM_DEFAULT_NH_W) ")"},
     {"s", 1, "--s S              SC-L1 threshold distance > 0, mesh units (default " S(DF_ADMM_DEFAULT_S) ")"},
-    {"rho", 1, "--rho RHO          ADMM penalty > w/s (default " S(DF_ADMM_DEFAULT_RHO) "; neohookean " S(DF_ADMM_DEFAULT_NH_RHO) ")"},
+    {"rho", 1, "--rho RHO          fixed ADMM penalty > w/s (default: adaptive, chosen and tuned by the solver)"},
     {"iters", 1, "--iters N          default iteration budget of a move (default " S(DF_ADMM_DEFAULT_MAX_ITERS) ")"},
     {"tol", 1, "--tol T            residual tolerance >= 0 (default " S(DF_ADMM_DEFAULT_TOL) ")"},
     {"youngs", 1, "--youngs E         neohookean Young's modulus, Pa (default " S(DF_ADMM_DEFAULT_YOUNGS) ")"},
@@ -46,8 +46,8 @@ static int check_ranges(const dc_cli_args *a, const df_msg_handles *h, df_error 
         return df_error_set(e, DF_EINVAL, "--w: %s must be >= 0", a->val[H_W]);
     if (h->s <= 0)
         return df_error_set(e, DF_EINVAL, "--s: %s must be > 0", a->val[H_S]);
-    if (h->rho <= 0)
-        return df_error_set(e, DF_EINVAL, "--rho: %s must be > 0 (and above w/s)", a->val[H_RHO]);
+    if (a->val[H_RHO] && h->rho <= 0)
+        return df_error_set(e, DF_EINVAL, "--rho: %s must be > 0 (and above w/s); omit it for the adaptive penalty", a->val[H_RHO]);
     if (h->tol < 0)
         return df_error_set(e, DF_EINVAL, "--tol: %s must be >= 0", a->val[H_TOL]);
     if (a->val[H_YOUNGS] && h->youngs <= 0)

@@ -86,7 +86,7 @@ typedef enum df_admm_energy {
  * E ~ 1e-6 and stopped early). After each iteration k:
  *   e_k   = |E_k - E_k-1| / |E_k|                      (relative objective change; 0 when equal)
  *   pri_k = ||r_k|| / max(||A x_k||, ||z_k||)          (relative primal residual)
- *   dua_k = ||s_k|| / ||y_k||                          (relative dual residual)
+ *   dua_k = ||s_k|| / max(||y_k||, ||z_k||)            (relative dual residual)
  *   residual = max(e_k, sqrt(tol) * max(pri_k, dua_k))
  * and the run has converged when residual < tol, i.e. the objective changed by less than tol
  * relative AND both ADMM residuals are below sqrt(tol) relative (near the optimum the objective
@@ -95,13 +95,68 @@ typedef enum df_admm_energy {
  * r = (V - Vrest - Z, F_e(V) - R_e X_e), A x = (V - Vrest, F_e(V)), z = (Z, R_e X_e),
  * s = the change of (Z, R_e X_e) over the iteration and y = (U, W) the scaled duals (s and y both
  * measured in the constraint space, i.e. Boyd's rho A^T B dz and rho A^T u without the common A^T).
- * Per-vertex energies (spokes and rims) have only the Z block. Boyd's absolute term eps_abs sqrt(n)
- * is 0: a zero residual counts as 0 and a nonzero one over a zero scale as +inf. */
+ * Per-vertex energies (spokes and rims) have only the Z block. ||z_k|| joins ||y_k|| in dua_k's
+ * scale because the duals vanish where the objective is flat (every moved vertex beyond s: the
+ * SC-L1 term is constant there), which left dua_k at round-off / round-off = O(1) at an exact fixed
+ * point (an ACAP grid ran 3000 iterations at residual 9.4e-6 with the energy unchanged to 1e-16).
+ * Boyd's absolute term eps_abs sqrt(n) is 0: a zero residual counts as 0 and a nonzero one over a zero scale as +inf. */
+/* DF_ADMM_RHO_RULE — the adaptive penalties, used when params.rho <= 0 (an explicit rho > 0 is used
+ * as given for the whole life of the solver, with the element penalties gamma_e as documented
+ * above, exactly as before). With c = w max(a_i) / s (the SC-L1 prox is convex only for rho > c)
+ * and k_el the median over vertices of the elastic part of the global matrix's diagonal
+ * (sum_e gamma_e |g_e,a|^2, or the spokes-and-rims weights):
+ *   initial rho = DF_ADMM_RHO_INIT_LOC c when c > 0, else DF_ADMM_RHO_INIT_EL k_el (1 when 0)
+ *   (the balancing then takes it to the floor on every shared-mesh case; starting at the floor
+ *   was measured slower on Neo-Hookean: 519 vs 144 iterations on the unit tests' bar);
+ *   rho stays in [DF_ADMM_RHO_FLOOR c, initial x DF_ADMM_RHO_RANGE] (c = 0: initial / RANGE below),
+ *   so rho > c always; the element penalties are gamma_e x g with one global g in
+ *   [DF_ADMM_GAMMA_MIN, DF_ADMM_GAMMA_MAX], initially 1.
+ * After every iteration, per block, the relative residuals (Wohlberg 2017; penalty-free, so the
+ * rule does not depend on the length unit or the energy scale) of the Z block
+ *     pri_z = ||V - Vrest - Z|| / max(||V - Vrest||, ||Z||),   dual_z = ||Z_k - Z_k-1|| / ||U||
+ * and of the element block (gamma_e metric, F_e(V) = R_e X_e; element-family energies but
+ * Neo-Hookean, whose gamma_e is tied to its prox's curvature: g = 1 there)
+ *     pri_e = ||F(V) - RX|| / max(||F(V)||, ||RX||),            dual_e = ||RX_k - RX_k-1|| / ||W||
+ * give a factor sqrt(pri / dual) when pri > DF_ADMM_RHO_IMBALANCE dual or
+ * dual > DF_ADMM_RHO_IMBALANCE pri (then < 1), else 1, at most DF_ADMM_RHO_MAX_STEP either way
+ * (DF_ADMM_GAMMA_MAX_STEP for g); rho and g are multiplied by their factors (Boyd et al. 2011
+ * sec. 3.4.1 residual balancing). Neo-Hookean: no balancing after an inverted (held, see
+ * df_admm_run) iterate. (Raising rho while iterates stay inverted was tried: on the pig teaser it
+ * doubled rho 22 times and never reached the targets.) Stall watch: when the best stop residual
+ * (DF_ADMM_RESIDUAL) of a window of DF_ADMM_RHO_STALL_WINDOW non-inverted iterations is no better
+ * than the previous window's and above max(tol, DF_ADMM_RHO_STALL_MIN) (the iteration cycles: small penalties near c can, e.g. the table
+ * case w 2e-7 oscillated at 1e-6 relative forever at 1.25 c), the next change multiplies rho by
+ * DF_ADMM_RHO_STALL_STEP and raises the floor to it. A change is one numeric-only refactorization (the global
+ * matrix is reassembled with the same pattern and factorized, supernodal, into a copy of the kept
+ * symbolic analysis, then converted to the simplicial LL^T the solves use, as at create; no new
+ * analysis; the affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
+ * (U x rho_old / rho_new, W / g-factor) and the Anderson history is dropped. Changes are at least
+ * G iterations apart (the first one too), G = max(DF_ADMM_RHO_MIN_GAP, ceil(DF_ADMM_RHO_COST x
+ * the factorization's flops / an iteration's estimated flops)), so refactorizations cost at most
+ * about 1 / DF_ADMM_RHO_COST of the iteration time. The rule is deterministic (no timing enters
+ * it); the penalties persist across df_admm_run calls (a reset_rest starts over).
+ * df_admm_result and df_admm_stats count the changes; df_admm_rho reports rho. */
+#define DF_ADMM_RHO_INIT_LOC 1.5
+#define DF_ADMM_RHO_INIT_EL 1.0
+#define DF_ADMM_RHO_FLOOR 1.25
+#define DF_ADMM_RHO_RANGE 1e6
+#define DF_ADMM_RHO_IMBALANCE 10.0
+#define DF_ADMM_RHO_MAX_STEP 10.0
+#define DF_ADMM_RHO_COST 5.0
+#define DF_ADMM_RHO_MIN_GAP 10
+#define DF_ADMM_RHO_STALL_WINDOW 200
+#define DF_ADMM_RHO_STALL_STEP 2.0
+#define DF_ADMM_RHO_STALL_MIN 1e-12
+#define DF_ADMM_GAMMA_MIN 0.25
+#define DF_ADMM_GAMMA_MAX 4.0
+#define DF_ADMM_GAMMA_MAX_STEP 4.0
+
 typedef struct df_admm_params {
     df_admm_energy energy;
     double w;              /* SC-L1 weight (energy per unit a_i per unit length), >= 0 */
     double s;              /* SC-L1 threshold distance (mesh length unit), > 0 */
-    double rho;            /* ADMM penalty of Z = V - Vrest; must be > w max(a_i) / s */
+    double rho;            /* ADMM penalty of Z = V - Vrest; > 0: fixed, must be > w max(a_i) / s;
+                              <= 0 (default): adaptive (DF_ADMM_RHO_RULE above) */
     double tol;            /* stop test (df_admm_run): residual < tol, see DF_ADMM_RESIDUAL below;
                               default 1e-11; 0: never stop early */
     int max_iters;         /* default iteration cap of df_admm_run; default 500 */
@@ -160,9 +215,9 @@ typedef struct df_admm_params {
 #define DF_ADMM_ACTIVE_CHECK 10
 #define DF_ADMM_ACTIVE_MAX_FRAC 0.5
 
-/* Fills `p` with the defaults for `energy` (w 1e-4, s 0.01, rho 0.1, tol 1e-11, max_iters 500,
- * E 1e7, nu 0.45, a_i = 1, no acceleration, Anderson m 5, cloth limits [0.9, 1.1], bending 1e-3;
- * NEOHOOKEAN: rho 5e5, w 500). NULL-safe. */
+/* Fills `p` with the defaults for `energy` (w 1e-4, s 0.01, rho 0 = adaptive, tol 1e-11,
+ * max_iters 500, E 1e7, nu 0.45, a_i = 1, no acceleration, Anderson m 5, cloth limits [0.9, 1.1],
+ * bending 1e-3; NEOHOOKEAN: w 500). NULL-safe. */
 void df_admm_params_default(df_admm_params *p, df_admm_energy energy);
 
 /* One affine constraint set (eq. 2c): A V_t = b for every vertex t in verts[0..n-1]; A is m x 3
@@ -193,7 +248,7 @@ typedef struct df_admm_degenerate {
 int df_admm_find_degenerate(const df_mesh *mesh, uint8_t *flags, df_admm_degenerate *rep,
                             df_error *err);
 
-/* Creates a solver for `mesh` (copied: the caller keeps ownership), `params`, the nh handle vertex
+/* Creates a solver for `mesh` (copied: the caller keeps ownership), `params` (rho <= 0: adaptive), the nh handle vertex
  * indices `handles` (distinct, in [0, nv), nh >= 1) and n_affine affine sets (may be NULL/0).
  * Computes per-element/per-vertex operators, analyzes and factorizes the global matrix once
  * (CHOLMOD). Initial state: V = rest, Z = U = W = 0, handle targets = rest positions.
@@ -268,6 +323,9 @@ typedef struct df_admm_result {
                               with the dual update's F_e) */
     double t_other;        /* seconds in objective evaluation and acceleration */
     double t_total;        /* wall-clock seconds of the call */
+    double rho;            /* the penalty in use at the end of the call */
+    int rho_changes;       /* adaptive penalty changes in this call (each one numeric refactorization) */
+    double t_refactor;     /* seconds in those refactorizations (part of t_total only) */
 } df_admm_result;
 
 /* Runs ADMM iterations from the current state until the residual drops below tol, the iteration or
@@ -312,7 +370,14 @@ typedef struct df_admm_stats {
     long factorizations;   /* cholmod_factorize calls */
     long solves;           /* cholmod_solve calls (each with an nv_free x 3 right-hand side) */
     long iterations;       /* ADMM iterations over the solver's lifetime */
+    long refactorizations; /* numeric-only refactorizations for a penalty change (also counted in
+                              factorizations) */
+    long rho_changes;      /* adaptive penalty changes */
 } df_admm_stats;
+
+/* The ADMM penalty in use: params.rho when it was given (> 0), else the adaptive penalty's current
+ * value (DF_ADMM_RHO_RULE). NULL-safe (0). */
+double df_admm_rho(const df_admm *s);
 
 /* Copies the lifetime counters. NULL-safe (zeroes `out` for a NULL solver). */
 void df_admm_get_stats(const df_admm *s, df_admm_stats *out);

@@ -404,6 +404,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     memset(&r, 0, sizeof(r));
     r.residual = INFINITY;
     r.stop = DF_ADMM_STOP_ITERS;
+    r.rho = s->p.rho; /* the active-set iterations keep the penalty (no adaptive change) */
     double tstart = admm_now();
     int rc = admm_act_init(s, err);
     if (rc) return rc;

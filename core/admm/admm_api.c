@@ -201,6 +201,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
         }
     }
     rc = admm_build_operators(s, err);
+    if (!rc) admm_rho_init(s); /* params.rho <= 0: the adaptive penalty's initial rho */
     if (!rc && !(s->p.rho * s->p.s > s->p.w * s->max_a))
         rc = df_error_set(err, DF_EINVAL,
                           "admm: rho = %g must exceed w max(a_i) / s = %g (SC-L1 prox would be nonconvex)",
@@ -209,6 +210,7 @@ int df_admm_create(const df_mesh *mesh, const df_admm_params *params, const int3
     if (!rc)
         rc = admm_active_defers(s) ? admm_active_prepare(s, err)
                                    : admm_build_system_affine(s, s->aff, s->naff, err);
+    if (!rc) admm_rho_set_gap(s);
     if (!rc && s->p.accelerate && admm_aa_init(&s->aa, s->p.anderson_m, s->n_state))
         rc = df_error_set(err, DF_ENOMEM, "admm: out of memory (Anderson history)");
     s->aa.nthreads = s->nthreads;
@@ -318,18 +320,24 @@ int df_admm_reset_rest(df_admm *s, df_error *err)
     m.ne = s->ne_in; /* as given: classified again on the new rest shape */
     m.E = s->E_in;
     df_admm *n = NULL;
-    int rc = df_admm_create(&m, &s->p, s->hidx, s->nh, s->aff, s->naff, &n, err);
+    df_admm_params p = s->p;
+    p.rho = s->rho_req; /* adaptive stays adaptive (from its initial rho on the new rest shape) */
+    int rc = df_admm_create(&m, &p, s->hidx, s->nh, s->aff, s->naff, &n, err);
     if (rc) return rc;
     n->st.analyses += s->st.analyses;
     n->st.factorizations += s->st.factorizations;
     n->st.solves += s->st.solves;
     n->st.iterations = s->st.iterations;
+    n->st.refactorizations += s->st.refactorizations;
+    n->st.rho_changes += s->st.rho_changes;
     df_admm tmp = *s;
     *s = *n;
     *n = tmp;
     df_admm_free(n);
     return DF_OK;
 }
+
+double df_admm_rho(const df_admm *s) { return s ? s->p.rho : 0.0; }
 
 void df_admm_get_stats(const df_admm *s, df_admm_stats *out)
 {

@@ -5,13 +5,13 @@
  * client's HandleParams against them.
  * DF_ADMM_DEFAULTS(X): X(field, value) for every field shared by df_admm_params,
  * df_msg_handles and Python HandleParams; DF_ADMM_DEFAULTS_NEOHOOKEAN(X): the overrides for the
- * Neo-Hookean energy (its stiffness is in Pa, so w and rho scale with it). */
+ * Neo-Hookean energy (its stiffness is in Pa, so w scales with it). */
 #ifndef DF_CORE_ADMM_DEFAULTS_H
 #define DF_CORE_ADMM_DEFAULTS_H
 
 #define DF_ADMM_DEFAULT_W 1e-4          /* SC-L1 locality weight */
 #define DF_ADMM_DEFAULT_S 0.01          /* SC-L1 threshold, mesh units */
-#define DF_ADMM_DEFAULT_RHO 0.1         /* ADMM penalty (> w max(a_i) / s) */
+#define DF_ADMM_DEFAULT_RHO 0           /* ADMM penalty: 0 = adaptive (admm.h DF_ADMM_RHO_RULE) */
 #define DF_ADMM_DEFAULT_TOL 1e-11       /* residual tolerance */
 #define DF_ADMM_DEFAULT_MAX_ITERS 500   /* iteration budget of a move */
 #define DF_ADMM_DEFAULT_YOUNGS 1e7      /* Neo-Hookean Young's modulus, Pa */
@@ -20,8 +20,7 @@
 #define DF_ADMM_DEFAULT_STRAIN_MIN 0.9  /* cloth stretch limits */
 #define DF_ADMM_DEFAULT_STRAIN_MAX 1.1
 #define DF_ADMM_DEFAULT_BENDING 1e-3    /* cloth bending stiffness */
-#define DF_ADMM_DEFAULT_NH_W 500        /* Neo-Hookean: w and rho */
-#define DF_ADMM_DEFAULT_NH_RHO 5e5
+#define DF_ADMM_DEFAULT_NH_W 500        /* Neo-Hookean: w (its rho is adaptive too) */
 
 #define DF_ADMM_DEFAULTS(X)                                                                  \
     X(w, DF_ADMM_DEFAULT_W) X(s, DF_ADMM_DEFAULT_S) X(rho, DF_ADMM_DEFAULT_RHO)              \
@@ -30,6 +29,6 @@
     X(area_weighting, 0) X(accelerate, 0) X(anderson_m, DF_ADMM_DEFAULT_ANDERSON_M)          \
     X(strain_min, DF_ADMM_DEFAULT_STRAIN_MIN) X(strain_max, DF_ADMM_DEFAULT_STRAIN_MAX)      \
     X(bending, DF_ADMM_DEFAULT_BENDING)
-#define DF_ADMM_DEFAULTS_NEOHOOKEAN(X) X(w, DF_ADMM_DEFAULT_NH_W) X(rho, DF_ADMM_DEFAULT_NH_RHO)
+#define DF_ADMM_DEFAULTS_NEOHOOKEAN(X) X(w, DF_ADMM_DEFAULT_NH_W)
 
 #endif

@@ -86,6 +86,7 @@ struct df_admm {
     cholmod_common cc;
     int cc_started;
     cholmod_factor *L;
+    cholmod_factor *Lsym;    /* adaptive penalties: copy of the supernodal symbolic analysis */
     cholmod_dense *rhs;      /* nfree x 3 column-major */
     cholmod_dense *sol, *sol_y, *sol_e; /* cholmod_solve2 result and workspaces, reused */
     /* affine constraints: Schur complement on top of the factorization */
@@ -107,6 +108,17 @@ struct df_admm {
     struct admm_active *act; /* active-set mode state (admm_active.h), NULL until first used */
     int act_dirty;           /* the state outside the active region may be off rest (a full run or
                                 set_positions since create / the last region build) */
+    /* adaptive penalty (admm_rho.c); p.rho is the penalty in use */
+    double rho_req;          /* params.rho as given (<= 0: adaptive) */
+    int rho_adaptive;        /* 1: residual balancing changes p.rho */
+    double rho_floor;        /* smallest penalty the balancing may choose (> w max(a_i) / s) */
+    double rho_ceil;         /* largest one */
+    int win_n, stall_pending;/* stall watch: iterations in the current window; a stall seen */
+    double win_best, win_prev; /* best stop residual of the current / previous window (-1: none) */
+    int rho_gap;             /* iterations between two penalty changes (refactorization cost) */
+    int rho_wait;            /* iterations left before the next change may happen */
+    double gscale;           /* element penalties: current gamma_e over the operators' gamma_e */
+    int broken;              /* a failed refactorization could not restore the affine system */
 };
 
 /* admm_setup.c: operators for the current Vrest (element gradients, spokes and rims, a_i,
@@ -133,6 +145,21 @@ int admm_global_solve(df_admm *s, df_error *err);
 /* solves K_ff x = rhs (s->rhs) with the affine correction towards A x = b (with_b = 1) or A x = 0;
  * *x points to the nfree x 3 column-major answer (valid until the next solve) */
 int admm_solve_rhs(df_admm *s, int with_b, const double **x, df_error *err);
+
+/* admm_system.c: p.rho = rho_new and every gamma_e multiplied by gscale, K_ff reassembled (same
+ * pattern) and refactored numerically (supernodal, from the kept symbolic copy Lsym), K_fh P and the affine Schur complement
+ * rebuilt; on error the old weights are restored (s->broken if even that fails) */
+int admm_system_refactor(df_admm *s, double rho_new, double gscale, df_error *err);
+
+/* admm_rho.c: the adaptive penalty (admm.h, DF_ADMM_RHO_RULE). admm_rho_init: at create, after the
+ * operators, before the system is built: chooses p.rho when params.rho <= 0 (else keeps it) and
+ * the floor. admm_rho_adapt: after an iteration with relative Z-block residuals pri_z, dual_z: may
+ * change p.rho (numeric refactorization, U rescaled); *changed = 1 then. */
+void admm_rho_init(df_admm *s);
+void admm_rho_set_gap(df_admm *s);
+struct admm_resid;
+int admm_rho_adapt(df_admm *s, const struct admm_resid *rs, int held, double resid, int *changed,
+                   df_error *err);
 
 /* admm_damp.c: the global step; for Neo-Hookean moves the applied handle targets towards the
  * requested ones by the largest step (1, 1/2, ...) that leaves no element of V inverted */

@@ -24,7 +24,7 @@ int admm_validate_params(const df_admm_params *p, df_error *err)
         return df_error_set(err, DF_EINVAL, "admm: unknown energy %d", (int)p->energy);
     if (!(p->w >= 0) || !isfinite(p->w)) return df_error_set(err, DF_EINVAL, "admm: w = %g must be finite and >= 0", p->w);
     if (!(p->s > 0) || !isfinite(p->s)) return df_error_set(err, DF_EINVAL, "admm: s = %g must be finite and > 0", p->s);
-    if (!(p->rho > 0) || !isfinite(p->rho)) return df_error_set(err, DF_EINVAL, "admm: rho = %g must be finite and > 0", p->rho);
+    if (!isfinite(p->rho)) return df_error_set(err, DF_EINVAL, "admm: rho = %g must be finite (> 0, or <= 0 for the adaptive penalty)", p->rho);
     if (!(p->tol >= 0) || !isfinite(p->tol)) return df_error_set(err, DF_EINVAL, "admm: tol = %g must be finite and >= 0", p->tol);
     if (p->max_iters < 1 || p->max_iters > DF_ADMM_MAX_ITERS_LIMIT)
         return df_error_set(err, DF_EINVAL, "admm: max_iters = %d outside [1, %d]", p->max_iters, DF_ADMM_MAX_ITERS_LIMIT);

@@ -11,6 +11,9 @@
 typedef struct admm_resid {
     double *U, *Z;           /* nv x 3 each */
     double *W, *RX;          /* ne x 9 each; NULL for the vertex family */
+    double pri_e, dual_e;    /* the same for the element block (gamma_e metric); element family only */
+    double pri_z, dual_z;    /* set by admm_resid_measure: the Z-block's own relative residuals
+                                ||dU|| / max(||Z + dU||, ||Z||) and ||dZ|| / ||U|| */
 } admm_resid;
 
 /* Allocates the copies for solver s. Errors: DF_ENOMEM (rs left empty). Caller frees with
@@ -28,10 +31,11 @@ void admm_resid_snapshot(admm_resid *rs, const df_admm *s);
  * F_e(V) = R_e X_e block):
  *   *pri  = ||r|| / max(||A x||, ||z||), r = (V - Vrest - Z, F_e(V) - R_e X_e) = (dU, dW),
  *           A x = (V - Vrest, F_e(V)) = (Z + dU, RX + dW), z = (Z, RX);
- *   *dual = ||s|| / ||y||, s = (dZ, dRX) (the change of the splitting variables, measured in the
- *           constraint space: Boyd's rho A^T B dz without the A^T factor), y = (U, W) (the scaled
- *           duals, in the same space).
+ *   *dual = ||s|| / max(||y||, ||z||), s = (dZ, dRX) (the change of the splitting variables,
+ *           measured in the constraint space: Boyd's rho A^T B dz without the A^T factor),
+ *           y = (U, W) (the scaled duals, in the same space); ||z|| in the denominator because y
+ *           vanishes where the objective is locally flat (all moved vertices beyond s).
  * A zero numerator gives 0; a nonzero one over a zero scale gives +inf. */
-void admm_resid_measure(const admm_resid *rs, const df_admm *s, double *pri, double *dual);
+void admm_resid_measure(admm_resid *rs, const df_admm *s, double *pri, double *dual);
 
 #endif

@@ -43,6 +43,7 @@ static int iterate(df_admm *s, df_admm_result *r, double *el_fused, df_error *er
 int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, df_error *err)
 {
     if (!s) return df_error_set(err, DF_EINVAL, "admm_run: NULL solver");
+    if (s->broken) return df_error_set(err, DF_EINTERNAL, "admm_run: the solver lost its affine system in a failed refactorization (out of memory); recreate it");
     if (s->p.active) { /* active-set mode (admm_active_run.c); 0 handled: full solve below */
         int handled = 0, arc = admm_active_run(s, budget, res, &handled, err);
         if (handled) return arc;
@@ -138,6 +139,13 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
             if (budget->progress(budget->user, &pr)) { r.stop = DF_ADMM_STOP_CALLBACK; break; }
         }
         if (conv) { r.converged = 1; r.stop = DF_ADMM_STOP_CONVERGED; break; }
+        if (s->rho_adaptive && it < maxit - 1) { /* adaptive penalty (admm_rho.c) */
+            double tr = admm_now();
+            int changed = 0;
+            rc = admm_rho_adapt(s, &rs, hold, r.residual, &changed, err);
+            if (rc) break;
+            if (changed) { r.rho_changes++; r.t_refactor += admm_now() - tr; }
+        }
     }
     free(x_before);
     admm_resid_free(&rs);
@@ -146,6 +154,7 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         r.elastic = admm_elastic(s, s->Vout);
         r.locality = admm_locality(s, s->Vout);
     }
+    r.rho = s->p.rho;
     r.t_total = admm_now() - tstart;
     if (res) *res = r;
     return rc;

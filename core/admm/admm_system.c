@@ -38,6 +38,7 @@ void admm_free_system(df_admm *s)
 {
     if (s->cc_started) {
         if (s->L) cholmod_free_factor(&s->L, &s->cc);
+        if (s->Lsym) cholmod_free_factor(&s->Lsym, &s->cc);
         if (s->rhs) cholmod_free_dense(&s->rhs, &s->cc);
         if (s->sol) cholmod_free_dense(&s->sol, &s->cc);
         if (s->sol_y) cholmod_free_dense(&s->sol_y, &s->cc);
@@ -173,6 +174,118 @@ static int build_affine(df_admm *s, const df_admm_affine *aff, int naff, df_erro
     return DF_OK;
 }
 
+static void free_affine(df_admm *s)
+{
+    free(s->ar_col); free(s->ar_A); free(s->ar_b); free(s->yc_free); free(s->Y); free(s->Sch); free(s->lam);
+    s->ar_col = s->yc_free = NULL;
+    s->ar_A = s->ar_b = s->Y = s->Sch = s->lam = NULL;
+    s->n_ycols = 0;
+    s->n_arows = 0;
+}
+
+/* K_ff (upper triangle, CHOLMOD sparse) and the K_fh coupling triplets for the current weights,
+ * rho and handle set (s->fidx set); the same entry sequence every time, so the same pattern */
+static int assemble_sparse(df_admm *s, cholmod_sparse **Ko, trip *cpl, df_error *err)
+{
+    int32_t nv = s->nv, nf = s->nfree;
+    int32_t *hmap = malloc((size_t)nv * sizeof(int32_t));
+    if (!hmap) return df_error_set(err, DF_ENOMEM, "admm: out of memory");
+    for (int32_t i = 0; i < nv; i++) hmap[i] = -1;
+    for (int32_t h = 0; h < s->nh; h++) hmap[s->hidx[h]] = h;
+    trip kff = {0};
+    memset(cpl, 0, sizeof(*cpl));
+    int rc = assemble(s, &kff, cpl, hmap);
+    free(hmap);
+    if (rc) { trip_free(&kff); trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: out of memory (assembly)"); }
+    cholmod_triplet *T = cholmod_allocate_triplet(nf, nf, (size_t)kff.n, 1, CHOLMOD_REAL, &s->cc);
+    if (!T) { trip_free(&kff); trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
+    memcpy(T->i, kff.i, (size_t)kff.n * sizeof(int32_t));
+    memcpy(T->j, kff.j, (size_t)kff.n * sizeof(int32_t));
+    memcpy(T->x, kff.v, (size_t)kff.n * sizeof(double));
+    T->nnz = (size_t)kff.n;
+    trip_free(&kff);
+    *Ko = cholmod_triplet_to_sparse(T, (size_t)T->nnz, &s->cc);
+    cholmod_free_triplet(&T, &s->cc);
+    if (!*Ko) { trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
+    return DF_OK;
+}
+
+/* numeric-only factorization of K into the analyzed L (which keeps its symbolic analysis; after
+ * the first factorization L is simplicial LL^T and cholmod_factorize refactors it in place) */
+static int factor_numeric(df_admm *s, cholmod_sparse *K)
+{
+    if (!s->Lsym) { /* in place: cholmod_factorize refactors a simplicial L with cholmod_rowfac */
+        int ok = cholmod_factorize(K, s->L, &s->cc);
+        s->st.factorizations++;
+        return ok && s->cc.status != CHOLMOD_NOT_POSDEF && s->L->minor >= s->L->n ? 0 : -1;
+    }
+    /* from a copy of the kept supernodal symbolic analysis: a supernodal (BLAS) numeric
+     * factorization, then the same simplicial LL^T conversion as at build */
+    cholmod_factor *Ln = cholmod_copy_factor(s->Lsym, &s->cc);
+    if (!Ln) return -1;
+    int ok = cholmod_factorize(K, Ln, &s->cc);
+    s->st.factorizations++;
+    if (!ok || s->cc.status == CHOLMOD_NOT_POSDEF || Ln->minor < Ln->n ||
+        (Ln->is_super && !cholmod_change_factor(CHOLMOD_REAL, 1, 0, 1, 1, Ln, &s->cc))) {
+        cholmod_free_factor(&Ln, &s->cc);
+        return -1;
+    }
+    cholmod_free_factor(&s->L, &s->cc);
+    s->L = Ln;
+    return 0;
+}
+
+/* reassembles K with p.rho and gam, refactors numerically, replaces the coupling and K_fh P and
+ * rebuilds the affine Schur complement */
+static int refactor_current(df_admm *s, df_error *err)
+{
+    cholmod_sparse *K = NULL;
+    trip cpl;
+    int rc = assemble_sparse(s, &K, &cpl, err);
+    if (rc) return rc;
+    int bad = factor_numeric(s, K);
+    cholmod_free_sparse(&K, &s->cc);
+    if (bad) {
+        trip_free(&cpl);
+        return df_error_set(err, DF_ESINGULAR, "admm: refactorization with rho = %g failed (status %d)", s->p.rho, s->cc.status);
+    }
+    free(s->cpl_f); free(s->cpl_h); free(s->cpl_v);
+    s->ncpl = cpl.n;
+    s->cpl_f = cpl.i; s->cpl_h = cpl.j; s->cpl_v = cpl.v;
+    admm_update_kfhp(s);
+    if (s->naff > 0) {
+        free_affine(s);
+        rc = build_affine(s, s->aff, s->naff, err);
+    }
+    return rc;
+}
+
+int admm_system_refactor(df_admm *s, double rho_new, double gscale, df_error *err)
+{
+    if (!s->L) return df_error_set(err, DF_EINTERNAL, "admm: no factorization to refactor");
+    double rho_old = s->p.rho, *gam_old = NULL;
+    if (gscale != 1.0) {
+        gam_old = malloc((size_t)s->ne * sizeof(double));
+        if (!gam_old) return df_error_set(err, DF_ENOMEM, "admm: out of memory");
+        memcpy(gam_old, s->gam, (size_t)s->ne * sizeof(double));
+        for (int32_t e = 0; e < s->ne; e++) s->gam[e] *= gscale;
+    }
+    s->p.rho = rho_new;
+    int rc = refactor_current(s, err);
+    if (rc == DF_OK) {
+        s->st.refactorizations++;
+        free(gam_old);
+        return DF_OK;
+    }
+    /* back to the old weights (the matrix factorized before: cannot fail but for memory) */
+    s->p.rho = rho_old;
+    if (gam_old) memcpy(s->gam, gam_old, (size_t)s->ne * sizeof(double));
+    free(gam_old);
+    df_error e2;
+    if (refactor_current(s, &e2)) s->broken = 1;
+    return rc;
+}
+
 int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df_error *err)
 {
     admm_free_system(s);
@@ -195,27 +308,21 @@ int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df
     s->KfhP = malloc((size_t)nf * 3 * sizeof(double));
     if (!s->fvert || !s->KfhP) { free(hmap); return df_error_set(err, DF_ENOMEM, "admm: out of memory"); }
     for (int32_t i = 0; i < nv; i++) if (s->fidx[i] >= 0) s->fvert[s->fidx[i]] = i;
-    trip kff = {0}, cpl = {0};
-    if (assemble(s, &kff, &cpl, hmap)) {
-        free(hmap); trip_free(&kff); trip_free(&cpl);
-        return df_error_set(err, DF_ENOMEM, "admm: out of memory (assembly)");
-    }
     free(hmap);
+    cholmod_sparse *K = NULL;
+    trip cpl;
+    int rc = assemble_sparse(s, &K, &cpl, err);
+    if (rc) return rc;
     s->ncpl = cpl.n;
     s->cpl_f = cpl.i; s->cpl_h = cpl.j; s->cpl_v = cpl.v;
-    cholmod_triplet *T = cholmod_allocate_triplet(nf, nf, (size_t)kff.n, 1, CHOLMOD_REAL, &s->cc);
-    if (!T) { trip_free(&kff); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
-    memcpy(T->i, kff.i, (size_t)kff.n * sizeof(int32_t));
-    memcpy(T->j, kff.j, (size_t)kff.n * sizeof(int32_t));
-    memcpy(T->x, kff.v, (size_t)kff.n * sizeof(double));
-    T->nnz = (size_t)kff.n;
-    trip_free(&kff);
-    cholmod_sparse *K = cholmod_triplet_to_sparse(T, (size_t)T->nnz, &s->cc);
-    cholmod_free_triplet(&T, &s->cc);
-    if (!K) return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory");
     s->L = cholmod_analyze(K, &s->cc);
     s->st.analyses++;
     if (!s->L) { cholmod_free_sparse(&K, &s->cc); return df_error_set(err, DF_EINTERNAL, "admm: cholmod_analyze failed (status %d)", s->cc.status); }
+    /* adaptive penalties: the symbolic analysis kept for the numeric refactorizations */
+    if (s->rho_adaptive && s->L->is_super && !(s->Lsym = cholmod_copy_factor(s->L, &s->cc))) {
+        cholmod_free_sparse(&K, &s->cc);
+        return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory");
+    }
     int ok = cholmod_factorize(K, s->L, &s->cc);
     s->st.factorizations++;
     cholmod_free_sparse(&K, &s->cc);

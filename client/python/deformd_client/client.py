@@ -795,8 +795,8 @@ class Client(PollMixin):
         """Defines the session's handle set (replacing any previous one). params: any field of
         messages.HandleParams (w, s, rho, tol, max_iters, youngs, poisson, strain_min,
         strain_max, bending, area_weighting, accelerate, anderson_m); the rest take the
-        reference defaults for `energy` (w 1e-4, s 0.01, rho 0.1; Neo-Hookean w 500, rho 5e5;
-        the solver needs rho > w / s). progress: a callback for the solver build
+        reference defaults for `energy` (w 1e-4, s 0.01, rho 0 = the solver's adaptive penalty;
+        Neo-Hookean w 500; an explicit rho must exceed w / s). progress: a callback for the solver build
         ("factorize" stage; see the module doc)."""
         p = m.HandleParams.for_energy(energy, **params)
         rid = self.send(m.HANDLES_SET, m.encode_handles(

@@ -415,7 +415,7 @@ BRUSH_DEFAULTS = {"type": BrushType.GRAB, "dim": 3, "falloff": 1, "integrator": 
                   "steps": 1, "radius": 1.0, "ratio": 1.1, "nu": 0.5, "strength": 1.0}
 
 # The handle-set (ADMM) defaults of core/admm/admm_defaults.h; HandleParams uses these.
-ADMM_DEFAULTS = {"w": 1e-4, "s": 0.01, "rho": 0.1, "tol": 1e-11, "max_iters": 500,
+ADMM_DEFAULTS = {"w": 1e-4, "s": 0.01, "rho": 0.0, "tol": 1e-11, "max_iters": 500,
                  "youngs": 1e7, "poisson": 0.45, "area_weighting": 0, "accelerate": 0,
                  "anderson_m": 5, "strain_min": 0.9, "strain_max": 1.1, "bending": 1e-3}
-ADMM_DEFAULTS_NEOHOOKEAN = {"w": 500.0, "rho": 5e5}
+ADMM_DEFAULTS_NEOHOOKEAN = {"w": 500.0}

@@ -443,6 +443,8 @@ static void test_handle_bodies(void **state)
     f64("handles", 12, -1, DF_EINVAL, "w -1");
     f64("handles", 20, 0, DF_EINVAL, "s 0");
     f64("handles", 28, NAN, DF_EINVAL, "rho");
+    f64("handles", 28, -1, DF_EINVAL, "rho -1");
+    f64("handles", 28, 0, DF_OK, NULL); /* rho 0: the solver's adaptive penalty */
     f64("handles", 36, -1e-3, DF_EINVAL, "tol");
     f64("handles", 44, 0, DF_EINVAL, "youngs 0");
     f64("handles", 52, 0.5, DF_EINVAL, "poisson 0.5");

@@ -269,7 +269,7 @@ static void test_handles_and_move_fields(void **state)
     assert_int_equal(b.len, 92 + 16 + 4 + 1 + 48 + 16 + 4 + 12);
     assert_int_equal(df_msg_handles_decode(b.data, b.len, &out, &e), DF_OK);
     assert_int_equal(out.energy, DF_ENERGY_NEOHOOKEAN);
-    assert_true(out.w == 1e4 && out.s == 0.01 && out.rho == 5e5 && out.tol == 1e-11);
+    assert_true(out.w == 1e4 && out.s == 0.01 && out.rho == 0.0 && out.tol == 1e-11); /* rho 0: adaptive */
     assert_true(out.youngs == 1e7 && out.poisson == 0.45 && out.bending == 0.25);
     assert_true(out.strain_min == 0.9 && out.strain_max == 1.1);
     assert_int_equal(out.accelerate, 1);
@@ -498,7 +498,7 @@ static void test_defaults_are_valid(void **state)
         assert_int_equal(df_msg_handles_encode(&hs, &b, &e), DF_OK);
         assert_int_equal(b.len, 92 + 8 + 4);
         assert_int_equal(hs.energy, en >= 1 && en <= DF_ENERGY_MAX ? en : DF_ENERGY_ARAP);
-        assert_true(hs.rho == (en == DF_ENERGY_NEOHOOKEAN ? 5e5 : 0.1));
+        assert_true(hs.rho == 0.0); /* adaptive for every energy (admm.h DF_ADMM_RHO_RULE) */
         assert_true(hs.w == (en == DF_ENERGY_NEOHOOKEAN ? 500 : 1e-4));
         assert_int_equal(hs.max_iters, 500);
     }
