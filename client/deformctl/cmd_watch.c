@@ -208,7 +208,8 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     if (a->val[CTL_NGLOBAL + 1] && enc)
         return ctl_usage_error(ctx, cmd, "--shm carries the exact stream: not with --encoding "
                                "other than exact");
-    df_client *c = ctl_connect_enc(ctx, cmd, enc, bound);
+    /* any --encoding (exact included) sends the stream trailer: coalesced when slow */
+    df_client *c = ctl_connect_enc(ctx, cmd, a->val[CTL_NGLOBAL + 3] != NULL, enc, bound);
     if (!c)
         return CTL_EXIT_SERVER;
     watch_state w = {ctx, 0, 0, 0, 0, 0, 0, 0};
