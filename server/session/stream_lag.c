@@ -165,6 +165,21 @@ static void catch_up(df_session *s, int i)
     df_frames_clear(&out);
 }
 
+void df_stream_lag_thresholds(size_t limit, int start, int resume, size_t *hi, size_t *lo)
+{
+    *hi = start > 0 ? (size_t)start : DF_LAG_HI(limit);
+    if (*hi > limit) *hi = limit;
+    *lo = resume > 0 ? (size_t)resume : DF_LAG_LO(limit);
+    if (*lo > *hi) *lo = *hi;
+}
+
+/* the thresholds of connection c under the running config */
+static void thresholds(const df_server *srv, const df_conn *c, size_t *hi, size_t *lo)
+{
+    df_stream_lag_thresholds(c->outq.limit, srv->cfg.stream_coalesce_start,
+                             srv->cfg.stream_coalesce_resume, hi, lo);
+}
+
 int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs)
 {
     df_conn *c = s->subs[i];
@@ -172,11 +187,12 @@ int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs
     df_sbuf *f = df_stream_enc_frame(s, c, frame, vs);
     if (!f) return DF_ENOMEM;
     chunk k;
-    size_t limit = c->outq.limit;
+    size_t hi, lo;
+    thresholds(s->srv, c, &hi, &lo);
     int head = chunk_head(frame, &k);
     int quant = (c->stream_enc & DF_STREAM_ENC_QUANTIZED) != 0;
     if (!(c->stream_enc || c->stream_neg) || !head ||
-        (!l->lagging && (l->mid || c->outq.bytes < DF_LAG_HI(limit))) ||
+        (!l->lagging && (l->mid || c->outq.bytes < hi)) ||
         (!l->lagging && lag_start(s, l, quant, k.base) != DF_OK)) {
         l->mid = head && !k.last; /* before the send: a drop unsubscribes (l then is gone) */
         int rc = df_conn_send(c, f);
@@ -197,7 +213,7 @@ int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs
     if (k.last) {
         c->coalesced++;
         s->srv->stats.stream_coalesced++;
-        if (c->outq.bytes <= DF_LAG_LO(limit)) catch_up(s, i);
+        if (c->outq.bytes <= lo) catch_up(s, i);
     }
     return DF_OK;
 }
@@ -209,8 +225,9 @@ void df_stream_lag_poll(df_server *srv)
         for (int i = 0; i < s->nsubs && s->sub_lag; i++) {
             df_sublag *l = &s->sub_lag[i];
             df_conn *c = s->subs[i];
-            if (l->lagging && l->last && !c->closing && c->outq.bytes <= DF_LAG_LO(c->outq.limit))
-                catch_up(s, i);
+            size_t hi, lo;
+            thresholds(srv, c, &hi, &lo);
+            if (l->lagging && l->last && !c->closing && c->outq.bytes <= lo) catch_up(s, i);
         }
 }
 

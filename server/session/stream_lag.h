@@ -4,13 +4,14 @@
  * stream-encoding trailer (any encoding, exact included; df_conn.stream_neg), when they are not
  * on the shared-memory ring.
  *
- * When such a subscriber's output queue holds DF_LAG_HI(limit) bytes or more as the first chunk
- * of a version is broadcast, it starts lagging: from that version on its stream frames are not
- * queued but folded into a per-subscription accumulator (exact: the newest float32
- * displacement of every row the skipped versions listed; quantized: the sum of the group's dq of
- * every row), so nothing grows with the number of versions. Once its queue is down to
- * DF_LAG_LO(limit) (checked at every stream frame of the session and once per loop iteration),
- * it gets one coalesced version: version = the last one skipped, base_version = the version it
+ * When such a subscriber's output queue holds the start threshold (config
+ * stream_coalesce_start, default DF_LAG_HI(limit)) or more as the first chunk of a version is
+ * broadcast, it starts lagging: from that version on its stream frames are not queued but
+ * folded into a per-subscription accumulator (exact: the newest float32 displacement of every
+ * row the skipped versions listed; quantized: the sum of the group's dq of every row), so
+ * nothing grows with the number of versions. Once its queue is down to the resume threshold
+ * (stream_coalesce_resume, default DF_LAG_LO(limit); checked at every stream frame of the
+ * session and once per loop iteration), it gets one coalesced version: version = the last one skipped, base_version = the version it
  * held (so `version > base_version + 1`), the rows that changed since (exact: their newest u,
  * DISPLACEMENT events, sparse or dense; quantized: QDISP events with the summed dq, exactly the
  * delta against the K it holds), compressed like its other frames (ZSTD). A version's chunks are
@@ -27,8 +28,15 @@
 #include "server/session/session.h"
 #include "server/session/stream_enc.h"
 
-#define DF_LAG_HI(limit) ((limit) / 8)  /* queued bytes at which a subscriber starts lagging */
-#define DF_LAG_LO(limit) ((limit) / 16) /* ... and at which it gets its coalesced version */
+#define DF_LAG_HI(limit) ((limit) / 8)  /* default queued bytes at which a subscriber starts
+                                         * lagging (config stream_coalesce_start = 0) */
+#define DF_LAG_LO(limit) ((limit) / 16) /* ... and at which it gets its coalesced version
+                                         * (stream_coalesce_resume = 0) */
+
+/* The thresholds in effect for a connection with output queue limit `limit` under config
+ * `start`, `resume` (bytes, 0 = the defaults above): *hi = start capped at limit, *lo = resume
+ * capped at *hi. Pure. */
+void df_stream_lag_thresholds(size_t limit, int start, int resume, size_t *hi, size_t *lo);
 
 /* The coalescing state of one subscription (session.h sub_lag[i], parallel to subs[i]). */
 typedef struct df_sublag {

@@ -410,3 +410,35 @@ def test_a_slow_deformctl_watch_encoding_exact_is_coalesced(make_daemon):
             p.send_signal(signal.SIGCONT)
             p.kill()
             p.communicate(timeout=TIMEOUT)
+
+
+@pytest.mark.parametrize("start", [None, "1m"])
+def test_stream_coalesce_start_sets_the_threshold(make_daemon, start):
+    """stream_coalesce_start (deformd.conf(5)): with the default (output_queue_limit 256 MiB / 8 =
+    32 MiB) a trailer client that does not read while 40 dense versions (~19 MB) are broadcast
+    is sent every one of them; with stream_coalesce_start = 1m (resume 256k) the same run folds
+    versions for it. Either way its chain of versions ends at the last one."""
+    cfg = "" if start is None else "stream_coalesce_start = %s\nstream_coalesce_resume = 256k\n" % start
+    d = make_daemon(cfg)
+    with d.unix_client() as ed:
+        sid = ed.load_mesh(grid_obj(200, 200), fmt=".obj", name="thr").session_id
+        X = ed.get_mesh(sid).positions
+        slow = Client.connect_unix(d.socket_path, timeout=TIMEOUT, encoding=0)
+        with slow:
+            held = MeshState.sync(slow, sid)
+            slow.subscribe(sid)
+            ed.brush_begin(sid, Brush(type="grab", center=X[0:3], move=(0, 0, 0.001),
+                                      radius=0.5))
+            for k in range(2, 41):
+                ed.brush_update(sid, move=(0.001 * k, 0.0005 * k, 0.001 * k))
+            ed.brush_end(sid)
+            last = int(ed.stats(sid)["version"])
+            folded = ed.stats()["stream_coalesced_versions"]
+            evs = collect(slow, sid, last)
+            for e in evs:
+                assert held.apply(e)
+            assert held.tobytes() == ed.get_mesh(sid).positions.tobytes()
+            if start is None:
+                assert folded == 0 and [e.version for e in evs] == list(range(1, last + 1))
+            else:
+                assert folded > 0 and len(evs) < last
