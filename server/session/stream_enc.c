@@ -11,6 +11,7 @@
 #include "proto/messages.h"
 #include "server/log.h"
 #include "server/net/reply.h"
+#include "server/server.h"
 
 #define ZSTD_STREAM_LEVEL 1       /* fast; the loop thread compresses each frame */
 #define ZFRAME_HEADER 12         /* zframe body bytes before the zstd frame */
@@ -33,6 +34,13 @@ static df_qgroup *find_group(df_session *s, double err)
     return NULL;
 }
 
+/* returns one group's charge (3 nv int64) */
+static void release_group(df_session *s)
+{
+    if (s->srv)
+        df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, 3 * (size_t)s->nv * sizeof(int64_t));
+}
+
 int df_stream_enc_join(df_session *s, const df_conn *c, df_error *err)
 {
     if (!(c->stream_enc & DF_STREAM_ENC_QUANTIZED) || find_group(s, c->stream_err)) return DF_OK;
@@ -41,11 +49,16 @@ int df_stream_enc_join(df_session *s, const df_conn *c, df_error *err)
                             "distinct quantized error bounds (at most %d); connect with one of "
                             "theirs", (unsigned long long)s->id, s->nqg, DF_QGROUP_MAX);
     size_t m = 3 * (size_t)s->nv;
+    /* charged to memory_max_mb (membudget.h); a bare session (bench) has no server */
+    if (s->srv && df_session_mem_charge(s->srv, DF_MEM_STREAM, m * sizeof(int64_t), "subscribe "
+                                        "(quantized stream group)", err) != DF_OK)
+        return DF_ELIMIT;
     int64_t *K = malloc(m * sizeof *K);
     df_qgroup *g = realloc(s->qg, (size_t)(s->nqg + 1) * sizeof *g);
     if (!K || !g) {
         free(K);
         if (g) s->qg = g;
+        if (s->srv) df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, m * sizeof(int64_t));
         return df_error_set(err, DF_ENOMEM, "subscribe: out of memory for the quantized stream "
                             "of %d vertices", s->nv);
     }
@@ -66,8 +79,12 @@ void df_stream_enc_prune(df_session *s)
         for (int j = 0; j < s->nsubs && !used; j++)
             used = (s->subs[j]->stream_enc & DF_STREAM_ENC_QUANTIZED) &&
                    s->subs[j]->stream_err == s->qg[i].err;
-        if (used) s->qg[w++] = s->qg[i];
-        else free(s->qg[i].K);
+        if (used) {
+            s->qg[w++] = s->qg[i];
+        } else {
+            free(s->qg[i].K);
+            release_group(s);
+        }
     }
     s->nqg = w;
     if (w == 0) {
@@ -78,7 +95,10 @@ void df_stream_enc_prune(df_session *s)
 
 void df_stream_enc_free(df_session *s)
 {
-    for (int i = 0; i < s->nqg; i++) free(s->qg[i].K);
+    for (int i = 0; i < s->nqg; i++) {
+        free(s->qg[i].K);
+        release_group(s);
+    }
     free(s->qg);
     s->qg = NULL;
     s->nqg = 0;

@@ -10,6 +10,7 @@
 #include "server/log.h"
 #include "server/net/conn.h"
 #include "server/net/reply.h"
+#include "server/server.h"
 #include "server/session/stream.h"
 
 #define DISP_HEADER 44   /* disp body bytes before the rows (PROTOCOL.md 4.21) */
@@ -37,9 +38,16 @@ static int chunk_head(const df_sbuf *f, chunk *k)
     return 1;
 }
 
-static int lag_start(df_session *s, df_sublag *l, int quant, uint64_t held)
+static int lag_start(df_session *s, const df_conn *c, df_sublag *l, int quant, uint64_t held)
 {
     size_t nv = (size_t)s->nv;
+    uint64_t bytes = nv * (quant ? 1 + 3 * sizeof *l->dq : 1 + 3 * sizeof *l->u);
+    df_error err;
+    if (df_session_mem_charge(s->srv, DF_MEM_STREAM, bytes, "coalescing", &err) != DF_OK) {
+        df_log(DF_LOG_WARN, "session %llu: client %llu cannot keep up and is not coalesced: %s",
+               (unsigned long long)s->id, (unsigned long long)c->id, err.msg);
+        return DF_ELIMIT;
+    }
     l->touched = calloc(nv, 1);
     if (quant) l->dq = calloc(3 * nv, sizeof *l->dq);
     else l->u = malloc(3 * nv * sizeof *l->u);
@@ -50,8 +58,10 @@ static int lag_start(df_session *s, df_sublag *l, int quant, uint64_t held)
         l->touched = NULL;
         l->dq = NULL;
         l->u = NULL;
+        df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, bytes);
         return DF_ENOMEM;
     }
+    l->charged = bytes;
     l->lagging = 1;
     l->held = held;
     s->srv->lagging_subs++;
@@ -193,7 +203,7 @@ int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs
     int quant = (c->stream_enc & DF_STREAM_ENC_QUANTIZED) != 0;
     if (!(c->stream_enc || c->stream_neg) || !head ||
         (!l->lagging && (l->mid || c->outq.bytes < hi)) ||
-        (!l->lagging && lag_start(s, l, quant, k.base) != DF_OK)) {
+        (!l->lagging && lag_start(s, c, l, quant, k.base) != DF_OK)) {
         l->mid = head && !k.last; /* before the send: a drop unsubscribes (l then is gone) */
         int rc = df_conn_send(c, f);
         df_sbuf_unref(f);
@@ -235,6 +245,7 @@ void df_stream_lag_release(df_session *s, int i)
 {
     df_sublag *l = &s->sub_lag[i];
     if (l->lagging) s->srv->lagging_subs--;
+    if (l->charged) df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, l->charged);
     free(l->touched);
     free(l->u);
     free(l->dq);

@@ -48,13 +48,17 @@ typedef struct df_sublag {
     uint8_t *touched;         /* nv flags: rows the folded versions listed */
     float *u;                 /* exact: nv x 3 newest displacements of touched rows */
     int64_t *dq;              /* quantized: nv x 3 summed dq of touched rows */
+    uint64_t charged;         /* bytes of the above charged to memory_max_mb (DF_MEM_STREAM) */
 } df_sublag;
 
 /* Sends stream frame `frame` (a DISPLACEMENT or PROGRESS event chunk of session s) to subscriber
  * i: its variant from `vs` (stream_enc.h), or folded into its accumulator when it lags (and its
  * coalesced version when its queue has drained). Returns df_conn_send's result, or DF_OK when
- * folded. Errors: DF_ENOMEM when the accumulator cannot be made (the frame is then queued as
- * usual: the queue limit still applies). */
+ * folded. The accumulator (13 bytes a vertex exact, 25 quantized) is charged to memory_max_mb
+ * (membudget.h DF_MEM_STREAM) while the subscriber lags. Errors: DF_ENOMEM when the
+ * accumulator cannot be made or the memory budget refuses it (logged once per lag attempt with
+ * the ELIMIT message; the frame is then queued as usual: the queue limit still applies, so such
+ * a subscriber is dropped like any slow reader and resyncs). */
 int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs);
 
 /* Sends the coalesced version to every lagging subscriber of every session whose queue has

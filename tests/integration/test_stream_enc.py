@@ -442,3 +442,39 @@ def test_stream_coalesce_start_sets_the_threshold(make_daemon, start):
                 assert folded == 0 and [e.version for e in evs] == list(range(1, last + 1))
             else:
                 assert folded > 0 and len(evs) < last
+
+
+def test_quantized_groups_are_charged_to_memory_max_mb(make_daemon):
+    """Each quantized group (24 bytes a vertex: K of 3 int64) is charged to memory_max_mb (stats
+    memory.stream_bytes): with 16 MiB and a 40,000-vertex session, subscribers with ever new
+    error bounds are admitted until the budget is full, then refused with ELIMIT naming
+    memory_max_mb (before the 15-group limit); the charge is returned when they leave."""
+    d = make_daemon("memory_max_mb = 16\n")
+    with d.unix_client() as ed:
+        sid = ed.load_mesh(grid_obj(200, 200), fmt=".obj", name="budget").session_id
+        nv = len(ed.get_mesh(sid).positions) // 3
+        per_group = 24 * nv
+        cs = []
+        refused = None
+        try:
+            for k in range(15):
+                c = Client.connect_unix(d.socket_path, encoding=m.STREAM_ENC_QUANTIZED,
+                                        error=1e-4 * (k + 1))
+                cs.append(c)
+                try:
+                    c.subscribe(sid)
+                except DeformdError as e:
+                    refused = e
+                    break
+                assert ed.stats()["memory.stream_bytes"] == per_group * (k + 1)
+            assert refused is not None, "15 groups fit in 16 MiB"
+            assert refused.code == E.ELIMIT and "memory_max_mb" in str(refused), str(refused)
+            admitted = len(cs) - 1
+            assert admitted >= 1
+            assert ed.stats()["memory.stream_bytes"] == per_group * admitted  # nothing for it
+            for c in cs[:admitted]:          # leaving prunes each group (its reply is after)
+                c.unsubscribe(sid)
+            assert ed.stats()["memory.stream_bytes"] == 0
+        finally:
+            for c in cs:
+                c.close()
