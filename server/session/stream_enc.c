@@ -159,6 +159,7 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     const uint8_t *h = frame->data, *p = h + DF_FRAME_HEADER_SIZE;
     size_t n = frame->len - DF_FRAME_HEADER_SIZE;
     uint16_t type = df_le16_load(h + 6);
+    const uint8_t *prog = type == DF_MSG_PROGRESS && n >= PROGRESS_HEADER ? p : NULL;
     if (type == DF_MSG_PROGRESS) {
         p += PROGRESS_HEADER;
         n -= n >= PROGRESS_HEADER ? PROGRESS_HEADER : n;
@@ -175,7 +176,8 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
                (unsigned long long)s->id);
         return NULL;
     }
-    size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count;
+    size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count +
+                 PROGRESS_HEADER;
     uint8_t *out = malloc(cap);
     if (!out) return NULL;
     uint8_t *o = out + DF_FRAME_HEADER_SIZE, *q = o + QDISP_HEADER;
@@ -203,17 +205,22 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
             q = put_varint(q, ((uint64_t)dq[k] << 1) ^ (uint64_t)(dq[k] >> 63));
         sent++;
     }
+    uint32_t rows_bytes = (uint32_t)(q - (o + QDISP_HEADER));
+    if (prog) { /* the progress trailer (4.40): the iterate's status .. elapsed_ms, as sent */
+        memcpy(q, prog, PROGRESS_HEADER);
+        q += PROGRESS_HEADER;
+    }
     size_t len = (size_t)(q - out);
     memcpy(out, h, DF_FRAME_HEADER_SIZE); /* same flags and request id */
     df_le16_store(out + 6, DF_MSG_QDISP);
     df_le32_store(out + 20, (uint32_t)(len - DF_FRAME_HEADER_SIZE));
     memcpy(o, p, 24);                     /* session_id, version, base_version */
     o[24] = p[24];                        /* kind */
-    o[25] = 0;
+    o[25] = prog ? 1 : 0;                 /* flags: bit 0 the progress trailer */
     df_le16_store(o + 26, 0);
     df_le32_store(o + 28, nv);
     df_le32_store(o + 32, sent);
-    df_le32_store(o + 36, (uint32_t)(q - (o + QDISP_HEADER)));
+    df_le32_store(o + 36, rows_bytes);
     uint64_t step;
     memcpy(&step, &g->step, 8);
     df_le64_store(o + 40, step);

@@ -138,8 +138,10 @@ static void catch_up(df_session *s, int i)
         df_error err;
         df_sbuf *f = NULL;
         if (quant) {
-            df_msg_qdisp q = {s->id, l->last, l->held, l->kind, (uint32_t)nv, cnt,
-                              2 * c->stream_err, idx + off, dq + 3 * (size_t)off};
+            df_msg_qdisp q = {.session_id = s->id, .version = l->last, .base_version = l->held,
+                              .kind = l->kind, .nv = (uint32_t)nv, .count = cnt,
+                              .step = 2 * c->stream_err, .idx = idx + off,
+                              .dq = dq + 3 * (size_t)off}; /* no progress trailer */
             df_buf b;
             df_buf_init(&b);
             size_t start;

@@ -478,3 +478,43 @@ def test_quantized_groups_are_charged_to_memory_max_mb(make_daemon):
         finally:
             for c in cs:
                 c.close()
+
+
+@pytest.mark.parametrize("encoding", ["quantized", "quantized+zstd"])
+def test_quantized_progress_iterates_carry_iteration_and_residual(make_daemon, encoding):
+    """A handle move's PROGRESS iterates reach a quantized client as QDISP versions with the
+    progress trailer (PROTOCOL.md 4.40, flags bit 0): status, final, iteration, objective,
+    residual and elapsed_ms equal those an exact subscriber got in its PROGRESS events for the
+    same versions; other versions have no trailer."""
+    d = make_daemon()
+    enc = m.STREAM_ENCODINGS[encoding]
+    with d.unix_client() as ed:
+        sid = ed.load_mesh(grid_obj(12, 12), fmt=".obj", name="prog").session_id
+        X = ed.get_mesh(sid).positions
+        err = 1e-4 * bbox_diag(X)
+        ex = Client.connect_unix(d.socket_path, timeout=TIMEOUT)
+        qc = Client.connect_unix(d.socket_path, timeout=TIMEOUT, encoding=enc, error=err)
+        with ex, qc:
+            ex.subscribe(sid)
+            qc.subscribe(sid)
+            edits(ed, sid, X)
+            last = int(ed.stats(sid)["version"])
+            want = {}
+            while True:
+                ev = ex.next_event(TIMEOUT)
+                assert ev is not None
+                v = ev.disp.version if isinstance(ev, st.Progress) else getattr(ev, "version", 0)
+                if isinstance(ev, st.Progress):
+                    want[v] = (int(ev.status), ev.final, ev.iteration, ev.objective, ev.residual,
+                               ev.elapsed_ms)
+                if v == last:
+                    break
+            assert want, "the move sent no progress iterate"
+            got = {}
+            for q in collect(qc, sid, last):
+                assert isinstance(q, se.QDisp)
+                if q.progress is not None:
+                    p = q.progress
+                    got[q.version] = (p.status, p.final, p.iteration, p.objective, p.residual,
+                                      p.elapsed_ms)
+            assert got == want
