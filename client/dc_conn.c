@@ -19,13 +19,14 @@ double dc_now_us(void)
     return (double)ts.tv_sec * 1e6 + (double)ts.tv_nsec * 1e-3;
 }
 
-static int hello(df_client *c, const char *name, uint8_t enc, double bound, df_error *err);
+static int hello(df_client *c, const char *name, int trailer, uint8_t enc, double bound,
+                 df_error *err);
 
 /* A client on connected socket `fd` (closed on error): TLS first when `tls_ca` is set (the
- * certificate must name `host`), then the hello (asking for stream encoding `enc` with error
- * bound `bound` when enc != 0). */
+ * certificate must name `host`), then the hello (with the stream trailer when `trailer`:
+ * asking for stream encoding `enc`, 0 = exact, with error bound `bound`). */
 static int wrap_fd_enc(int fd, const char *name, const char *host, const char *tls_ca,
-                       uint8_t enc, double bound, df_client **out, df_error *err)
+                       int trailer, uint8_t enc, double bound, df_client **out, df_error *err)
 {
     df_client *c = calloc(1, sizeof *c);
     uint8_t *rb = malloc(DF_CLIENT_READ_BUF);
@@ -49,7 +50,7 @@ static int wrap_fd_enc(int fd, const char *name, const char *host, const char *t
     }
     df_buf_init(&c->out);
     int rc = tls_ca ? dc_tls_start(c, host, tls_ca, err) : DF_OK;
-    if (rc == DF_OK) rc = hello(c, name, enc, bound, err);
+    if (rc == DF_OK) rc = hello(c, name, trailer, enc, bound, err);
     if (rc) {
         df_client_close(c);
         return rc;
@@ -61,7 +62,7 @@ static int wrap_fd_enc(int fd, const char *name, const char *host, const char *t
 static int wrap_fd(int fd, const char *name, const char *host, const char *tls_ca,
                    df_client **out, df_error *err)
 {
-    return wrap_fd_enc(fd, name, host, tls_ca, 0, 0, out, err);
+    return wrap_fd_enc(fd, name, host, tls_ca, 0, 0, 0, out, err);
 }
 
 int df_client_connect_enc(const char *unix_path, const char *host, int port, const char *tls_ca,
@@ -76,7 +77,7 @@ int df_client_connect_enc(const char *unix_path, const char *host, int port, con
     int fd = unix_path ? dc_net_connect_unix(unix_path, err) : dc_net_connect_tcp(host, port, err);
     if (fd < 0)
         return fd;
-    return wrap_fd_enc(fd, name, unix_path ? NULL : host, unix_path ? NULL : tls_ca, encoding,
+    return wrap_fd_enc(fd, name, unix_path ? NULL : host, unix_path ? NULL : tls_ca, 1, encoding,
                        error_bound, out, err);
 }
 
@@ -428,14 +429,15 @@ int dc_hello(df_client *c, const char *name, df_error *err)
 {
     uint8_t enc = c->server.has_stream ? c->server.stream_encoding : 0;
     double bound = c->server.has_stream ? c->server.error_bound : 0;
-    return hello(c, name, enc, bound, err);
+    return hello(c, name, c->server.has_stream, enc, bound, err);
 }
 
-static int hello(df_client *c, const char *name, uint8_t enc, double bound, df_error *err)
+static int hello(df_client *c, const char *name, int trailer, uint8_t enc, double bound,
+                 df_error *err)
 {
     df_msg_hello m;
     memset(&m, 0, sizeof m);
-    m.has_stream = enc != 0; /* exact: the original hello, no trailer */
+    m.has_stream = trailer || enc != 0; /* else the original hello, no trailer */
     m.stream_encoding = enc;
     m.error_bound = enc ? bound : 0;
     m.min_version = DF_PROTO_VERSION_MIN;

@@ -77,9 +77,12 @@ int df_client_moves(const df_client *c);
 
 /* Connects like df_client_connect_unix (`unix_path` non-NULL) or df_client_connect_tcp_tls
  * (`host`, `port`, `tls_ca` may be NULL) and asks in the hello for stream encoding `encoding`
- * (DF_STREAM_ENC_* bits; 0: exact float32, the original hello) with absolute error bound
- * `error_bound` (mesh units, QUANTIZED only, else 0; PROTOCOL.md 4.2, 6.3). The granted encoding
- * is in df_client_server_info(c)->stream_encoding. Stream events then include DF_MSG_QDISP
+ * (DF_STREAM_ENC_* bits; 0: exact float32) with absolute error bound `error_bound` (mesh
+ * units, QUANTIZED only, else 0; PROTOCOL.md 4.2, 6.3). The hello always carries the stream
+ * trailer, encoding 0 included: the daemon then coalesces this connection's stream when it
+ * cannot keep up (PROTOCOL.md 6.3 "Bandwidth"; the other connects send the original hello and
+ * are never coalesced). Needs a daemon that knows the trailer (protocol of issue 16). The
+ * granted encoding is in df_client_server_info(c)->stream_encoding. Stream events then include DF_MSG_QDISP
  * and DF_MSG_ZFRAME frames, which df_client_replica_feed takes. Errors: as the connects, and
  * DF_EINVAL for a bad encoding request (checked before connecting). */
 int df_client_connect_enc(const char *unix_path, const char *host, int port, const char *tls_ca,

@@ -610,6 +610,11 @@ typedef struct df_msg_qdisp {          /* QDISP event: one chunk of a quantized 
     int32_t *idx;                      /* count vertex indices, strictly increasing, < nv */
     int64_t *dq;                       /* count x 3 changes of the quantized displacement, in
                                         * steps (|dq| < 2^53); malloc'd on decode */
+    /* optional progress trailer (PROTOCOL.md 4.40): a PROGRESS iterate's fields, kind 3 only */
+    uint8_t has_progress;              /* 1: the trailer is present */
+    uint8_t status, final;             /* as progress: final iff status != running */
+    uint32_t iteration;                /* 1-based */
+    double objective, residual, elapsed_ms; /* finite; residual, elapsed_ms >= 0 */
 } df_msg_qdisp;
 
 typedef struct df_msg_zframe {         /* ZFRAME event: a stream event frame compressed by zstd */

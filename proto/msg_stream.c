@@ -10,6 +10,8 @@
 
 #define QDISP_HEADER 48       /* bytes before the rows */
 #define QDISP_ROW_MAX 29      /* varint gap (<= 5 bytes) + 3 zigzag varints of |v| < 2^53 */
+#define QDISP_PROGRESS 32     /* the optional progress trailer after the rows (4.40) */
+#define QDISP_FLAG_PROGRESS 1 /* flags bit 0: the progress trailer follows the rows */
 #define QDISP_DQ_LIMIT (1ll << 53)
 
 static size_t put_varint(uint8_t *q, uint64_t v)
@@ -59,6 +61,23 @@ static int qdisp_check(const df_msg_qdisp *m, df_error *err)
                             DF_MAX_MESH_VERTICES, m->count);
     if (!(m->step > 0 && isfinite(m->step)))
         return df_error_set(err, DF_EINVAL, "%s: step %g must be finite and > 0", M, m->step);
+    if (m->has_progress > 1)
+        return df_error_set(err, DF_EINVAL, "%s: has_progress %u not 0 or 1", M, m->has_progress);
+    if (!m->has_progress)
+        return DF_OK;
+    if (m->kind != DF_CHANGE_HANDLE_MOVE)
+        return df_error_set(err, DF_EINVAL, "%s: a progress trailer on kind %u (only handle_move, "
+                            "%u)", M, m->kind, DF_CHANGE_HANDLE_MOVE);
+    if (m->status > DF_MOVE_STATUS_MAX || m->final > 1 ||
+        (m->final == 1) != (m->status != DF_MOVE_RUNNING))
+        return df_error_set(err, DF_EINVAL, "%s: progress status %u / final %u invalid (status "
+                            "0..%u, final iff status != running)", M, m->status, m->final,
+                            DF_MOVE_STATUS_MAX);
+    if (!isfinite(m->objective) || !isfinite(m->residual) || m->residual < 0 ||
+        !isfinite(m->elapsed_ms) || m->elapsed_ms < 0)
+        return df_error_set(err, DF_EINVAL, "%s: progress objective %g, residual %g, elapsed_ms "
+                            "%g must be finite (residual, elapsed >= 0)", M, m->objective,
+                            m->residual, m->elapsed_ms);
     return DF_OK;
 }
 
@@ -74,15 +93,15 @@ int df_msg_qdisp_encode(const df_msg_qdisp *m, df_buf *out, df_error *err)
                 m->dq[3 * (size_t)i + k] >= QDISP_DQ_LIMIT)
                 rc = df_error_set(err, DF_EINVAL, "qdisp: row %u change out of +-2^53 steps", i);
     }
-    if (rc || (rc = df_enc_reserve(out, QDISP_HEADER + QDISP_ROW_MAX * (size_t)m->count, "qdisp",
-                                   err)))
+    if (rc || (rc = df_enc_reserve(out, QDISP_HEADER + QDISP_ROW_MAX * (size_t)m->count +
+                                   QDISP_PROGRESS, "qdisp", err)))
         return rc;
     size_t start = out->len;
     df_buf_put_u64(out, m->session_id);
     df_buf_put_u64(out, m->version);
     df_buf_put_u64(out, m->base_version);
     df_buf_put_u8(out, m->kind);
-    df_buf_put_u8(out, 0);
+    df_buf_put_u8(out, m->has_progress ? QDISP_FLAG_PROGRESS : 0);
     df_buf_put_u16(out, 0);
     df_buf_put_u32(out, m->nv);
     df_buf_put_u32(out, m->count);
@@ -97,6 +116,15 @@ int df_msg_qdisp_encode(const df_msg_qdisp *m, df_buf *out, df_error *err)
     }
     out->len += (size_t)(q - q0);
     df_le32_store(out->data + start + 36, (uint32_t)(q - q0));
+    if (m->has_progress) { /* the progress trailer: progress's first 32 bytes (4.22) */
+        df_buf_put_u8(out, m->status);
+        df_buf_put_u8(out, m->final);
+        df_buf_put_u16(out, 0);
+        df_buf_put_u32(out, m->iteration);
+        df_buf_put_f64(out, m->objective);
+        df_buf_put_f64(out, m->residual);
+        df_buf_put_f64(out, m->elapsed_ms);
+    }
     return DF_OK;
 }
 
@@ -110,7 +138,7 @@ int df_msg_qdisp_decode(const uint8_t *p, size_t n, df_msg_qdisp *m, df_error *e
     t.version = df_rd_u64(&r, "version");
     t.base_version = df_rd_u64(&r, "base_version");
     t.kind = df_rd_u8(&r, "kind");
-    df_rd_reserved8(&r, "reserved");
+    uint8_t flags = df_rd_u8(&r, "flags");
     df_rd_reserved16(&r, "reserved");
     t.nv = df_rd_u32(&r, "nv");
     t.count = df_rd_u32(&r, "count");
@@ -118,13 +146,33 @@ int df_msg_qdisp_decode(const uint8_t *p, size_t n, df_msg_qdisp *m, df_error *e
     t.step = df_rd_f64(&r, "step");
     if (r.rc)
         return r.rc;
+    if (flags & ~QDISP_FLAG_PROGRESS)
+        return df_error_set(err, DF_EINVAL, "qdisp: unknown flags 0x%x (known: 1 progress)",
+                            (unsigned)flags);
+    size_t rest = n - r.off, tail = flags ? QDISP_PROGRESS : 0;
+    if (rows_bytes > rest || rest - rows_bytes != tail)
+        return df_error_set(err, rest < (size_t)rows_bytes + tail ? DF_EPROTO_TRUNCATED
+                                                                  : DF_EPROTO_TRAILING,
+                            "qdisp: rows_bytes %u%s but %zu bytes follow the header", rows_bytes,
+                            tail ? " and the 32-byte progress trailer" : "", rest);
+    if (tail) { /* the progress trailer after the rows */
+        df_rd tr;
+        df_rd_init(&tr, p + r.off + rows_bytes, QDISP_PROGRESS, "qdisp", err);
+        t.has_progress = 1;
+        t.status = df_rd_u8(&tr, "status");
+        t.final = df_rd_u8(&tr, "final");
+        df_rd_reserved16(&tr, "reserved");
+        t.iteration = df_rd_u32(&tr, "iteration");
+        t.objective = df_rd_f64(&tr, "objective");
+        t.residual = df_rd_f64(&tr, "residual");
+        t.elapsed_ms = df_rd_f64(&tr, "elapsed_ms");
+        if (tr.rc)
+            return tr.rc;
+        n -= QDISP_PROGRESS; /* the rows end where the trailer starts */
+    }
     int rc = qdisp_check(&t, err);
     if (rc)
         return rc;
-    if (rows_bytes != n - r.off)
-        return df_error_set(err, rows_bytes > n - r.off ? DF_EPROTO_TRUNCATED : DF_EPROTO_TRAILING,
-                            "qdisp: rows_bytes %u but %zu bytes follow the header", rows_bytes,
-                            n - r.off);
     if ((uint64_t)t.count * 4 > rows_bytes) /* a row takes >= 4 bytes: bound before allocating */
         return df_error_set(err, DF_EPROTO_TRUNCATED, "qdisp: %u rows cannot fit in %u bytes",
                             t.count, rows_bytes);

@@ -211,6 +211,8 @@ static const int_key k_int_keys[] = {
      DF_CONFIG_MAX_HID_ENUMERATE_S},
     {"store_max_mb", offsetof(df_server_config, store_max_mb), 0, 1 << 30},
     {"cluster_lease_ms", offsetof(df_server_config, cluster_lease_ms), 300, 600000},
+    {"stream_coalesce_start", offsetof(df_server_config, stream_coalesce_start), 0, 1 << 30},
+    {"stream_coalesce_resume", offsetof(df_server_config, stream_coalesce_resume), 0, 1 << 30},
 };
 
 /* socket_mode: octal permission bits, 0..0777, with or without a leading 0. */
@@ -494,9 +496,9 @@ static const char k_usage[] =
     "                      [::], LAN): the stream can be read, and without a key anyone who\n"
     "                      can reach it can load, edit and close every session\n"
     "  --config FILE       read 'key = value' settings (socket, tcp, allow_paths, max_clients,\n"
-    "                      output_queue_limit, cache_memory_mb, log_level, max_mesh_vertices,\n"
-    "                      max_sessions, threads, spin_us, inline_us, admm_active, cursor_hz,\n"
-    "                      shm_ring_bytes,\n"
+    "                      output_queue_limit, stream_coalesce_start, stream_coalesce_resume,\n"
+    "                      cache_memory_mb, log_level, max_mesh_vertices, max_sessions,\n"
+    "                      threads, spin_us, inline_us, admm_active, cursor_hz, shm_ring_bytes,\n"
     "                      shm_total_bytes, max_upload_mb, uploads_max_mb, history_max_mb,\n"
     "                      history_replay_ms, resync_ring_mb, memory_max_mb, tcp_insecure,\n"
     "                      socket_mode, socket_group, handshake_timeout_s, idle_timeout_s,\n"
@@ -539,6 +541,7 @@ static const char k_usage[] =
     "\n"
     "SIGHUP re-reads the config file and the options: log_level, max_clients, max_sessions,\n"
     "handshake_timeout_s, idle_timeout_s, cursor_hz, output_queue_limit, allow_paths,\n"
+    "stream_coalesce_start, stream_coalesce_resume,\n"
     "session_access, session_observers (for new sessions) and quota_* change live; a change of any other setting is logged as needing a restart; a file with an error\n"
     "is logged and the current settings stay.\n"
     "\n"

@@ -21,6 +21,11 @@
  *                      colon- or comma-separated list; repeated lines append
  *   max_clients        simultaneous connections (1 .. DF_CONFIG_MAX_CLIENTS_LIMIT)
  *   output_queue_limit bytes a client may have queued before it is dropped (suffix k/m/g ok)
+ *   stream_coalesce_start  queued bytes from which a subscriber whose hello carried the stream
+ *                      trailer gets coalesced versions (PROTOCOL.md 6.3; suffix k/m/g ok;
+ *                      0 .. 1g, default 0 = output_queue_limit / 8; capped at the limit)
+ *   stream_coalesce_resume queued bytes at or below which it gets its coalesced version
+ *                      (0 .. 1g, default 0 = output_queue_limit / 16; capped at the start)
  *   cache_memory_mb    memory cap of cached factorizations across sessions, MiB (0 = no caching
  *                      beyond the running job)
  *   log_level          error | warn | info | debug
@@ -164,6 +169,8 @@ typedef struct df_server_config {
     char allow_paths[DF_CONFIG_MAX_ALLOW][DF_CONFIG_PATH_MAX]; /* normalized, no trailing '/' */
     int max_clients;
     size_t output_queue_limit;   /* bytes */
+    int stream_coalesce_start;   /* bytes, 0 = output_queue_limit / 8 (stream_lag.h) */
+    int stream_coalesce_resume;  /* bytes, 0 = output_queue_limit / 16 */
     size_t cache_memory_mb;
     int log_level;               /* DF_LOG_* */
     int32_t max_mesh_vertices;

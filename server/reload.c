@@ -82,6 +82,8 @@ static void apply(df_server *srv, const df_server_config *n)
     c->idle_timeout_s = n->idle_timeout_s;
     c->cursor_hz = n->cursor_hz;
     c->output_queue_limit = n->output_queue_limit;
+    c->stream_coalesce_start = n->stream_coalesce_start;
+    c->stream_coalesce_resume = n->stream_coalesce_resume;
     c->n_allow = n->n_allow;
     memcpy(c->allow_paths, n->allow_paths, sizeof c->allow_paths);
     c->access.session_access = n->access.session_access; /* membership.h: of new sessions */

@@ -3,7 +3,7 @@
  * Live (applied once no job runs, so that no compute worker reads the settings meanwhile; the
  * log level at once): log_level, max_clients, max_sessions, handshake_timeout_s,
  * idle_timeout_s, cursor_hz, output_queue_limit (connections accepted afterwards),
- * allow_paths, session_access and quota_* (checked at the next request / load). Every other
+ * stream_coalesce_start and stream_coalesce_resume (at the next stream frame), allow_paths, session_access and quota_* (checked at the next request / load). Every other
  * setting (listeners, socket mode and group, threads, spin_us, inline_us, memory and cache
  * budgets, shm sizes, mesh and upload limits, hid, hid_replay*, hid_enumerate_s, hid.* mappings,
  * peer_key) needs a restart: a changed one is logged by name and keeps its

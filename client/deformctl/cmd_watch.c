@@ -148,8 +148,17 @@ static void watch_frame(watch_state *w, const df_frame_header *h, const uint8_t 
         }
         if (q.session_id == w->session) {
             w->rows += q.count;
+            df_msg_progress pr; /* a handle-move iterate: its progress trailer (4.40) */
+            memset(&pr, 0, sizeof pr);
+            pr.status = q.status;
+            pr.final = q.final;
+            pr.iteration = q.iteration;
+            pr.objective = q.objective;
+            pr.residual = q.residual;
+            pr.elapsed_ms = q.elapsed_ms;
             if (last)
-                watch_line(w, q.session_id, q.version, q.kind, "quantized", NULL);
+                watch_line(w, q.session_id, q.version, q.kind, "quantized",
+                           q.has_progress ? &pr : NULL);
         }
         df_msg_qdisp_free(&q);
     }
@@ -208,7 +217,8 @@ static int run_watch(ctl_ctx *ctx, const ctl_cmd *cmd, const dc_cli_args *a)
     if (a->val[CTL_NGLOBAL + 1] && enc)
         return ctl_usage_error(ctx, cmd, "--shm carries the exact stream: not with --encoding "
                                "other than exact");
-    df_client *c = ctl_connect_enc(ctx, cmd, enc, bound);
+    /* any --encoding (exact included) sends the stream trailer: coalesced when slow */
+    df_client *c = ctl_connect_enc(ctx, cmd, a->val[CTL_NGLOBAL + 3] != NULL, enc, bound);
     if (!c)
         return CTL_EXIT_SERVER;
     watch_state w = {ctx, 0, 0, 0, 0, 0, 0, 0};

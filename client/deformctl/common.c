@@ -48,10 +48,23 @@ int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const d
 
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd)
 {
-    return ctl_connect_enc(ctx, cmd, 0, 0);
+    return ctl_connect_enc(ctx, cmd, 0, 0, 0);
 }
 
-df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, uint8_t enc, double bound)
+/* the connect of ctl_connect_enc: df_client_connect_enc (stream trailer) when `trailer`, else the
+ * original hello */
+static int connect_to(const char *path, const ctl_ctx *ctx, const char *ca, int trailer,
+                      uint8_t enc, double bound, df_client **c, df_error *e)
+{
+    if (trailer)
+        return df_client_connect_enc(path, path ? NULL : ctx->host, ctx->port, ca, "deformctl",
+                                     enc, bound, c, e);
+    return path ? df_client_connect_unix(path, "deformctl", c, e)
+                : df_client_connect_tcp_tls(ctx->host, ctx->port, "deformctl", ca, c, e);
+}
+
+df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, int trailer, uint8_t enc,
+                           double bound)
 {
     df_error e;
     df_error_clear(&e);
@@ -69,8 +82,7 @@ df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, uint8_t enc, 
     if (ctx->tcp) {
         /* --tls-ca, else $DEFORMD_TLS_CA: TLS whenever a CA is given */
         const char *ca = ctx->tls_ca ? ctx->tls_ca : getenv("DEFORMD_TLS_CA");
-        rc = df_client_connect_enc(NULL, ctx->host, ctx->port, ca && ca[0] ? ca : NULL,
-                                   "deformctl", enc, bound, &c, &e);
+        rc = connect_to(NULL, ctx, ca && ca[0] ? ca : NULL, trailer, enc, bound, &c, &e);
     } else {
         char path[256];
         const char *p = ctx->socket;
@@ -81,7 +93,7 @@ df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, uint8_t enc, 
             }
             p = path;
         }
-        rc = df_client_connect_enc(p, NULL, 0, NULL, "deformctl", enc, bound, &c, &e);
+        rc = connect_to(p, ctx, NULL, trailer, enc, bound, &c, &e);
     }
     if (rc == DF_OK && key_len) rc = df_client_authenticate(c, key, key_len, &e);
     else if (rc == DF_OK && df_client_server_info(c)->auth_required)

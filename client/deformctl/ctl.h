@@ -115,9 +115,12 @@ int ctl_fail(const ctl_ctx *ctx, const ctl_cmd *cmd, const df_client *c, const d
 /* Connects per the global options (main has already checked and split them); on failure
  * prints the error and returns NULL: the caller exits CTL_EXIT_SERVER. */
 df_client *ctl_connect(const ctl_ctx *ctx, const ctl_cmd *cmd);
-/* ctl_connect asking in the hello for stream encoding `enc` (DF_STREAM_ENC_* bits, 0 exact)
- * with error bound `bound` (mesh units, QUANTIZED only): `watch --encoding`. */
-df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, uint8_t enc, double bound);
+/* ctl_connect; with `trailer` the hello carries the stream trailer (df_client_connect_enc),
+ * asking for stream encoding `enc` (DF_STREAM_ENC_* bits, 0 exact) with error bound `bound`
+ * (mesh units, QUANTIZED only), so the daemon coalesces the stream when this client cannot keep
+ * up: `watch --encoding`. Without it (enc and bound then 0) the original hello. */
+df_client *ctl_connect_enc(const ctl_ctx *ctx, const ctl_cmd *cmd, int trailer, uint8_t enc,
+                           double bound);
 
 
 /* Resolves SESSION (a decimal id, or else a session name looked up with open session) into

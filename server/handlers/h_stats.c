@@ -108,6 +108,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "memory.shm_bytes", (double)mb->used[DF_MEM_SHM]);
         put(&st, "memory.history_bytes", (double)mb->used[DF_MEM_HISTORY]);
         put(&st, "memory.resync_bytes", (double)mb->used[DF_MEM_RESYNC]);
+        put(&st, "memory.stream_bytes", (double)mb->used[DF_MEM_STREAM]);
         put(&st, "uploads_in_flight", uploads);
         put(&st, "uploads_max_bytes", (double)((uint64_t)srv->cfg.uploads_max_mb << 20));
         put(&st, "max_upload_bytes", (double)((uint64_t)srv->cfg.max_upload_mb << 20));

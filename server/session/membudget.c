@@ -8,10 +8,10 @@
 
 static const char *const k_kind_name[DF_MEM_KINDS] = {"uploads in flight", "sessions",
                                                       "shared-memory rings", "undo history",
-                                                      "resync rings"};
+                                                      "resync rings", "stream encodings"};
 /* Config key of each kind's own cap ("" when it has none) and how it is written. */
 static const char *const k_kind_key[DF_MEM_KINDS] = {"uploads_max_mb", "", "shm_total_bytes", "",
-                                                     ""};
+                                                     "", ""};
 
 void df_mem_set_limits(df_membudget *b, uint64_t max, uint64_t uploads_max, uint64_t shm_max)
 {

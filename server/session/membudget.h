@@ -2,7 +2,8 @@
  *
  * Everything the daemon allocates on a client's behalf is charged here before it is allocated,
  * by kind: in-flight upload buffers, sessions (mesh, positions and scratch, estimated by
- * df_session_estimate_bytes), shared-memory rings, undo history and resync rings. A charge that would take
+ * df_session_estimate_bytes), shared-memory rings, undo history, resync rings, and the stream
+ * encodings' per-group quantized arrays and lagging subscribers' accumulators. A charge that would take
  * the total above `max` (config memory_max_mb), or its kind above the kind's own cap (uploads:
  * uploads_max_mb, rings: shm_total_bytes), is refused with DF_ELIMIT and a message naming the
  * limit and its config key; nothing is charged then (session.h df_session_mem_charge first lets
@@ -21,6 +22,8 @@ typedef enum df_mem_kind {
     DF_MEM_SHM,         /* shared-memory stream rings (/dev/shm is RAM) */
     DF_MEM_HISTORY,     /* undo/redo history */
     DF_MEM_RESYNC,      /* resync rings of recently broadcast frames (resync.h) */
+    DF_MEM_STREAM,      /* quantized stream groups and coalescing state (stream_enc.h,
+                         * stream_lag.h) */
     DF_MEM_KINDS
 } df_mem_kind;
 

@@ -11,6 +11,7 @@
 #include "proto/messages.h"
 #include "server/log.h"
 #include "server/net/reply.h"
+#include "server/server.h"
 
 #define ZSTD_STREAM_LEVEL 1       /* fast; the loop thread compresses each frame */
 #define ZFRAME_HEADER 12         /* zframe body bytes before the zstd frame */
@@ -33,6 +34,13 @@ static df_qgroup *find_group(df_session *s, double err)
     return NULL;
 }
 
+/* returns one group's charge (3 nv int64) */
+static void release_group(df_session *s)
+{
+    if (s->srv)
+        df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, 3 * (size_t)s->nv * sizeof(int64_t));
+}
+
 int df_stream_enc_join(df_session *s, const df_conn *c, df_error *err)
 {
     if (!(c->stream_enc & DF_STREAM_ENC_QUANTIZED) || find_group(s, c->stream_err)) return DF_OK;
@@ -41,11 +49,16 @@ int df_stream_enc_join(df_session *s, const df_conn *c, df_error *err)
                             "distinct quantized error bounds (at most %d); connect with one of "
                             "theirs", (unsigned long long)s->id, s->nqg, DF_QGROUP_MAX);
     size_t m = 3 * (size_t)s->nv;
+    /* charged to memory_max_mb (membudget.h); a bare session (bench) has no server */
+    if (s->srv && df_session_mem_charge(s->srv, DF_MEM_STREAM, m * sizeof(int64_t), "subscribe "
+                                        "(quantized stream group)", err) != DF_OK)
+        return DF_ELIMIT;
     int64_t *K = malloc(m * sizeof *K);
     df_qgroup *g = realloc(s->qg, (size_t)(s->nqg + 1) * sizeof *g);
     if (!K || !g) {
         free(K);
         if (g) s->qg = g;
+        if (s->srv) df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, m * sizeof(int64_t));
         return df_error_set(err, DF_ENOMEM, "subscribe: out of memory for the quantized stream "
                             "of %d vertices", s->nv);
     }
@@ -66,8 +79,12 @@ void df_stream_enc_prune(df_session *s)
         for (int j = 0; j < s->nsubs && !used; j++)
             used = (s->subs[j]->stream_enc & DF_STREAM_ENC_QUANTIZED) &&
                    s->subs[j]->stream_err == s->qg[i].err;
-        if (used) s->qg[w++] = s->qg[i];
-        else free(s->qg[i].K);
+        if (used) {
+            s->qg[w++] = s->qg[i];
+        } else {
+            free(s->qg[i].K);
+            release_group(s);
+        }
     }
     s->nqg = w;
     if (w == 0) {
@@ -78,7 +95,10 @@ void df_stream_enc_prune(df_session *s)
 
 void df_stream_enc_free(df_session *s)
 {
-    for (int i = 0; i < s->nqg; i++) free(s->qg[i].K);
+    for (int i = 0; i < s->nqg; i++) {
+        free(s->qg[i].K);
+        release_group(s);
+    }
     free(s->qg);
     s->qg = NULL;
     s->nqg = 0;
@@ -139,6 +159,7 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     const uint8_t *h = frame->data, *p = h + DF_FRAME_HEADER_SIZE;
     size_t n = frame->len - DF_FRAME_HEADER_SIZE;
     uint16_t type = df_le16_load(h + 6);
+    const uint8_t *prog = type == DF_MSG_PROGRESS && n >= PROGRESS_HEADER ? p : NULL;
     if (type == DF_MSG_PROGRESS) {
         p += PROGRESS_HEADER;
         n -= n >= PROGRESS_HEADER ? PROGRESS_HEADER : n;
@@ -155,7 +176,8 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
                (unsigned long long)s->id);
         return NULL;
     }
-    size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count;
+    size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count +
+                 PROGRESS_HEADER;
     uint8_t *out = malloc(cap);
     if (!out) return NULL;
     uint8_t *o = out + DF_FRAME_HEADER_SIZE, *q = o + QDISP_HEADER;
@@ -183,17 +205,22 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
             q = put_varint(q, ((uint64_t)dq[k] << 1) ^ (uint64_t)(dq[k] >> 63));
         sent++;
     }
+    uint32_t rows_bytes = (uint32_t)(q - (o + QDISP_HEADER));
+    if (prog) { /* the progress trailer (4.40): the iterate's status .. elapsed_ms, as sent */
+        memcpy(q, prog, PROGRESS_HEADER);
+        q += PROGRESS_HEADER;
+    }
     size_t len = (size_t)(q - out);
     memcpy(out, h, DF_FRAME_HEADER_SIZE); /* same flags and request id */
     df_le16_store(out + 6, DF_MSG_QDISP);
     df_le32_store(out + 20, (uint32_t)(len - DF_FRAME_HEADER_SIZE));
     memcpy(o, p, 24);                     /* session_id, version, base_version */
     o[24] = p[24];                        /* kind */
-    o[25] = 0;
+    o[25] = prog ? 1 : 0;                 /* flags: bit 0 the progress trailer */
     df_le16_store(o + 26, 0);
     df_le32_store(o + 28, nv);
     df_le32_store(o + 32, sent);
-    df_le32_store(o + 36, (uint32_t)(q - (o + QDISP_HEADER)));
+    df_le32_store(o + 36, rows_bytes);
     uint64_t step;
     memcpy(&step, &g->step, 8);
     df_le64_store(o + 40, step);

@@ -34,8 +34,10 @@ typedef struct df_qgroup {
 
 /* Adds the group of subscriber `c` (when its encoding is QUANTIZED and the session has no group
  * for its error bound yet), initialized from the published displacements s->uf (the version
- * the subscribe answers with). Call right after df_session_subscribe succeeds. DF_OK, or
- * DF_ENOMEM (nothing changed). */
+ * the subscribe answers with); its 24 bytes a vertex are charged to memory_max_mb (membudget.h
+ * DF_MEM_STREAM, released by prune / free). Call right after df_session_subscribe succeeds.
+ * DF_OK, DF_ELIMIT (over the memory budget: the message names memory_max_mb and the bytes),
+ * DF_ENOMEM; nothing changed on error. */
 int df_stream_enc_join(df_session *s, const df_conn *c, df_error *err);
 
 /* Frees the groups no subscriber of `s` uses any more (after an unsubscribe or a close), or

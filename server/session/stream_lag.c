@@ -10,6 +10,7 @@
 #include "server/log.h"
 #include "server/net/conn.h"
 #include "server/net/reply.h"
+#include "server/server.h"
 #include "server/session/stream.h"
 
 #define DISP_HEADER 44   /* disp body bytes before the rows (PROTOCOL.md 4.21) */
@@ -37,9 +38,16 @@ static int chunk_head(const df_sbuf *f, chunk *k)
     return 1;
 }
 
-static int lag_start(df_session *s, df_sublag *l, int quant, uint64_t held)
+static int lag_start(df_session *s, const df_conn *c, df_sublag *l, int quant, uint64_t held)
 {
     size_t nv = (size_t)s->nv;
+    uint64_t bytes = nv * (quant ? 1 + 3 * sizeof *l->dq : 1 + 3 * sizeof *l->u);
+    df_error err;
+    if (df_session_mem_charge(s->srv, DF_MEM_STREAM, bytes, "coalescing", &err) != DF_OK) {
+        df_log(DF_LOG_WARN, "session %llu: client %llu cannot keep up and is not coalesced: %s",
+               (unsigned long long)s->id, (unsigned long long)c->id, err.msg);
+        return DF_ELIMIT;
+    }
     l->touched = calloc(nv, 1);
     if (quant) l->dq = calloc(3 * nv, sizeof *l->dq);
     else l->u = malloc(3 * nv * sizeof *l->u);
@@ -50,8 +58,10 @@ static int lag_start(df_session *s, df_sublag *l, int quant, uint64_t held)
         l->touched = NULL;
         l->dq = NULL;
         l->u = NULL;
+        df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, bytes);
         return DF_ENOMEM;
     }
+    l->charged = bytes;
     l->lagging = 1;
     l->held = held;
     s->srv->lagging_subs++;
@@ -128,8 +138,10 @@ static void catch_up(df_session *s, int i)
         df_error err;
         df_sbuf *f = NULL;
         if (quant) {
-            df_msg_qdisp q = {s->id, l->last, l->held, l->kind, (uint32_t)nv, cnt,
-                              2 * c->stream_err, idx + off, dq + 3 * (size_t)off};
+            df_msg_qdisp q = {.session_id = s->id, .version = l->last, .base_version = l->held,
+                              .kind = l->kind, .nv = (uint32_t)nv, .count = cnt,
+                              .step = 2 * c->stream_err, .idx = idx + off,
+                              .dq = dq + 3 * (size_t)off}; /* no progress trailer */
             df_buf b;
             df_buf_init(&b);
             size_t start;
@@ -165,6 +177,21 @@ static void catch_up(df_session *s, int i)
     df_frames_clear(&out);
 }
 
+void df_stream_lag_thresholds(size_t limit, int start, int resume, size_t *hi, size_t *lo)
+{
+    *hi = start > 0 ? (size_t)start : DF_LAG_HI(limit);
+    if (*hi > limit) *hi = limit;
+    *lo = resume > 0 ? (size_t)resume : DF_LAG_LO(limit);
+    if (*lo > *hi) *lo = *hi;
+}
+
+/* the thresholds of connection c under the running config */
+static void thresholds(const df_server *srv, const df_conn *c, size_t *hi, size_t *lo)
+{
+    df_stream_lag_thresholds(c->outq.limit, srv->cfg.stream_coalesce_start,
+                             srv->cfg.stream_coalesce_resume, hi, lo);
+}
+
 int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs)
 {
     df_conn *c = s->subs[i];
@@ -172,12 +199,13 @@ int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs
     df_sbuf *f = df_stream_enc_frame(s, c, frame, vs);
     if (!f) return DF_ENOMEM;
     chunk k;
-    size_t limit = c->outq.limit;
+    size_t hi, lo;
+    thresholds(s->srv, c, &hi, &lo);
     int head = chunk_head(frame, &k);
     int quant = (c->stream_enc & DF_STREAM_ENC_QUANTIZED) != 0;
     if (!(c->stream_enc || c->stream_neg) || !head ||
-        (!l->lagging && (l->mid || c->outq.bytes < DF_LAG_HI(limit))) ||
-        (!l->lagging && lag_start(s, l, quant, k.base) != DF_OK)) {
+        (!l->lagging && (l->mid || c->outq.bytes < hi)) ||
+        (!l->lagging && lag_start(s, c, l, quant, k.base) != DF_OK)) {
         l->mid = head && !k.last; /* before the send: a drop unsubscribes (l then is gone) */
         int rc = df_conn_send(c, f);
         df_sbuf_unref(f);
@@ -197,7 +225,7 @@ int df_stream_lag_send(df_session *s, int i, df_sbuf *frame, df_enc_variants *vs
     if (k.last) {
         c->coalesced++;
         s->srv->stats.stream_coalesced++;
-        if (c->outq.bytes <= DF_LAG_LO(limit)) catch_up(s, i);
+        if (c->outq.bytes <= lo) catch_up(s, i);
     }
     return DF_OK;
 }
@@ -209,8 +237,9 @@ void df_stream_lag_poll(df_server *srv)
         for (int i = 0; i < s->nsubs && s->sub_lag; i++) {
             df_sublag *l = &s->sub_lag[i];
             df_conn *c = s->subs[i];
-            if (l->lagging && l->last && !c->closing && c->outq.bytes <= DF_LAG_LO(c->outq.limit))
-                catch_up(s, i);
+            size_t hi, lo;
+            thresholds(srv, c, &hi, &lo);
+            if (l->lagging && l->last && !c->closing && c->outq.bytes <= lo) catch_up(s, i);
         }
 }
 
@@ -218,6 +247,7 @@ void df_stream_lag_release(df_session *s, int i)
 {
     df_sublag *l = &s->sub_lag[i];
     if (l->lagging) s->srv->lagging_subs--;
+    if (l->charged) df_mem_release(df_server_mem(s->srv), DF_MEM_STREAM, l->charged);
     free(l->touched);
     free(l->u);
     free(l->dq);

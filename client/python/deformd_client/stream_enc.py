@@ -18,7 +18,20 @@ from . import messages as m
 from .wire import ProtocolError, Reader
 
 _QDISP_HEAD = "QQQBBHIIId"       # 48 bytes
+_QDISP_PROGRESS = "BBHIddd"       # 32 bytes: the optional progress trailer (flags bit 0)
+_FLAG_PROGRESS = 1
 _DQ_LIMIT = 1 << 53
+
+
+@dataclass
+class QProgress:
+    """The progress trailer of a QDISP (4.40): the handle-move iterate's fields, as in PROGRESS."""
+    status: int
+    final: int
+    iteration: int
+    objective: float
+    residual: float
+    elapsed_ms: float
 
 
 @dataclass
@@ -37,6 +50,8 @@ class QDisp:
     # bytes of its frames on the wire (compressed size for ZFRAME); not part of equality
     wire_bytes: int = field(default=0, compare=False)
     kind_name: str = "qdisp"
+    # the iterate's fields when the version is a PROGRESS iterate (flags bit 0), else None
+    progress: Optional[QProgress] = None
 
 
 def _varint(p, off: int, n: int):
@@ -56,16 +71,28 @@ def _varint(p, off: int, n: int):
 
 def decode_qdisp(p: bytes) -> QDisp:
     r = Reader(p, "qdisp")
-    sid, ver, base, kind, r1, r2, nv, count, rows_bytes, step = r.take(_QDISP_HEAD)
-    if r1 or r2:
-        raise ProtocolError("qdisp: reserved field not 0")
+    sid, ver, base, kind, flags, r2, nv, count, rows_bytes, step = r.take(_QDISP_HEAD)
+    if flags & ~_FLAG_PROGRESS or r2:
+        raise ProtocolError("qdisp: unknown flags 0x%x or reserved field not 0" % flags)
     if sid == 0 or ver <= base or not 1 <= kind < m.CHANGE_SNAPSHOT or not 1 <= nv <= \
             m.MAX_MESH_VERTICES or count > nv or not (step > 0 and math.isfinite(step)):
         raise ProtocolError("qdisp: bad header (session %d version %d base %d kind %d nv %d "
                             "count %d step %r)" % (sid, ver, base, kind, nv, count, step))
     off, n = r.off, len(p)
-    if rows_bytes != n - off:
-        raise ProtocolError("qdisp: rows_bytes %d but %d bytes follow" % (rows_bytes, n - off))
+    tail = 32 if flags & _FLAG_PROGRESS else 0
+    if rows_bytes + tail != n - off:
+        raise ProtocolError("qdisp: rows_bytes %d (+%d trailer) but %d bytes follow"
+                            % (rows_bytes, tail, n - off))
+    prog = None
+    if tail:
+        t = Reader(p[n - tail:], "qdisp")
+        status, final, res, it, obj, resid, ms = t.take(_QDISP_PROGRESS)
+        if res or kind != m.CHANGE_HANDLE_MOVE or final > 1 or \
+                not all(math.isfinite(x) for x in (obj, resid, ms)) or resid < 0 or ms < 0:
+            raise ProtocolError("qdisp: bad progress trailer (kind %d, final %d, residual %r)"
+                                % (kind, final, resid))
+        prog = QProgress(status, final, it, obj, resid, ms)
+        n -= tail
     idx: List[int] = []
     dq: List[int] = []
     prev = -1
@@ -83,7 +110,7 @@ def decode_qdisp(p: bytes) -> QDisp:
             dq.append(d)
     if off != n:
         raise ProtocolError("qdisp: %d bytes after the rows" % (n - off))
-    return QDisp(sid, ver, base, kind, nv, count, step, idx, dq)
+    return QDisp(sid, ver, base, kind, nv, count, step, idx, dq, progress=prog)
 
 
 def join_qdisp(chunks: List[QDisp]) -> QDisp:
@@ -97,6 +124,7 @@ def join_qdisp(chunks: List[QDisp]) -> QDisp:
             raise ProtocolError("qdisp chunk rows not increasing")
         out.idx += c.idx
         out.dq += c.dq
+        out.progress = out.progress or c.progress
     out.count = len(out.idx)
     return out
 

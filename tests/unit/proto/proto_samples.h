@@ -17,7 +17,7 @@ typedef struct sample {
 } sample;
 
 enum { N_SAMPLES_BASE = 42, N_SAMPLES_DEVICES = 5, N_SAMPLES_RESYNC = 1, N_SAMPLES_ACCESS = 4,
-       N_SAMPLES_WORK = 4, N_SAMPLES_PEERS = 3, N_SAMPLES_STREAM = 5,
+       N_SAMPLES_WORK = 4, N_SAMPLES_PEERS = 3, N_SAMPLES_STREAM = 6,
        N_SAMPLES = N_SAMPLES_BASE + N_SAMPLES_DEVICES + N_SAMPLES_RESYNC + N_SAMPLES_ACCESS +
                    N_SAMPLES_WORK + N_SAMPLES_PEERS + N_SAMPLES_STREAM };
 
@@ -329,11 +329,21 @@ static inline void build_samples(sample *s)
     ADD("hello_reply_stream", DF_MSG_HELLO, DF_FLAG_REPLY,
         df_msg_hello_reply_encode(&hrq, out, &e));
     int64_t qd_dq[9] = {1, -1, 0, 300, -70000, 5, 0, 0, -(1ll << 40)};
-    df_msg_qdisp qd = {42, 8, 7, DF_CHANGE_BRUSH, 100, 3, 2e-5, sample_sparse_idx, qd_dq};
+    df_msg_qdisp qd = {.session_id = 42, .version = 8, .base_version = 7, .kind = DF_CHANGE_BRUSH,
+                       .nv = 100, .count = 3, .step = 2e-5, .idx = sample_sparse_idx,
+                       .dq = qd_dq};
     ADD("qdisp", DF_MSG_QDISP, DF_FLAG_EVENT, df_msg_qdisp_encode(&qd, out, &e));
-    df_msg_qdisp qe = {42, 9, 8, DF_CHANGE_HANDLE_MOVE, 100, 0, 1e-3, NULL, NULL};
+    df_msg_qdisp qe = {.session_id = 42, .version = 9, .base_version = 8,
+                       .kind = DF_CHANGE_HANDLE_MOVE, .nv = 100, .count = 0, .step = 1e-3};
     ADD("qdisp_empty", DF_MSG_QDISP, DF_FLAG_EVENT | DF_FLAG_MORE,
         df_msg_qdisp_encode(&qe, out, &e));
+    /* a handle-move iterate with the progress trailer (4.40) */
+    df_msg_qdisp qp = {.session_id = 42, .version = 10, .base_version = 9,
+                       .kind = DF_CHANGE_HANDLE_MOVE, .nv = 100, .count = 3, .step = 2e-5,
+                       .idx = sample_sparse_idx, .dq = qd_dq, .has_progress = 1,
+                       .status = DF_MOVE_RUNNING, .final = 0, .iteration = 4, .objective = 1.25,
+                       .residual = 3e-4, .elapsed_ms = 12.5};
+    ADD("qdisp_progress", DF_MSG_QDISP, DF_FLAG_EVENT, df_msg_qdisp_encode(&qp, out, &e));
     /* a real zstd frame of 16 zero bytes (zstd -c of /dev/zero, head -c 16) */
     static const uint8_t zbytes[] = {0x28, 0xb5, 0x2f, 0xfd, 0x04, 0x58, 0x45, 0x00, 0x00,
                                      0x10, 0x00, 0x00, 0x01, 0x00, 0x32, 0xc0, 0x02, 0x32,

@@ -590,7 +590,8 @@ static void test_stream_encodings(void **state)
     df_buf_reset(&b);
     int32_t idx[3] = {0, 5, 999};
     int64_t dq[9] = {1, 0, 0, -1, 2, -3, 1ll << 50, -(1ll << 50), 0};
-    df_msg_qdisp q = {7, 3, 2, DF_CHANGE_BRUSH, 1000, 3, 0.5, idx, dq}, r;
+    df_msg_qdisp q = {.session_id = 7, .version = 3, .base_version = 2, .kind = DF_CHANGE_BRUSH,
+                      .nv = 1000, .count = 3, .step = 0.5, .idx = idx, .dq = dq}, r;
     assert_int_equal(df_msg_qdisp_encode(&q, &b, &e), DF_OK);
     assert_int_equal(df_msg_qdisp_decode(b.data, b.len, &r, &e), DF_OK);
     assert_int_equal(r.count, 3);
@@ -600,6 +601,34 @@ static void test_stream_encodings(void **state)
     b.data[28] = 100; /* nv 1000 -> 868: index 999 is outside */
     b.data[29] = 3;
     assert_int_equal(df_msg_qdisp_decode(b.data, b.len, &r, &e), DF_EINVAL);
+    df_buf_reset(&b);
+    /* the progress trailer (4.40): round trip, bad flag bits, a missing trailer, bad fields */
+    df_msg_qdisp qp = q;
+    qp.kind = DF_CHANGE_HANDLE_MOVE;
+    qp.has_progress = 1;
+    qp.status = DF_MOVE_CONVERGED;
+    qp.final = 1;
+    qp.iteration = 17;
+    qp.objective = 0.125;
+    qp.residual = 2.5e-7;
+    qp.elapsed_ms = 40;
+    assert_int_equal(df_msg_qdisp_encode(&qp, &b, &e), DF_OK);
+    assert_int_equal(df_msg_qdisp_decode(b.data, b.len, &r, &e), DF_OK);
+    assert_true(r.has_progress == 1 && r.status == DF_MOVE_CONVERGED && r.final == 1 &&
+                r.iteration == 17 && r.objective == 0.125 && r.residual == 2.5e-7 &&
+                r.elapsed_ms == 40 && r.count == 3 && r.idx[2] == 999);
+    df_msg_qdisp_free(&r);
+    b.data[25] = 3; /* an unknown flag bit */
+    assert_int_equal(df_msg_qdisp_decode(b.data, b.len, &r, &e), DF_EINVAL);
+    b.data[25] = 1;
+    assert_int_equal(df_msg_qdisp_decode(b.data, b.len - 32, &r, &e), DF_EPROTO_TRUNCATED);
+    b.data[25] = 0; /* the trailer without the flag: trailing bytes */
+    assert_int_equal(df_msg_qdisp_decode(b.data, b.len, &r, &e), DF_EPROTO_TRAILING);
+    qp.final = 0; /* final iff status != running */
+    assert_int_equal(df_msg_qdisp_encode(&qp, &b, &e), DF_EINVAL);
+    qp.final = 1;
+    qp.kind = DF_CHANGE_BRUSH; /* only a handle-move iterate has progress */
+    assert_int_equal(df_msg_qdisp_encode(&qp, &b, &e), DF_EINVAL);
     df_buf_reset(&b);
     idx[1] = 0; /* not increasing */
     assert_int_equal(df_msg_qdisp_encode(&q, &b, &e), DF_EINVAL);

@@ -14,6 +14,7 @@
 
 #include "server/config.h"
 #include "server/session/membudget.h"
+#include "server/session/stream_lag.h"
 #include "server/log.h"
 
 static void test_defaults(void **state)
@@ -67,6 +68,8 @@ static void test_parse_file_text(void **state)
                        "allow_paths = /tmp, /\n"
                        "max_clients = 12\n"
                        "output_queue_limit = 8m\n"
+                       "stream_coalesce_start = 2m\n"
+                       "stream_coalesce_resume = 512k\n"
                        "cache_memory_mb = 64\n"
                        "log_level = debug\n"
                        "max_mesh_vertices = 2000\n"
@@ -85,6 +88,8 @@ static void test_parse_file_text(void **state)
     assert_string_equal(c.allow_paths[1], "/");
     assert_int_equal(c.max_clients, 12);
     assert_true(c.output_queue_limit == (size_t)8 << 20);
+    assert_int_equal(c.stream_coalesce_start, 2 << 20);
+    assert_int_equal(c.stream_coalesce_resume, 512 << 10);
     assert_true(c.cache_memory_mb == 64);
     assert_int_equal(c.log_level, DF_LOG_DEBUG);
     assert_int_equal(c.max_mesh_vertices, 2000);
@@ -119,6 +124,22 @@ static void test_parse_file_text(void **state)
     assert_string_equal(c.socket_path, "");
 }
 
+/* stream_coalesce_start / _resume: 0 = output_queue_limit / 8 and / 16; start capped at the
+ * limit, resume at the start */
+static void test_stream_coalesce_thresholds(void **state)
+{
+    (void)state;
+    size_t hi, lo, limit = (size_t)4 << 20;
+    df_stream_lag_thresholds(limit, 0, 0, &hi, &lo);
+    assert_true(hi == limit / 8 && lo == limit / 16);
+    df_stream_lag_thresholds(limit, 1 << 20, 1000, &hi, &lo);
+    assert_true(hi == (size_t)1 << 20 && lo == 1000);
+    df_stream_lag_thresholds(limit, 64 << 20, 0, &hi, &lo);   /* above the limit: the limit */
+    assert_true(hi == limit && lo == limit / 16);
+    df_stream_lag_thresholds(limit, 4096, 8192, &hi, &lo);    /* resume above start: start */
+    assert_true(hi == 4096 && lo == 4096);
+}
+
 static void test_parse_errors_leave_config_untouched(void **state)
 {
     (void)state;
@@ -143,6 +164,8 @@ static void test_parse_errors_leave_config_untouched(void **state)
         "handshake_timeout_s = -1\n", "handshake_timeout_s = 86401\n",
         "idle_timeout_s = soon\n",   "idle_timeout_s = 1e3\n",
         "cursor_hz = -1\n",          "cursor_hz = 10001\n",      "cursor_hz = fast\n",
+        "stream_coalesce_start = -1\n", "stream_coalesce_start = 2g\n",
+        "stream_coalesce_resume = lots\n",
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         df_server_config c, before;
@@ -481,6 +504,7 @@ int main(void)
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_parse_file_text),
         cmocka_unit_test(test_parse_errors_leave_config_untouched),
+        cmocka_unit_test(test_stream_coalesce_thresholds),
         cmocka_unit_test(test_network_and_admission_keys),
         cmocka_unit_test(test_cluster_keys),
         cmocka_unit_test(test_load_file_and_cli),
