@@ -146,6 +146,18 @@ int admm_global_solve(df_admm *s, df_error *err);
  * *x points to the nfree x 3 column-major answer (valid until the next solve) */
 int admm_solve_rhs(df_admm *s, int with_b, const double **x, df_error *err);
 
+/* admm_system.c: a growing list of (i, j, v) entries, for the sparse assembly of the whole-mesh
+ * system and of the active region's sub-system. Start from {0}; admm_trip_push appends one entry
+ * (capacity doubled as needed; -1 when out of memory, the list kept as it was); admm_trip_free
+ * frees the arrays and zeroes the list. */
+typedef struct admm_trip {
+    int64_t n, cap;
+    int32_t *i, *j;
+    double *v;
+} admm_trip;
+int admm_trip_push(admm_trip *t, int32_t i, int32_t j, double v);
+void admm_trip_free(admm_trip *t);
+
 /* admm_system.c: p.rho = rho_new and every gamma_e multiplied by gscale, K_ff reassembled (same
  * pattern) and refactored numerically (supernodal, from the kept symbolic copy Lsym), K_fh P and the affine Schur complement
  * rebuilt; on error the old weights are restored (s->broken if even that fails) */

@@ -378,9 +378,7 @@ static void classify(pn *P, double support_tol)
             const int32_t *el = s->E + (size_t)e * 4;
             double F[9];
             admm_newton_element_F(s, P->V, e, F);
-            double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-                       F[2] * (F[3] * F[7] - F[4] * F[6]);
-            if (J > 0) continue;
+            if (admm_det3(F) > 0) continue;
             for (int a = 0; a < 4; a++)
                 if (P->cls[el[a]] == CLS_REST) {
                     P->cls[el[a]] = CLS_FREE;
