@@ -282,36 +282,13 @@ static void region_lists(df_admm *s, admm_active *a)
     a->gam3_ae = gsum;
 }
 
-typedef struct sub_trip {
-    int64_t n, cap;
-    int32_t *i, *j;
-    double *v;
-} sub_trip;
-
-static int push(sub_trip *t, int32_t i, int32_t j, double v)
-{
-    if (t->n == t->cap) {
-        int64_t nc = t->cap ? 2 * t->cap : 4096;
-        int32_t *ni = realloc(t->i, (size_t)nc * sizeof(int32_t));
-        if (ni) t->i = ni;
-        int32_t *nj = realloc(t->j, (size_t)nc * sizeof(int32_t));
-        if (nj) t->j = nj;
-        double *nw = realloc(t->v, (size_t)nc * sizeof(double));
-        if (nw) t->v = nw;
-        if (!ni || !nj || !nw) return -1;
-        t->cap = nc;
-    }
-    t->i[t->n] = i; t->j[t->n] = j; t->v[t->n] = v; t->n++;
-    return 0;
-}
-
 /* one entry K(i, j) of the global matrix into the sub-system (free row i) or its couplings */
-static int emit(const admm_active *a, sub_trip *kff, sub_trip *cpl, int32_t i, int32_t j, double v)
+static int emit(const admm_active *a, admm_trip *kff, admm_trip *cpl, int32_t i, int32_t j, double v)
 {
     int32_t fi = a->rfidx[i], fj = a->rfidx[j];
     if (fi < 0) return 0;
-    if (fj >= 0) return fi <= fj ? push(kff, fi, fj, v) : 0;
-    return push(cpl, fi, j, v);
+    if (fj >= 0) return fi <= fj ? admm_trip_push(kff, fi, fj, v) : 0;
+    return admm_trip_push(cpl, fi, j, v);
 }
 
 /* the principal submatrix of K on the region's free vertices, its couplings to fixed vertices
@@ -331,7 +308,7 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
     a->ncp = 0;
     a->rho_fact = s->p.rho;
     if (a->nrf == 0) return DF_OK;
-    sub_trip kff = {0}, cpl = {0};
+    admm_trip kff = {0}, cpl = {0};
     int rc = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
         for (int32_t k = 0; k < a->nae && !rc; k++) {
@@ -362,7 +339,7 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
             }
         }
     }
-    for (int32_t f = 0; f < a->nrf && !rc; f++) rc |= push(&kff, f, f, s->p.rho);
+    for (int32_t f = 0; f < a->nrf && !rc; f++) rc |= admm_trip_push(&kff, f, f, s->p.rho);
     /* couplings to the outside (at rest, constant while the region stands) summed into kout;
      * those to handles (targets change) kept in the cp list */
     free(a->kout);
@@ -380,16 +357,16 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
     a->ncp = nh;
     a->cp_f = cpl.i; a->cp_v = cpl.j; a->cp_val = cpl.v;
     if (rc) {
-        free(kff.i); free(kff.j); free(kff.v);
+        admm_trip_free(&kff);
         return df_error_set(err, DF_ENOMEM, "admm_run: out of memory (active sub-system)");
     }
     cholmod_triplet *T = cholmod_allocate_triplet(a->nrf, a->nrf, (size_t)kff.n, 1, CHOLMOD_REAL, &s->cc);
-    if (!T) { free(kff.i); free(kff.j); free(kff.v); return df_error_set(err, DF_ENOMEM, "admm_run: CHOLMOD out of memory"); }
+    if (!T) { admm_trip_free(&kff); return df_error_set(err, DF_ENOMEM, "admm_run: CHOLMOD out of memory"); }
     memcpy(T->i, kff.i, (size_t)kff.n * sizeof(int32_t));
     memcpy(T->j, kff.j, (size_t)kff.n * sizeof(int32_t));
     memcpy(T->x, kff.v, (size_t)kff.n * sizeof(double));
     T->nnz = (size_t)kff.n;
-    free(kff.i); free(kff.j); free(kff.v);
+    admm_trip_free(&kff);
     cholmod_sparse *K = cholmod_triplet_to_sparse(T, (size_t)T->nnz, &s->cc);
     cholmod_free_triplet(&T, &s->cc);
     if (!K) return df_error_set(err, DF_ENOMEM, "admm_run: CHOLMOD out of memory");

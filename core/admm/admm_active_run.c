@@ -9,11 +9,10 @@
 #include <string.h>
 
 #include "core/admm/admm_active.h"
+#include "core/admm/admm_resid.h"
 #include "core/admm/scl1.h"
 
 #define ADMM_BUDGET_MARGIN 1.05 /* as admm_run.c */
-#define ADMM_DAMP_HALVINGS 7    /* as admm_damp.c */
-#define ADMM_DAMP_MAX_STALL 2
 /* a region's loops fork threads only when they have this much work: an OpenMP fork/join (a futex
  * wake-up with the passive wait policy) costs tens of microseconds, a whole light loop over a
  * small region less */
@@ -21,19 +20,6 @@
 #define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
 /* a run starts from a fresh region when the current one is this many times larger than needed */
 #define ACT_SHRINK 2
-
-static inline void el_F(const df_admm *s, const double *V, int32_t e, double F[9])
-{
-    const int32_t *el = s->E + (size_t)e * s->esz;
-    const double *g = s->grad + (size_t)e * s->esz * 3;
-    memset(F, 0, 9 * sizeof(double));
-    for (int a = 0; a < s->esz; a++) {
-        const double *x = V + 3 * (size_t)el[a];
-        const double *ga = g + 3 * a;
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * ga[c];
-    }
-}
 
 /* The residuals of the stop test (admm_resid.c's, over the region) are summed inside the
  * kernels from each item's old and new values, without snapshots: squared norms of r, A x, z, s
@@ -97,31 +83,7 @@ static void act_rhs(df_admm *s)
     const int32_t nf = a->nrf;
     if (nf == 0) return; /* every region vertex is a handle */
     double *rhs = a->rhs->x;
-    const double rho = s->p.rho;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (nf >= ACT_PAR_LIGHT)
-    for (int32_t f = 0; f < nf; f++) {
-        int32_t v = a->rfv[f];
-        double b[3] = {0, 0, 0};
-        if (s->family == ADMM_FAM_ELEMENT) {
-            for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
-                const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
-                b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
-            }
-        } else {
-            for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
-                int32_t se = s->in_ent[p];
-                int32_t t = (se > 0 ? se : -se) - 1;
-                double sign = se > 0 ? 1.0 : -1.0;
-                const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
-                double w = sign * s->sr_w[t];
-                for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
-            }
-        }
-        for (int k = 0; k < 3; k++) {
-            size_t o = 3 * (size_t)v + k;
-            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - a->kout[f + (size_t)k * nf];
-        }
-    }
+    admm_rhs_rows(s, a->rfv, nf, a->kout, rhs, nf >= ACT_PAR_LIGHT);
     for (int64_t t = 0; t < a->ncp; t++) {
         const double *p = s->target + 3 * (size_t)a->hmap[a->cp_v[t]];
         for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * p[k];
@@ -135,10 +97,8 @@ static int any_inverted(const df_admm *s)
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(| : bad) if (a->nae >= ACT_PAR_LIGHT)
     for (int32_t k = 0; k < a->nae; k++) {
         double F[9];
-        el_F(s, s->V, a->ae[k], F);
-        double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-                   F[2] * (F[3] * F[7] - F[4] * F[6]);
-        bad |= !(J > 0);
+        admm_element_F(s, s->V, a->ae[k], F);
+        bad |= !(admm_det3(F) > 0);
     }
     return bad;
 }
@@ -193,26 +153,13 @@ static int act_global(df_admm *s, df_error *err)
         if (!any_inverted(s)) { found = 1; break; }
     }
     if (!found) {
-        t *= 2.0;
         place(s, x, 0.0);
-        int va_bad = any_inverted(s);
-        if (!va_bad && s->damp_stall < ADMM_DAMP_MAX_STALL) {
-            t = 0.0;
-            s->damp_stall++;
-        } else {
-            if (va_bad) t = 1.0;
-            s->damp_stall = 0;
-        }
+        t = admm_damp_choose(s, t * 2.0, any_inverted(s));
         place(s, x, t);
     } else {
         s->damp_stall = 0;
     }
-    if (t == 1.0) {
-        memcpy(s->target, s->target_req, (size_t)s->nh * 3 * sizeof(double));
-        s->tgt_pending = 0;
-    } else {
-        for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++) s->target[i] += t * s->damp_dp[i];
-    }
+    admm_damp_apply(s, t);
     a->kfhp_dirty = 1;
     return DF_OK;
 }
@@ -229,7 +176,7 @@ static double act_dual(df_admm *s, act_acc *acc)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
             double F[9], er = 0, ea = 0, ey = 0;
-            el_F(s, s->V, e, F);
+            admm_element_F(s, s->V, e, F);
             double *W = s->W + 9 * (size_t)e;
             const double *RX = s->RX + 9 * (size_t)e;
             for (int c = 0; c < 9; c++) {
@@ -266,27 +213,13 @@ static double act_elastic(const df_admm *s)
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             double F[9];
-            el_F(s, V, a->ae[k], F);
+            admm_element_F(s, V, a->ae[k], F);
             E += admm_element_energy_F(s, a->ae[k], F);
         }
         return E;
     }
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_HEAVY)
-    for (int32_t k = 0; k < a->nae; k++) {
-        int32_t i = a->ae[k];
-        double R[9];
-        admm_fit_vertex(s, V, i, R);
-        for (int32_t t = s->sr_ptr[i]; t < s->sr_ptr[i + 1]; t++) {
-            const double *xa = V + 3 * (size_t)s->sr_a[t], *xb = V + 3 * (size_t)s->sr_b[t];
-            const double *dr = s->sr_d + 3 * (size_t)t;
-            double r2 = 0;
-            for (int r = 0; r < 3; r++) {
-                double d = R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2] - (xb[r] - xa[r]);
-                r2 += d * d;
-            }
-            E += 0.5 * s->sr_w[t] * r2;
-        }
-    }
+    for (int32_t k = 0; k < a->nae; k++) E += admm_vertex_energy(s, V, a->ae[k]);
     return E;
 }
 
@@ -434,7 +367,6 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     int maxit = budget && budget->max_iters > 0 ? budget->max_iters : s->p.max_iters;
     double max_ms = budget ? budget->max_ms : 0;
     int every = budget && budget->progress ? budget->progress_every : 0;
-    const double sq_tol = sqrt(s->p.tol);
     double E_prev = s->E_last;
     if (!isfinite(E_prev)) {
         double el0 = act_elastic(s), lo0 = act_locality(s);
@@ -474,14 +406,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         r.iterations++;
         s->st.iterations++;
         r.elastic = el; r.locality = lo; r.objective = E;
-        if (!hold && isfinite(E) && isfinite(E_prev)) {
-            double dE = fabs(E - E_prev), rel = dE == 0.0 ? 0.0 : dE / fabs(E);
-            double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
-            r.residual = rel > pd ? rel : pd;
-            if (isnan(r.residual)) r.residual = INFINITY;
-        } else {
-            r.residual = INFINITY;
-        }
+        r.residual = admm_stop_residual(s, hold, E, E_prev, pri, dual);
         E_prev = E;
         s->E_last = E; s->el_last = el; s->lo_last = lo;
         int conv = r.residual < s->p.tol;

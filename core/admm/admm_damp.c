@@ -16,8 +16,27 @@
 
 #include "core/admm/admm_internal.h"
 
-#define ADMM_DAMP_HALVINGS 7      /* smallest trial step 2^-7 */
 #define ADMM_DAMP_MAX_STALL 2     /* iterations the handles may hold still before a forced step */
+
+double admm_damp_choose(df_admm *s, double t_min, int va_bad)
+{
+    if (!va_bad && s->damp_stall < ADMM_DAMP_MAX_STALL) {
+        s->damp_stall++;
+        return 0.0;
+    }
+    s->damp_stall = 0;
+    return va_bad ? 1.0 : t_min;
+}
+
+void admm_damp_apply(df_admm *s, double t)
+{
+    if (t == 1.0) {
+        memcpy(s->target, s->target_req, (size_t)s->nh * 3 * sizeof(double));
+        s->tgt_pending = 0;
+    } else {
+        for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++) s->target[i] += t * s->damp_dp[i];
+    }
+}
 
 /* 1 when some element of V has det F_e <= 0 */
 static int any_inverted(const df_admm *s, const double *V)
@@ -25,17 +44,9 @@ static int any_inverted(const df_admm *s, const double *V)
     int bad = 0;
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(| : bad)
     for (int32_t e = 0; e < s->ne; e++) {
-        const int32_t *el = s->E + (size_t)e * s->esz;
-        const double *g = s->grad + (size_t)e * s->esz * 3;
-        double F[9] = {0};
-        for (int a = 0; a < s->esz; a++) {
-            const double *x = V + 3 * (size_t)el[a];
-            for (int r = 0; r < 3; r++)
-                for (int c = 0; c < 3; c++) F[3 * r + c] += x[r] * g[3 * a + c];
-        }
-        double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-                   F[2] * (F[3] * F[7] - F[4] * F[6]);
-        bad |= !(J > 0);
+        double F[9];
+        admm_element_F(s, V, e, F); /* Neo-Hookean: tets, q = 3 */
+        bad |= !(admm_det3(F) > 0);
     }
     return bad;
 }
@@ -79,24 +90,12 @@ int admm_global_step(df_admm *s, df_error *err)
         if (!any_inverted(s, s->V)) { found = 1; break; }
     }
     if (!found) {
-        t *= 2.0; /* the smallest trial step */
-        if (!any_inverted(s, s->damp_va) && s->damp_stall < ADMM_DAMP_MAX_STALL) {
-            t = 0.0;
-            s->damp_stall++;
-        } else {
-            if (any_inverted(s, s->damp_va)) t = 1.0;
-            s->damp_stall = 0;
-        }
+        t = admm_damp_choose(s, t * 2.0, any_inverted(s, s->damp_va)); /* the smallest trial step */
         place(s, x, t);
     } else {
         s->damp_stall = 0;
     }
-    if (t == 1.0) {
-        memcpy(s->target, s->target_req, (size_t)s->nh * 3 * sizeof(double));
-        s->tgt_pending = 0;
-    } else {
-        for (int64_t i = 0; i < 3 * (int64_t)s->nh; i++) s->target[i] += t * s->damp_dp[i];
-    }
+    admm_damp_apply(s, t);
     admm_update_kfhp(s);
     return DF_OK;
 }

@@ -17,8 +17,7 @@ double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9])
         return 0.5 * vol * ((sg[0] - 1) * (sg[0] - 1) + (sg[1] - 1) * (sg[1] - 1));
     }
     if (s->p.energy == DF_ADMM_NEOHOOKEAN) {
-        double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-                   F[2] * (F[3] * F[7] - F[4] * F[6]);
+        double J = admm_det3(F);
         if (!(J > 0)) return INFINITY;
         double I1 = 0;
         for (int k = 0; k < 9; k++) I1 += F[k] * F[k];
@@ -35,18 +34,12 @@ double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9])
 
 static double element_energy(const df_admm *s, const double *V, int32_t e)
 {
-    const int32_t *el = s->E + (size_t)e * s->esz;
-    const double *g = s->grad + (size_t)e * s->esz * 3;
-    double F[9] = {0};
-    for (int a = 0; a < s->esz; a++) {
-        const double *x = V + 3 * (size_t)el[a];
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * g[3 * a + c];
-    }
+    double F[9];
+    admm_element_F(s, V, e, F);
     return admm_element_energy_F(s, e, F);
 }
 
-static double vertex_energy(const df_admm *s, const double *V, int32_t i)
+double admm_vertex_energy(const df_admm *s, const double *V, int32_t i)
 {
     double R[9];
     admm_fit_vertex(s, V, i, R);
@@ -72,7 +65,7 @@ double admm_elastic(const df_admm *s, const double *V)
         for (int32_t e = 0; e < s->ne; e++) E += element_energy(s, V, e);
     } else {
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
-        for (int32_t i = 0; i < s->nv; i++) E += vertex_energy(s, V, i);
+        for (int32_t i = 0; i < s->nv; i++) E += admm_vertex_energy(s, V, i);
     }
     return E + admm_bending(s, V);
 }

@@ -146,6 +146,18 @@ int admm_global_solve(df_admm *s, df_error *err);
  * *x points to the nfree x 3 column-major answer (valid until the next solve) */
 int admm_solve_rhs(df_admm *s, int with_b, const double **x, df_error *err);
 
+/* admm_system.c: a growing list of (i, j, v) entries, for the sparse assembly of the whole-mesh
+ * system and of the active region's sub-system. Start from {0}; admm_trip_push appends one entry
+ * (capacity doubled as needed; -1 when out of memory, the list kept as it was); admm_trip_free
+ * frees the arrays and zeroes the list. */
+typedef struct admm_trip {
+    int64_t n, cap;
+    int32_t *i, *j;
+    double *v;
+} admm_trip;
+int admm_trip_push(admm_trip *t, int32_t i, int32_t j, double v);
+void admm_trip_free(admm_trip *t);
+
 /* admm_system.c: p.rho = rho_new and every gamma_e multiplied by gscale, K_ff reassembled (same
  * pattern) and refactored numerically (supernodal, from the kept symbolic copy Lsym), K_fh P and the affine Schur complement
  * rebuilt; on error the old weights are restored (s->broken if even that fails) */
@@ -164,6 +176,17 @@ int admm_rho_adapt(df_admm *s, const struct admm_resid *rs, int held, double res
 /* admm_damp.c: the global step; for Neo-Hookean moves the applied handle targets towards the
  * requested ones by the largest step (1, 1/2, ...) that leaves no element of V inverted */
 int admm_global_step(df_admm *s, df_error *err);
+/* the damped handle step shared by admm_global_step and the active-set run (admm_active_run.c),
+ * which try t = 1, 1/2, ..., 2^-ADMM_DAMP_HALVINGS on their own vertex sets first.
+ * admm_damp_choose: when no trial step avoids an inversion: t_min the smallest trial step, va_bad
+ * 1 when V_a (t = 0) has an inverted element; returns the step to take: 0 (hold still, at most
+ * ADMM_DAMP_MAX_STALL times in a row, counted in s->damp_stall) when V_a is fine, else t_min, or 1
+ * when V_a is inverted (damping cannot help); resets the count when not holding.
+ * admm_damp_apply: moves the applied targets by t dp (t = 1: exactly to target_req, nothing
+ * pending). */
+#define ADMM_DAMP_HALVINGS 7 /* smallest trial step 2^-7 */
+double admm_damp_choose(df_admm *s, double t_min, int va_bad);
+void admm_damp_apply(df_admm *s, double t);
 
 /* admm_local.c: local steps and the global right-hand side. admm_local_x_one: local step 1 of
  * element e (R_e X_e) and its right-hand side pieces Ce (element family only). */
@@ -171,6 +194,13 @@ void admm_local_x_one(df_admm *s, int32_t e);
 void admm_local_x(df_admm *s);
 void admm_local_z(df_admm *s);
 void admm_assemble_rhs(df_admm *s);
+/* the global right-hand side rows of the nf vertices verts (free vertices, no handles): for row f,
+ * vertex v = verts[f], column k: the element (cell) pieces gathered at v + rho (Vrest + Z - U)_v,k
+ * - sub[f + k nf], written to rhs[f + k nf] (both nf x 3 column-major). par: fork OpenMP threads.
+ * admm_assemble_rhs is this over the whole mesh's free vertices (sub = K_fh P); the active-set run
+ * over its region's (sub = the outside couplings). */
+void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
+                   int par);
 /* dual updates; for the element family also returns sum_e E_e(F_e(V)) (the elastic energy of V
  * without bending, from the same F_e), else 0 */
 double admm_dual_update(df_admm *s);
@@ -198,6 +228,31 @@ double admm_elastic(const df_admm *s, const double *V);
 double admm_locality(const df_admm *s, const double *V);
 double admm_bending(const df_admm *s, const double *V);
 double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9]);
+/* elastic energy of vertex i's spokes-and-rims cell at V (vertex family): sum over its entries t
+ * of sr_w[t] / 2 |s_i R_i d_t - (V_b - V_a)|^2 with s_i R_i = admm_fit_vertex(V, i) */
+double admm_vertex_energy(const df_admm *s, const double *V, int32_t i);
+
+/* F_e(V) = sum_a V_a g_{e,a}^T of kept element e (3 x q, row stride 3, unused columns 0); inline
+ * for the per-element loops of the full and the active-set paths (one summation order for both) */
+static inline void admm_element_F(const df_admm *s, const double *V, int32_t e, double F[9])
+{
+    const int32_t *el = s->E + (size_t)e * s->esz;
+    const double *g = s->grad + (size_t)e * s->esz * 3;
+    for (int k = 0; k < 9; k++) F[k] = 0.0;
+    for (int a = 0; a < s->esz; a++) {
+        const double *x = V + 3 * (size_t)el[a];
+        const double *ga = g + 3 * a;
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * ga[c];
+    }
+}
+
+/* det of a row-major 3 x 3 matrix */
+static inline double admm_det3(const double F[9])
+{
+    return F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+           F[2] * (F[3] * F[7] - F[4] * F[6]);
+}
 
 /* admm_anderson.c */
 int admm_aa_init(admm_anderson *aa, int m, int64_t n);

@@ -15,20 +15,6 @@
  * uses the isotropic expansion instead of an eigen-decomposition */
 #define ADMM_NH_ISO_REL 1e-8
 
-/* F = sum_a V_a g_a^T (3 x q, row stride 3) */
-static inline void element_F(const df_admm *s, const double *V, int32_t e, double F[9])
-{
-    const int32_t *el = s->E + (size_t)e * s->esz;
-    const double *g = s->grad + (size_t)e * s->esz * 3;
-    memset(F, 0, 9 * sizeof(double));
-    for (int a = 0; a < s->esz; a++) {
-        const double *x = V + 3 * (size_t)el[a];
-        const double *ga = g + 3 * a;
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < s->q; c++) F[3 * r + c] += x[r] * ga[c];
-    }
-}
-
 /* per-element right-hand side contributions C_{e,a} = gam_e (R_e X_e - W_e) g_{e,a}, gathered per
  * vertex by admm_assemble_rhs (element-ordered writes, no atomics) */
 static inline void element_contrib(df_admm *s, int32_t e, const double *RX, const double *W)
@@ -68,7 +54,7 @@ static void local_x_element_one(df_admm *s, int32_t e)
     const df_admm_energy en = s->p.energy;
     {
         double G[9], *W = s->W + 9 * (size_t)e, *RX = s->RX + 9 * (size_t)e;
-        element_F(s, s->V, e, G);
+        admm_element_F(s, s->V, e, G);
         for (int k = 0; k < 9; k++) G[k] += W[k];
         double vol = s->vol[e], gam = s->gam[e];
         if (s->q == 2) {
@@ -219,14 +205,13 @@ void admm_local_z(df_admm *s)
     }
 }
 
-void admm_assemble_rhs(df_admm *s)
+void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
+                   int par)
 {
-    const int32_t nf = s->nfree;
-    double *rhs = s->rhs->x;
     const double rho = s->p.rho;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (par)
     for (int32_t f = 0; f < nf; f++) {
-        int32_t v = s->fvert[f];
+        int32_t v = verts[f];
         double b[3] = {0, 0, 0};
         if (s->family == ADMM_FAM_ELEMENT) {
             for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
@@ -245,10 +230,12 @@ void admm_assemble_rhs(df_admm *s)
         }
         for (int k = 0; k < 3; k++) {
             size_t o = 3 * (size_t)v + k;
-            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - s->KfhP[f + (size_t)k * nf];
+            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - sub[f + (size_t)k * nf];
         }
     }
 }
+
+void admm_assemble_rhs(df_admm *s) { admm_rhs_rows(s, s->fvert, s->nfree, s->KfhP, s->rhs->x, 1); }
 
 double admm_dual_update(df_admm *s)
 {
@@ -257,7 +244,7 @@ double admm_dual_update(df_admm *s)
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
         for (int32_t e = 0; e < s->ne; e++) {
             double F[9];
-            element_F(s, s->V, e, F);
+            admm_element_F(s, s->V, e, F);
             double *W = s->W + 9 * (size_t)e;
             const double *RX = s->RX + 9 * (size_t)e;
             for (int k = 0; k < 9; k++) W[k] += F[k] - RX[k];

@@ -100,6 +100,24 @@ static double vertex_stiffness(const df_admm *s, int32_t i)
     return k;
 }
 
+/* V += a D for the first a in 1, 1/2, ..., 2^-(halvings - 1) with a finite objective below P->f
+ * (P->f updated; P->Vt scratch); 0 when none */
+static int halving_step(pn *P, int halvings)
+{
+    size_t nv3 = 3 * (size_t)P->s->nv;
+    for (int h = 0; h < halvings; h++) {
+        double a = ldexp(1.0, -h);
+        for (size_t q = 0; q < nv3; q++) P->Vt[q] = P->V[q] + a * P->D[q];
+        double ft = objective(P->s, P->Vt, NULL, NULL);
+        if (isfinite(ft) && ft < P->f) {
+            memcpy(P->V, P->Vt, nv3 * sizeof(double));
+            P->f = ft;
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* moves the worst subgradient violators off rest along -g_el (first-order step, halved until E
  * decreases); returns the number added (0: none could decrease E) */
 static int32_t grow(pn *P)
@@ -118,22 +136,12 @@ static int32_t grow(pn *P)
         for (int q = 0; q < 3; q++) P->D[3 * (size_t)i + q] = -t * g[q] / ng;
         n++;
     }
-    if (n == 0) return 0;
-    for (int h = 0; h < 40; h++) {
-        double a = ldexp(1.0, -h);
-        for (size_t q = 0; q < nv3; q++) P->Vt[q] = P->V[q] + a * P->D[q];
-        double ft = objective(s, P->Vt, NULL, NULL);
-        if (isfinite(ft) && ft < P->f) {
-            memcpy(P->V, P->Vt, nv3 * sizeof(double));
-            P->f = ft;
-            for (int32_t i = 0; i < s->nv; i++)
-                if (P->D[3 * (size_t)i] != 0 || P->D[3 * (size_t)i + 1] != 0 || P->D[3 * (size_t)i + 2] != 0)
-                    P->cls[i] = CLS_FREE;
-            collect_support(P);
-            return n;
-        }
-    }
-    return 0;
+    if (n == 0 || !halving_step(P, 40)) return 0;
+    for (int32_t i = 0; i < s->nv; i++)
+        if (P->D[3 * (size_t)i] != 0 || P->D[3 * (size_t)i + 1] != 0 || P->D[3 * (size_t)i + 2] != 0)
+            P->cls[i] = CLS_FREE;
+    collect_support(P);
+    return n;
 }
 
 /* snaps free vertices back to rest that are within PN_SNAP_REL s of it and satisfy the subgradient
@@ -200,18 +208,7 @@ static int32_t reaim(pn *P)
         for (int q = 0; q < 3; q++) P->D[3 * (size_t)i + q] = x0[q] - t * g[q] / ng - x[q];
         n++;
     }
-    if (n == 0) return 0;
-    for (int h = 0; h < 30; h++) {
-        double a = ldexp(1.0, -h);
-        for (size_t q = 0; q < nv3; q++) P->Vt[q] = P->V[q] + a * P->D[q];
-        double ft = objective(s, P->Vt, NULL, NULL);
-        if (isfinite(ft) && ft < P->f) {
-            memcpy(P->V, P->Vt, nv3 * sizeof(double));
-            P->f = ft;
-            return n;
-        }
-    }
-    return 0;
+    return n > 0 && halving_step(P, 30) ? n : 0;
 }
 
 /* the Newton matrix: exact, else projected, else projected + growing shift */
@@ -381,9 +378,7 @@ static void classify(pn *P, double support_tol)
             const int32_t *el = s->E + (size_t)e * 4;
             double F[9];
             admm_newton_element_F(s, P->V, e, F);
-            double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-                       F[2] * (F[3] * F[7] - F[4] * F[6]);
-            if (J > 0) continue;
+            if (admm_det3(F) > 0) continue;
             for (int a = 0; a < 4; a++)
                 if (P->cls[el[a]] == CLS_REST) {
                     P->cls[el[a]] = CLS_FREE;

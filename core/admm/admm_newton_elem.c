@@ -84,12 +84,6 @@ int admm_newton_psd_project(double *A, int n)
 
 /* ---- densities ---- */
 
-static double det3(const double F[9])
-{
-    return F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-           F[2] * (F[3] * F[7] - F[4] * F[6]);
-}
-
 /* cofactor matrix: cof(F)_ij = d det F / d F_ij */
 static void cof3(const double F[9], double C[9])
 {
@@ -106,7 +100,7 @@ static void cof3(const double F[9], double C[9])
 
 static int neohookean(double mu, double lambda, const double F[9], double P[9], double *H, int project)
 {
-    double J = det3(F);
+    double J = admm_det3(F);
     if (!(J > 0)) return -1;
     double C[9], Fit[9]; /* Fit = F^-T = cof(F) / J */
     cof3(F, C);
@@ -179,10 +173,10 @@ double admm_newton_det_step(const double F[9], const double D[9], double tmax)
     double CF[9], CD[9], c[4];
     cof3(F, CF);
     cof3(D, CD);
-    c[0] = det3(F);
+    c[0] = admm_det3(F);
     c[1] = c[2] = 0;
     for (int k = 0; k < 9; k++) { c[1] += CF[k] * D[k]; c[2] += CD[k] * F[k]; }
-    c[3] = det3(D);
+    c[3] = admm_det3(D);
     if (c[1] >= 0 && c[2] >= 0 && c[3] >= 0) return INFINITY;
     /* split [0, tmax] at the critical points (roots of 3 c3 t^2 + 2 c2 t + c1) */
     double br[4] = {0, tmax, tmax, tmax};

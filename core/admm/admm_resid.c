@@ -88,3 +88,13 @@ void admm_resid_measure(admm_resid *rs, const df_admm *s, double *pri, double *d
      * round-off, O(1) at an exact fixed point; max(||y||, ||z||) keeps it relative */
     *dual = ratio(s2, y2 > z2 ? y2 : z2);
 }
+
+double admm_stop_residual(const df_admm *s, int hold, double E, double E_prev, double pri, double dual)
+{
+    if (hold || !isfinite(E) || !isfinite(E_prev)) return INFINITY;
+    const double sq_tol = sqrt(s->p.tol);
+    double dE = fabs(E - E_prev), rel = dE == 0.0 ? 0.0 : dE / fabs(E);
+    double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
+    double r = rel > pd ? rel : pd;
+    return isnan(r) ? INFINITY : r;
+}

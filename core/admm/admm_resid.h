@@ -38,4 +38,10 @@ void admm_resid_snapshot(admm_resid *rs, const df_admm *s);
  * A zero numerator gives 0; a nonzero one over a zero scale gives +inf. */
 void admm_resid_measure(admm_resid *rs, const df_admm *s, double *pri, double *dual);
 
+/* The stop residual of one iteration (admm.h DF_ADMM_RESIDUAL), for the full and the active-set
+ * run: max(|E - E_prev| / |E|, sqrt(tol) max(pri, dual)) from the objective E of the new iterate,
+ * the previous one E_prev and the relative residuals pri, dual; +inf when hold (the iterate was
+ * held back), when E or E_prev is not finite, or when the value is NaN. */
+double admm_stop_residual(const df_admm *s, int hold, double E, double E_prev, double pri, double dual);
+
 #endif

@@ -64,7 +64,6 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
     if (admm_resid_init(&rs, s, err)) { free(x_before); return DF_ENOMEM; }
     /* primal and dual residuals must fall below sqrt(tol) (relative): near the optimum the
      * objective error is quadratic in them, so this matches the energy test's |dE| < tol |E| */
-    const double sq_tol = sqrt(s->p.tol);
     double E_prev = s->E_last;
     if (!isfinite(E_prev)) {
         double el0 = admm_elastic(s, s->Vout), lo0 = admm_locality(s, s->Vout);
@@ -121,14 +120,7 @@ int df_admm_run(df_admm *s, const df_admm_budget *budget, df_admm_result *res, d
         r.elastic = el;
         r.locality = lo;
         r.objective = E;
-        if (!hold && isfinite(E) && isfinite(E_prev)) {
-            double dE = fabs(E - E_prev), rel = dE == 0.0 ? 0.0 : dE / fabs(E);
-            double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
-            r.residual = rel > pd ? rel : pd;
-            if (isnan(r.residual)) r.residual = INFINITY;
-        } else {
-            r.residual = INFINITY;
-        }
+        r.residual = admm_stop_residual(s, hold, E, E_prev, pri, dual);
         E_prev = E;
         s->E_last = E;
         s->el_last = el;

@@ -9,13 +9,7 @@
 
 #include "core/admm/admm_internal.h"
 
-typedef struct trip {
-    int64_t n, cap;
-    int32_t *i, *j;
-    double *v;
-} trip;
-
-static int trip_push(trip *t, int32_t i, int32_t j, double v)
+int admm_trip_push(admm_trip *t, int32_t i, int32_t j, double v)
 {
     if (t->n == t->cap) {
         int64_t nc = t->cap ? 2 * t->cap : 1024;
@@ -32,7 +26,7 @@ static int trip_push(trip *t, int32_t i, int32_t j, double v)
     return 0;
 }
 
-static void trip_free(trip *t) { free(t->i); free(t->j); free(t->v); memset(t, 0, sizeof(*t)); }
+void admm_trip_free(admm_trip *t) { free(t->i); free(t->j); free(t->v); memset(t, 0, sizeof(*t)); }
 
 void admm_free_system(df_admm *s)
 {
@@ -53,15 +47,15 @@ void admm_free_system(df_admm *s)
 }
 
 /* emits K entries (both triangles of the symmetric matrix) into the free/coupling containers */
-static int emit(df_admm *s, trip *kff, trip *cpl, const int32_t *hmap, int32_t i, int32_t j, double v)
+static int emit(df_admm *s, admm_trip *kff, admm_trip *cpl, const int32_t *hmap, int32_t i, int32_t j, double v)
 {
     int32_t fi = s->fidx[i], fj = s->fidx[j];
-    if (fi >= 0 && fj >= 0) return fi <= fj ? trip_push(kff, fi, fj, v) : 0;
-    if (fi >= 0 && fj < 0) return trip_push(cpl, fi, hmap[j], v);
+    if (fi >= 0 && fj >= 0) return fi <= fj ? admm_trip_push(kff, fi, fj, v) : 0;
+    if (fi >= 0 && fj < 0) return admm_trip_push(cpl, fi, hmap[j], v);
     return 0;
 }
 
-static int assemble(df_admm *s, trip *kff, trip *cpl, const int32_t *hmap)
+static int assemble(df_admm *s, admm_trip *kff, admm_trip *cpl, const int32_t *hmap)
 {
     int rc = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
@@ -185,28 +179,28 @@ static void free_affine(df_admm *s)
 
 /* K_ff (upper triangle, CHOLMOD sparse) and the K_fh coupling triplets for the current weights,
  * rho and handle set (s->fidx set); the same entry sequence every time, so the same pattern */
-static int assemble_sparse(df_admm *s, cholmod_sparse **Ko, trip *cpl, df_error *err)
+static int assemble_sparse(df_admm *s, cholmod_sparse **Ko, admm_trip *cpl, df_error *err)
 {
     int32_t nv = s->nv, nf = s->nfree;
     int32_t *hmap = malloc((size_t)nv * sizeof(int32_t));
     if (!hmap) return df_error_set(err, DF_ENOMEM, "admm: out of memory");
     for (int32_t i = 0; i < nv; i++) hmap[i] = -1;
     for (int32_t h = 0; h < s->nh; h++) hmap[s->hidx[h]] = h;
-    trip kff = {0};
+    admm_trip kff = {0};
     memset(cpl, 0, sizeof(*cpl));
     int rc = assemble(s, &kff, cpl, hmap);
     free(hmap);
-    if (rc) { trip_free(&kff); trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: out of memory (assembly)"); }
+    if (rc) { admm_trip_free(&kff); admm_trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: out of memory (assembly)"); }
     cholmod_triplet *T = cholmod_allocate_triplet(nf, nf, (size_t)kff.n, 1, CHOLMOD_REAL, &s->cc);
-    if (!T) { trip_free(&kff); trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
+    if (!T) { admm_trip_free(&kff); admm_trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
     memcpy(T->i, kff.i, (size_t)kff.n * sizeof(int32_t));
     memcpy(T->j, kff.j, (size_t)kff.n * sizeof(int32_t));
     memcpy(T->x, kff.v, (size_t)kff.n * sizeof(double));
     T->nnz = (size_t)kff.n;
-    trip_free(&kff);
+    admm_trip_free(&kff);
     *Ko = cholmod_triplet_to_sparse(T, (size_t)T->nnz, &s->cc);
     cholmod_free_triplet(&T, &s->cc);
-    if (!*Ko) { trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
+    if (!*Ko) { admm_trip_free(cpl); return df_error_set(err, DF_ENOMEM, "admm: CHOLMOD out of memory"); }
     return DF_OK;
 }
 
@@ -240,13 +234,13 @@ static int factor_numeric(df_admm *s, cholmod_sparse *K)
 static int refactor_current(df_admm *s, df_error *err)
 {
     cholmod_sparse *K = NULL;
-    trip cpl;
+    admm_trip cpl;
     int rc = assemble_sparse(s, &K, &cpl, err);
     if (rc) return rc;
     int bad = factor_numeric(s, K);
     cholmod_free_sparse(&K, &s->cc);
     if (bad) {
-        trip_free(&cpl);
+        admm_trip_free(&cpl);
         return df_error_set(err, DF_ESINGULAR, "admm: refactorization with rho = %g failed (status %d)", s->p.rho, s->cc.status);
     }
     free(s->cpl_f); free(s->cpl_h); free(s->cpl_v);
@@ -310,7 +304,7 @@ int admm_build_system_affine(df_admm *s, const df_admm_affine *aff, int naff, df
     for (int32_t i = 0; i < nv; i++) if (s->fidx[i] >= 0) s->fvert[s->fidx[i]] = i;
     free(hmap);
     cholmod_sparse *K = NULL;
-    trip cpl;
+    admm_trip cpl;
     int rc = assemble_sparse(s, &K, &cpl, err);
     if (rc) return rc;
     s->ncpl = cpl.n;
