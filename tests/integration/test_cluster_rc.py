@@ -21,12 +21,10 @@ import threading
 
 import pytest
 
-from cluster_harness import Cluster, RedisCluster, cli, owner_port, poll_until
-from deformd_client import DeformdError, MeshState
-from deformd_client import errors as E
+from cluster_harness import GRID, Cluster, RedisCluster, Storm, brush_of, cli, owner_port, poll_until
+from deformd_client import MeshState
 from deformd_client.stream import Disp
 from helpers import grid_obj, obj_bytes_positions
-from test_cluster import GRID, Storm, brush_of, reconnect
 
 
 @pytest.fixture(scope="module")
@@ -143,34 +141,17 @@ def test_kill9_owner_loses_no_acknowledged_edit(rc, make_daemon):
             target = s.acked + 6
             owner = cl.by_port(owner_port(s.w))
             assert owner is not None
-            fire = threading.Event()
-            killer = threading.Thread(target=lambda: (fire.wait(60), owner.proc.kill()))
-            killer.start()
-            try:
-                while True:
-                    s.step()
-                    if s.acked >= target:
-                        fire.set()            # killed while the next requests are in flight
-            except (ConnectionError, OSError, DeformdError) as e:
-                if isinstance(e, DeformdError):
-                    assert e.code in (E.EIO, E.ESTATE), e
-            fire.set()
-            killer.join(30)
-            owner.proc.wait()
-            s.w.close()
+            s.storm_until_killed(owner, target)
             cl.kill9(owner)
-            s.w = reconnect(cl, s.sid, kill)
+            s.reconnect_writer(kill)
             assert owner_port(s.w) != owner.tcp_port
-            s.after_failover(s.w.get_mesh(s.sid).version)
-            s.check(s.w)
-        for _ in range(8):
-            s.step()
+            s.resync()
+        s.steps(8)
         s.check(s.w)
         print("Redis Cluster: %d kill -9 of the owner; acked edits lost: 0" % 2)
     finally:
         if s:
-            s.w.close()
-            s.sh.close()
+            s.close()
         cl.stop()
 
 
@@ -198,8 +179,7 @@ def test_slot_migration_is_followed(rc, make_daemon):
     s = None
     try:
         s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        for _ in range(6):
-            s.step()
+        s.steps(6)
         key = "deformd:{%d}:lease" % s.sid
         src = rc.master_of(key)
         dst = next(p for p in rc.ports if p != src)
@@ -211,14 +191,12 @@ def test_slot_migration_is_followed(rc, make_daemon):
         def during():                       # keys on dst, slot still src's: -ASK
             n = count(dst)
             assert n >= 4 and count(src) == 0
-            for _ in range(6):
-                s.step()
+            s.steps(6)
             assert count(src) == 0 and count(dst) >= n   # written on dst after ASKING
 
         migrate_slot(rc, slot, src, dst, during)
         assert rc.master_of(key) == dst
-        for _ in range(8):                  # the daemon's map says src: -MOVED
-            s.step()
+        s.steps(8)                          # the daemon's map says src: -MOVED
         s.check(s.w)
         for k in keys_of(s.sid):
             assert holders(rc, k) == [dst], k
@@ -238,8 +216,7 @@ def test_slot_migration_is_followed(rc, make_daemon):
         assert "dropped from this daemon" not in owner.log()
     finally:
         if s:
-            s.w.close()
-            s.sh.close()
+            s.close()
         cl.stop()
 
 
@@ -249,25 +226,16 @@ def test_master_killed_and_restarted_with_aof_loses_nothing_acknowledged(rc, mak
     s = None
     try:
         s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        for _ in range(10):
-            s.step()
+        s.steps(10)
         k = rc.ports.index(rc.master_of("deformd:{%d}:lease" % s.sid))
         rc.kill9(k)
-        try:                                  # its master down: refused, not acknowledged
-            s.step()
-            raise AssertionError("a change was acknowledged without its Redis master")
-        except DeformdError as e:
-            assert e.code == E.EIO, e
+        s.step_refused("a change was acknowledged without its Redis master")   # not acknowledged
         rc.restart(k)
-        s.w.close()
-        s.w = reconnect(cl, s.sid, 1)
-        s.after_failover(s.w.get_mesh(s.sid).version)
-        s.check(s.w)
-        for _ in range(8):
-            s.step()
+        s.reconnect_writer(1)
+        s.resync()
+        s.steps(8)
         s.check(s.w)
     finally:
         if s:
-            s.w.close()
-            s.sh.close()
+            s.close()
         cl.stop()
