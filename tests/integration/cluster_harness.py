@@ -6,6 +6,7 @@ onto a plain "shadow" daemon that receives exactly the acknowledged requests.
 Redis runs with `--save '' --appendonly yes --appendfsync always` in a tmp dir, so that a kill -9
 of Redis loses nothing it acknowledged (the cluster's durability is Redis's AOF). Waits poll with a
 deadline (Redis readiness, a lease expiry), never sleep for a fixed time to wait for something."""
+import contextlib
 import os
 import shutil
 import signal
@@ -19,7 +20,7 @@ from typing import List, Optional
 from conftest import Daemon, check_stopped, free_tcp_port, skip_or_fail
 from deformd_client import Brush, DeformdError
 from deformd_client import errors as E
-from helpers import obj_bytes_positions
+from helpers import grid_obj, obj_bytes_positions
 
 REDIS = shutil.which("redis-server")
 LEASE_MS = 1000
@@ -419,3 +420,20 @@ def reconnect(cl, sid, k):
             raise
         return c
     return poll_until(attempt, "a new owner serving session %d" % sid)
+
+
+@contextlib.contextmanager
+def storm(cl, shadow, redis=None):
+    """A Storm on cluster cl over a GRID x GRID grid, mirrored onto shadow (a plain Daemon); on
+    leaving (normally or not): the storm's clients closed, cl stopped, then redis (a Redis) when
+    given."""
+    s = None
+    try:
+        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        yield s
+    finally:
+        if s:
+            s.close()
+        cl.stop()
+        if redis:
+            redis.stop()

@@ -17,8 +17,8 @@ import subprocess
 import threading
 import time
 
-from cluster_harness import (GRID, LEASE_MS, Cluster, Redis, Storm, brush_of, owner_port, poll_until,
-                             reconnect, redis_cmd)
+from cluster_harness import (GRID, LEASE_MS, Cluster, Redis, brush_of, owner_port, poll_until, reconnect,
+                             redis_cmd, storm)
 from conftest import DEFORMCTL
 from deformd_client import DeformdError, MeshState
 from deformd_client import errors as E
@@ -128,55 +128,49 @@ KILLS = 10
 def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon):
     r = Redis(str(tmp_path))
     cl = Cluster(r, 3)
-    shadow = make_daemon()
-    s = None
-    watcher = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        # a subscriber on another daemon (redirected to the owner), resyncing after each failover
-        replica = MeshState(s.X)
-        watcher = cl.daemons[1].tcp_client()
-        watcher.subscribe(s.sid)
-        times = []
-        for kill in range(KILLS):
-            target = s.acked + 5 + kill      # versions acknowledged before the kill
-            owner = cl.by_port(owner_port(s.w))
-            assert owner is not None
-            t_kill = s.storm_until_killed(owner, target)
-            if t_kill is None:
-                t_kill = time.monotonic()
-            cl.kill9(owner)                   # its replacement joins the cluster
-            s.reconnect_writer(kill)
-            times.append(time.monotonic() - t_kill)
-            s.resync()
-            try:                              # what reached it before its daemon died
-                for ev in watcher.events(timeout=0.2):
-                    if isinstance(ev, Disp):
-                        replica.apply(ev)
-            except (ConnectionError, OSError):
-                pass                          # the owner it was redirected to is gone
-            watcher.close()
-            watcher = reconnect(cl, s.sid, kill + 1)
-            watcher.subscribe(s.sid, from_version=replica.version)
-        s.steps(8)                           # the last owner keeps serving
-        s.check(s.w)
-        final = s.w.get_mesh(s.sid)
-        for ev in watcher.events(timeout=5.0):
-            if isinstance(ev, Disp):
-                replica.apply(ev)
-            if replica.version == final.version:
-                break
-        assert replica.version == final.version
-        assert replica.tobytes() == final.positions.tobytes(), "the subscriber diverged"
-        print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
-              % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
-    finally:
-        if watcher:
-            watcher.close()
-        if s:
-            s.close()
-        cl.stop()
-        r.stop()
+    with storm(cl, make_daemon(), r) as s:
+        watcher = None
+        try:
+            # a subscriber on another daemon (redirected to the owner), resyncing after each failover
+            replica = MeshState(s.X)
+            watcher = cl.daemons[1].tcp_client()
+            watcher.subscribe(s.sid)
+            times = []
+            for kill in range(KILLS):
+                target = s.acked + 5 + kill      # versions acknowledged before the kill
+                owner = cl.by_port(owner_port(s.w))
+                assert owner is not None
+                t_kill = s.storm_until_killed(owner, target)
+                if t_kill is None:
+                    t_kill = time.monotonic()
+                cl.kill9(owner)                   # its replacement joins the cluster
+                s.reconnect_writer(kill)
+                times.append(time.monotonic() - t_kill)
+                s.resync()
+                try:                              # what reached it before its daemon died
+                    for ev in watcher.events(timeout=0.2):
+                        if isinstance(ev, Disp):
+                            replica.apply(ev)
+                except (ConnectionError, OSError):
+                    pass                          # the owner it was redirected to is gone
+                watcher.close()
+                watcher = reconnect(cl, s.sid, kill + 1)
+                watcher.subscribe(s.sid, from_version=replica.version)
+            s.steps(8)                           # the last owner keeps serving
+            s.check(s.w)
+            final = s.w.get_mesh(s.sid)
+            for ev in watcher.events(timeout=5.0):
+                if isinstance(ev, Disp):
+                    replica.apply(ev)
+                if replica.version == final.version:
+                    break
+            assert replica.version == final.version
+            assert replica.tobytes() == final.positions.tobytes(), "the subscriber diverged"
+            print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
+                  % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
+        finally:
+            if watcher:
+                watcher.close()
 
 
 def test_stale_owner_is_fenced_and_drops_the_session(tmp_path):
@@ -233,24 +227,19 @@ def test_stale_owner_is_fenced_and_drops_the_session(tmp_path):
 def test_redis_killed_and_restarted_with_aof_loses_nothing_acknowledged(tmp_path, make_daemon):
     r = Redis(str(tmp_path))
     cl = Cluster(r, 2)
-    shadow = make_daemon()
-    s = None
     try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        s.steps(10)
-        port = r.port
-        r.kill9()
-        s.step_refused("a change was acknowledged without Redis")   # Redis down: not acked
-        r = Redis(str(tmp_path), port)        # the same AOF
-        s.reconnect_writer(1)
-        s.resync()
-        s.steps(8)
-        s.check(s.w)
+        with storm(cl, make_daemon()) as s:
+            s.steps(10)
+            port = r.port
+            r.kill9()
+            s.step_refused("a change was acknowledged without Redis")   # Redis down: not acked
+            r = Redis(str(tmp_path), port)        # the same AOF
+            s.reconnect_writer(1)
+            s.resync()
+            s.steps(8)
+            s.check(s.w)
     finally:
-        if s:
-            s.close()
-        cl.stop()
-        r.stop()
+        r.stop()                              # the restarted Redis
 
 
 def test_start_refused_without_redis_and_warned_of_weak_persistence(tmp_path):

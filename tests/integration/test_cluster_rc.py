@@ -21,7 +21,7 @@ import threading
 
 import pytest
 
-from cluster_harness import GRID, Cluster, RedisCluster, Storm, brush_of, cli, owner_port, poll_until
+from cluster_harness import Cluster, RedisCluster, brush_of, cli, owner_port, poll_until, storm
 from deformd_client import MeshState
 from deformd_client.stream import Disp
 from helpers import grid_obj, obj_bytes_positions
@@ -133,10 +133,7 @@ def test_sessions_on_different_masters_converge(rc):
 
 def test_kill9_owner_loses_no_acknowledged_edit(rc, make_daemon):
     cl = Cluster(rc, 3)
-    shadow = make_daemon()
-    s = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+    with storm(cl, make_daemon()) as s:
         for kill in range(2):
             target = s.acked + 6
             owner = cl.by_port(owner_port(s.w))
@@ -149,10 +146,6 @@ def test_kill9_owner_loses_no_acknowledged_edit(rc, make_daemon):
         s.steps(8)
         s.check(s.w)
         print("Redis Cluster: %d kill -9 of the owner; acked edits lost: 0" % 2)
-    finally:
-        if s:
-            s.close()
-        cl.stop()
 
 
 def migrate_slot(rc, slot, src, dst, between=None):
@@ -175,10 +168,7 @@ def migrate_slot(rc, slot, src, dst, between=None):
 
 def test_slot_migration_is_followed(rc, make_daemon):
     cl = Cluster(rc, 2)
-    shadow = make_daemon()
-    s = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+    with storm(cl, make_daemon()) as s:
         s.steps(6)
         key = "deformd:{%d}:lease" % s.sid
         src = rc.master_of(key)
@@ -214,18 +204,11 @@ def test_slot_migration_is_followed(rc, make_daemon):
         assert s.acked == v + 1 and owner_port(s.w) == owner.tcp_port
         s.check(s.w)
         assert "dropped from this daemon" not in owner.log()
-    finally:
-        if s:
-            s.close()
-        cl.stop()
 
 
 def test_master_killed_and_restarted_with_aof_loses_nothing_acknowledged(rc, make_daemon):
     cl = Cluster(rc, 2)
-    shadow = make_daemon()
-    s = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+    with storm(cl, make_daemon()) as s:
         s.steps(10)
         k = rc.ports.index(rc.master_of("deformd:{%d}:lease" % s.sid))
         rc.kill9(k)
@@ -235,7 +218,3 @@ def test_master_killed_and_restarted_with_aof_loses_nothing_acknowledged(rc, mak
         s.resync()
         s.steps(8)
         s.check(s.w)
-    finally:
-        if s:
-            s.close()
-        cl.stop()
