@@ -297,6 +297,16 @@ def brush_of(X, k):
                  move=(0.01, 0.0, 0.02 * (1 + k % 4)), twist=(0, 0, 0.1), radius=0.3, nu=0.4)
 
 
+def run_strokes(c, sid, X, first, n, updates, k):
+    """n strokes by client c on session sid: each a begin (brush_of(X, first + stroke)), `updates`
+    updates moving (0.01 u, 0, 0.01 k) for u = 1..updates, and an end."""
+    for s in range(n):
+        c.brush_begin(sid, brush_of(X, first + s))
+        for u in range(1, updates + 1):
+            c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
+        c.brush_end(sid)
+
+
 class Storm:
     """One writer stroking a cluster session, mirrored request by request onto a plain daemon
     (the shadow) once acknowledged: the shadow holds what the cluster must hold."""

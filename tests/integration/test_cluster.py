@@ -18,7 +18,7 @@ import threading
 import time
 
 from cluster_harness import (GRID, LEASE_MS, Cluster, Redis, brush_of, owner_port, poll_until, reconnect,
-                             redis_cmd, storm)
+                             redis_cmd, run_strokes, storm)
 from conftest import DEFORMCTL
 from deformd_client import DeformdError, MeshState
 from deformd_client import errors as E
@@ -50,11 +50,7 @@ def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
             c = clients[k]
             try:
                 start.wait()
-                for s in range(strokes):
-                    c.brush_begin(sid, brush_of(X, 7 * k + s))
-                    for u in range(1, updates + 1):
-                        c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
-                    c.brush_end(sid)
+                run_strokes(c, sid, X, 7 * k, strokes, updates, k)
             except Exception as e:  # reported below with the client number
                 errors.append((k, repr(e)))
 

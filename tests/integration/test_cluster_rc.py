@@ -21,7 +21,7 @@ import threading
 
 import pytest
 
-from cluster_harness import Cluster, RedisCluster, brush_of, cli, owner_port, poll_until, storm
+from cluster_harness import Cluster, RedisCluster, cli, owner_port, poll_until, run_strokes, storm
 from deformd_client import MeshState
 from deformd_client.stream import Disp
 from helpers import grid_obj, obj_bytes_positions
@@ -89,11 +89,7 @@ def test_sessions_on_different_masters_converge(rc):
         def worker(sid, k, c):
             try:
                 start.wait()
-                for s in range(strokes):
-                    c.brush_begin(sid, brush_of(X, 5 * k + s))
-                    for u in range(1, updates + 1):
-                        c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
-                    c.brush_end(sid)
+                run_strokes(c, sid, X, 5 * k, strokes, updates, k)
             except Exception as e:  # reported below with the session and client
                 errors.append((sid, k, repr(e)))
 

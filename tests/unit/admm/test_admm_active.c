@@ -150,6 +150,18 @@ static void free_pair(df_admm *full, df_admm *act, scene *sc)
     scene_free(sc);
 }
 
+/* the n = 10 tet scene in *sc, ARAP full and active solvers on it, dragged by amount and run
+ * 20000 iterations each (caller frees with free_pair) */
+static void tet_arap_pair(scene *sc, double amount, df_admm **full, df_admm **act)
+{
+    tet_scene(sc, 10);
+    df_admm_params pf = arap_params(sc, 0), pa = arap_params(sc, 1);
+    *full = make(sc, &pf);
+    *act = make(sc, &pa);
+    set_drag2(*full, *act, sc, amount);
+    run2(*full, *act, 20000, NULL, NULL);
+}
+
 static double max_diff(const double *a, const double *b, int32_t nv)
 {
     double d = 0;
@@ -262,11 +274,8 @@ static void test_region_grows_with_drag(void **state)
 {
     (void)state;
     scene sc;
-    tet_scene(&sc, 10);
-    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
-    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
-    set_drag2(full, act, &sc, 0.2);
-    run2(full, act, 20000, NULL, NULL);
+    df_admm *full, *act;
+    tet_arap_pair(&sc, 0.2, &full, &act);
     df_admm_active_stats st1, st2;
     df_admm_get_active_stats(act, &st1);
     set_drag2(full, act, &sc, 2.0); /* drag further: the support spreads into the band */
@@ -321,11 +330,8 @@ static void test_set_positions_and_reset_rest(void **state)
 {
     (void)state;
     scene sc;
-    tet_scene(&sc, 10);
-    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
-    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
-    set_drag2(full, act, &sc, 0.5);
-    run2(full, act, 20000, NULL, NULL);
+    df_admm *full, *act;
+    tet_arap_pair(&sc, 0.5, &full, &act);
     /* an outside edit far from the region: a corner vertex of the top face pushed down */
     double *V = malloc((size_t)sc.m.nv * 3 * sizeof(double));
     memcpy(V, df_admm_positions(act), (size_t)sc.m.nv * 3 * sizeof(double));
