@@ -17,105 +17,15 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "core/admm/admm.h"
-#include "core/mesh/mesh_io.h"
-
-#define QUALITY_REL 1e-6
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-typedef struct experiment {
-    const char *label, *stem, *init;
-    df_admm_energy energy;
-    double rho, s;
-} experiment;
-
-typedef struct loaded {
-    df_mesh m;
-    int32_t nh;
-    int32_t *h;
-    double *tg;    /* nh x 3 targets */
-} loaded;
-
-static const char *mesh_dir(void)
-{
-    const char *d = getenv("MESHES");
-    return d && *d ? d : "../shared/meshes";
-}
-
-static int load(const experiment *x, loaded *L)
-{
-    char p[1024];
-    df_error err;
-    df_mesh_init(&L->m);
-    snprintf(p, sizeof(p), "%s/%s_rest.node", mesh_dir(), x->stem);
-    if (df_mesh_read_file(p, NULL, &L->m, NULL, &err)) { printf("  cannot read %s: %s\n", p, err.msg); return -1; }
-    snprintf(p, sizeof(p), "%s/%s_handles.txt", mesh_dir(), x->stem);
-    FILE *f = fopen(p, "r");
-    if (!f) { printf("  cannot read %s\n", p); return -1; }
-    L->h = malloc((size_t)L->m.nv * sizeof(int32_t));
-    L->nh = 0;
-    while (L->nh < L->m.nv && fscanf(f, "%d", &L->h[L->nh]) == 1) L->nh++;
-    fclose(f);
-    snprintf(p, sizeof(p), "%s/%s", mesh_dir(), x->init);
-    double *T;
-    int32_t nt;
-    if (df_mesh_read_tetgen_nodes(p, &T, &nt, &err) || nt != L->m.nv) { printf("  cannot read %s\n", p); return -1; }
-    L->tg = malloc((size_t)L->nh * 3 * sizeof(double));
-    for (int k = 0; k < L->nh; k++) memcpy(L->tg + 3 * k, T + 3 * (size_t)L->h[k], 24);
-    free(T);
-    return 0;
-}
-
-static void unload(loaded *L)
-{
-    df_mesh_free(&L->m);
-    free(L->h);
-    free(L->tg);
-}
-
-/* the paper's w (= rho_paper s / 10) with ADMM penalty rho (0: the paper's rho) */
-static df_admm *make(const experiment *x, const loaded *L, int accelerate, double rho)
-{
-    df_admm_params p;
-    df_admm_params_default(&p, x->energy);
-    p.rho = rho > 0 ? rho : x->rho; p.s = x->s; p.w = x->rho * x->s / 10.0;
-    p.accelerate = accelerate;
-    df_admm *s = NULL;
-    df_error err;
-    if (df_admm_create(&L->m, &p, L->h, L->nh, NULL, 0, &s, &err)) { printf("  create: %s\n", err.msg); return NULL; }
-    if (df_admm_set_targets(s, L->tg, &err)) { printf("  targets: %s\n", err.msg); df_admm_free(s); return NULL; }
-    return s;
-}
-
-typedef struct quality {
-    double target, t0, t_hit;
-    int it_hit;
-} quality;
-
-static int quality_cb(void *user, const df_admm_progress *pr)
-{
-    quality *q = user;
-    if (pr->objective <= q->target * (1.0 + QUALITY_REL)) {
-        q->t_hit = now() - q->t0;
-        q->it_hit = pr->iteration;
-        return 1;
-    }
-    return 0;
-}
+#include "bench_paper.h"
 
 /* 500 plain iterations: Table 2 row; returns the final objective, *t the run's seconds */
 static double table_row(const experiment *x, const loaded *L, double *t)
 {
-    double tc = now();
+    double tc = bench_now();
     df_admm *s = make(x, L, 0, 0);
     if (!s) return NAN;
-    double t_setup = now() - tc;
+    double t_setup = bench_now() - tc;
     df_admm_result r;
     df_error err;
     df_admm_run(s, &(df_admm_budget){500, 0, 0, NULL, NULL}, &r, &err);
@@ -144,15 +54,15 @@ static void time_to_quality(const experiment *x, const loaded *L, double E500, d
         double rho = variant >= 2 ? fast : x->rho;
         /* the machine is shared: best of 3 for the plain fast-penalty runs (a few seconds each) */
         int reps = variant == 2 ? 3 : 1;
-        quality q = {E500, 0, NAN, -1};
+        quality q = {E500, 0, NAN, -1, NULL};
         df_admm_result r;
         memset(&r, 0, sizeof(r));
         for (int rep = 0; rep < reps; rep++) {
             df_admm *s = make(x, L, acc, rho);
             if (!s) return;
-            quality qr = {E500, 0, NAN, -1};
+            quality qr = {E500, 0, NAN, -1, NULL};
             df_error err;
-            qr.t0 = now();
+            qr.t0 = bench_now();
             df_admm_run(s, &(df_admm_budget){acc ? 300 : 600, 0, 1, quality_cb, &qr}, &r, &err);
             if (qr.it_hit > 0 && (q.it_hit < 0 || qr.t_hit < q.t_hit)) q = qr;
             df_admm_free(s);
@@ -187,12 +97,12 @@ static void interactive(const experiment *x, int paper_rho)
                 double r0 = L.m.V[3 * (size_t)L.h[k] + d];
                 t[3 * k + d] = r0 + a * (L.tg[3 * k + d] - r0);
             }
-        double t0 = now();
+        double t0 = bench_now();
         df_error err;
         df_admm_set_targets(s, t, &err);
         df_admm_result r;
         df_admm_run(s, &(df_admm_budget){0, 33.0, 0, NULL, NULL}, &r, &err);
-        double ms = 1e3 * (now() - t0);
+        double ms = 1e3 * (bench_now() - t0);
         worst = fmax(worst, ms);
         sum += ms;
         total_it += r.iterations;
@@ -232,14 +142,7 @@ int main(int argc, char **argv)
         setenv("OMP_WAIT_POLICY", "passive", 1);
         execv("/proc/self/exe", argv);
     }
-    char probe[1024];
-    snprintf(probe, sizeof(probe), "%s/pig_rest.node", mesh_dir());
-    FILE *f = fopen(probe, "r");
-    if (!f) {
-        printf("bench_admm: %s not found; set MESHES to the shared meshes folder. Skipping.\n", probe);
-        return 0;
-    }
-    fclose(f);
+    if (!paper_meshes_present("bench_admm")) return 0;
     setvbuf(stdout, NULL, _IOLBF, 0);
 #ifdef _OPENMP
     printf("bench_admm: %d OpenMP threads, OMP_WAIT_POLICY=%s\n", omp_get_max_threads(), getenv("OMP_WAIT_POLICY"));
@@ -247,10 +150,10 @@ int main(int argc, char **argv)
     printf("bench_admm: built without OpenMP (serial kernels)\n");
 #endif
     experiment ex[4] = {
-        {"pig ARAP", "pig", "pig_init0.4.node", DF_ADMM_ARAP, 0.1, 0.01},
-        {"pig Neo-Hookean", "pig", "pig_init0.4.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01},
-        {"bar3 ARAP", "bar3", "bar3_init1.node", DF_ADMM_ARAP, 0.1, 0.1},
-        {"apple Neo-Hookean", "teaser_apple", "teaser_apple_init1.node", DF_ADMM_NEOHOOKEAN, 1e3, 0.01},
+        PAPER_PIG_ARAP,
+        PAPER_PIG_NH,
+        PAPER_BAR3_ARAP,
+        PAPER_APPLE_NH,
     };
     printf("== Table 2 (500 plain ADMM iterations, times in seconds; paper: pig ARAP 4.03, pig NH 7.18, bar ARAP 5.65,"
            " apple NH 1.13 on 8 threads)\n");
@@ -269,8 +172,8 @@ int main(int argc, char **argv)
     time_to_quality(&ex[1], &L[1], E500[1], T500[1], 2.0);
     for (int i = 0; i < 4; i++) unload(&L[i]);
     printf("== interactive drag\n");
-    experiment teaser_nh = {"pig teaser Neo-Hookean", "pig", "pig_init_teaser.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01};
-    experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01};
+    experiment teaser_nh = PAPER_PIG_TEASER_NH;
+    experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0};
     interactive(&teaser_arap, 0);
     interactive(&teaser_nh, 0);
     interactive(&teaser_nh, 1);

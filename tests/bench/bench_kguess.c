@@ -20,70 +20,12 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "core/admm/admm.h"
 #include "core/kelvinlet/kelvinlet_guess.h"
-#include "core/mesh/mesh_io.h"
+#include "bench_paper.h"
 
 #define MAX_ITERS 5000
 
 static double radius_scale = 1.0; /* argv[1]: multiple of the default radius */
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static const char *mesh_dir(void)
-{
-    const char *d = getenv("MESHES");
-    return d && *d ? d : "../shared/meshes";
-}
-
-typedef struct experiment {
-    const char *label, *stem, *init;
-    df_admm_energy energy;
-    double rho, s;
-} experiment;
-
-typedef struct loaded {
-    df_mesh m;
-    int32_t nh;
-    int32_t *h;
-    double *tg;
-} loaded;
-
-static int load(const experiment *x, loaded *L)
-{
-    char p[1024];
-    df_error err;
-    df_mesh_init(&L->m);
-    snprintf(p, sizeof(p), "%s/%s_rest.node", mesh_dir(), x->stem);
-    if (df_mesh_read_file(p, NULL, &L->m, NULL, &err)) { printf("  cannot read %s: %s\n", p, err.msg); return -1; }
-    snprintf(p, sizeof(p), "%s/%s_handles.txt", mesh_dir(), x->stem);
-    FILE *f = fopen(p, "r");
-    if (!f) { printf("  cannot read %s\n", p); return -1; }
-    L->h = malloc((size_t)L->m.nv * sizeof(int32_t));
-    L->nh = 0;
-    while (L->nh < L->m.nv && fscanf(f, "%d", &L->h[L->nh]) == 1) L->nh++;
-    fclose(f);
-    snprintf(p, sizeof(p), "%s/%s", mesh_dir(), x->init);
-    double *T;
-    int32_t nt;
-    if (df_mesh_read_tetgen_nodes(p, &T, &nt, &err) || nt != L->m.nv) { printf("  cannot read %s\n", p); return -1; }
-    L->tg = malloc((size_t)L->nh * 3 * sizeof(double));
-    for (int k = 0; k < L->nh; k++) memcpy(L->tg + 3 * k, T + 3 * (size_t)L->h[k], 24);
-    free(T);
-    return 0;
-}
-
-static void unload(loaded *L)
-{
-    df_mesh_free(&L->m);
-    free(L->h);
-    free(L->tg);
-}
 
 typedef struct outcome {
     int ok, iters, converged;
@@ -100,7 +42,7 @@ static outcome solve(const experiment *x, const loaded *L, int guess)
     df_admm *s = NULL;
     df_error err;
     if (df_admm_create(&L->m, &p, L->h, L->nh, NULL, 0, &s, &err)) { printf("  create: %s\n", err.msg); return o; }
-    double t0 = now();
+    double t0 = bench_now();
     if (guess) {
         size_t n = 3 * (size_t)L->m.nv;
         double *G = malloc(n * sizeof *G);
@@ -114,7 +56,7 @@ static outcome solve(const experiment *x, const loaded *L, int guess)
             return o;
         }
         free(G);
-        o.guess_secs = now() - t0;
+        o.guess_secs = bench_now() - t0;
     }
     df_admm_budget b = {MAX_ITERS, 0, 0, NULL, NULL};
     df_admm_result r;
@@ -123,7 +65,7 @@ static outcome solve(const experiment *x, const loaded *L, int guess)
         df_admm_free(s);
         return o;
     }
-    o.secs = now() - t0;
+    o.secs = bench_now() - t0;
     o.iters = r.iterations;
     o.converged = r.converged;
     o.objective = r.objective;
@@ -161,21 +103,14 @@ int main(int argc, char **argv)
         setenv("OMP_WAIT_POLICY", "passive", 1);
         execv("/proc/self/exe", argv);
     }
-    char probe[1024];
-    snprintf(probe, sizeof(probe), "%s/pig_rest.node", mesh_dir());
-    FILE *f = fopen(probe, "r");
-    if (!f) {
-        printf("bench_kguess: %s not found; set MESHES to the shared meshes folder. Skipping.\n", probe);
-        return 0;
-    }
-    fclose(f);
+    if (!paper_meshes_present("bench_kguess")) return 0;
     setvbuf(stdout, NULL, _IOLBF, 0);
     printf("bench_kguess: Kelvinlet initial guess vs plain start, to tol 1e-11 (cap %d iterations)\n", MAX_ITERS);
     experiment ex[4] = {
-        {"pig ARAP", "pig", "pig_init0.4.node", DF_ADMM_ARAP, 0.1, 0.01},
-        {"pig Neo-Hookean", "pig", "pig_init0.4.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.01},
-        {"bar3 ARAP", "bar3", "bar3_init1.node", DF_ADMM_ARAP, 0.1, 0.1},
-        {"bar3 Neo-Hookean", "bar3", "bar3_init1.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.1},
+        PAPER_PIG_ARAP,
+        PAPER_PIG_NH,
+        PAPER_BAR3_ARAP,
+        {"bar3 Neo-Hookean", "bar3", "bar3_init1.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.1, 0, 0},
     };
     if (argc > 1) radius_scale = atof(argv[1]);
     int only = argc > 2 ? atoi(argv[2]) : -1, bad = 0;

@@ -15,25 +15,11 @@
 #include <string.h>
 #include <time.h>
 
-#include "core/admm/admm.h"
-#include "core/mesh/mesh_io.h"
+#include "bench_paper.h"
 
 #define TARGET_KKT 1e-9
 #define CLAMP_FRAC 0.95
 #define LONG_CAP_S 15.0 /* time cap of the long ADMM run (seconds) */
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static const char *mesh_dir(void)
-{
-    const char *d = getenv("MESHES");
-    return d && *d ? d : "../shared/meshes";
-}
 
 typedef struct curve {
     df_admm *s;
@@ -57,14 +43,14 @@ static int progress(void *user, const df_admm_progress *p)
     curve *c = user;
     int it = c->base + p->iteration;
     if (!is_checkpoint(it) || c->n >= 32) return 0;
-    double ta = now(), k = NAN;
+    double ta = bench_now(), k = NAN;
     df_error err;
     if (df_admm_kkt(c->s, p->V, &k, &err)) k = NAN;
     c->it[c->n] = it;
     c->E[c->n] = p->objective;
     c->kkt[c->n] = k;
-    c->t_excl += now() - ta;
-    c->t[c->n] = now() - c->t0 - c->t_excl;
+    c->t_excl += bench_now() - ta;
+    c->t[c->n] = bench_now() - c->t0 - c->t_excl;
     c->n++;
     return 0;
 }
@@ -137,17 +123,17 @@ static int run_case(const char *label, const char *stem, const char *init, int s
     /* ADMM alone: start_iters iterations (checkpoints), the state handed to the polish on a second
      * solver, then on to long_iters (or until the long run's time cap) */
     curve c = {.s = a};
-    c.t0 = now();
+    c.t0 = bench_now();
     df_admm_run(a, &(df_admm_budget){start_iters, 0, 1, progress, &c}, NULL, &err);
     double t_start = c.n ? c.t[c.n - 1] : NAN;
     if (df_admm_set_positions(b, df_admm_positions(a), NULL, &err)) { printf("bench_newton: %s\n", err.msg); return -1; }
     if (long_iters > start_iters) {
-        double ta = now();
+        double ta = bench_now();
         c.base = start_iters;
         df_admm_result lr;
         df_admm_run(a, &(df_admm_budget){long_iters - start_iters, LONG_CAP_S * 1e3, 1, progress, &c}, &lr, &err);
         if (lr.stop == DF_ADMM_STOP_TIME && c.n < 32) { /* the time cap ended it between checkpoints */
-            double tk = now(), k = NAN;
+            double tk = bench_now(), k = NAN;
             if (df_admm_kkt(a, df_admm_positions(a), &k, &err)) k = NAN;
             c.it[c.n] = start_iters + lr.iterations;
             c.E[c.n] = lr.objective;

@@ -1,21 +1,26 @@
 """Test harness of cluster mode (server/cluster/cluster.h): one redis-server (or a Redis Cluster of
 several masters) and several deformd daemons on loopback ports, each daemon in a tmp dir of its own
-with its own local store.
+with its own local store; and the stroke storm (Storm) the failover tests drive through it, mirrored
+onto a plain "shadow" daemon that receives exactly the acknowledged requests.
 
 Redis runs with `--save '' --appendonly yes --appendfsync always` in a tmp dir, so that a kill -9
 of Redis loses nothing it acknowledged (the cluster's durability is Redis's AOF). Waits poll with a
 deadline (Redis readiness, a lease expiry), never sleep for a fixed time to wait for something."""
+import contextlib
 import os
 import shutil
 import signal
 import socket
 import subprocess
 import tempfile
+import threading
 import time
 from typing import List, Optional
 
 from conftest import Daemon, check_stopped, free_tcp_port, skip_or_fail
-from deformd_client import DeformdError
+from deformd_client import Brush, DeformdError
+from deformd_client import errors as E
+from helpers import grid_obj, obj_bytes_positions
 
 REDIS = shutil.which("redis-server")
 LEASE_MS = 1000
@@ -281,3 +286,164 @@ def poll_until(fn, what: str, deadline_s: float = DEADLINE_S):
             last = e
             time.sleep(0.02)
     raise AssertionError("%s: not within %.0f s (last error %r)" % (what, deadline_s, last))
+
+
+GRID = 16
+
+
+def brush_of(X, k):
+    vi = (k * 37) % (len(X) // 3)
+    return Brush(type="grab" if k % 3 else "twist", center=X[3 * vi:3 * vi + 3],
+                 move=(0.01, 0.0, 0.02 * (1 + k % 4)), twist=(0, 0, 0.1), radius=0.3, nu=0.4)
+
+
+def run_strokes(c, sid, X, first, n, updates, k):
+    """n strokes by client c on session sid: each a begin (brush_of(X, first + stroke)), `updates`
+    updates moving (0.01 u, 0, 0.01 k) for u = 1..updates, and an end."""
+    for s in range(n):
+        c.brush_begin(sid, brush_of(X, first + s))
+        for u in range(1, updates + 1):
+            c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
+        c.brush_end(sid)
+
+
+class Storm:
+    """One writer stroking a cluster session, mirrored request by request onto a plain daemon
+    (the shadow) once acknowledged: the shadow holds what the cluster must hold."""
+
+    def __init__(self, cl, shadow, data):
+        self.cl = cl
+        self.X = obj_bytes_positions(data)
+        d0 = cl.daemons[0]
+        with d0.unix_client() as a:
+            self.sid = a.load_mesh(data, fmt=".obj", name="storm").session_id
+        self.sh = shadow.unix_client()
+        self.ssid = self.sh.load_mesh(data, fmt=".obj", name="storm").session_id
+        self.w = d0.tcp_client()
+        self.inflight = None       # (op, args) sent to the cluster, not acknowledged
+        self.open = False          # a stroke is open on the shadow
+        self.acked = 0             # versions acknowledged so far
+        self.k = 0
+
+    def apply(self, c, sid, op, args):
+        if op == "begin":
+            return c.brush_begin(sid, args)
+        if op == "update":
+            return c.brush_update(sid, move=args)
+        return c.brush_end(sid)
+
+    def step(self):
+        """The next request of the storm (strokes of begin, two updates, end), mirrored."""
+        phase = self.k % 4
+        op = ("begin", "update", "update", "end")[phase]
+        args = brush_of(self.X, self.k // 4) if op == "begin" else (0.01 * phase, 0, 0.01)
+        self.inflight = (op, args)
+        ack = self.apply(self.w, self.sid, op, args)
+        self.inflight = None
+        self.apply(self.sh, self.ssid, op, args)
+        self.open = op != "end"
+        self.acked = ack.version
+        self.k += 1
+
+    def after_failover(self, version):
+        """The cluster came back at `version`: the in-flight request counts when it was applied
+        (it bumped the version); a stroke left open was ended by the restore."""
+        sv = self.sh.get_mesh(self.ssid).version
+        if version == sv + 1 and self.inflight and self.inflight[0] != "end":
+            self.apply(self.sh, self.ssid, *self.inflight)
+            self.open = True
+        self.inflight = None
+        if self.open:
+            self.sh.brush_end(self.ssid)
+            self.open = False
+        self.k += (-self.k) % 4      # the next request begins a stroke
+
+    def steps(self, n):
+        """n more requests of the storm (step)."""
+        for _ in range(n):
+            self.step()
+
+    def storm_until_killed(self, owner, target):
+        """Steps until the acknowledged version reaches target, then has owner (a Daemon)
+        killed (-9) from another thread while the next requests are in flight, stepping on until
+        the writer fails (connection lost, or EIO / ESTATE); waits for owner's exit. Returns the
+        monotonic time of the kill order, None when the writer failed before target."""
+        fire = threading.Event()
+        killer = threading.Thread(target=lambda: (fire.wait(60), owner.proc.kill()))
+        killer.start()
+        t_kill = None
+        try:
+            while True:
+                self.step()
+                if self.acked >= target and not fire.is_set():
+                    fire.set()            # killed while the next requests are in flight
+                    t_kill = time.monotonic()
+        except (ConnectionError, OSError, DeformdError) as e:
+            if isinstance(e, DeformdError):
+                assert e.code in (E.EIO, E.ESTATE), e
+        fire.set()
+        killer.join(30)
+        owner.proc.wait()
+        return t_kill
+
+    def step_refused(self, why):
+        """The next request must be refused with EIO (Redis down: not acknowledged); why: the
+        assertion message when it is acknowledged."""
+        try:
+            self.step()
+            raise AssertionError(why)
+        except DeformdError as e:
+            assert e.code == E.EIO, e
+
+    def reconnect_writer(self, k):
+        """Closes the writer and reconnects it through daemon k (reconnect)."""
+        self.w.close()
+        self.w = reconnect(self.cl, self.sid, k)
+
+    def resync(self):
+        """After a failover: after_failover at the writer's version, then check through it."""
+        self.after_failover(self.w.get_mesh(self.sid).version)
+        self.check(self.w)
+
+    def close(self):
+        """Closes the writer and the shadow's client."""
+        self.w.close()
+        self.sh.close()
+
+    def check(self, c):
+        m = c.get_mesh(self.sid)
+        ref = self.sh.get_mesh(self.ssid)
+        assert m.version >= self.acked, "acked version %d lost (now %d)" % (self.acked, m.version)
+        assert m.version == ref.version
+        assert m.positions.tobytes() == ref.positions.tobytes(), "positions differ at version %d" \
+            % m.version
+
+
+def reconnect(cl, sid, k):
+    """A client on a live daemon, following redirects, once the session is served again."""
+    def attempt():
+        c = cl.daemons[k % len(cl.daemons)].tcp_client(timeout=5.0)
+        try:
+            c.get_mesh(sid)
+        except BaseException:
+            c.close()
+            raise
+        return c
+    return poll_until(attempt, "a new owner serving session %d" % sid)
+
+
+@contextlib.contextmanager
+def storm(cl, shadow, redis=None):
+    """A Storm on cluster cl over a GRID x GRID grid, mirrored onto shadow (a plain Daemon); on
+    leaving (normally or not): the storm's clients closed, cl stopped, then redis (a Redis) when
+    given."""
+    s = None
+    try:
+        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+        yield s
+    finally:
+        if s:
+            s.close()
+        cl.stop()
+        if redis:
+            redis.stop()

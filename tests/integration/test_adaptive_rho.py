@@ -27,6 +27,16 @@ def _move(c, name, handles, targets, iters, **params):
     return sid, res
 
 
+def _ctl_handles(daemon, sid, hfile, *extra):
+    """deformctl `handles` on session sid: ARAP, the handles of hfile, W, S, then extra; it must
+    succeed."""
+    p = subprocess.run([DEFORMCTL, "--socket", daemon.socket_path, "handles", str(sid),
+                        "--energy", "arap", "--handles", str(hfile), "--w", str(W),
+                        "--s", str(S), *extra],
+                       capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert p.returncode == 0, p.stderr
+
+
 def test_move_without_rho_converges_to_the_fixed_penalty_objective(daemon):
     pts, _ = tet_grid(N)
     handles, targets = _setup(pts)
@@ -60,18 +70,10 @@ def test_deformctl_handles_without_rho_sends_zero(daemon, tmp_path):
     hfile.write_text("".join("%d\n" % h for h in handles))
     with daemon.unix_client() as c:
         sid = c.load_mesh(tet_grid_medit(N), fmt=".mesh", name="rho-ctl").session_id
-        p = subprocess.run([DEFORMCTL, "--socket", daemon.socket_path, "handles", str(sid),
-                            "--energy", "arap", "--handles", str(hfile), "--w", str(W),
-                            "--s", str(S), "--iters", "3000"],
-                           capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
-        assert p.returncode == 0, p.stderr
+        _ctl_handles(daemon, sid, hfile, "--iters", "3000")
         assert c.get_handles(sid).params.rho == 0.0
         res = c.move_handles(sid, targets, timeout=600)
         assert res.status == m.MOVE_CONVERGED and res.iterations < 3000, res
-        p = subprocess.run([DEFORMCTL, "--socket", daemon.socket_path, "handles", str(sid),
-                            "--energy", "arap", "--handles", str(hfile), "--w", str(W),
-                            "--s", str(S), "--rho", "0.5"],
-                           capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
-        assert p.returncode == 0, p.stderr
+        _ctl_handles(daemon, sid, hfile, "--rho", "0.5")
         assert c.get_handles(sid).params.rho == 0.5
         c.close_session(sid)

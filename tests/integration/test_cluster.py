@@ -17,22 +17,14 @@ import subprocess
 import threading
 import time
 
-from cluster_harness import LEASE_MS, Cluster, Redis, owner_port, poll_until, redis_cmd
+from cluster_harness import (GRID, LEASE_MS, Cluster, Redis, brush_of, owner_port, poll_until, reconnect,
+                             redis_cmd, run_strokes, storm)
 from conftest import DEFORMCTL
-from deformd_client import Brush, DeformdError, MeshState
+from deformd_client import DeformdError, MeshState
 from deformd_client import errors as E
 from deformd_client import messages as m
 from deformd_client.stream import Disp
 from helpers import grid_obj, obj_bytes_positions
-
-GRID = 16
-
-
-def brush_of(X, k):
-    vi = (k * 37) % (len(X) // 3)
-    return Brush(type="grab" if k % 3 else "twist", center=X[3 * vi:3 * vi + 3],
-                 move=(0.01, 0.0, 0.02 * (1 + k % 4)), twist=(0, 0, 0.1), radius=0.3, nu=0.4)
-
 
 def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
     r = Redis(str(tmp_path))
@@ -58,11 +50,7 @@ def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
             c = clients[k]
             try:
                 start.wait()
-                for s in range(strokes):
-                    c.brush_begin(sid, brush_of(X, 7 * k + s))
-                    for u in range(1, updates + 1):
-                        c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
-                    c.brush_end(sid)
+                run_strokes(c, sid, X, 7 * k, strokes, updates, k)
             except Exception as e:  # reported below with the client number
                 errors.append((k, repr(e)))
 
@@ -130,153 +118,55 @@ def test_clients_on_three_daemons_stroke_one_session_and_converge(tmp_path):
         r.stop()
 
 
-class Storm:
-    """One writer stroking a cluster session, mirrored request by request onto a plain daemon
-    (the shadow) once acknowledged: the shadow holds what the cluster must hold."""
-
-    def __init__(self, cl, shadow, data):
-        self.cl = cl
-        self.X = obj_bytes_positions(data)
-        d0 = cl.daemons[0]
-        with d0.unix_client() as a:
-            self.sid = a.load_mesh(data, fmt=".obj", name="storm").session_id
-        self.sh = shadow.unix_client()
-        self.ssid = self.sh.load_mesh(data, fmt=".obj", name="storm").session_id
-        self.w = d0.tcp_client()
-        self.inflight = None       # (op, args) sent to the cluster, not acknowledged
-        self.open = False          # a stroke is open on the shadow
-        self.acked = 0             # versions acknowledged so far
-        self.k = 0
-
-    def apply(self, c, sid, op, args):
-        if op == "begin":
-            return c.brush_begin(sid, args)
-        if op == "update":
-            return c.brush_update(sid, move=args)
-        return c.brush_end(sid)
-
-    def step(self):
-        """The next request of the storm (strokes of begin, two updates, end), mirrored."""
-        phase = self.k % 4
-        op = ("begin", "update", "update", "end")[phase]
-        args = brush_of(self.X, self.k // 4) if op == "begin" else (0.01 * phase, 0, 0.01)
-        self.inflight = (op, args)
-        ack = self.apply(self.w, self.sid, op, args)
-        self.inflight = None
-        self.apply(self.sh, self.ssid, op, args)
-        self.open = op != "end"
-        self.acked = ack.version
-        self.k += 1
-
-    def after_failover(self, version):
-        """The cluster came back at `version`: the in-flight request counts when it was applied
-        (it bumped the version); a stroke left open was ended by the restore."""
-        sv = self.sh.get_mesh(self.ssid).version
-        if version == sv + 1 and self.inflight and self.inflight[0] != "end":
-            self.apply(self.sh, self.ssid, *self.inflight)
-            self.open = True
-        self.inflight = None
-        if self.open:
-            self.sh.brush_end(self.ssid)
-            self.open = False
-        self.k += (-self.k) % 4      # the next request begins a stroke
-
-    def check(self, c):
-        m = c.get_mesh(self.sid)
-        ref = self.sh.get_mesh(self.ssid)
-        assert m.version >= self.acked, "acked version %d lost (now %d)" % (self.acked, m.version)
-        assert m.version == ref.version
-        assert m.positions.tobytes() == ref.positions.tobytes(), "positions differ at version %d" \
-            % m.version
-
-
-def reconnect(cl, sid, k):
-    """A client on a live daemon, following redirects, once the session is served again."""
-    def attempt():
-        c = cl.daemons[k % len(cl.daemons)].tcp_client(timeout=5.0)
-        try:
-            c.get_mesh(sid)
-        except BaseException:
-            c.close()
-            raise
-        return c
-    return poll_until(attempt, "a new owner serving session %d" % sid)
-
-
 KILLS = 10
 
 
 def test_kill9_owner_mid_storm_loses_no_acknowledged_edit(tmp_path, make_daemon):
     r = Redis(str(tmp_path))
     cl = Cluster(r, 3)
-    shadow = make_daemon()
-    s = None
-    watcher = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        # a subscriber on another daemon (redirected to the owner), resyncing after each failover
-        replica = MeshState(s.X)
-        watcher = cl.daemons[1].tcp_client()
-        watcher.subscribe(s.sid)
-        times = []
-        for kill in range(KILLS):
-            target = s.acked + 5 + kill      # versions acknowledged before the kill
-            owner = cl.by_port(owner_port(s.w))
-            assert owner is not None
-            fire = threading.Event()
-            killer = threading.Thread(target=lambda: (fire.wait(60), owner.proc.kill()))
-            killer.start()
-            t_kill = None
-            try:
-                while True:
-                    s.step()
-                    if s.acked >= target and not fire.is_set():
-                        fire.set()            # killed while the next requests are in flight
-                        t_kill = time.monotonic()
-            except (ConnectionError, OSError, DeformdError) as e:
-                if isinstance(e, DeformdError):
-                    assert e.code in (E.EIO, E.ESTATE), e
-            fire.set()
-            killer.join(30)
-            owner.proc.wait()
-            if t_kill is None:
-                t_kill = time.monotonic()
-            s.w.close()
-            cl.kill9(owner)                   # its replacement joins the cluster
-            s.w = reconnect(cl, s.sid, kill)
-            times.append(time.monotonic() - t_kill)
-            s.after_failover(s.w.get_mesh(s.sid).version)
+    with storm(cl, make_daemon(), r) as s:
+        watcher = None
+        try:
+            # a subscriber on another daemon (redirected to the owner), resyncing after each failover
+            replica = MeshState(s.X)
+            watcher = cl.daemons[1].tcp_client()
+            watcher.subscribe(s.sid)
+            times = []
+            for kill in range(KILLS):
+                target = s.acked + 5 + kill      # versions acknowledged before the kill
+                owner = cl.by_port(owner_port(s.w))
+                assert owner is not None
+                t_kill = s.storm_until_killed(owner, target)
+                if t_kill is None:
+                    t_kill = time.monotonic()
+                cl.kill9(owner)                   # its replacement joins the cluster
+                s.reconnect_writer(kill)
+                times.append(time.monotonic() - t_kill)
+                s.resync()
+                try:                              # what reached it before its daemon died
+                    for ev in watcher.events(timeout=0.2):
+                        if isinstance(ev, Disp):
+                            replica.apply(ev)
+                except (ConnectionError, OSError):
+                    pass                          # the owner it was redirected to is gone
+                watcher.close()
+                watcher = reconnect(cl, s.sid, kill + 1)
+                watcher.subscribe(s.sid, from_version=replica.version)
+            s.steps(8)                           # the last owner keeps serving
             s.check(s.w)
-            try:                              # what reached it before its daemon died
-                for ev in watcher.events(timeout=0.2):
-                    if isinstance(ev, Disp):
-                        replica.apply(ev)
-            except (ConnectionError, OSError):
-                pass                          # the owner it was redirected to is gone
-            watcher.close()
-            watcher = reconnect(cl, s.sid, kill + 1)
-            watcher.subscribe(s.sid, from_version=replica.version)
-        for _ in range(8):                   # the last owner keeps serving
-            s.step()
-        s.check(s.w)
-        final = s.w.get_mesh(s.sid)
-        for ev in watcher.events(timeout=5.0):
-            if isinstance(ev, Disp):
-                replica.apply(ev)
-            if replica.version == final.version:
-                break
-        assert replica.version == final.version
-        assert replica.tobytes() == final.positions.tobytes(), "the subscriber diverged"
-        print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
-              % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
-    finally:
-        if watcher:
-            watcher.close()
-        if s:
-            s.w.close()
-            s.sh.close()
-        cl.stop()
-        r.stop()
+            final = s.w.get_mesh(s.sid)
+            for ev in watcher.events(timeout=5.0):
+                if isinstance(ev, Disp):
+                    replica.apply(ev)
+                if replica.version == final.version:
+                    break
+            assert replica.version == final.version
+            assert replica.tobytes() == final.positions.tobytes(), "the subscriber diverged"
+            print("cluster failover after kill -9 (lease %d ms): %s s; acked edits lost: 0"
+                  % (LEASE_MS, ", ".join("%.2f" % t for t in times)))
+        finally:
+            if watcher:
+                watcher.close()
 
 
 def test_stale_owner_is_fenced_and_drops_the_session(tmp_path):
@@ -333,33 +223,19 @@ def test_stale_owner_is_fenced_and_drops_the_session(tmp_path):
 def test_redis_killed_and_restarted_with_aof_loses_nothing_acknowledged(tmp_path, make_daemon):
     r = Redis(str(tmp_path))
     cl = Cluster(r, 2)
-    shadow = make_daemon()
-    s = None
     try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        for _ in range(10):
-            s.step()
-        port = r.port
-        r.kill9()
-        try:                                  # Redis down: the change is refused, not acked
-            s.step()
-            raise AssertionError("a change was acknowledged without Redis")
-        except DeformdError as e:
-            assert e.code == E.EIO, e
-        r = Redis(str(tmp_path), port)        # the same AOF
-        s.w.close()
-        s.w = reconnect(cl, s.sid, 1)
-        s.after_failover(s.w.get_mesh(s.sid).version)
-        s.check(s.w)
-        for _ in range(8):
-            s.step()
-        s.check(s.w)
+        with storm(cl, make_daemon()) as s:
+            s.steps(10)
+            port = r.port
+            r.kill9()
+            s.step_refused("a change was acknowledged without Redis")   # Redis down: not acked
+            r = Redis(str(tmp_path), port)        # the same AOF
+            s.reconnect_writer(1)
+            s.resync()
+            s.steps(8)
+            s.check(s.w)
     finally:
-        if s:
-            s.w.close()
-            s.sh.close()
-        cl.stop()
-        r.stop()
+        r.stop()                              # the restarted Redis
 
 
 def test_start_refused_without_redis_and_warned_of_weak_persistence(tmp_path):

@@ -21,12 +21,10 @@ import threading
 
 import pytest
 
-from cluster_harness import Cluster, RedisCluster, cli, owner_port, poll_until
-from deformd_client import DeformdError, MeshState
-from deformd_client import errors as E
+from cluster_harness import Cluster, RedisCluster, cli, owner_port, poll_until, run_strokes, storm
+from deformd_client import MeshState
 from deformd_client.stream import Disp
 from helpers import grid_obj, obj_bytes_positions
-from test_cluster import GRID, Storm, brush_of, reconnect
 
 
 @pytest.fixture(scope="module")
@@ -91,11 +89,7 @@ def test_sessions_on_different_masters_converge(rc):
         def worker(sid, k, c):
             try:
                 start.wait()
-                for s in range(strokes):
-                    c.brush_begin(sid, brush_of(X, 5 * k + s))
-                    for u in range(1, updates + 1):
-                        c.brush_update(sid, move=(0.01 * u, 0, 0.01 * k))
-                    c.brush_end(sid)
+                run_strokes(c, sid, X, 5 * k, strokes, updates, k)
             except Exception as e:  # reported below with the session and client
                 errors.append((sid, k, repr(e)))
 
@@ -135,43 +129,19 @@ def test_sessions_on_different_masters_converge(rc):
 
 def test_kill9_owner_loses_no_acknowledged_edit(rc, make_daemon):
     cl = Cluster(rc, 3)
-    shadow = make_daemon()
-    s = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
+    with storm(cl, make_daemon()) as s:
         for kill in range(2):
             target = s.acked + 6
             owner = cl.by_port(owner_port(s.w))
             assert owner is not None
-            fire = threading.Event()
-            killer = threading.Thread(target=lambda: (fire.wait(60), owner.proc.kill()))
-            killer.start()
-            try:
-                while True:
-                    s.step()
-                    if s.acked >= target:
-                        fire.set()            # killed while the next requests are in flight
-            except (ConnectionError, OSError, DeformdError) as e:
-                if isinstance(e, DeformdError):
-                    assert e.code in (E.EIO, E.ESTATE), e
-            fire.set()
-            killer.join(30)
-            owner.proc.wait()
-            s.w.close()
+            s.storm_until_killed(owner, target)
             cl.kill9(owner)
-            s.w = reconnect(cl, s.sid, kill)
+            s.reconnect_writer(kill)
             assert owner_port(s.w) != owner.tcp_port
-            s.after_failover(s.w.get_mesh(s.sid).version)
-            s.check(s.w)
-        for _ in range(8):
-            s.step()
+            s.resync()
+        s.steps(8)
         s.check(s.w)
         print("Redis Cluster: %d kill -9 of the owner; acked edits lost: 0" % 2)
-    finally:
-        if s:
-            s.w.close()
-            s.sh.close()
-        cl.stop()
 
 
 def migrate_slot(rc, slot, src, dst, between=None):
@@ -194,12 +164,8 @@ def migrate_slot(rc, slot, src, dst, between=None):
 
 def test_slot_migration_is_followed(rc, make_daemon):
     cl = Cluster(rc, 2)
-    shadow = make_daemon()
-    s = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        for _ in range(6):
-            s.step()
+    with storm(cl, make_daemon()) as s:
+        s.steps(6)
         key = "deformd:{%d}:lease" % s.sid
         src = rc.master_of(key)
         dst = next(p for p in rc.ports if p != src)
@@ -211,14 +177,12 @@ def test_slot_migration_is_followed(rc, make_daemon):
         def during():                       # keys on dst, slot still src's: -ASK
             n = count(dst)
             assert n >= 4 and count(src) == 0
-            for _ in range(6):
-                s.step()
+            s.steps(6)
             assert count(src) == 0 and count(dst) >= n   # written on dst after ASKING
 
         migrate_slot(rc, slot, src, dst, during)
         assert rc.master_of(key) == dst
-        for _ in range(8):                  # the daemon's map says src: -MOVED
-            s.step()
+        s.steps(8)                          # the daemon's map says src: -MOVED
         s.check(s.w)
         for k in keys_of(s.sid):
             assert holders(rc, k) == [dst], k
@@ -236,38 +200,17 @@ def test_slot_migration_is_followed(rc, make_daemon):
         assert s.acked == v + 1 and owner_port(s.w) == owner.tcp_port
         s.check(s.w)
         assert "dropped from this daemon" not in owner.log()
-    finally:
-        if s:
-            s.w.close()
-            s.sh.close()
-        cl.stop()
 
 
 def test_master_killed_and_restarted_with_aof_loses_nothing_acknowledged(rc, make_daemon):
     cl = Cluster(rc, 2)
-    shadow = make_daemon()
-    s = None
-    try:
-        s = Storm(cl, shadow, grid_obj(GRID, GRID))
-        for _ in range(10):
-            s.step()
+    with storm(cl, make_daemon()) as s:
+        s.steps(10)
         k = rc.ports.index(rc.master_of("deformd:{%d}:lease" % s.sid))
         rc.kill9(k)
-        try:                                  # its master down: refused, not acknowledged
-            s.step()
-            raise AssertionError("a change was acknowledged without its Redis master")
-        except DeformdError as e:
-            assert e.code == E.EIO, e
+        s.step_refused("a change was acknowledged without its Redis master")   # not acknowledged
         rc.restart(k)
-        s.w.close()
-        s.w = reconnect(cl, s.sid, 1)
-        s.after_failover(s.w.get_mesh(s.sid).version)
+        s.reconnect_writer(1)
+        s.resync()
+        s.steps(8)
         s.check(s.w)
-        for _ in range(8):
-            s.step()
-        s.check(s.w)
-    finally:
-        if s:
-            s.w.close()
-            s.sh.close()
-        cl.stop()

@@ -104,6 +104,30 @@ static inline void tu_free(df_mesh *m)
     memset(m, 0, sizeof(*m));
 }
 
+/* tu_bar3d_handles' outputs in one record (tu_bar_load / tu_bar_free) */
+typedef struct tu_bar {
+    df_mesh m;
+    int32_t *h;    /* nh handle indices */
+    int nh;
+    double *tg;    /* nh x 3 targets */
+} tu_bar;
+
+/* tu_bar3d_handles into a tu_bar; the caller frees it with tu_bar_free */
+static inline tu_bar tu_bar_load(void)
+{
+    tu_bar b;
+    tu_bar3d_handles(&b.m, &b.h, &b.nh, &b.tg);
+    return b;
+}
+
+/* frees a tu_bar_load result (mesh, handles, targets) */
+static inline void tu_bar_free(tu_bar *b)
+{
+    free(b->h);
+    free(b->tg);
+    tu_free(&b->m);
+}
+
 /* dense SPD solve A x = b (n x n row-major, overwritten), Cholesky; returns 0 on success */
 static inline int tu_chol_solve(double *A, double *b, int n, int nrhs)
 {

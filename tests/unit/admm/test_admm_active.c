@@ -127,6 +127,41 @@ static df_admm_result run(df_admm *s, int iters)
     return r;
 }
 
+/* the same drag on both solvers (set_drag) */
+static void set_drag2(df_admm *full, df_admm *act, const scene *sc, double amount)
+{
+    set_drag(full, sc, amount);
+    set_drag(act, sc, amount);
+}
+
+/* iters on both solvers (run), full first; their results in *rf, *ra when not NULL */
+static void run2(df_admm *full, df_admm *act, int iters, df_admm_result *rf, df_admm_result *ra)
+{
+    df_admm_result a = run(full, iters), b = run(act, iters);
+    if (rf) *rf = a;
+    if (ra) *ra = b;
+}
+
+/* frees both solvers and the scene */
+static void free_pair(df_admm *full, df_admm *act, scene *sc)
+{
+    df_admm_free(full);
+    df_admm_free(act);
+    scene_free(sc);
+}
+
+/* the n = 10 tet scene in *sc, ARAP full and active solvers on it, dragged by amount and run
+ * 20000 iterations each (caller frees with free_pair) */
+static void tet_arap_pair(scene *sc, double amount, df_admm **full, df_admm **act)
+{
+    tet_scene(sc, 10);
+    df_admm_params pf = arap_params(sc, 0), pa = arap_params(sc, 1);
+    *full = make(sc, &pf);
+    *act = make(sc, &pa);
+    set_drag2(*full, *act, sc, amount);
+    run2(*full, *act, 20000, NULL, NULL);
+}
+
 static double max_diff(const double *a, const double *b, int32_t nv)
 {
     double d = 0;
@@ -164,12 +199,11 @@ static void drag_pair(const scene *sc, const df_admm_params *pf, const df_admm_p
     *full = make(sc, pf);
     *act = make(sc, pa);
     for (int k = 1; k <= steps; k++) {
-        set_drag(*full, sc, step * k);
-        set_drag(*act, sc, step * k);
-        run(*full, 20);
-        run(*act, 20);
+        set_drag2(*full, *act, sc, step * k);
+        run2(*full, *act, 20, NULL, NULL);
     }
-    df_admm_result rf = run(*full, 20000), ra = run(*act, 20000);
+    df_admm_result rf, ra;
+    run2(*full, *act, 20000, &rf, &ra);
     assert_same(*full, *act, &rf, &ra, sc->m.nv);
 }
 
@@ -197,9 +231,7 @@ static void test_tet_arap_equals_full(void **state)
     check_far_field(act, &sc);
     /* the full solve's far field is at rest up to round-off only: more vertices differ there */
     assert_true(count_moved(full, &sc.m) > count_moved(act, &sc.m));
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 static void test_tri_arap_equals_full(void **state)
@@ -211,9 +243,7 @@ static void test_tri_arap_equals_full(void **state)
     df_admm *full, *act;
     drag_pair(&sc, &pf, &pa, 4, 0.3, &full, &act);
     check_far_field(act, &sc);
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 static void test_tet_neohookean_equals_full(void **state)
@@ -237,27 +267,20 @@ static void test_tet_neohookean_equals_full(void **state)
     df_admm *full, *act;
     drag_pair(&sc, &pf, &pa, 3, 0.3, &full, &act);
     check_far_field(act, &sc);
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 static void test_region_grows_with_drag(void **state)
 {
     (void)state;
     scene sc;
-    tet_scene(&sc, 10);
-    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
-    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
-    set_drag(full, &sc, 0.2);
-    set_drag(act, &sc, 0.2);
-    run(full, 20000);
-    run(act, 20000);
+    df_admm *full, *act;
+    tet_arap_pair(&sc, 0.2, &full, &act);
     df_admm_active_stats st1, st2;
     df_admm_get_active_stats(act, &st1);
-    set_drag(full, &sc, 2.0); /* drag further: the support spreads into the band */
-    set_drag(act, &sc, 2.0);
-    df_admm_result rf = run(full, 20000), ra = run(act, 20000);
+    set_drag2(full, act, &sc, 2.0); /* drag further: the support spreads into the band */
+    df_admm_result rf, ra;
+    run2(full, act, 20000, &rf, &ra);
     df_admm_get_active_stats(act, &st2);
     assert_true(st2.grows > st1.grows);
     assert_true(st2.region_vertices > st1.region_vertices);
@@ -265,21 +288,16 @@ static void test_region_grows_with_drag(void **state)
     assert_same(full, act, &rf, &ra, sc.m.nv);
     check_far_field(act, &sc);
     /* and back: the support shrinks, the next run rebuilds a smaller region from it */
-    set_drag(full, &sc, 0.2);
-    set_drag(act, &sc, 0.2);
-    run(full, 20000);
-    run(act, 20000);
-    rf = run(full, 20000); /* the first run's end shows the shrunk support, the next shrinks */
-    ra = run(act, 20000);
+    set_drag2(full, act, &sc, 0.2);
+    run2(full, act, 20000, NULL, NULL);
+    run2(full, act, 20000, &rf, &ra); /* the first run's end shows the shrunk support, the next shrinks */
     df_admm_active_stats st3;
     df_admm_get_active_stats(act, &st3);
     assert_true(st3.rebuilds > st2.rebuilds);
     assert_true(st3.region_vertices < st2.region_vertices);
     assert_same(full, act, &rf, &ra, sc.m.nv);
     check_far_field(act, &sc);
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 /* band 1: a support vertex is always >= 1 ring from the edge, so the depth rule never grows the
@@ -293,9 +311,9 @@ static void test_certificate_grows_region(void **state)
     pa.active_band = 1;
     pa.active_check_every = 5;
     df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
-    set_drag(full, &sc, 2.0);
-    set_drag(act, &sc, 2.0);
-    df_admm_result rf = run(full, 20000), ra = run(act, 20000);
+    set_drag2(full, act, &sc, 2.0);
+    df_admm_result rf, ra;
+    run2(full, act, 20000, &rf, &ra);
     df_admm_active_stats st;
     df_admm_get_active_stats(act, &st);
     assert_true(st.check_grows > 0);
@@ -303,9 +321,7 @@ static void test_certificate_grows_region(void **state)
     assert_true(st.checks > st.check_grows); /* the last certificate passed */
     assert_same(full, act, &rf, &ra, sc.m.nv);
     check_far_field(act, &sc);
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 /* set_positions (e.g. an undo or a brush edit somewhere else) and reset_rest in active mode give the
@@ -314,13 +330,8 @@ static void test_set_positions_and_reset_rest(void **state)
 {
     (void)state;
     scene sc;
-    tet_scene(&sc, 10);
-    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
-    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa);
-    set_drag(full, &sc, 0.5);
-    set_drag(act, &sc, 0.5);
-    run(full, 20000);
-    run(act, 20000);
+    df_admm *full, *act;
+    tet_arap_pair(&sc, 0.5, &full, &act);
     /* an outside edit far from the region: a corner vertex of the top face pushed down */
     double *V = malloc((size_t)sc.m.nv * 3 * sizeof(double));
     memcpy(V, df_admm_positions(act), (size_t)sc.m.nv * 3 * sizeof(double));
@@ -333,7 +344,8 @@ static void test_set_positions_and_reset_rest(void **state)
     assert_int_equal(nch, 1);
     df_admm_active_stats st0, st1;
     df_admm_get_active_stats(act, &st0);
-    df_admm_result rf = run(full, 20000), ra = run(act, 20000);
+    df_admm_result rf, ra;
+    run2(full, act, 20000, &rf, &ra);
     df_admm_get_active_stats(act, &st1);
     assert_true(st1.rebuilds > st0.rebuilds);
     assert_same(full, act, &rf, &ra, sc.m.nv);
@@ -348,17 +360,14 @@ static void test_set_positions_and_reset_rest(void **state)
     }
     assert_int_equal(df_admm_set_targets(full, t, &err), DF_OK);
     assert_int_equal(df_admm_set_targets(act, t, &err), DF_OK);
-    rf = run(full, 20000);
-    ra = run(act, 20000);
+    run2(full, act, 20000, &rf, &ra);
     assert_same(full, act, &rf, &ra, sc.m.nv);
     df_admm_active_stats st2;
     df_admm_get_active_stats(act, &st2);
     assert_true(st2.runs > 0);
     free(t);
     free(V);
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 /* affine constraints: the active mode falls back to the full solve, bit for bit */
@@ -377,9 +386,9 @@ static void test_affine_falls_back(void **state)
     df_error err;
     assert_int_equal(df_admm_create(&sc.m, &pf, sc.h, sc.nh, &aff, 1, &full, &err), DF_OK);
     assert_int_equal(df_admm_create(&sc.m, &pa, sc.h, sc.nh, &aff, 1, &act, &err), DF_OK);
-    set_drag(full, &sc, 0.5);
-    set_drag(act, &sc, 0.5);
-    df_admm_result rf = run(full, 50), ra = run(act, 50);
+    set_drag2(full, act, &sc, 0.5);
+    df_admm_result rf, ra;
+    run2(full, act, 50, &rf, &ra);
     assert_int_equal(rf.iterations, ra.iterations);
     assert_memory_equal(&rf.objective, &ra.objective, sizeof(double));
     assert_memory_equal(df_admm_positions(full), df_admm_positions(act), (size_t)sc.m.nv * 3 * sizeof(double));
@@ -387,9 +396,7 @@ static void test_affine_falls_back(void **state)
     df_admm_get_active_stats(act, &st);
     assert_int_equal(st.runs, 0);
     assert_int_equal(st.fallbacks, 1);
-    df_admm_free(full);
-    df_admm_free(act);
-    scene_free(&sc);
+    free_pair(full, act, &sc);
 }
 
 static void test_bad_params(void **state)

@@ -20,28 +20,25 @@
 static void test_guess_reaches_targets(void **state)
 {
     (void)state;
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
-    double *G = malloc(3 * (size_t)m.nv * sizeof *G), fit = -1, rad = -1;
+    tu_bar bh = tu_bar_load();
+    double *G = malloc(3 * (size_t)bh.m.nv * sizeof *G), fit = -1, rad = -1;
     df_error err;
-    assert_int_equal(df_kelvinlet_guess(m.V, m.nv, h, nh, tg, 0.0, 0.5, G, &fit, &rad, &err), DF_OK);
+    assert_int_equal(df_kelvinlet_guess(bh.m.V, bh.m.nv, bh.h, bh.nh, bh.tg,
+                                        0.0, 0.5, G, &fit, &rad, &err), DF_OK);
     assert_true(fit >= 0 && fit < 1e-9);
-    assert_true(rad == df_kelvinlet_guess_radius(m.V, m.nv, h, nh) && rad > 0);
-    for (int k = 0; k < nh; k++)
-        assert_true(tu_dist(G + 3 * (size_t)h[k], tg + 3 * k) <= 1e-9);
+    assert_true(rad == df_kelvinlet_guess_radius(bh.m.V, bh.m.nv, bh.h, bh.nh) && rad > 0);
+    for (int k = 0; k < bh.nh; k++)
+        assert_true(tu_dist(G + 3 * (size_t)bh.h[k], bh.tg + 3 * k) <= 1e-9);
     /* the field moves the free vertices next to the moved face, and less at mid-bar */
     double near = 0, mid = 0;
-    for (int32_t i = 0; i < m.nv; i++) {
-        double d = tu_dist(G + 3 * (size_t)i, m.V + 3 * (size_t)i), x = m.V[3 * (size_t)i];
+    for (int32_t i = 0; i < bh.m.nv; i++) {
+        double d = tu_dist(G + 3 * (size_t)i, bh.m.V + 3 * (size_t)i), x = bh.m.V[3 * (size_t)i];
         if (fabs(x - 2.5) < 1e-12) near = fmax(near, d);
         if (fabs(x - 1.5) < 1e-12) mid = fmax(mid, d);
     }
     assert_true(near > 1e-3);
     assert_true(mid < near);
-    free(G); free(h); free(tg); tu_free(&m);
+    free(G); tu_bar_free(&bh);
 }
 
 static df_admm *make(const df_mesh *m, const int32_t *h, int nh, const double *tg)
@@ -64,17 +61,13 @@ static df_admm *make(const df_mesh *m, const int32_t *h, int nh, const double *t
 static void test_admm_from_guess(void **state)
 {
     (void)state;
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
+    tu_bar bh = tu_bar_load();
     df_error err;
     df_admm_result plain, seeded;
-    df_admm *a = make(&m, h, nh, tg), *b = make(&m, h, nh, tg);
+    df_admm *a = make(&bh.m, bh.h, bh.nh, bh.tg), *b = make(&bh.m, bh.h, bh.nh, bh.tg);
     assert_int_equal(df_admm_run(a, NULL, &plain, &err), DF_OK);
-    double *G = malloc(3 * (size_t)m.nv * sizeof *G);
-    assert_int_equal(df_kelvinlet_guess(df_admm_positions(b), m.nv, h, nh, tg, 0.0, 0.5, G, NULL,
+    double *G = malloc(3 * (size_t)bh.m.nv * sizeof *G);
+    assert_int_equal(df_kelvinlet_guess(df_admm_positions(b), bh.m.nv, bh.h, bh.nh, bh.tg, 0.0, 0.5, G, NULL,
                                         NULL, &err), DF_OK);
     assert_int_equal(df_admm_set_positions(b, G, NULL, &err), DF_OK);
     assert_int_equal(df_admm_run(b, NULL, &seeded, &err), DF_OK);
@@ -84,39 +77,41 @@ static void test_admm_from_guess(void **state)
     assert_true(fabs(seeded.objective - plain.objective) / (plain.objective + 1.0) < 1e3 * TOL);
     assert_true(seeded.iterations <= plain.iterations);
     const double *V = df_admm_positions(b);
-    for (int k = 0; k < nh; k++)
-        assert_true(tu_dist(V + 3 * (size_t)h[k], tg + 3 * k) <= 1e-9);
+    for (int k = 0; k < bh.nh; k++)
+        assert_true(tu_dist(V + 3 * (size_t)bh.h[k], bh.tg + 3 * k) <= 1e-9);
     df_admm_free(a); df_admm_free(b);
-    free(G); free(h); free(tg); tu_free(&m);
+    free(G); tu_bar_free(&bh);
 }
 
 static void test_bad_input(void **state)
 {
     (void)state;
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
-    size_t n = 3 * (size_t)m.nv;
+    tu_bar bh = tu_bar_load();
+    size_t n = 3 * (size_t)bh.m.nv;
     double *G = malloc(n * sizeof *G);
     for (size_t i = 0; i < n; i++) G[i] = -7.0;
     df_error err;
-    int32_t keep = h[1];
-    h[1] = h[0]; /* repeated handle */
-    assert_int_equal(df_kelvinlet_guess(m.V, m.nv, h, nh, tg, 0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
-    h[1] = m.nv; /* out of range */
-    assert_int_equal(df_kelvinlet_guess(m.V, m.nv, h, nh, tg, 0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
-    h[1] = keep;
-    double t0 = tg[4];
-    tg[4] = NAN;
-    assert_int_equal(df_kelvinlet_guess(m.V, m.nv, h, nh, tg, 0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
-    tg[4] = t0;
-    assert_int_equal(df_kelvinlet_guess(m.V, m.nv, h, nh, tg, 0.0, 0.7, G, NULL, NULL, &err), DF_EINVAL);
-    assert_int_equal(df_kelvinlet_guess(NULL, m.nv, h, nh, tg, 0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
-    assert_int_equal(df_kelvinlet_guess(m.V, m.nv, h, 0, tg, 0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
+    int32_t keep = bh.h[1];
+    bh.h[1] = bh.h[0]; /* repeated handle */
+    assert_int_equal(df_kelvinlet_guess(bh.m.V, bh.m.nv, bh.h, bh.nh, bh.tg,
+                                        0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
+    bh.h[1] = bh.m.nv; /* out of range */
+    assert_int_equal(df_kelvinlet_guess(bh.m.V, bh.m.nv, bh.h, bh.nh, bh.tg,
+                                        0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
+    bh.h[1] = keep;
+    double t0 = bh.tg[4];
+    bh.tg[4] = NAN;
+    assert_int_equal(df_kelvinlet_guess(bh.m.V, bh.m.nv, bh.h, bh.nh, bh.tg,
+                                        0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
+    bh.tg[4] = t0;
+    assert_int_equal(df_kelvinlet_guess(bh.m.V, bh.m.nv, bh.h, bh.nh, bh.tg,
+                                        0.0, 0.7, G, NULL, NULL, &err), DF_EINVAL);
+    assert_int_equal(df_kelvinlet_guess(NULL, bh.m.nv, bh.h, bh.nh, bh.tg,
+                                        0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
+    assert_int_equal(df_kelvinlet_guess(bh.m.V, bh.m.nv, bh.h, 0, bh.tg,
+                                        0.0, 0.5, G, NULL, NULL, &err), DF_EINVAL);
     for (size_t i = 0; i < n; i++) assert_true(G[i] == -7.0);
-    free(G); free(h); free(tg); tu_free(&m);
+    free(G); tu_bar_free(&bh);
 }
 
 int main(void)

@@ -65,23 +65,20 @@ static df_admm *make(const df_mesh *m, df_admm_energy en, double w, double s_thr
  * perturbed shape where some vertices are within s of rest and some beyond */
 static void gradient_check(df_admm_energy en)
 {
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
-    df_admm *s = make(&m, en, en == DF_ADMM_NEOHOOKEAN ? 3e5 : 1e-2, 0.05, en == DF_ADMM_NEOHOOKEAN ? 5e7 : 1.0, h, nh, tg);
-    double *V = malloc((size_t)m.nv * 24), *g = malloc((size_t)m.nv * 24);
+    tu_bar bh = tu_bar_load();
+    df_admm *s = make(&bh.m, en, en == DF_ADMM_NEOHOOKEAN ? 3e5 : 1e-2, 0.05, en == DF_ADMM_NEOHOOKEAN ? 5e7 : 1.0,
+                      bh.h, bh.nh, bh.tg);
+    double *V = malloc((size_t)bh.m.nv * 24), *g = malloc((size_t)bh.m.nv * 24);
     srand(7);
-    for (int32_t i = 0; i < m.nv; i++)
+    for (int32_t i = 0; i < bh.m.nv; i++)
         for (int k = 0; k < 3; k++) {
             double amp = (i % 3 == 0) ? 0.0 : (i % 3 == 1 ? 0.02 : 0.08); /* rest, inside s, beyond s */
-            V[3 * i + k] = m.V[3 * i + k] + amp * (2.0 * rand() / RAND_MAX - 1.0) + (i % 3 == 1 ? 0.005 : 0.0);
+            V[3 * i + k] = bh.m.V[3 * i + k] + amp * (2.0 * rand() / RAND_MAX - 1.0) + (i % 3 == 1 ? 0.005 : 0.0);
         }
-    assert_int_equal(count_inverted(&m, V), 0);
+    assert_int_equal(count_inverted(&bh.m, V), 0);
     assert_int_equal(admm_newton_gradient((const struct df_admm *)s, V, g, NULL, NULL), 0);
     double worst = 0, gmax = 0;
-    for (int32_t i = 0; i < m.nv; i++) {
+    for (int32_t i = 0; i < bh.m.nv; i++) {
         if (i % 3 == 0) continue; /* SC-L1 is not differentiable at rest */
         for (int k = 0; k < 3; k++) {
             double h0 = 1e-6, x = V[3 * i + k];
@@ -99,7 +96,7 @@ static void gradient_check(df_admm_energy en)
     assert_true(worst <= 1e-6 * gmax);
     free(V); free(g);
     df_admm_free(s);
-    tu_free(&m); free(h); free(tg);
+    tu_bar_free(&bh);
 }
 
 static void test_gradient_nh(void **st) { (void)st; gradient_check(DF_ADMM_NEOHOOKEAN); }
@@ -185,12 +182,8 @@ static void test_det_step(void **st)
 static void test_kkt_function(void **st)
 {
     (void)st;
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
-    df_admm *s = make(&m, DF_ADMM_NEOHOOKEAN, 0.0, 0.01, 5e5, h, nh, tg);
+    tu_bar bh = tu_bar_load();
+    df_admm *s = make(&bh.m, DF_ADMM_NEOHOOKEAN, 0.0, 0.01, 5e5, bh.h, bh.nh, bh.tg);
     df_error err;
     assert_int_equal(df_admm_run(s, &(df_admm_budget){30, 0, 0, NULL, NULL}, NULL, &err), DF_OK);
     double k0 = -1, k1 = -1;
@@ -201,14 +194,14 @@ static void test_kkt_function(void **st)
     assert_true(k0 > 1e-6);
     assert_true(k1 < 1e-9);
     assert_true(fabs(k1 - pr.kkt) <= 1e-3 * pr.kkt + 1e-15);
-    double *V = malloc((size_t)m.nv * 24);
-    memcpy(V, df_admm_positions(s), (size_t)m.nv * 24);
+    double *V = malloc((size_t)bh.m.nv * 24);
+    memcpy(V, df_admm_positions(s), (size_t)bh.m.nv * 24);
     V[3 * 20] = NAN;
     assert_int_equal(df_admm_kkt(s, V, &k1, &err), DF_EINVAL);
     assert_int_equal(df_admm_kkt(s, NULL, &k1, &err), DF_EINVAL);
     free(V);
     df_admm_free(s);
-    tu_free(&m); free(h); free(tg);
+    tu_bar_free(&bh);
 }
 
 /* Neo-Hookean with a strong locality weight from a rough ADMM start (10 iterations: V off Z by a
@@ -250,32 +243,28 @@ static void test_rough_start_nh(void **st)
 static void test_follower(void **st)
 {
     (void)st;
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
+    tu_bar bh = tu_bar_load();
     int32_t c = -1, n1 = -1, n2 = -1;
-    for (int32_t i = 0; i < m.nv; i++) {
-        const double *x = m.V + 3 * i;
+    for (int32_t i = 0; i < bh.m.nv; i++) {
+        const double *x = bh.m.V + 3 * i;
         if (x[0] == 1.5 && x[1] == 0.5 && x[2] == 0.5) c = i;
         if (x[0] == 2.0 && x[1] == 0.5 && x[2] == 0.5) n1 = i;
         if (x[0] == 1.5 && x[1] == 1.0 && x[2] == 0.5) n2 = i;
     }
     assert_true(c >= 0 && n1 >= 0 && n2 >= 0);
-    df_mesh d = m;
-    d.nv = m.nv + 1;
-    d.ne = m.ne + 1;
+    df_mesh d = bh.m;
+    d.nv = bh.m.nv + 1;
+    d.ne = bh.m.ne + 1;
     d.V = malloc((size_t)d.nv * 24);
     d.E = malloc((size_t)d.ne * 16);
-    memcpy(d.V, m.V, (size_t)m.nv * 24);
-    memcpy(d.V + 3 * m.nv, m.V + 3 * c, 24);
-    memcpy(d.E, m.E, (size_t)m.ne * 16);
-    int32_t ex[4] = {m.nv, c, n1, n2};
-    memcpy(d.E + 4 * m.ne, ex, 16);
+    memcpy(d.V, bh.m.V, (size_t)bh.m.nv * 24);
+    memcpy(d.V + 3 * bh.m.nv, bh.m.V + 3 * c, 24);
+    memcpy(d.E, bh.m.E, (size_t)bh.m.ne * 16);
+    int32_t ex[4] = {bh.m.nv, c, n1, n2};
+    memcpy(d.E + 4 * bh.m.ne, ex, 16);
     double E[2];
     for (int k = 0; k < 2; k++) {
-        df_admm *s = make(k ? &d : &m, DF_ADMM_NEOHOOKEAN, 0.0, 0.01, 5e5, h, nh, tg);
+        df_admm *s = make(k ? &d : &bh.m, DF_ADMM_NEOHOOKEAN, 0.0, 0.01, 5e5, bh.h, bh.nh, bh.tg);
         df_error err;
         df_admm_degenerate dg;
         df_admm_get_degenerate(s, &dg);
@@ -287,25 +276,21 @@ static void test_follower(void **st)
         E[k] = pr.objective;
         const double *V = df_admm_positions(s);
         if (k) {
-            assert_true(tu_dist(V + 3 * m.nv, V + 3 * c) <= 1e-12);
-            assert_true(tu_dist(V + 3 * c, m.V + 3 * c) > 1e-3); /* the twin did move */
+            assert_true(tu_dist(V + 3 * bh.m.nv, V + 3 * c) <= 1e-12);
+            assert_true(tu_dist(V + 3 * c, bh.m.V + 3 * c) > 1e-3); /* the twin did move */
         }
         df_admm_free(s);
     }
     assert_true(fabs(E[0] - E[1]) <= 1e-10 * E[0]);
     free(d.V); free(d.E);
-    tu_free(&m); free(h); free(tg);
+    tu_bar_free(&bh);
 }
 
 /* w = 0: every non-handle vertex free */
 static void full_space(df_admm_energy en, double rho)
 {
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
-    df_admm *s = make(&m, en, 0.0, 0.01, rho, h, nh, tg);
+    tu_bar bh = tu_bar_load();
+    df_admm *s = make(&bh.m, en, 0.0, 0.01, rho, bh.h, bh.nh, bh.tg);
     df_error err;
     df_admm_result ar;
     assert_int_equal(df_admm_run(s, &(df_admm_budget){100, 0, 0, NULL, NULL}, &ar, &err), DF_OK);
@@ -316,7 +301,7 @@ static void full_space(df_admm_energy en, double rho)
     assert_true(pr.iterations >= 1);
     assert_true(pr.objective <= ar.objective);
     assert_true(fabs(pr.objective_admm - ar.objective) <= 1e-12 * ar.objective);
-    assert_int_equal(pr.support, m.nv - nh);
+    assert_int_equal(pr.support, bh.m.nv - bh.nh);
     assert_int_equal(pr.violations, 0);
     /* every accepted iterate had a finite (uninverted) energy, the history is non-increasing up to
      * roundoff */
@@ -325,11 +310,11 @@ static void full_space(df_admm_energy en, double rho)
         if (k > 0) assert_true(pr.hist_objective[k] <= pr.hist_objective[k - 1] * (1 + 1e-12));
     }
     const double *V = df_admm_positions(s);
-    assert_int_equal(count_inverted(&m, V), 0);
+    assert_int_equal(count_inverted(&bh.m, V), 0);
     assert_true(fabs(eval(s, V) - pr.objective) <= 1e-12 * pr.objective);
-    for (int k = 0; k < nh; k++) assert_memory_equal(V + 3 * h[k], tg + 3 * k, 24);
+    for (int k = 0; k < bh.nh; k++) assert_memory_equal(V + 3 * bh.h[k], bh.tg + 3 * k, 24);
     /* an independent reference: 20x more ADMM iterations from the same start do not beat it */
-    df_admm *s2 = make(&m, en, 0.0, 0.01, rho, h, nh, tg);
+    df_admm *s2 = make(&bh.m, en, 0.0, 0.01, rho, bh.h, bh.nh, bh.tg);
     df_admm_result ar2;
     assert_int_equal(df_admm_run(s2, &(df_admm_budget){2000, 0, 0, NULL, NULL}, &ar2, &err), DF_OK);
     assert_true(pr.objective <= ar2.objective * (1 + 1e-12));
@@ -340,7 +325,7 @@ static void full_space(df_admm_energy en, double rho)
     assert_int_equal(pr2.analyses, 0);
     df_admm_free(s2);
     df_admm_free(s);
-    tu_free(&m); free(h); free(tg);
+    tu_bar_free(&bh);
 }
 
 static void test_full_space_nh(void **st) { (void)st; full_space(DF_ADMM_NEOHOOKEAN, 5e5); }
@@ -409,15 +394,12 @@ static void test_locality_arap(void **st) { (void)st; locality_case(DF_ADMM_ARAP
 static void test_affine_kept(void **st)
 {
     (void)st;
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
+    tu_bar bh = tu_bar_load();
     int32_t line[64];
     int nl = 0;
-    for (int32_t i = 0; i < m.nv; i++)
-        if (m.V[3 * i] > 0 && m.V[3 * i] < 3.0 && m.V[3 * i + 1] == 0.0 && m.V[3 * i + 2] == 0.0) line[nl++] = i;
+    for (int32_t i = 0; i < bh.m.nv; i++)
+        if (bh.m.V[3 * i] > 0 && bh.m.V[3 * i] < 3.0 && bh.m.V[3 * i + 1] == 0.0 && bh.m.V[3 * i + 2] == 0.0)
+            line[nl++] = i;
     df_admm_affine aff = {nl, line, 1, {0, 0, 1, 0, 0, 0, 0, 0, 0}, {0.0, 0, 0}}; /* z = 0 */
     df_admm_params p;
     df_admm_params_default(&p, DF_ADMM_NEOHOOKEAN);
@@ -425,8 +407,8 @@ static void test_affine_kept(void **st)
     p.w = 0.0;
     df_admm *s = NULL;
     df_error err;
-    assert_int_equal(df_admm_create(&m, &p, h, nh, &aff, 1, &s, &err), DF_OK);
-    assert_int_equal(df_admm_set_targets(s, tg, &err), DF_OK);
+    assert_int_equal(df_admm_create(&bh.m, &p, bh.h, bh.nh, &aff, 1, &s, &err), DF_OK);
+    assert_int_equal(df_admm_set_targets(s, bh.tg, &err), DF_OK);
     assert_int_equal(df_admm_run(s, &(df_admm_budget){100, 0, 0, NULL, NULL}, NULL, &err), DF_OK);
     double before = eval(s, df_admm_positions(s));
     df_admm_polish_result pr;
@@ -439,7 +421,7 @@ static void test_affine_kept(void **st)
     for (int k = 0; k < nl; k++) ymove = fmax(ymove, fabs(V[3 * line[k] + 1]));
     assert_true(ymove > 1e-3); /* they did move, in the plane */
     df_admm_free(s);
-    tu_free(&m); free(h); free(tg);
+    tu_bar_free(&bh);
 }
 
 static void test_refusals(void **st)
@@ -457,17 +439,13 @@ static void test_refusals(void **st)
     df_admm_free(sg);
     tu_free(&g);
     /* targets set but never run: handles not at their targets */
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;
-    tu_bar3d_handles(&m, &h, &nh, &tg);
-    df_admm *s = make(&m, DF_ADMM_ARAP, 1e-4, 0.01, 0.1, h, nh, tg);
-    double *V0 = malloc((size_t)m.nv * 24);
-    memcpy(V0, df_admm_positions(s), (size_t)m.nv * 24);
+    tu_bar bh = tu_bar_load();
+    df_admm *s = make(&bh.m, DF_ADMM_ARAP, 1e-4, 0.01, 0.1, bh.h, bh.nh, bh.tg);
+    double *V0 = malloc((size_t)bh.m.nv * 24);
+    memcpy(V0, df_admm_positions(s), (size_t)bh.m.nv * 24);
     assert_int_equal(df_admm_polish(s, NULL, NULL, &err), DF_ESTATE);
     assert_non_null(strstr(err.msg, "target"));
-    assert_memory_equal(V0, df_admm_positions(s), (size_t)m.nv * 24);
+    assert_memory_equal(V0, df_admm_positions(s), (size_t)bh.m.nv * 24);
     df_admm_polish_params bad = {DF_ADMM_POLISH_MAX_ITERS + 1, 0, 0, 0};
     assert_int_equal(df_admm_polish(s, &bad, NULL, &err), DF_EINVAL);
     bad = (df_admm_polish_params){10, NAN, 0, 0};
@@ -475,10 +453,10 @@ static void test_refusals(void **st)
     bad = (df_admm_polish_params){10, 0, -1.0, 0};
     assert_int_equal(df_admm_polish(s, &bad, NULL, &err), DF_EINVAL);
     assert_int_equal(df_admm_polish(NULL, NULL, NULL, &err), DF_EINVAL);
-    assert_memory_equal(V0, df_admm_positions(s), (size_t)m.nv * 24);
+    assert_memory_equal(V0, df_admm_positions(s), (size_t)bh.m.nv * 24);
     free(V0);
     df_admm_free(s);
-    tu_free(&m); free(h); free(tg);
+    tu_bar_free(&bh);
 }
 
 int main(void)

@@ -12,88 +12,23 @@
 #include <cmocka.h>
 
 #include "../unit_skip.h"
+#include "redis_rig.h"
 
-#include <arpa/inet.h>
 #include <hiredis/hiredis.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "server/cluster/lease.h"
 #include "server/cluster/redis.h"
 #include "server/cluster/rlog.h"
 
-static pid_t g_pid = -1;
-static int g_port;
 static char g_url[64];
-static char g_dir[] = "/tmp/df-unit-redis-XXXXXX";
 
-static int free_port(void)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t len = sizeof a;
-    if (fd < 0 || bind(fd, (struct sockaddr *)&a, sizeof a) != 0 ||
-        getsockname(fd, (struct sockaddr *)&a, &len) != 0) {
-        if (fd >= 0) close(fd);
-        return -1;
-    }
-    close(fd);
-    return ntohs(a.sin_port);
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
-/* redis-server on a free port (no persistence), ready when PING answers (polled, 10 s). */
+/* redis-server on a free port (no persistence, see redis_rig.h); g_url its redis:// URL. */
 static int start_redis(void **state)
 {
     (void)state;
-    if (system("command -v redis-server >/dev/null 2>&1") != 0) return 0; /* tests skip */
-    if (!mkdtemp(g_dir)) return -1;
-    g_port = free_port();
-    char port[16];
-    snprintf(port, sizeof port, "%d", g_port);
-    g_pid = fork();
-    if (g_pid == 0) {
-        if (!freopen("/dev/null", "w", stdout)) _exit(127);
-        execlp("redis-server", "redis-server", "--port", port, "--bind", "127.0.0.1", "--save",
-               "", "--appendonly", "no", "--dir", g_dir, (char *)NULL);
-        _exit(127);
-    }
-    snprintf(g_url, sizeof g_url, "redis://127.0.0.1:%d", g_port);
-    df_redis *r;
-    if (df_redis_new(g_url, &r, NULL) != DF_OK) return -1;
-    double deadline = now_s() + 10;
-    int ok = 0;
-    while (!ok && now_s() < deadline) {
-        struct redisReply *rep = NULL;
-        ok = df_redis_cmdv(r, &rep, NULL, 1, "PING") == DF_OK;
-        df_redis_reply_free(rep);
-        if (!ok) usleep(20000);
-    }
-    df_redis_free(r);
-    return ok ? 0 : -1;
-}
-
-static int stop_redis(void **state)
-{
-    (void)state;
-    if (g_pid > 0) {
-        kill(g_pid, SIGTERM);
-        waitpid(g_pid, NULL, 0);
-        char cmd[128];
-        snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);
-        if (system(cmd) != 0) return -1;
-    }
-    return 0;
+    int rc = redis_rig_start("/tmp/df-unit-redis-XXXXXX", 0);
+    if (g_pid > 0) snprintf(g_url, sizeof g_url, "redis://127.0.0.1:%d", g_port);
+    return rc;
 }
 
 static df_redis *connect_or_skip(void)

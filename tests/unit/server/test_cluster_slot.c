@@ -13,86 +13,17 @@
 #include <cmocka.h>
 
 #include "../unit_skip.h"
+#include "redis_rig.h"
 
-#include <arpa/inet.h>
 #include <hiredis/hiredis.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "server/cluster/slot.h"
 
-static pid_t g_pid = -1;
-static int g_port;
-static char g_dir[] = "/tmp/df-unit-rcslot-XXXXXX";
-
-static int free_port(void)
-{
-    int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-    socklen_t len = sizeof a;
-    if (fd < 0 || bind(fd, (struct sockaddr *)&a, sizeof a) != 0 ||
-        getsockname(fd, (struct sockaddr *)&a, &len) != 0) {
-        if (fd >= 0) close(fd);
-        return -1;
-    }
-    close(fd);
-    return ntohs(a.sin_port);
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
-/* A cluster-enabled redis-server (CLUSTER KEYSLOT needs no slots assigned), ready when PING
- * answers (polled, 10 s). */
+/* A cluster-enabled redis-server (CLUSTER KEYSLOT needs no slots assigned; see redis_rig.h). */
 static int start_redis(void **state)
 {
     (void)state;
-    if (system("command -v redis-server >/dev/null 2>&1") != 0) return 0;
-    if (!mkdtemp(g_dir)) return -1;
-    g_port = free_port();
-    char port[16], conf[128];
-    snprintf(port, sizeof port, "%d", g_port);
-    snprintf(conf, sizeof conf, "%s/nodes.conf", g_dir);
-    g_pid = fork();
-    if (g_pid == 0) {
-        if (!freopen("/dev/null", "w", stdout)) _exit(127);
-        execlp("redis-server", "redis-server", "--port", port, "--bind", "127.0.0.1", "--save",
-               "", "--appendonly", "no", "--dir", g_dir, "--cluster-enabled", "yes",
-               "--cluster-config-file", conf, (char *)NULL);
-        _exit(127);
-    }
-    double deadline = now_s() + 10;
-    while (now_s() < deadline) {
-        redisContext *c = redisConnect("127.0.0.1", g_port);
-        redisReply *rep = c && !c->err ? redisCommand(c, "PING") : NULL;
-        int ok = rep && rep->type == REDIS_REPLY_STATUS;
-        if (rep) freeReplyObject(rep);
-        if (c) redisFree(c);
-        if (ok) return 0;
-        usleep(20000);
-    }
-    return -1;
-}
-
-static int stop_redis(void **state)
-{
-    (void)state;
-    if (g_pid > 0) {
-        kill(g_pid, SIGTERM);
-        waitpid(g_pid, NULL, 0);
-        char cmd[128];
-        snprintf(cmd, sizeof cmd, "rm -rf %s", g_dir);
-        if (system(cmd) != 0) return -1;
-    }
-    return 0;
+    return redis_rig_start("/tmp/df-unit-rcslot-XXXXXX", 1);
 }
 
 /* The published check value of CRC16/XMODEM, and the spec's hash tag rules. */
