@@ -199,8 +199,11 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     }
     size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count +
                  PROGRESS_HEADER;
-    uint8_t *out = malloc(cap);
-    if (!out) return NULL;
+    /* built in place: a df_sbuf of the worst-case size (sbuf.c keeps such blocks for reuse, so
+     * the pages written are not faulted afresh every version) */
+    df_sbuf *b = df_sbuf_new(cap);
+    if (!b) return NULL;
+    uint8_t *out = b->data;
     uint8_t *o = out + DF_FRAME_HEADER_SIZE, *q = o + QDISP_HEADER;
     const uint8_t *rows = p + DISP_HEADER;
     int64_t prev = -1;
@@ -209,7 +212,7 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     for (uint32_t r = 0; r < count; r++, rows += row) {
         uint32_t i = enc == DF_DISP_SPARSE ? df_le32_load(rows) : offset + r;
         if (i >= nv) {
-            free(out);
+            df_sbuf_unref(b);
             return NULL;
         }
         float u[3];
@@ -243,9 +246,7 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     uint64_t step;
     memcpy(&step, &g->step, 8);
     df_le64_store(o + 40, step);
-    uint8_t *shrunk = realloc(out, len);
-    df_sbuf *b = df_sbuf_adopt(shrunk ? shrunk : out, len);
-    if (!b) free(shrunk ? shrunk : out);
+    b->len = len;
     return b;
 }
 
