@@ -2,6 +2,7 @@
 #include "server/session/stream_enc.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <zstd.h>
@@ -126,6 +127,33 @@ int df_stream_enc_applies(const df_sbuf *frame)
     return (type == DF_MSG_DISPLACEMENT || type == DF_MSG_PROGRESS) && (flags & DF_FLAG_EVENT);
 }
 
+/* One compression context per thread, kept across frames (ZSTD_compress would create and free
+ * one per call, its tables page-faulted afresh) and freed when the thread exits: the same bytes
+ * as ZSTD_compress. NULL when out of memory (the caller then uses ZSTD_compress). */
+static pthread_key_t cctx_key;
+static pthread_once_t cctx_once = PTHREAD_ONCE_INIT;
+
+static void cctx_free(void *p)
+{
+    ZSTD_freeCCtx(p);
+}
+
+static void cctx_key_make(void)
+{
+    (void)pthread_key_create(&cctx_key, cctx_free);
+}
+
+static ZSTD_CCtx *thread_cctx(void)
+{
+    pthread_once(&cctx_once, cctx_key_make);
+    ZSTD_CCtx *cx = pthread_getspecific(cctx_key);
+    if (!cx && (cx = ZSTD_createCCtx()) != NULL && pthread_setspecific(cctx_key, cx) != 0) {
+        ZSTD_freeCCtx(cx);
+        cx = NULL;
+    }
+    return cx;
+}
+
 df_sbuf *df_stream_enc_zstd(df_sbuf *frame)
 {
     size_t raw = frame->len - DF_FRAME_HEADER_SIZE;
@@ -133,10 +161,7 @@ df_sbuf *df_stream_enc_zstd(df_sbuf *frame)
     size_t bound = ZSTD_compressBound(raw);
     df_sbuf *z = df_sbuf_new(DF_FRAME_HEADER_SIZE + ZFRAME_HEADER + bound);
     if (!z) return NULL;
-    /* one compression context per thread, kept across frames (ZSTD_compress would create and
-     * free one per call, its tables page-faulted afresh): the same bytes as ZSTD_compress */
-    static _Thread_local ZSTD_CCtx *cx;
-    if (!cx) cx = ZSTD_createCCtx();
+    ZSTD_CCtx *cx = thread_cctx();
     size_t zn = cx ? ZSTD_compressCCtx(cx, z->data + DF_FRAME_HEADER_SIZE + ZFRAME_HEADER, bound,
                                        frame->data + DF_FRAME_HEADER_SIZE, raw, ZSTD_STREAM_LEVEL)
                    : ZSTD_compress(z->data + DF_FRAME_HEADER_SIZE + ZFRAME_HEADER, bound,
