@@ -4,6 +4,16 @@
 #include <pthread.h>
 #include <stdlib.h>
 
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/asan_interface.h>
+/* a kept block is poisoned: a use after the last unref still fails under `make asan` */
+#define KEPT_POISON(b) ASAN_POISON_MEMORY_REGION((b), sizeof *(b) + (b)->cap)
+#define KEPT_UNPOISON(b, n) ASAN_UNPOISON_MEMORY_REGION((b), (n))
+#else
+#define KEPT_POISON(b) ((void)(b))
+#define KEPT_UNPOISON(b, n) ((void)(b), (void)(n))
+#endif
+
 /* Large buffers (stream frames of big meshes: 12 MB a version for 1M vertices) are kept for
  * reuse after their last unref instead of freed: a fresh block of that size comes from mmap and
  * page-faults on every first write (~3.8 ms per 12 MB), a kept one does not. At most CACHE_N
@@ -15,7 +25,7 @@
 
 static pthread_mutex_t cache_mu = PTHREAD_MUTEX_INITIALIZER;
 static df_sbuf *cache[CACHE_N];
-static size_t cache_bytes;
+static size_t cache_bytes, cache_cap[CACHE_N]; /* cache_cap: each kept block's capacity */
 static uint64_t cache_age[CACHE_N], cache_clock; /* put order: the oldest is dropped first */
 
 static df_sbuf *cache_take(size_t cap)
@@ -24,13 +34,14 @@ static df_sbuf *cache_take(size_t cap)
     pthread_mutex_lock(&cache_mu);
     int best = -1;
     for (int i = 0; i < CACHE_N; i++)
-        if (cache[i] && cache[i]->cap >= cap && cache[i]->cap - cap <= cap / 4 &&
-            (best < 0 || cache[i]->cap < cache[best]->cap))
+        if (cache[i] && cache_cap[i] >= cap && cache_cap[i] - cap <= cap / 4 &&
+            (best < 0 || cache_cap[i] < cache_cap[best]))
             best = i;
     if (best >= 0) {
         b = cache[best];
         cache[best] = NULL;
-        cache_bytes -= b->cap;
+        cache_bytes -= cache_cap[best];
+        KEPT_UNPOISON(b, sizeof *b + cache_cap[best]);
     }
     pthread_mutex_unlock(&cache_mu);
     return b;
@@ -41,6 +52,7 @@ static df_sbuf *cache_take(size_t cap)
 static void cache_put(df_sbuf *b)
 {
     df_sbuf *drop[CACHE_N];
+    size_t drop_cap[CACHE_N];
     int nd = 0;
     pthread_mutex_lock(&cache_mu);
     for (;;) {
@@ -52,8 +64,9 @@ static void cache_put(df_sbuf *b)
             }
         if (n < CACHE_N && cache_bytes + b->cap <= CACHE_MAX) break;
         if (oldest < 0) break;
+        drop_cap[nd] = cache_cap[oldest];
         drop[nd++] = cache[oldest];
-        cache_bytes -= cache[oldest]->cap;
+        cache_bytes -= cache_cap[oldest];
         cache[oldest] = NULL;
     }
     int kept = 0;
@@ -61,12 +74,17 @@ static void cache_put(df_sbuf *b)
         for (int i = 0; i < CACHE_N && !kept; i++)
             if (!cache[i]) {
                 cache[i] = b;
+                cache_cap[i] = b->cap;
                 cache_age[i] = ++cache_clock;
                 cache_bytes += b->cap;
+                KEPT_POISON(b);
                 kept = 1;
             }
     pthread_mutex_unlock(&cache_mu);
-    for (int i = 0; i < nd; i++) free(drop[i]);
+    for (int i = 0; i < nd; i++) {
+        KEPT_UNPOISON(drop[i], sizeof *drop[i] + drop_cap[i]);
+        free(drop[i]);
+    }
     if (!kept) free(b);
 }
 
