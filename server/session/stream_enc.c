@@ -2,6 +2,7 @@
 #include "server/session/stream_enc.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <zstd.h>
@@ -25,6 +26,21 @@ static inline int64_t quantize(float u, double q)
     if (k > K_LIMIT) k = K_LIMIT;
     if (k < -K_LIMIT) k = -K_LIMIT;
     return (int64_t)k;
+}
+
+/* quantize(u, q) with r = 1 / q (rounded): the same K, a multiply instead of a division where
+ * that provably gives it. For |y| < 2^20, y = u * r differs from the u / q of quantize by less than
+ * 3 * 2^-53 * 2^20 < 2^-31, and y + 0.5 from its counterpart by less than 2^-31 + 2 * 2^-33 <
+ * 1e-9; so when y + 0.5 lies more than 1e-6 from every integer both have the same floor. Anything
+ * else (near a step boundary, large, NaN): quantize's division. */
+static inline int64_t quantize_r(float u, double q, double r)
+{
+    double y = (double)u * r;
+    if (fabs(y) < 1048576.0) {
+        double z = y + 0.5, k = floor(z), f = z - k; /* f exact: the fraction bits of z */
+        if (f > 1e-6 && f < 1 - 1e-6) return (int64_t)k;
+    }
+    return quantize(u, q);
 }
 
 static df_qgroup *find_group(df_session *s, double err)
@@ -111,6 +127,33 @@ int df_stream_enc_applies(const df_sbuf *frame)
     return (type == DF_MSG_DISPLACEMENT || type == DF_MSG_PROGRESS) && (flags & DF_FLAG_EVENT);
 }
 
+/* One compression context per thread, kept across frames (ZSTD_compress would create and free
+ * one per call, its tables page-faulted afresh) and freed when the thread exits: the same bytes
+ * as ZSTD_compress. NULL when out of memory (the caller then uses ZSTD_compress). */
+static pthread_key_t cctx_key;
+static pthread_once_t cctx_once = PTHREAD_ONCE_INIT;
+
+static void cctx_free(void *p)
+{
+    ZSTD_freeCCtx(p);
+}
+
+static void cctx_key_make(void)
+{
+    (void)pthread_key_create(&cctx_key, cctx_free);
+}
+
+static ZSTD_CCtx *thread_cctx(void)
+{
+    pthread_once(&cctx_once, cctx_key_make);
+    ZSTD_CCtx *cx = pthread_getspecific(cctx_key);
+    if (!cx && (cx = ZSTD_createCCtx()) != NULL && pthread_setspecific(cctx_key, cx) != 0) {
+        ZSTD_freeCCtx(cx);
+        cx = NULL;
+    }
+    return cx;
+}
+
 df_sbuf *df_stream_enc_zstd(df_sbuf *frame)
 {
     size_t raw = frame->len - DF_FRAME_HEADER_SIZE;
@@ -118,8 +161,11 @@ df_sbuf *df_stream_enc_zstd(df_sbuf *frame)
     size_t bound = ZSTD_compressBound(raw);
     df_sbuf *z = df_sbuf_new(DF_FRAME_HEADER_SIZE + ZFRAME_HEADER + bound);
     if (!z) return NULL;
-    size_t zn = ZSTD_compress(z->data + DF_FRAME_HEADER_SIZE + ZFRAME_HEADER, bound,
-                              frame->data + DF_FRAME_HEADER_SIZE, raw, ZSTD_STREAM_LEVEL);
+    ZSTD_CCtx *cx = thread_cctx();
+    size_t zn = cx ? ZSTD_compressCCtx(cx, z->data + DF_FRAME_HEADER_SIZE + ZFRAME_HEADER, bound,
+                                       frame->data + DF_FRAME_HEADER_SIZE, raw, ZSTD_STREAM_LEVEL)
+                   : ZSTD_compress(z->data + DF_FRAME_HEADER_SIZE + ZFRAME_HEADER, bound,
+                                   frame->data + DF_FRAME_HEADER_SIZE, raw, ZSTD_STREAM_LEVEL);
     if (ZSTD_isError(zn) || zn + ZFRAME_HEADER >= raw) { /* incompressible: the frame itself */
         df_sbuf_unref(z);
         return df_sbuf_ref(frame);
@@ -178,27 +224,28 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     }
     size_t cap = DF_FRAME_HEADER_SIZE + QDISP_HEADER + QDISP_ROW_MAX * (size_t)count +
                  PROGRESS_HEADER;
-    uint8_t *out = malloc(cap);
-    if (!out) return NULL;
+    /* built in place: a df_sbuf of the worst-case size (sbuf.c keeps such blocks for reuse, so
+     * the pages written are not faulted afresh every version) */
+    df_sbuf *b = df_sbuf_new(cap);
+    if (!b) return NULL;
+    uint8_t *out = b->data;
     uint8_t *o = out + DF_FRAME_HEADER_SIZE, *q = o + QDISP_HEADER;
     const uint8_t *rows = p + DISP_HEADER;
     int64_t prev = -1;
     uint32_t sent = 0;
+    const double rstep = 1.0 / g->step;
     for (uint32_t r = 0; r < count; r++, rows += row) {
         uint32_t i = enc == DF_DISP_SPARSE ? df_le32_load(rows) : offset + r;
         if (i >= nv) {
-            free(out);
+            df_sbuf_unref(b);
             return NULL;
         }
         float u[3];
         memcpy(u, rows + (enc == DF_DISP_SPARSE ? 4 : 0), 12);
         int64_t *K = g->K + 3 * (size_t)i, dq[3];
-        for (int k = 0; k < 3; k++) {
-            int64_t kn = quantize(u[k], g->step);
-            dq[k] = kn - K[k];
-            K[k] = kn;
-        }
-        if ((dq[0] | dq[1] | dq[2]) == 0) continue;
+        for (int k = 0; k < 3; k++) dq[k] = quantize_r(u[k], g->step, rstep) - K[k];
+        if ((dq[0] | dq[1] | dq[2]) == 0) continue; /* unchanged row: K not written (no dirty line) */
+        for (int k = 0; k < 3; k++) K[k] += dq[k];
         q = put_varint(q, (uint64_t)((int64_t)i - prev - 1));
         prev = i;
         for (int k = 0; k < 3; k++)
@@ -224,9 +271,7 @@ static df_sbuf *quantize_frame(df_session *s, df_qgroup *g, df_sbuf *frame)
     uint64_t step;
     memcpy(&step, &g->step, 8);
     df_le64_store(o + 40, step);
-    uint8_t *shrunk = realloc(out, len);
-    df_sbuf *b = df_sbuf_adopt(shrunk ? shrunk : out, len);
-    if (!b) free(shrunk ? shrunk : out);
+    b->len = len;
     return b;
 }
 
