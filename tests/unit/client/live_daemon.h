@@ -7,6 +7,7 @@
 #include <limits.h>
 #include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -99,6 +100,30 @@ static inline void live_daemon_stop(live_daemon *d)
     snprintf(log, sizeof log, "%s/deformd.conf", d->dir);
     unlink(log);
     rmdir(d->dir);
+}
+
+/* An n x n grid (n >= 2) as OFF text: 2 (n-1)^2 triangles over the unit square, slightly curved
+ * (z = 0.1 (i mod 3) / n). Returns malloc'd text (caller frees; NULL when out of memory), its
+ * length in *len. */
+static inline char *live_grid_off(int n, size_t *len)
+{
+    size_t cap = (size_t)n * n * 64 + 64;
+    char *t = malloc(cap);
+    *len = 0;
+    if (!t) return NULL;
+    size_t o = (size_t)snprintf(t, cap, "OFF\n%d %d 0\n", n * n, 2 * (n - 1) * (n - 1));
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++)
+            o += (size_t)snprintf(t + o, cap - o, "%g %g %g\n", i / (n - 1.0), j / (n - 1.0),
+                                  0.1 * (i % 3) / n);
+    for (int j = 0; j + 1 < n; j++)
+        for (int i = 0; i + 1 < n; i++) {
+            int a = j * n + i;
+            o += (size_t)snprintf(t + o, cap - o, "3 %d %d %d\n3 %d %d %d\n", a, a + 1, a + n + 1,
+                                  a, a + n + 1, a + n);
+        }
+    *len = o;
+    return t;
 }
 
 #endif

@@ -58,26 +58,6 @@ static void on_event(void *user, const df_frame_header *h, const uint8_t *p)
         r->stale = 1;
 }
 
-/* An n x n grid as OFF text (triangles), slightly curved. */
-static char *grid_off(int n, size_t *len)
-{
-    size_t cap = (size_t)n * n * 64 + 64;
-    char *t = malloc(cap);
-    size_t o = (size_t)snprintf(t, cap, "OFF\n%d %d 0\n", n * n, 2 * (n - 1) * (n - 1));
-    for (int j = 0; j < n; j++)
-        for (int i = 0; i < n; i++)
-            o += (size_t)snprintf(t + o, cap - o, "%g %g %g\n", i / (n - 1.0), j / (n - 1.0),
-                                  0.1 * (i % 3) / n);
-    for (int j = 0; j + 1 < n; j++)
-        for (int i = 0; i + 1 < n; i++) {
-            int a = j * n + i;
-            o += (size_t)snprintf(t + o, cap - o, "3 %d %d %d\n3 %d %d %d\n", a, a + 1, a + n + 1,
-                                  a, a + n + 1, a + n);
-        }
-    *len = o;
-    return t;
-}
-
 static void stroke_update(df_client *c, uint64_t sid, int writer, int i)
 {
     df_msg_brush_update u;
@@ -109,7 +89,7 @@ static void test_replicas_match_the_daemon(void **state)
     for (int k = 0; k < LIVE_CLIENTS; k++)
         assert_int_equal(df_client_connect_unix(L.d.sock, "live", &L.c[k], &e), DF_OK);
     size_t len;
-    char *off = grid_off(30, &len);
+    char *off = live_grid_off(30, &len);
     df_msg_session_info info;
     assert_int_equal(df_client_load_mesh_bytes(L.c[0], "live", DF_FMT_OFF, off, len, 0, &info, &e),
                      DF_OK);
@@ -210,7 +190,7 @@ static void test_shm_subscriber_too_slow_for_the_ring_resyncs(void **state)
     assert_int_equal(df_client_connect_unix(d.sock, "writer", &w, &e), DF_OK);
     assert_int_equal(df_client_connect_unix(d.sock, "reader", &r, &e), DF_OK);
     size_t len;
-    char *off = grid_off(40, &len);
+    char *off = live_grid_off(40, &len);
     df_msg_session_info info;
     assert_int_equal(df_client_load_mesh_bytes(w, "ring", DF_FMT_OFF, off, len, 0, &info, &e),
                      DF_OK);
@@ -310,7 +290,7 @@ static void test_replica_resyncs_from_the_version_it_holds(void **state)
     df_error e;
     assert_int_equal(df_client_connect_unix(d.sock, "writer", &w, &e), DF_OK);
     size_t len;
-    char *off = grid_off(20, &len);
+    char *off = live_grid_off(20, &len);
     df_msg_session_info info;
     assert_int_equal(df_client_load_mesh_bytes(w, "resync", DF_FMT_OFF, off, len, 0, &info, &e),
                      DF_OK);

@@ -49,25 +49,6 @@ static void on_event(void *user, const df_frame_header *h, const uint8_t *p)
     }
 }
 
-static char *grid_off(int n, size_t *len)
-{
-    size_t cap = (size_t)n * n * 64 + 64;
-    char *t = malloc(cap);
-    size_t o = (size_t)snprintf(t, cap, "OFF\n%d %d 0\n", n * n, 2 * (n - 1) * (n - 1));
-    for (int j = 0; j < n; j++)
-        for (int i = 0; i < n; i++)
-            o += (size_t)snprintf(t + o, cap - o, "%g %g %g\n", i / (n - 1.0), j / (n - 1.0),
-                                  0.1 * (i % 3) / n);
-    for (int j = 0; j + 1 < n; j++)
-        for (int i = 0; i + 1 < n; i++) {
-            int a = j * n + i;
-            o += (size_t)snprintf(t + o, cap - o, "3 %d %d %d\n3 %d %d %d\n", a, a + 1, a + n + 1,
-                                  a, a + n + 1, a + n);
-        }
-    *len = o;
-    return t;
-}
-
 static void test_slow_exact_c_subscriber_is_coalesced(void **state)
 {
     (void)state;
@@ -86,7 +67,7 @@ static void test_slow_exact_c_subscriber_is_coalesced(void **state)
     assert_int_equal(df_client_server_info(old)->has_stream, 0); /* the original hello */
     df_client_close(old);
     size_t len;
-    char *off = grid_off(GRID, &len);
+    char *off = live_grid_off(GRID, &len);
     df_msg_session_info info;
     assert_int_equal(df_client_load_mesh_bytes(ed, "coal", DF_FMT_OFF, off, len, 0, &info, &e),
                      DF_OK);
