@@ -36,8 +36,9 @@ static int parse_moved(const char *msg, char *host, size_t cap, int *port)
         h++;
         colon[-1] = '\0';
     }
-    if (strlen(h) >= cap) return 0;
-    snprintf(host, cap, "%s", h);
+    size_t n = strlen(h);
+    if (n >= cap) return 0;
+    memcpy(host, h, n + 1);
     *port = (int)p;
     return 1;
 }
