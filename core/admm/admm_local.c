@@ -208,6 +208,7 @@ void admm_local_z(df_admm *s)
 void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
                    int par)
 {
+    (void)par; /* read only by the OpenMP pragma (unused in serial builds: make tsan) */
     const double rho = s->p.rho;
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (par)
     for (int32_t f = 0; f < nf; f++) {
