@@ -27,7 +27,6 @@ out of the call (the connection stays usable: the reply is collected by the next
 dropped). A daemon without the feature refuses the request (EPROTO_RESERVED / EPROTO_TRAILING):
 call again without `progress`.
 """
-import dataclasses
 import os
 import secrets
 import socket
@@ -36,19 +35,19 @@ import time
 from array import array
 from collections import deque
 from dataclasses import dataclass
-from typing import Callable, Deque, Dict, Iterator, List, Optional, Sequence, Set, Tuple, Union
+from typing import Deque, Dict, Iterator, List, Optional, Set, Tuple, Union
 
-from . import access as ac
 from . import auth
 from . import brush_state as bs
 from . import devices as dv
 from . import frame as fr
 from . import messages as m
-from . import peers as pr
 from . import progress as pg
 from . import schema
 from . import stream as st
 from . import stream_enc as se
+from .access_requests import AccessRequestsMixin
+from .edit_requests import EditRequestsMixin
 from .poll import PollMixin
 from .stream import ShmRing
 from .errors import EMOVED, ConnectionClosed, DeformdError, error_name, moved_address
@@ -105,10 +104,9 @@ class ShmLost:
 
 Event = Union[st.Disp, st.Progress, se.QDisp, SessionClosed, ShmLost, bs.BrushState, bs.BrushCursor,
               pg.WorkProgress]
-# A progress callback (load_mesh, load_file, set_handles, move_handles): one WorkProgress a call.
-ProgressFn = Callable[[pg.WorkProgress], None]
+ProgressFn = pg.ProgressFn  # a progress callback (load_mesh, load_file, set_handles, move_handles)
 
-class Client(PollMixin):
+class Client(PollMixin, EditRequestsMixin, AccessRequestsMixin):
     """A connection to deformd. Not thread-safe: use one Client per thread."""
 
     def __init__(self, sock: socket.socket, timeout: float = DEFAULT_TIMEOUT_S,
@@ -731,112 +729,6 @@ class Client(PollMixin):
             raise
         return info
 
-    # ------------------------------------------------------------------ brush
-    def brush_begin(self, session_id: int, brush: m.Brush,
-                    progress: Optional["ProgressFn"] = None) -> m.Ack:
-        """Opens a stroke. progress: a callback for the "factorize" stage of the LU of the
-        brush's pinned points (built by the begin when its load is non-zero, else by the first
-        update; see the module doc); the stroke's later updates report to brush_update's."""
-        if progress is not None:
-            brush = dataclasses.replace(brush, options=pg.WORK_OPT_PROGRESS)
-        return m.decode_ack(self._request_progress(m.BRUSH_BEGIN,
-                                                   m.encode_brush(session_id, brush), progress))
-
-    def brush_update(self, session_id: int, move=None, twist=None, scale: float = 0.0,
-                     matrix=None, progress: Optional["ProgressFn"] = None) -> m.Ack:
-        """Cumulative load since the stroke began (same meaning as in Brush). progress: the
-        pin LU's "factorize" events when this update (re)builds it, for a stroke whose
-        brush_begin asked for progress."""
-        return m.decode_ack(self._request_progress(
-            m.BRUSH_UPDATE, m.encode_brush_update(session_id, move, twist, scale, matrix),
-            progress))
-
-    def brush_end(self, session_id: int) -> m.Ack:
-        return m.decode_ack(self._one(m.BRUSH_END, m.encode_session_ref(session_id)))
-
-    def brush_cancel(self, session_id: int) -> m.Ack:
-        return m.decode_ack(self._one(m.BRUSH_CANCEL, m.encode_session_ref(session_id)))
-
-    def stroke(self, session_id: int, brush: m.Brush,
-               progress: Optional["ProgressFn"] = None) -> m.Ack:
-        """One whole stroke committed as one version (like `deformctl brush`): begin with the
-        brush's load (applied as its first update), then end. Returns the end's ack. progress:
-        as in brush_begin."""
-        self.brush_begin(session_id, brush, progress)
-        return self.brush_end(session_id)
-
-    def set_brush_param(self, session_id: int, param: str, value: float) -> m.Ack:
-        """param: radius | nu | strength | falloff | ratio."""
-        return m.decode_ack(self._one(m.SET_BRUSH_PARAM,
-                                      m.encode_brush_param(session_id, param, value)))
-
-    def brush_state_get(self, session_id: int) -> bs.BrushState:
-        """The session brush (PROTOCOL.md 4.14a): values, seq, last changer (changed 0)."""
-        return bs.decode_brush_state(self._one(m.BRUSH_STATE_GET,
-                                               m.encode_session_ref(session_id)))
-
-    def brush_state_set(self, session_id: int, **fields) -> bs.BrushState:
-        """Sets fields of the session brush: type, radius, nu, strength, falloff, ratio,
-        integrator, steps, mirror (None = off, or (px, py, pz, nx, ny, nz)). Giving only one of
-        integrator / steps (one wire field) reads the other from the daemon first. Returns the
-        new state; subscribers get it as a BrushState event naming this client. DeformdError
-        EINVAL (nothing changed) for a bad value."""
-        base = bs.BrushValues()
-        if ("integrator" in fields) != ("steps" in fields):
-            base = self.brush_state_get(session_id).values
-        mask, v = bs.values_with(base, **fields)
-        return bs.decode_brush_state(self._one(m.BRUSH_STATE_SET,
-                                               bs.encode_brush_state_set(session_id, mask, v)))
-
-    # ------------------------------------------------------------------ handles
-    def set_handles(self, session_id: int, handles: Sequence[int], energy: str = "arap",
-                    affine: Sequence[m.AffineSet] = (),
-                    progress: Optional["ProgressFn"] = None, **params) -> m.Ack:
-        """Defines the session's handle set (replacing any previous one). params: any field of
-        messages.HandleParams (w, s, rho, tol, max_iters, youngs, poisson, strain_min,
-        strain_max, bending, area_weighting, accelerate, anderson_m); the rest take the
-        reference defaults for `energy` (w 1e-4, s 0.01, rho 0 = the solver's adaptive penalty;
-        Neo-Hookean w 500; an explicit rho must exceed w / s). progress: a callback for the solver build
-        ("factorize" stage; see the module doc)."""
-        p = m.HandleParams.for_energy(energy, **params)
-        rid = self.send(m.HANDLES_SET, m.encode_handles(
-            session_id, energy, handles, p, affine,
-            pg.WORK_OPT_PROGRESS if progress is not None else None))
-        return m.decode_ack(self._wait_with_progress(rid, progress))
-
-    def get_handles(self, session_id: int) -> m.HandleSet:
-        """The session's current handle set (energy, every parameter, handle indices in handle
-        order, affine sets). DeformdError ENOTFOUND when the session has no handle set."""
-        return m.decode_handles(self._one(m.HANDLES_GET, m.encode_session_ref(session_id)))
-
-    def move_handles(self, session_id: int, targets: Sequence[Sequence[float]],
-                     max_iters: int = 0, max_ms: int = 0, progress_every: int = 0,
-                     timeout: Optional[float] = None,
-                     progress: Optional["ProgressFn"] = None,
-                     kelvinlet_guess: bool = False, polish: bool = False) -> m.MoveResult:
-        """Moves the handles to `targets` (one xyz per handle) and waits for the final result;
-        progress iterates (and displacement frames) are queued as events. progress: a callback
-        for the "solve" stage (iterations of the budget) and a solver rebuild ("factorize"); see
-        the module doc. kelvinlet_guess: the solver starts from the Kelvinlet field of the
-        handles' move (option bit KELVINLET_GUESS, PROTOCOL.md 4.16). polish: after ADMM, a
-        projected-Newton polish to a relative KKT residual of 1e-9 (option bit POLISH; tet
-        meshes with arap, acap or neohookean; the result's residual is then its KKT residual)."""
-        opts = (pg.WORK_OPT_PROGRESS if progress is not None else 0) | (
-            int(m.WorkOpt.KELVINLET_GUESS) if kelvinlet_guess else 0) | (
-            int(m.WorkOpt.POLISH) if polish else 0)
-        rid = self.send(m.HANDLES_MOVE, m.encode_handle_move(
-            session_id, targets, max_iters, max_ms, progress_every, opts or None))
-        return m.decode_move_result(self._wait_with_progress(rid, progress, timeout))
-
-    def reset_rest(self, session_id: int) -> m.Ack:
-        return m.decode_ack(self._one(m.RESET_REST, m.encode_session_ref(session_id)))
-
-    def undo(self, session_id: int) -> m.Ack:
-        return m.decode_ack(self._one(m.UNDO, m.encode_session_ref(session_id)))
-
-    def redo(self, session_id: int) -> m.Ack:
-        return m.decode_ack(self._one(m.REDO, m.encode_session_ref(session_id)))
-
     # ------------------------------------------------------------------ reads
     def get_mesh(self, session_id: int, rest: bool = False, base: bool = False) -> MeshData:
         flags = (m.GET_MESH_REST if rest else 0) | (m.GET_MESH_BASE if base else 0)
@@ -851,51 +743,3 @@ class Client(PollMixin):
     def stats(self, session_id: int = 0) -> Dict[str, float]:
         """Daemon-wide (0) or one session's counters, key -> value."""
         return m.decode_stats(self._one(m.STATS, m.encode_stats_req(session_id)))
-
-    # ------------------------------------------------------------------ per-session access
-    def session_access(self, session_id: int, mode: Optional[str] = None,
-                       observers: Optional[bool] = None,
-                       new_key: bool = False) -> ac.AccessInfo:
-        """The session's access policy (PROTOCOL.md 4.34): with no change given, reads it (any
-        principal that may observe); mode "open" / "key" / "owner", observers True / False or
-        new_key=True change it (owner or admin only: EPERM otherwise). A new join key (new_key,
-        or a switch to key mode without one) comes back in .key (32 bytes) to the owner only."""
-        if mode is not None and mode not in ac.MODES:
-            raise ValueError("mode %r: open, key or owner" % (mode,))
-        payload = ac.encode_session_access(session_id, int(ac.MODES[mode]) if mode else 0,
-                                           ac.OBSERVERS[observers],
-                                           int(schema.AccessFlag.NEW_KEY) if new_key else 0)
-        return ac.decode_access_info(self._one(m.SESSION_ACCESS, payload))
-
-    def join(self, session_id: int, key: Union[bytes, str]) -> ac.AccessInfo:
-        """Becomes a member of a key-mode session with its join key (32 bytes, or 64 hex
-        digits); membership belongs to this connection's principal and outlasts it. A wrong key
-        is EPERM (and rate-limited per peer: ELIMIT)."""
-        raw = bytes.fromhex(key) if isinstance(key, str) else bytes(key)
-        return ac.decode_access_info(self._one(m.JOIN, ac.encode_join(session_id, raw)))
-
-    def session_peers(self, session_id: int) -> List[pr.Peer]:
-        """Who is connected to the session (PROTOCOL.md 4.38): one Peer per connection
-        subscribed to it, in subscription order: client_id, name (its HELLO client_name),
-        principal, transport, flags (PeerFlag: SELF marks this connection's own row, EDIT a
-        peer that may edit, SHM one on the shared-memory stream). Needs the observe right
-        (DeformdError EPERM); ENOTFOUND for an unknown session."""
-        return pr.decode_peer_list(self._one(m.SESSION_PEERS, m.encode_session_ref(session_id)))
-
-    # ------------------------------------------------------------------ devices (HID)
-    def devices_list(self) -> List[dv.DeviceInfo]:
-        """The daemon's HID devices (open or not), in id order."""
-        return dv.decode_device_list(self._one(m.DEVICES_LIST))
-
-    def device_bind(self, device_id: int, session_id: int = 0) -> None:
-        """Binds a device to a session (0: unbind, it follows the most recently active
-        session). ENOTFOUND for an unknown device or session."""
-        self._one(m.DEVICE_BIND, dv.encode_device_bind(device_id, session_id))
-
-    def device_view(self, device_id: int, session_id: int, view_proj: Sequence[float],
-                    viewport: Sequence[float]) -> None:
-        """Publishes the view a pen is cast through: view_proj 16 floats (row-major, mesh space
-        -> OpenGL clip space), viewport (x, y, width, height) in pixels, y down. Also binds the
-        device to session_id."""
-        self._one(m.DEVICE_VIEW, dv.encode_device_view(device_id, session_id, view_proj,
-                                                         viewport))

@@ -3,6 +3,7 @@ build, solve), sent only for requests that asked for them. Client.load_mesh / lo
 set_handles / move_handles take a `progress` callback that receives each WorkProgress as it
 arrives, before the request's reply; without a callback nothing is asked for."""
 import struct
+from typing import Callable
 from dataclasses import dataclass
 
 from .schema import WorkOpt, WorkStage
@@ -58,3 +59,7 @@ def decode_work_progress(p: bytes, request_id: int = 0) -> WorkProgress:
 def encode_work_progress(w: WorkProgress) -> bytes:
     return struct.pack("<QBBHQQd", w.session_id, int(w.stage), 1 if w.final else 0, 0, w.done,
                        w.total, w.elapsed_ms)
+
+
+# A progress callback (load_mesh, load_file, set_handles, move_handles): one WorkProgress a call.
+ProgressFn = Callable[["WorkProgress"], None]
