@@ -4,6 +4,8 @@ answered from the last published version, UNDO is refused at once, HANDLES_GET i
 newer move can supersede), a brush begin supersedes the move; a move ends when its requester
 disconnects. Only generous receive timeouts, no timing assertions: without the fixes the replies
 below never come and the waits time out."""
+import time
+
 import pytest
 
 from deformd_client import Brush, DeformdError, MeshState, Progress, messages as m
@@ -41,6 +43,17 @@ def wait_finals(c, sids, timeout=END_S):
 
 def wait_final(c, sid, timeout=END_S):
     return wait_finals(c, {sid}, timeout)[sid]
+
+
+def poll_stat(c, sid, key, ok, bound_s=REPLY_S):
+    """The session's stats value `key` once ok(value) holds, polled every 10 ms; the last value
+    when bound_s passes first (the caller's assertion then fails)."""
+    deadline = time.monotonic() + bound_s
+    while True:
+        v = c.stats(sid)[key]
+        if ok(v) or time.monotonic() > deadline:
+            return v
+        time.sleep(0.01)
 
 
 def test_four_long_moves_leave_a_worker_for_other_clients(daemon):
@@ -119,7 +132,10 @@ def test_reads_undo_and_handles_get_during_a_move_then_the_orphan_ends(daemon):
         assert last.status == m.MOVE_SUPERSEDED
         after = viewer.get_mesh(sid)
         assert after.version == last.disp.version    # the last iterate stays
-        assert viewer.stats(sid)["undo_depth"] >= 1  # ... as one undo step
+        # ... as one undo step: the daemon records it when the move's job completes on the loop
+        # thread, after the final frames went out, and GET_MESH / STATS do not wait for the job
+        # (reads run beside a move), so the step is polled for, up to a bound
+        assert poll_stat(viewer, sid, "undo_depth", lambda v: v >= 1) >= 1
         viewer.undo(sid)
         pts, _ = tet_grid(8)
         back = viewer.get_mesh(sid).positions
