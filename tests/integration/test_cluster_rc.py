@@ -189,11 +189,17 @@ def test_slot_migration_is_followed(rc, make_daemon):
         # the renewals followed too: the lease is still the owner's after several ttls
         owner = cl.by_port(owner_port(s.w))
         v = s.acked
-        first = int(cli(dst, "PTTL", key))
-        assert first > 0
+        # PTTL only falls between renewals, so a reading above the one before it shows a renewal
+        # (pipelined, redirected) landed on the new master. Comparing with the first reading alone
+        # could never pass when that reading was taken in the renewal's own millisecond (= ttl).
+        last = [int(cli(dst, "PTTL", key))]
+        assert last[0] > 0
 
-        def renewed():                      # a renewal (pipelined, redirected) reset its ttl
-            if int(cli(dst, "PTTL", key)) <= first:
+        def renewed():
+            now = int(cli(dst, "PTTL", key))
+            assert now > 0, "the lease expired on the new master (PTTL %d)" % now
+            went_up, last[0] = now > last[0], now
+            if not went_up:
                 raise OSError("lease not renewed yet")
         poll_until(renewed, "the lease renewed on the new master")
         s.step()
