@@ -210,7 +210,9 @@ def test_stale_owner_is_fenced_and_drops_the_session(tmp_path):
                     if e.code == E.EMOVED:
                         return e.message
                 raise OSError("d0 still serves the session")
-        assert dropped() == "MOVED %d 127.0.0.1:%d" % (sid, d1.tcp_port)
+        # the drop runs on the owner's loop after the refusal went out: waited for, not assumed
+        assert poll_until(dropped, "d0 dropping the session") == \
+            "MOVED %d 127.0.0.1:%d" % (sid, d1.tcp_port)
         log = d0.log()
         assert "session %d dropped from this daemon" % sid in log
         assert "fenced" in log
