@@ -38,7 +38,7 @@
 #define STEP 0.3    /* drag per update, grid spacings */
 #define TARGET_MS 33.0
 #define TARGET_REL 1e-8
-#define TAIL 1e-6   /* params.active_tail of the tail-test variant */
+#define TAIL 3e-6   /* params.active_tail of the tail-test variant */
 
 /* CPU seconds of the process (all threads): the work, whatever the machine's load */
 static double cpu_now(void)
