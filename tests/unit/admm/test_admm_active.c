@@ -247,6 +247,25 @@ static void test_tri_arap_equals_full(void **state)
     free_pair(full, act, &sc);
 }
 
+/* the tail test on spokes-and-rims cells: the drag converges to the full solve's result */
+static void test_tri_tail_equals_full(void **state)
+{
+    (void)state;
+    scene sc;
+    tri_scene(&sc, 40);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    pa.active_tail = 1e-6;
+    df_admm *full, *act;
+    drag_pair(&sc, &pf, &pa, 4, 0.3, &full, &act);
+    df_admm_active_stats st;
+    df_admm_get_active_stats(act, &st);
+    print_message("tail grows %ld, region %d of %d vertices, fallbacks %ld\n", st.tail_grows, st.region_vertices, sc.m.nv,
+                  st.fallbacks);
+    assert_true(st.tail_grows > 0);
+    check_far_field(act, &sc);
+    free_pair(full, act, &sc);
+}
+
 static void test_tet_neohookean_equals_full(void **state)
 {
     (void)state;
@@ -476,6 +495,7 @@ int main(void)
         cmocka_unit_test(test_tet_arap_equals_full),
         cmocka_unit_test(test_tri_arap_equals_full),
         cmocka_unit_test(test_tet_neohookean_equals_full),
+        cmocka_unit_test(test_tri_tail_equals_full),
         cmocka_unit_test(test_region_grows_with_drag),
         cmocka_unit_test(test_certificate_grows_region),
         cmocka_unit_test(test_tail_test_follows_full),
