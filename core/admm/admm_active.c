@@ -2,8 +2,8 @@
  * graph, the support, the region (support grown by `band` rings) with its fringe, depths and
  * elements, the snap of everything outside to rest, the principal sub-system of the global matrix
  * on the region's free vertices (CHOLMOD analysis + factorization, cached while the region and
- * rho are unchanged), the far-field certificate and the tail test's edge charge. The restricted iterations are in
- * admm_active_run.c. */
+ * rho are unchanged), the far-field certificate and the tail test's edge charge. The restricted
+ * iterations are in admm_active_run.c. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -426,11 +426,7 @@ int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra,
             a->stamp[v] = g;
             a->depth[v] = pass ? a->band : 0; /* extra: no rings around it */
             a->work[qt++] = v;
-            if (!a->in[v]) {
-                a->in[v] = 1;
-                a->rv[a->nr++] = v;
-                a->tail_added += pass;
-            }
+            if (!a->in[v]) { a->in[v] = 1; a->rv[a->nr++] = v; a->tail_added += pass; }
         }
     }
     while (qh < qt) {
@@ -566,25 +562,26 @@ int32_t admm_act_certify(df_admm *s)
     return n;
 }
 
+/* SC-L1 slope charge w a_i |Vout_i - Vrest_i| of vertex i */
+static double charge(const df_admm *s, int32_t i)
+{
+    const double *x = s->Vout + 3 * (size_t)i, *r = s->Vrest + 3 * (size_t)i;
+    double d0 = x[0] - r[0], d1 = x[1] - r[1], d2 = x[2] - r[2];
+    return s->p.w * s->a[i] * sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+}
+
 int32_t admm_act_tail(df_admm *s, double E, double tol)
 {
     admm_active *a = s->act;
     if (s->p.w == 0.0 || a->nedge == 0 || !(fabs(E) > 0)) return 0;
     double sum = 0, share = tol * fabs(E) / a->nedge;
-    for (int32_t k = 0; k < a->nedge; k++) {
-        int32_t i = a->edge[k];
-        const double *x = s->Vout + 3 * (size_t)i, *r = s->Vrest + 3 * (size_t)i;
-        double d0 = x[0] - r[0], d1 = x[1] - r[1], d2 = x[2] - r[2];
-        sum += s->a[i] * sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-    }
-    if (!(s->p.w * sum > tol * fabs(E))) return 0;
+    for (int32_t k = 0; k < a->nedge; k++) sum += charge(s, a->edge[k]);
+    if (!(sum > tol * fabs(E))) return 0;
     uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
     int32_t n = 0;
     for (int32_t k = 0; k < a->nedge; k++) {
         int32_t i = a->edge[k];
-        const double *x = s->Vout + 3 * (size_t)i, *r = s->Vrest + 3 * (size_t)i;
-        double d0 = x[0] - r[0], d1 = x[1] - r[1], d2 = x[2] - r[2];
-        if (!(s->p.w * s->a[i] * sqrt(d0 * d0 + d1 * d1 + d2 * d2) > share)) continue;
+        if (!(charge(s, i) > share)) continue;
         for (int32_t p = a->adj_ptr[i]; p < a->adj_ptr[i + 1]; p++) {
             int32_t u = a->adj[p];
             if (a->in[u] || a->stamp[u] == g) continue;
