@@ -175,6 +175,8 @@ typedef struct df_admm_params {
     int active;            /* 1: iterate on the active region only; 0: full solve (default) */
     int active_band;       /* rings of the band around the support, >= 1; 0: DF_ADMM_ACTIVE_BAND */
     int active_check_every;/* far-field certificate every k iterations; 0: DF_ADMM_ACTIVE_CHECK */
+    double active_tail;    /* tail test tolerance (DF_ADMM_ACTIVE, "Tail test"), >= 0; 0 (default):
+                              off */
 } df_admm_params;
 
 /* DF_ADMM_ACTIVE — active-set mode (params.active = 1; core/admm/admm_active*.c). SC-L1 leaves the
@@ -205,12 +207,23 @@ typedef struct df_admm_params {
  * change of the order of the full solve's far-field round-off). With params.active (and no
  * feature that falls back) df_admm_create builds no whole-mesh factorization; the first full run
  * builds it. df_admm_stats counts the region analyses, factorizations and solves too.
- * Exactness: converged results equal the full solve's (objective ~1e-14 relative in the tests);
- * a fixed number of iterations is not the same computation as the full solve's (there the
- * global step's decaying response moves the far field a little in every iteration, which feeds
- * back; it vanishes at convergence), so after e.g. 20 iterations the objectives
- * differ by ~1e-6 relative with the default band and ~1e-8 with 6 rings (make bench:
- * bench_local). */
+ * Tail test (params.active_tail = tol > 0; off by default): after every iteration, when the
+ * SC-L1 charge w sum a_i |Vout_i - Vrest_i| of the region's edge (its vertices next to the
+ * outside) exceeds tol |E|, the region grows by one ring at the edge vertices whose charge
+ * exceeds their share tol |E| / (edge size) (counted in df_admm_active_stats.tail_grows). The
+ * charge vanishes at convergence, so converged results are unchanged.
+ * Exactness: converged results equal the full solve's (objective ~1e-14 relative in the tests).
+ * A fixed number of iterations is not the same computation as the full solve's: there the global
+ * step's decaying response (about 6x per ring on bench_local's grids) moves every vertex a little
+ * in every iteration, and SC-L1 charges a small displacement linearly (w a_i |d_i|), so the full
+ * iterate carries a far-field cost the active iterate (and the optimum) does not have. Measured
+ * after 20 iterations on bench_local's 100k grid: the full objective is above the active one in
+ * every update, by 1.6e-6 relative with the default band, of which the full iterate's own far
+ * field outside the region costs 1.7e-6 (the full iterate with that far field put at rest is
+ * within 1.3e-7 of the active one; 1.6e-9 with 6 rings). No region growth, penalty change or
+ * stop happens in those updates, and both start from the same state: the difference is the
+ * global step's response beyond the band alone. The tail test with tol 3e-6 brings it to 7e-9,
+ * but the region it needs is ~3x the default band's (CPU per update ~4x). */
 #define DF_ADMM_ACTIVE_BAND 3
 #define DF_ADMM_ACTIVE_CHECK 10
 #define DF_ADMM_ACTIVE_MAX_FRAC 0.5
@@ -394,6 +407,7 @@ typedef struct df_admm_active_stats {
     int32_t region_vertices;   /* |R| now (0 when no region) */
     int32_t region_elements;   /* elements (per-vertex energies: cells) iterated on */
     int32_t support;           /* support size at the end of the last active run */
+    long tail_grows;           /* growths by the tail test (params.active_tail) */
 } df_admm_active_stats;
 
 /* Copies the active-set counters. NULL-safe (zeroes `out` for a NULL solver). */

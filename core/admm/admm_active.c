@@ -2,8 +2,8 @@
  * graph, the support, the region (support grown by `band` rings) with its fringe, depths and
  * elements, the snap of everything outside to rest, the principal sub-system of the global matrix
  * on the region's free vertices (CHOLMOD analysis + factorization, cached while the region and
- * rho are unchanged) and the far-field certificate. The restricted iterations are in
- * admm_active_run.c. */
+ * rho are unchanged), the far-field certificate and the tail test's edge charge. The restricted
+ * iterations are in admm_active_run.c. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,7 +35,7 @@ void admm_active_free(df_admm *s)
     admm_active *a = s->act;
     free_factor(s);
     free(a->adj_ptr); free(a->adj); free(a->hmap); free(a->in); free(a->depth); free(a->rv);
-    free(a->fr); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
+    free(a->fr); free(a->edge); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
     free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp);
     free(a->va);
     free(a);
@@ -110,6 +110,7 @@ int admm_act_init(df_admm *s, df_error *err)
     a->depth = calloc(nv, sizeof(int32_t));
     a->rv = malloc(nv * sizeof(int32_t));
     a->fr = malloc(nv * sizeof(int32_t));
+    a->edge = malloc(nv * sizeof(int32_t));
     a->ae = malloc(nm * sizeof(int32_t));
     a->ae2 = malloc(nm * sizeof(int32_t));
     a->emark = calloc(nm, 1);
@@ -119,7 +120,7 @@ int admm_act_init(df_admm *s, df_error *err)
     a->rfidx = malloc(nv * sizeof(int32_t));
     a->stamp = calloc(nv, sizeof(uint32_t));
     if (s->family == ADMM_FAM_VERTEX) a->tstamp = calloc((size_t)s->sr_ptr[s->nv] + 1, sizeof(uint32_t));
-    if (!a->hmap || !a->in || !a->depth || !a->rv || !a->fr || !a->ae || !a->ae2 || !a->emark || !a->work || !a->sup ||
+    if (!a->hmap || !a->in || !a->depth || !a->rv || !a->fr || !a->edge || !a->ae || !a->ae2 || !a->emark || !a->work || !a->sup ||
         !a->rfv || !a->rfidx || !a->stamp || (s->family == ADMM_FAM_VERTEX && !a->tstamp) || build_graph(s, a)) {
         df_admm_active_stats keep = a->st;
         admm_active_free(s);
@@ -238,8 +239,11 @@ static void region_lists(df_admm *s, admm_active *a)
             if (a->in[u] && a->stamp[u] != g) { a->stamp[u] = g; a->depth[u] = a->depth[v] + 1; a->work[qt++] = u; }
         }
     }
-    for (int32_t k = 0; k < a->nr; k++) /* a region component with no fringe (the whole mesh) */
+    a->nedge = 0;
+    for (int32_t k = 0; k < a->nr; k++) { /* a region component with no fringe (the whole mesh) */
         if (a->stamp[a->rv[k]] != g) a->depth[a->rv[k]] = INT32_MAX;
+        else if (a->depth[a->rv[k]] == 1) a->edge[a->nedge++] = a->rv[k];
+    }
     /* elements (cells): previous marks 1 -> 2; this pass marks 1 (new) or 3 (kept) into ae2 */
     for (int32_t k = 0; k < a->nae; k++) a->emark[a->ae[k]] = 2;
     int32_t n = 0;
@@ -408,6 +412,7 @@ int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra,
         memcpy(a->fr, a->rv, (size_t)old_n * sizeof(int32_t));
         for (int32_t k = 0; k < old_n; k++) a->in[a->rv[k]] = 0;
         a->nr = 0;
+        a->tail_added = 0;
     }
     /* BFS `band` rings from the seeds (support and extra); depth[] holds the hop count here */
     uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
@@ -419,9 +424,9 @@ int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra,
             int32_t v = list[k];
             if (a->stamp[v] == g) continue;
             a->stamp[v] = g;
-            a->depth[v] = 0;
+            a->depth[v] = pass ? a->band : 0; /* extra: no rings around it */
             a->work[qt++] = v;
-            if (!a->in[v]) { a->in[v] = 1; a->rv[a->nr++] = v; }
+            if (!a->in[v]) { a->in[v] = 1; a->rv[a->nr++] = v; a->tail_added += pass; }
         }
     }
     while (qh < qt) {
@@ -553,6 +558,36 @@ int32_t admm_act_certify(df_admm *s)
         if (a->hmap[v] >= 0) continue; /* a handle is constrained, not optimal */
         double fn = force_norm(s, v);
         if (!(fn <= s->p.w * s->a[v])) a->sup[a->nsup + n++] = v;
+    }
+    return n;
+}
+
+/* SC-L1 slope charge w a_i |Vout_i - Vrest_i| of vertex i */
+static double charge(const df_admm *s, int32_t i)
+{
+    const double *x = s->Vout + 3 * (size_t)i, *r = s->Vrest + 3 * (size_t)i;
+    double d0 = x[0] - r[0], d1 = x[1] - r[1], d2 = x[2] - r[2];
+    return s->p.w * s->a[i] * sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+}
+
+int32_t admm_act_tail(df_admm *s, double E, double tol)
+{
+    admm_active *a = s->act;
+    if (s->p.w == 0.0 || a->nedge == 0 || !(fabs(E) > 0)) return 0;
+    double sum = 0, share = tol * fabs(E) / a->nedge;
+    for (int32_t k = 0; k < a->nedge; k++) sum += charge(s, a->edge[k]);
+    if (!(sum > tol * fabs(E))) return 0;
+    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
+    int32_t n = 0;
+    for (int32_t k = 0; k < a->nedge; k++) {
+        int32_t i = a->edge[k];
+        if (!(charge(s, i) > share)) continue;
+        for (int32_t p = a->adj_ptr[i]; p < a->adj_ptr[i + 1]; p++) {
+            int32_t u = a->adj[p];
+            if (a->in[u] || a->stamp[u] == g) continue;
+            a->stamp[u] = g;
+            a->sup[a->nsup + n++] = u;
+        }
     }
     return n;
 }

@@ -20,6 +20,8 @@ typedef struct admm_active {
     int32_t *depth;          /* nv: hops to the nearest outside vertex (region), 0 outside */
     int32_t nr, *rv;         /* region vertices */
     int32_t nfr, *fr;        /* fringe: outside vertices next to the region */
+    int32_t nedge, *edge;    /* edge: region vertices next to the fringe (depth 1) */
+    int32_t tail_added;      /* vertices the tail test added since the last fresh build */
     int32_t nae, *ae, *ae2;  /* elements touching the region (vertex family: cells of region and
                                 fringe vertices); ae2: scratch of the same size */
     uint8_t *emark;          /* ne (element family) or nv (cells): 1 when in ae */
@@ -51,7 +53,8 @@ typedef struct admm_active {
 /* admm_active.c */
 int admm_act_init(df_admm *s, df_error *err);                 /* allocates s->act (once) */
 /* (re)builds the region: fresh (from the support only; vertices leaving it are snapped to rest)
- * or grown (union with the current region); refactors. extra (n) joins the support. */
+ * or grown (union with the current region); refactors. extra (n_extra vertices) join the region
+ * themselves, without rings around them (the tail test's one-ring growth). */
 int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra, df_error *err);
 /* support scan over the region (or, stale, the whole mesh) into act->sup */
 void admm_act_support(df_admm *s, int whole);
@@ -62,6 +65,11 @@ int admm_act_needs_grow(const df_admm *s);
 /* far-field certificate: appends the failing fringe vertices to act->sup after its nsup entries
  * (nsup unchanged) and returns their number */
 int32_t admm_act_certify(df_admm *s);
+/* tail test (admm.h DF_ADMM_ACTIVE, edge tail): appends to act->sup after its nsup entries (nsup
+ * unchanged) the fringe vertices next to edge vertices whose SC-L1 charge w a_i |Vout_i - Vrest_i|
+ * exceeds tol |E| / nedge, and returns their number (0 when the summed edge charge is within
+ * tol |E|) */
+int32_t admm_act_tail(df_admm *s, double E, double tol);
 /* sub-system solve: rhs already in act->rhs; *x the nrf x 3 column-major answer */
 int admm_act_solve(df_admm *s, const double **x, df_error *err);
 int admm_act_buffers(df_admm *s, df_error *err);

@@ -3,7 +3,8 @@
  * its vertices, the global step on its free vertices with the region's factor, Neo-Hookean damped
  * handle steps), the same scale-invariant stop test as the full solve (admm.h DF_ADMM_RESIDUAL;
  * the far field adds its constant share sum gam_e |I|^2 to the residual scales), region growth,
- * the far-field certificate, and the fallback to the full solve. */
+ * the far-field certificate, the tail test (params.active_tail) and the fallback to the full
+ * solve. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -306,13 +307,15 @@ static int finish_full(df_admm *s, const df_admm_budget *budget, double tstart, 
     return DF_OK;
 }
 
-/* grows the region by the support in act->sup (+ failing fringe vertices); 1 when it got too big */
-static int grow(df_admm *s, int by_check, df_error *err, int *rc)
+/* grows the region by the support in act->sup (+ failing fringe vertices) and by the n_tail
+ * vertices the tail test put after them; 1 when it got too big */
+static int grow(df_admm *s, int by_check, int32_t n_tail, df_error *err, int *rc)
 {
     admm_active *a = s->act;
     a->st.grows++;
     if (by_check) a->st.check_grows++;
-    *rc = admm_act_build(s, 0, NULL, 0, err);
+    if (n_tail > 0) a->st.tail_grows++;
+    *rc = admm_act_build(s, 0, a->sup + a->nsup, n_tail, err);
     return !*rc && too_big(s);
 }
 
@@ -349,7 +352,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     } else {
         admm_act_support(s, 0);
         if (admm_act_needs_grow(s)) { a->st.grows++; rc = admm_act_build(s, 0, NULL, 0, err); }
-        else if ((int64_t)ACT_SHRINK * admm_act_fresh_size(s) < a->nr) {
+        else if ((int64_t)ACT_SHRINK * ((int64_t)admm_act_fresh_size(s) + a->tail_added) < a->nr) {
             /* the support shrank (a drag back): rebuild from it; the vertices leaving the region
              * go exactly to rest (they are off it by no more than the iterations' residual) */
             a->st.rebuilds++;
@@ -414,15 +417,20 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
          * before reporting convergence */
         admm_act_support(s, 0);
         int need = admm_act_needs_grow(s), by_check = 0;
+        int32_t nt = 0;
         certified = 0;
         if (!need && (conv || r.iterations % a->check_every == 0)) {
             int32_t nf = admm_act_certify(s);
             if (nf > 0) { a->nsup += nf; need = by_check = 1; }
             else certified = 1;
         }
+        if (!need && !conv && s->p.active_tail > 0) { /* tail test (admm.h): every iteration */
+            nt = admm_act_tail(s, E, s->p.active_tail);
+            need = nt > 0;
+        }
         if (need) {
             conv = 0;
-            if (grow(s, by_check, err, &rc)) { fell_back = 1; break; }
+            if (grow(s, by_check, nt, err, &rc)) { fell_back = 1; break; }
             if (rc) break;
         }
         r.t_other += admm_now() - ta;
@@ -442,7 +450,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         int32_t nf = admm_act_certify(s);
         if (nf > 0 || admm_act_needs_grow(s)) {
             a->nsup += nf;
-            (void)grow(s, nf > 0, err, &rc); /* too big: the next run falls back at its start */
+            (void)grow(s, nf > 0, 0, err, &rc); /* too big: the next run falls back at its start */
         }
     }
     if (r.iterations == 0 && rc == DF_OK) {

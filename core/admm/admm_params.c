@@ -39,6 +39,8 @@ int admm_validate_params(const df_admm_params *p, df_error *err)
     if (p->active_check_every < 0 || p->active_check_every > DF_ADMM_MAX_ITERS_LIMIT)
         return df_error_set(err, DF_EINVAL, "admm: active_check_every = %d outside [0, %d] (0: default)",
                             p->active_check_every, DF_ADMM_MAX_ITERS_LIMIT);
+    if (!(p->active_tail >= 0) || !isfinite(p->active_tail))
+        return df_error_set(err, DF_EINVAL, "admm: active_tail = %g must be finite and >= 0 (0: off)", p->active_tail);
     if (p->accelerate && (p->anderson_m < 1 || p->anderson_m > DF_ADMM_MAX_ANDERSON))
         return df_error_set(err, DF_EINVAL, "admm: anderson_m = %d outside [1, %d]", p->anderson_m, DF_ADMM_MAX_ANDERSON);
     if (p->energy == DF_ADMM_CLOTH) {

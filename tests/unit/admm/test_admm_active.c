@@ -3,7 +3,8 @@
  * mode and converged equals the full solve (params.active = 0) within 1e-8 relative objective and
  * 1e-8 positions; the vertices outside the region stay bitwise at rest; the region grows when the
  * handle drags further and shrinks when it comes back; with a band of one ring only the far-field certificate can grow the region
- * and it does; set_positions and reset_rest keep working in active mode (same result as the full
+ * and it does; the tail test makes a 20-iteration update follow the full solve's iterate closely
+ * (and converges to the same result); set_positions and reset_rest keep working in active mode (same result as the full
  * solve); affine constraints fall back to the full solve (bit-identical to it); bad parameters are
  * refused. Expected values come from the full solve of the same problem. */
 #include <stdarg.h>
@@ -246,6 +247,25 @@ static void test_tri_arap_equals_full(void **state)
     free_pair(full, act, &sc);
 }
 
+/* the tail test on spokes-and-rims cells: the drag converges to the full solve's result */
+static void test_tri_tail_equals_full(void **state)
+{
+    (void)state;
+    scene sc;
+    tri_scene(&sc, 40);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
+    pa.active_tail = 1e-6;
+    df_admm *full, *act;
+    drag_pair(&sc, &pf, &pa, 4, 0.3, &full, &act);
+    df_admm_active_stats st;
+    df_admm_get_active_stats(act, &st);
+    print_message("tail grows %ld, region %d of %d vertices, fallbacks %ld\n", st.tail_grows, st.region_vertices, sc.m.nv,
+                  st.fallbacks);
+    assert_true(st.tail_grows > 0);
+    check_far_field(act, &sc);
+    free_pair(full, act, &sc);
+}
+
 static void test_tet_neohookean_equals_full(void **state)
 {
     (void)state;
@@ -322,6 +342,44 @@ static void test_certificate_grows_region(void **state)
     assert_same(full, act, &rf, &ra, sc.m.nv);
     check_far_field(act, &sc);
     free_pair(full, act, &sc);
+}
+
+/* the tail test (params.active_tail): an unconverged 20-iteration update follows the full solve's
+ * iterate, whose global step moves every vertex a little, far more closely than the plain band
+ * (Dirichlet at rest on the fringe) does: the region grows one ring wherever its edge still
+ * carries SC-L1 charge. Expected values: the full solve of the same update; converged, the result
+ * is the full solve's as without the test. */
+static void test_tail_test_follows_full(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 16);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1), pt = pa;
+    pt.active_tail = 1e-6;
+    df_admm *full = make(&sc, &pf), *act = make(&sc, &pa), *tail = make(&sc, &pt);
+    set_drag2(full, act, &sc, 0.3);
+    set_drag(tail, &sc, 0.3);
+    df_admm_result rf, ra;
+    run2(full, act, 20, &rf, &ra);
+    df_admm_result rt = run(tail, 20);
+    double d_band = fabs(ra.objective - rf.objective) / fabs(rf.objective);
+    double d_tail = fabs(rt.objective - rf.objective) / fabs(rf.objective);
+    print_message("20 iterations: |E_active - E_full| / E_full: band %.2e, band + tail test %.2e\n", d_band, d_tail);
+    assert_true(d_tail * 10.0 < d_band);
+    df_admm_active_stats sa, st;
+    df_admm_get_active_stats(act, &sa);
+    df_admm_get_active_stats(tail, &st);
+    assert_int_equal(sa.tail_grows, 0);
+    assert_true(st.tail_grows > 0);
+    assert_true(st.region_vertices > sa.region_vertices);
+    print_message("region %d vertices (plain band %d), %d moved, of %d\n", st.region_vertices, sa.region_vertices,
+                  count_moved(tail, &sc.m), sc.m.nv);
+    assert_int_equal(st.fallbacks, 0);
+    assert_true(count_moved(tail, &sc.m) <= st.region_vertices); /* the rest still bitwise at rest */
+    run2(full, tail, 20000, &rf, &rt);
+    assert_same(full, tail, &rf, &rt, sc.m.nv);
+    df_admm_free(act);
+    free_pair(full, tail, &sc);
 }
 
 /* set_positions (e.g. an undo or a brush edit somewhere else) and reset_rest in active mode give the
@@ -417,6 +475,13 @@ static void test_bad_params(void **state)
     p.active_band = 0;
     p.active_check_every = -3;
     assert_int_equal(df_admm_create(&sc.m, &p, sc.h, sc.nh, NULL, 0, &s, &err), DF_EINVAL);
+    p.active_check_every = 0;
+    p.active_tail = -1e-6;
+    assert_int_equal(df_admm_create(&sc.m, &p, sc.h, sc.nh, NULL, 0, &s, &err), DF_EINVAL);
+    assert_non_null(strstr(err.msg, "active_tail"));
+    p.active_tail = NAN;
+    assert_int_equal(df_admm_create(&sc.m, &p, sc.h, sc.nh, NULL, 0, &s, &err), DF_EINVAL);
+    assert_non_null(strstr(err.msg, "active_tail"));
     assert_null(s);
     df_admm_active_stats st;
     df_admm_get_active_stats(NULL, &st);
@@ -430,8 +495,10 @@ int main(void)
         cmocka_unit_test(test_tet_arap_equals_full),
         cmocka_unit_test(test_tri_arap_equals_full),
         cmocka_unit_test(test_tet_neohookean_equals_full),
+        cmocka_unit_test(test_tri_tail_equals_full),
         cmocka_unit_test(test_region_grows_with_drag),
         cmocka_unit_test(test_certificate_grows_region),
+        cmocka_unit_test(test_tail_test_follows_full),
         cmocka_unit_test(test_set_positions_and_reset_rest),
         cmocka_unit_test(test_affine_falls_back),
         cmocka_unit_test(test_bad_params),
