@@ -9,7 +9,8 @@
 #include "core/mesh/geodesic.h"
 
 #define RECIPE_MAGIC_V1 0x31525344u /* "DSR1" */
-#define RECIPE_MAGIC 0x32525344u    /* "DSR2": + i32 surface */
+#define RECIPE_MAGIC_V2 0x32525344u /* "DSR2": + i32 surface */
+#define RECIPE_MAGIC 0x33525344u    /* "DSR3": + i32 arith */
 
 void df_stroke_loaded_brush(const df_kelvinlet_brush *b, double strength,
                             const double load[DF_STROKE_LOAD_N], df_kelvinlet_brush *out)
@@ -221,6 +222,7 @@ int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *le
     put_i32(&c, k->mirror);
     put_i32(&c, k->moving);
     put_i32(&c, k->surface);
+    put_i32(&c, k->arith ? k->arith : DF_KELVINLET_ARITH_CURRENT);
     put(&c, &k->ratio, 8);
     put(&c, &k->radius, 8);
     put(&c, &k->nu, 8);
@@ -252,20 +254,27 @@ int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, d
     uint32_t magic = 0;
     int type = 0, integrator = 0;
     df_kelvinlet_brush *k = &r->brush;
-    int ok = get(&c, &magic, 4) && (magic == RECIPE_MAGIC || magic == RECIPE_MAGIC_V1) &&
+    int ok = get(&c, &magic, 4) &&
+             (magic == RECIPE_MAGIC || magic == RECIPE_MAGIC_V2 || magic == RECIPE_MAGIC_V1) &&
              get_i32(&c, &type) &&
              get_i32(&c, &k->dim) && get_i32(&c, &k->order) && get_i32(&c, &integrator) &&
              get_i32(&c, &k->steps) && get_i32(&c, &k->mirror) && get_i32(&c, &k->moving) &&
-             (magic == RECIPE_MAGIC_V1 || get_i32(&c, &k->surface)) && get(&c, &k->ratio, 8) && get(&c, &k->radius, 8) && get(&c, &k->nu, 8) &&
+             (magic == RECIPE_MAGIC_V1 || get_i32(&c, &k->surface)) &&
+             (magic != RECIPE_MAGIC || get_i32(&c, &k->arith)) &&
+             get(&c, &k->ratio, 8) && get(&c, &k->radius, 8) && get(&c, &k->nu, 8) &&
              get(&c, k->centre, 24) && get(&c, k->mirror_point, 24) &&
              get(&c, k->mirror_normal, 24) && get(&c, &r->strength, 8) &&
              get(&c, r->load, 8 * DF_STROKE_LOAD_N) && get(&c, &r->n_pins, 4) &&
              get_i32(&c, &r->pin_flags);
     if (!ok || r->n_pins > DF_KELVINLET_MAX_PINS || c.left != 24 * (size_t)r->n_pins ||
-        (k->surface != 0 && k->surface != 1)) {
+        (k->surface != 0 && k->surface != 1) ||
+        (magic == RECIPE_MAGIC &&
+         (k->arith < DF_KELVINLET_ARITH_1 || k->arith > DF_KELVINLET_ARITH_CURRENT))) {
         memset(r, 0, sizeof *r);
         return df_error_set(err, DF_EFORMAT, "stroke recipe: malformed (%zu bytes)", len);
     }
+    if (magic != RECIPE_MAGIC)
+        k->arith = DF_KELVINLET_ARITH_1; /* written by a build before arithmetic versions */
     k->type = (df_kelvinlet_type)type;
     k->integrator = (df_kelvinlet_integrator)integrator;
     if (r->n_pins) {
