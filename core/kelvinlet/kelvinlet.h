@@ -141,7 +141,8 @@ int df_kelvinlet_weights(int order, double ratio, double radius, double *eps, do
  * contribution; a mirrored grab solves the 3x3 (2D: 2x2) tip constraint including the image.
  * Errors: DF_EINVAL (NaN/Inf, radius <= 0, ratio <= 1, order outside [1, 8], nu outside the
  * allowed set, dim not 2/3, zero mirror normal, steps outside [1, MAX_STEPS], bad type, pinch
- * gradient not symmetric traceless, radii or values outside the MIN/MAX bounds);
+ * gradient not symmetric traceless, radii or values outside the MIN/MAX bounds, arith outside
+ * [0, DF_KELVINLET_ARITH_CURRENT]);
  * DF_ESINGULAR when the normalization map is singular (scale at nu = 0.5, affine gradient
  * with a trace at nu = 0.5, 2D single-scale radius where the tip map vanishes, mirrored grab
  * centred on the plane with a tip across it); `out` untouched. */
@@ -156,7 +157,9 @@ void df_kelvinlet_brush_advance(df_kelvinlet_brush *b);
 
 /* Deforms n float32 xyz points in place along the field with the brush's integrator/steps
  * (2D brushes leave z untouched). OpenMP over blocks on p->threads, SIMD kernel dispatched at
- * run time (AVX2/FMA or SSE4.2). Errors: DF_EINVAL (NULL with n > 0, non-finite input coordinate or
+ * run time (AVX2/FMA or SSE4.2), in the arithmetic version of p->brush.arith (every version:
+ * within 1e-6 of max |u| of the double reference for a plain brush, the centre moved by `tip`
+ * to a few float roundings). Errors: DF_EINVAL (NULL with n > 0, non-finite input coordinate or
  * |coordinate| > MAX_VALUE, invalid prepared field), DF_ENOMEM, DF_ESINGULAR (a moving brush
  * whose substep normalization becomes singular); points untouched on error. */
 int df_kelvinlet_apply(const df_kelvinlet_prepared *p, float *xyz, size_t n, df_error *err);
