@@ -10,7 +10,8 @@
  * Issue 14 item 6 table, each line `value (target) ok|MISS`: per-point time of a grab (Euler,
  * 1 step, displacements) for falloff orders 1-8 in 3D and 2D, as CPU time on one thread (the
  * targets: order n >= 4 within ORDER_SLOPE x (n - 1)/2 of order 3, whose cost it extends scale
- * by scale; 2D within 1.5x of 3D of the same order) and as wall time on all threads, then in
+ * by scale; 2D within 1.5x of 3D of the same order, summarized in one MET/MISS line; 2D
+ * orders 1-3 run arithmetic version 2, float32, kelvinlet.h) and as wall time on all threads, then in
  * the same table the pinned brushes (CPU ns/pt on one thread, the unpinned brush beside it,
  * ns per load and point, wall ns/pt on all threads). Per pinned case: the 160-pin field on 1M
  * points (target 5 ms, evaluated exactly: kelvinlet.h says why there is no far-field
