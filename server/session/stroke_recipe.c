@@ -207,6 +207,9 @@ int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *le
 {
     if (!r || !out || !len || r->n_pins > DF_KELVINLET_MAX_PINS || (r->n_pins && !r->pins))
         return df_error_set(err, DF_EINVAL, "stroke recipe: bad pins (%u)", r ? r->n_pins : 0);
+    if (r->brush.arith < 0 || r->brush.arith > DF_KELVINLET_ARITH_CURRENT)
+        return df_error_set(err, DF_EINVAL, "stroke recipe: Kelvinlet arithmetic version %d "
+                            "unknown (0..%d)", r->brush.arith, DF_KELVINLET_ARITH_CURRENT);
     size_t n = DF_STROKE_RECIPE_FIXED + 24 * (size_t)r->n_pins;
     uint8_t *b = malloc(n);
     if (!b) return df_error_set(err, DF_ENOMEM, "stroke recipe: out of memory");
@@ -267,11 +270,16 @@ int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, d
              get(&c, r->load, 8 * DF_STROKE_LOAD_N) && get(&c, &r->n_pins, 4) &&
              get_i32(&c, &r->pin_flags);
     if (!ok || r->n_pins > DF_KELVINLET_MAX_PINS || c.left != 24 * (size_t)r->n_pins ||
-        (k->surface != 0 && k->surface != 1) ||
-        (magic == RECIPE_MAGIC &&
-         (k->arith < DF_KELVINLET_ARITH_1 || k->arith > DF_KELVINLET_ARITH_CURRENT))) {
+        (k->surface != 0 && k->surface != 1)) {
         memset(r, 0, sizeof *r);
         return df_error_set(err, DF_EFORMAT, "stroke recipe: malformed (%zu bytes)", len);
+    }
+    if (magic == RECIPE_MAGIC &&
+        (k->arith < DF_KELVINLET_ARITH_1 || k->arith > DF_KELVINLET_ARITH_CURRENT)) {
+        int v = k->arith;
+        memset(r, 0, sizeof *r);
+        return df_error_set(err, DF_EFORMAT, "stroke recipe: Kelvinlet arithmetic version %d "
+                            "unknown to this build (1..%d)", v, DF_KELVINLET_ARITH_CURRENT);
     }
     if (magic != RECIPE_MAGIC)
         k->arith = DF_KELVINLET_ARITH_1; /* written by a build before arithmetic versions */

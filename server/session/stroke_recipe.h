@@ -97,7 +97,8 @@ int df_stroke_recipe_replay_with(const df_stroke_recipe *r, const double *from, 
  * without `arith` and version 1 ('DSR1', DF_STROKE_RECIPE_FIXED_V1 + 24 n_pins) also without
  * `surface`; decode still reads both (surface 0 for version 1, arith DF_KELVINLET_ARITH_1: what
  * the builds that wrote them evaluated).
- * Errors: DF_EINVAL (n_pins over the maximum, pins NULL with n_pins > 0), DF_ENOMEM. */
+ * Errors: DF_EINVAL (n_pins over the maximum, pins NULL with n_pins > 0, brush.arith outside
+ * 0..DF_KELVINLET_ARITH_CURRENT), DF_ENOMEM. */
 #define DF_STROKE_RECIPE_FIXED 280
 #define DF_STROKE_RECIPE_FIXED_V2 276
 #define DF_STROKE_RECIPE_FIXED_V1 272

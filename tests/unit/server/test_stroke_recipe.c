@@ -298,10 +298,20 @@ static void test_blob_versions(void **st)
         int32_t v = bad_arith[i], keep;
         memcpy(&keep, b + 36, 4);
         memcpy(b + 36, &v, 4);                  /* arith (i32 at offset 36) unknown */
-        assert_int_equal(df_stroke_recipe_decode(b, len, &back, NULL), DF_EFORMAT);
+        df_error e;
+        assert_int_equal(df_stroke_recipe_decode(b, len, &back, &e), DF_EFORMAT);
+        assert_non_null(strstr(e.msg, "arithmetic version"));
         assert_int_equal(back.brush.arith, 0);  /* zeroed */
         memcpy(b + 36, &keep, 4);
+        if (bad_arith[i] != 0) {                /* 0 (current) is legal in a brush */
+            r.brush.arith = bad_arith[i];
+            uint8_t *nb = NULL;
+            size_t nl = 0;
+            assert_int_equal(df_stroke_recipe_encode(&r, &nb, &nl, &e), DF_EINVAL);
+            assert_null(nb);
+        }
     }
+    r.brush.arith = DF_KELVINLET_ARITH_1;
     b[32] = 2;                                  /* surface (i32 at offset 32) not 0/1 */
     assert_int_equal(df_stroke_recipe_decode(b, len, &back, NULL), DF_EFORMAT);
     b[32] = 1;
