@@ -30,6 +30,15 @@
 #define DF_KELVINLET_MAX_RADIUS 1e6       /* that the float32 kernels cannot over/underflow */
 #define DF_KELVINLET_MAX_VALUE 1e9        /* |coordinate|, |tip|, |omega|, |s|, |grad| bound */
 
+/* Arithmetic versions of the float32 path (df_kelvinlet_brush.arith). A version fixes the bits
+ * every brush produces; a new one is added (never an old one changed) when a faster or more
+ * accurate evaluation changes bits, and the old ones stay evaluable so that journaled strokes
+ * recorded by older builds replay bit for bit (server/session/stroke_recipe.h). */
+#define DF_KELVINLET_ARITH_1 1            /* 2D grab of orders 1-3 summed in double          */
+#define DF_KELVINLET_ARITH_2 2            /* 2D grab of orders 1-3 in float32 (kelvinlet_simd2d.h);
+                                             every other load as in version 1              */
+#define DF_KELVINLET_ARITH_CURRENT DF_KELVINLET_ARITH_2
+
 typedef enum df_kelvinlet_type {
     DF_KELVINLET_GRAB = 0,   /* translation: `tip` is the wanted displacement of the centre */
     DF_KELVINLET_TWIST = 1,  /* rotation: grad u(centre) = [omega]x (2D: uses omega[2])      */
@@ -70,6 +79,10 @@ typedef struct df_kelvinlet_brush {
                                 the mesh from the centre (kelvinlet_surface.h). The field
                                 functions of this header ignore it: the caller holding the
                                 mesh applies the weights; 0: plain field                      */
+    int arith;               /* float32 arithmetic version: 0 (the defaults) = the current one,
+                                DF_KELVINLET_ARITH_1..CURRENT = that version (a replay of a
+                                stroke recorded by an older build); the double reference
+                                functions ignore it                                           */
 } df_kelvinlet_brush;
 
 /* The multi-scale kernel of one brush: radii eps[i] = radius * ratio^i and weights w[i]
@@ -109,7 +122,7 @@ typedef struct df_kelvinlet_prepared {
 } df_kelvinlet_prepared;
 
 /* Fills `b` with defaults: GRAB, dim 3, order 1, ratio 1.1, radius 1, nu 0.5, everything else 0,
- * no mirror, Euler with 1 step, stationary, not surface-aware. */
+ * no mirror, Euler with 1 step, stationary, not surface-aware, arith 0 (the current version). */
 void df_kelvinlet_brush_defaults(df_kelvinlet_brush *b);
 
 /* Multi-scale radii and weights. In: order in [1, MAX_ORDER], ratio > 1, radius > 0.
@@ -128,7 +141,8 @@ int df_kelvinlet_weights(int order, double ratio, double radius, double *eps, do
  * contribution; a mirrored grab solves the 3x3 (2D: 2x2) tip constraint including the image.
  * Errors: DF_EINVAL (NaN/Inf, radius <= 0, ratio <= 1, order outside [1, 8], nu outside the
  * allowed set, dim not 2/3, zero mirror normal, steps outside [1, MAX_STEPS], bad type, pinch
- * gradient not symmetric traceless, radii or values outside the MIN/MAX bounds);
+ * gradient not symmetric traceless, radii or values outside the MIN/MAX bounds, arith outside
+ * [0, DF_KELVINLET_ARITH_CURRENT]);
  * DF_ESINGULAR when the normalization map is singular (scale at nu = 0.5, affine gradient
  * with a trace at nu = 0.5, 2D single-scale radius where the tip map vanishes, mirrored grab
  * centred on the plane with a tip across it); `out` untouched. */
@@ -143,7 +157,9 @@ void df_kelvinlet_brush_advance(df_kelvinlet_brush *b);
 
 /* Deforms n float32 xyz points in place along the field with the brush's integrator/steps
  * (2D brushes leave z untouched). OpenMP over blocks on p->threads, SIMD kernel dispatched at
- * run time (AVX2/FMA or SSE4.2). Errors: DF_EINVAL (NULL with n > 0, non-finite input coordinate or
+ * run time (AVX2/FMA or SSE4.2), in the arithmetic version of p->brush.arith (every version:
+ * within 1e-6 of max |u| of the double reference for a plain brush, the centre moved by `tip`
+ * to a few float roundings). Errors: DF_EINVAL (NULL with n > 0, non-finite input coordinate or
  * |coordinate| > MAX_VALUE, invalid prepared field), DF_ENOMEM, DF_ESINGULAR (a moving brush
  * whose substep normalization becomes singular); points untouched on error. */
 int df_kelvinlet_apply(const df_kelvinlet_prepared *p, float *xyz, size_t n, df_error *err);

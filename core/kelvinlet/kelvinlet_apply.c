@@ -1,7 +1,10 @@
 /* kelvinlet_apply.c — the float32 evaluation path: SoA blocks of BLOCK points, one fused
  * SIMD loop per load (every order 1-8, 3D and 2D, specialized at compile time so the scale
- * loop unrolls and vectorizes; the loop bodies live in kelvinlet_simd.h), Euler / RK4 per block, OpenMP over blocks when more than one thread may run (a parallel
- * region costs microseconds even with one thread: small meshes on a 1-thread caller skip it).
+ * loop unrolls and vectorizes; the loop bodies live in kelvinlet_simd.h, and those of the 2D grab
+ * of orders 1-3 under arithmetic version 2 in kelvinlet_simd2d.h: the brush's `arith` picks the
+ * version, kelvinlet.h), Euler / RK4 per block, OpenMP over blocks when more than one thread may
+ * run (a parallel region costs microseconds even with one thread: small meshes on a 1-thread
+ * caller skip it).
  *
  * SIMD: the block integrator carries __attribute__((target_clones("arch=x86-64-v4",
  * "arch=x86-64-v3", "default"))): gcc emits AVX-512 and AVX2/FMA clones next to the portable
@@ -23,6 +26,7 @@
 
 #include "core/kelvinlet/kelvinlet_internal.h"
 #include "core/kelvinlet/kelvinlet_simd.h"
+#include "core/kelvinlet/kelvinlet_simd2d.h"
 
 #define PAR_MIN_BLOCKS 4          /* below this many blocks run on one thread            */
 
@@ -51,7 +55,7 @@ typedef struct fplan {
 /* ---- plan construction --------------------------------------------------------------- */
 
 static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *src, double h,
-                      fsrc *o)
+                      int arith, fsrc *o)
 {
     memset(o, 0, sizeof *o);
     o->dim = k->dim;
@@ -110,6 +114,8 @@ static void build_src(const df_kelvinlet_kernel *k, const df_kelvinlet_source *s
         o->kT = (float)(4.0 * b - 2.0 * a); /* trace: (4b - 2a)(sq + xq2) t r              */
     }
     o->lcoef = (float)(b - a);
+    if (k->dim == 2 && k->order <= 3 && !src->affine && arith >= DF_KELVINLET_ARITH_2)
+        dfk2_build(k, o);
 }
 
 static int build_plan(const df_kelvinlet_prepared *p, double h, fplan *pl, df_error *err)
@@ -120,7 +126,7 @@ static int build_plan(const df_kelvinlet_prepared *p, double h, fplan *pl, df_er
         return df_error_set(err, DF_ENOMEM, "kelvinlet: out of memory for %zu loads", p->nsrc);
     const df_kelvinlet_source *s = dfk_sources(p);
     for (size_t i = 0; i < p->nsrc; i++)
-        build_src(&p->kernel[s[i].kernel], &s[i], h, &pl->s[i]);
+        build_src(&p->kernel[s[i].kernel], &s[i], h, dfk_arith(&p->brush), &pl->s[i]);
     return DF_OK;
 }
 
@@ -310,6 +316,19 @@ static inline __attribute__((always_inline)) void eval_block(const fplan *pl, bl
         memset(u[c], 0, sizeof u[c]);
     for (size_t k = 0; k < pl->n; k++) {
         const fsrc *S = &pl->s[k];
+        if (S->v2) {
+            switch (S->order) {
+            case 1: grab2f(S, 1, 0, p, u); break;
+            case 2: grab2f(S, 2, 0, p, u); break;
+            default:
+                if (S->v2close)
+                    grab2f(S, 3, 1, p, u);
+                else
+                    grab2f(S, 3, 0, p, u);
+                break;
+            }
+            continue;
+        }
         if (S->dim == 2) {
             if (!S->affine) {
                 switch (S->order) {

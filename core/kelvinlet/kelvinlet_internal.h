@@ -10,6 +10,12 @@
 
 #include "core/kelvinlet/kelvinlet.h"
 
+/* The arithmetic version brush b asks for (its arith, or DF_KELVINLET_ARITH_CURRENT for 0). */
+static inline int dfk_arith(const df_kelvinlet_brush *b)
+{
+    return b->arith ? b->arith : DF_KELVINLET_ARITH_CURRENT;
+}
+
 /* 1 if x is finite. */
 int dfk_finite(double x);
 

@@ -65,6 +65,9 @@ static int validate(const df_kelvinlet_brush *b, df_error *err)
         return df_error_set(err, DF_EINVAL, "kelvinlet mirror flag %d must be 0 or 1", b->mirror);
     if (b->moving != 0 && b->moving != 1)
         return df_error_set(err, DF_EINVAL, "kelvinlet moving flag %d must be 0 or 1", b->moving);
+    if (b->arith < 0 || b->arith > DF_KELVINLET_ARITH_CURRENT)
+        return df_error_set(err, DF_EINVAL, "kelvinlet arithmetic version %d unknown (0..%d)",
+                            b->arith, DF_KELVINLET_ARITH_CURRENT);
     if (b->surface != 0 && b->surface != 1)
         return df_error_set(err, DF_EINVAL, "kelvinlet surface flag %d must be 0 or 1",
                             b->surface);

@@ -35,6 +35,11 @@ typedef struct fsrc {
     float kK, kD1, kD2, kDq, kT; /* affine coefficients (see affine3 / grab2, affine2)   */
     float lcoef;           /* 2D: (b - a) sum_i w_i ln(s + eps_i^2)                     */
     double dx[MO], ddel[MO], dw[MO], dwd[MO]; /* the same in double (orders >= 4, 2D)    */
+    int v2, v2close;       /* 2D grab, orders 1-3, arithmetic 2 (kelvinlet_simd2d.h); order 3
+                              with eps_3^2 <= 2 eps_1^2                                       */
+    float A0, L0;          /* v2: A(0) of the double kernel, the float L at s = 0            */
+    float kBq, kQs;        /* v2: B = kBq qq, s Q = kQs (s / eps_1^2) qq (qq: scaled q products) */
+    float dh[MO];          /* v2: eps_i^2 / eps_1^2 - 1                                        */
 } fsrc;
 
 /* 1/sqrt(x), x > 0 normal: bit-level estimate plus three Newton steps (float rounding level). */

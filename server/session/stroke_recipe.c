@@ -9,7 +9,8 @@
 #include "core/mesh/geodesic.h"
 
 #define RECIPE_MAGIC_V1 0x31525344u /* "DSR1" */
-#define RECIPE_MAGIC 0x32525344u    /* "DSR2": + i32 surface */
+#define RECIPE_MAGIC_V2 0x32525344u /* "DSR2": + i32 surface */
+#define RECIPE_MAGIC 0x33525344u    /* "DSR3": + i32 arith */
 
 void df_stroke_loaded_brush(const df_kelvinlet_brush *b, double strength,
                             const double load[DF_STROKE_LOAD_N], df_kelvinlet_brush *out)
@@ -206,6 +207,9 @@ int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *le
 {
     if (!r || !out || !len || r->n_pins > DF_KELVINLET_MAX_PINS || (r->n_pins && !r->pins))
         return df_error_set(err, DF_EINVAL, "stroke recipe: bad pins (%u)", r ? r->n_pins : 0);
+    if (r->brush.arith < 0 || r->brush.arith > DF_KELVINLET_ARITH_CURRENT)
+        return df_error_set(err, DF_EINVAL, "stroke recipe: Kelvinlet arithmetic version %d "
+                            "unknown (0..%d)", r->brush.arith, DF_KELVINLET_ARITH_CURRENT);
     size_t n = DF_STROKE_RECIPE_FIXED + 24 * (size_t)r->n_pins;
     uint8_t *b = malloc(n);
     if (!b) return df_error_set(err, DF_ENOMEM, "stroke recipe: out of memory");
@@ -221,6 +225,7 @@ int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *le
     put_i32(&c, k->mirror);
     put_i32(&c, k->moving);
     put_i32(&c, k->surface);
+    put_i32(&c, k->arith ? k->arith : DF_KELVINLET_ARITH_CURRENT);
     put(&c, &k->ratio, 8);
     put(&c, &k->radius, 8);
     put(&c, &k->nu, 8);
@@ -252,11 +257,14 @@ int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, d
     uint32_t magic = 0;
     int type = 0, integrator = 0;
     df_kelvinlet_brush *k = &r->brush;
-    int ok = get(&c, &magic, 4) && (magic == RECIPE_MAGIC || magic == RECIPE_MAGIC_V1) &&
+    int ok = get(&c, &magic, 4) &&
+             (magic == RECIPE_MAGIC || magic == RECIPE_MAGIC_V2 || magic == RECIPE_MAGIC_V1) &&
              get_i32(&c, &type) &&
              get_i32(&c, &k->dim) && get_i32(&c, &k->order) && get_i32(&c, &integrator) &&
              get_i32(&c, &k->steps) && get_i32(&c, &k->mirror) && get_i32(&c, &k->moving) &&
-             (magic == RECIPE_MAGIC_V1 || get_i32(&c, &k->surface)) && get(&c, &k->ratio, 8) && get(&c, &k->radius, 8) && get(&c, &k->nu, 8) &&
+             (magic == RECIPE_MAGIC_V1 || get_i32(&c, &k->surface)) &&
+             (magic != RECIPE_MAGIC || get_i32(&c, &k->arith)) &&
+             get(&c, &k->ratio, 8) && get(&c, &k->radius, 8) && get(&c, &k->nu, 8) &&
              get(&c, k->centre, 24) && get(&c, k->mirror_point, 24) &&
              get(&c, k->mirror_normal, 24) && get(&c, &r->strength, 8) &&
              get(&c, r->load, 8 * DF_STROKE_LOAD_N) && get(&c, &r->n_pins, 4) &&
@@ -266,6 +274,15 @@ int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, d
         memset(r, 0, sizeof *r);
         return df_error_set(err, DF_EFORMAT, "stroke recipe: malformed (%zu bytes)", len);
     }
+    if (magic == RECIPE_MAGIC &&
+        (k->arith < DF_KELVINLET_ARITH_1 || k->arith > DF_KELVINLET_ARITH_CURRENT)) {
+        int v = k->arith;
+        memset(r, 0, sizeof *r);
+        return df_error_set(err, DF_EFORMAT, "stroke recipe: Kelvinlet arithmetic version %d "
+                            "unknown to this build (1..%d)", v, DF_KELVINLET_ARITH_CURRENT);
+    }
+    if (magic != RECIPE_MAGIC)
+        k->arith = DF_KELVINLET_ARITH_1; /* written by a build before arithmetic versions */
     k->type = (df_kelvinlet_type)type;
     k->integrator = (df_kelvinlet_integrator)integrator;
     if (r->n_pins) {

@@ -87,21 +87,28 @@ int df_stroke_recipe_replay_with(const df_stroke_recipe *r, const double *from, 
                                  const df_mesh_sparse *adj, const double *rest, int planar,
                                  int threads, float *scratch, double *to, df_error *err);
 
-/* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR2', i32 type,
- * dim, order, integrator, steps, mirror, moving, surface, f64 ratio, radius, nu, centre[3],
- * mirror_point[3], mirror_normal[3], strength, load[16], u32 n_pins, i32 pin_flags, then
- * 3 x n_pins f64 pins; native-endian, packed (DF_STROKE_RECIPE_FIXED + 24 n_pins bytes).
- * Version 1 ('DSR1', DF_STROKE_RECIPE_FIXED_V1 + 24 n_pins bytes) is the same without
- * `surface`; decode still reads it (surface 0).
- * Errors: DF_EINVAL (n_pins over the maximum, pins NULL with n_pins > 0), DF_ENOMEM. */
-#define DF_STROKE_RECIPE_FIXED 276
+/* Serializes a recipe into a new malloc'd blob (*out, *len bytes): u32 magic 'DSR3', i32 type,
+ * dim, order, integrator, steps, mirror, moving, surface, arith (the brush's arithmetic
+ * version, kelvinlet.h: its arith, or DF_KELVINLET_ARITH_CURRENT for 0, so a replay by a later
+ * build evaluates the very arithmetic that produced the recorded checksum), f64 ratio, radius,
+ * nu, centre[3], mirror_point[3], mirror_normal[3], strength, load[16], u32 n_pins, i32
+ * pin_flags, then 3 x n_pins f64 pins; native-endian, packed (DF_STROKE_RECIPE_FIXED +
+ * 24 n_pins bytes). Version 2 ('DSR2', DF_STROKE_RECIPE_FIXED_V2 + 24 n_pins) is the same
+ * without `arith` and version 1 ('DSR1', DF_STROKE_RECIPE_FIXED_V1 + 24 n_pins) also without
+ * `surface`; decode still reads both (surface 0 for version 1, arith DF_KELVINLET_ARITH_1: what
+ * the builds that wrote them evaluated).
+ * Errors: DF_EINVAL (n_pins over the maximum, pins NULL with n_pins > 0, brush.arith outside
+ * 0..DF_KELVINLET_ARITH_CURRENT), DF_ENOMEM. */
+#define DF_STROKE_RECIPE_FIXED 280
+#define DF_STROKE_RECIPE_FIXED_V2 276
 #define DF_STROKE_RECIPE_FIXED_V1 272
 int df_stroke_recipe_encode(const df_stroke_recipe *r, uint8_t **out, size_t *len,
                             df_error *err);
 
-/* Parses a blob of df_stroke_recipe_encode (version 2, or version 1) into *r (pins malloc'd;
- * free with df_stroke_recipe_free). Errors: DF_EFORMAT (wrong magic or length, n_pins over the
- * maximum, surface not 0/1, a non-finite number), DF_ENOMEM; *r zeroed on error. */
+/* Parses a blob of df_stroke_recipe_encode (version 3, 2 or 1) into *r (pins malloc'd; free
+ * with df_stroke_recipe_free); r->brush.arith is always set (1..DF_KELVINLET_ARITH_CURRENT).
+ * Errors: DF_EFORMAT (wrong magic or length, n_pins over the maximum, surface not 0/1, an
+ * arithmetic version this build does not know, a NaN), DF_ENOMEM; *r zeroed on error. */
 int df_stroke_recipe_decode(const uint8_t *b, size_t len, df_stroke_recipe *r, df_error *err);
 
 /* Frees the recipe's pins and zeroes it. NULL-safe. */

@@ -143,8 +143,8 @@ def test_a_full_store_fails_the_edit_and_loses_nothing_acknowledged(tmp_path):
         assert rows == 2                       # begin's version; end's undo step (no delta)
         assert s1["store_recipe_records"] - s0["store_recipe_records"] == 2
         # both rows are recipe records (record.h: a 32-byte header and the stroke's request,
-        # a version 2 recipe blob: 276 bytes)
-        assert size == 2 * (32 + 276), size
+        # a version 3 recipe blob: 280 bytes)
+        assert size == 2 * (32 + 280), size
         print("store: a Kelvinlet stroke on %d vertices logs %d bytes (%.2f per vertex)"
               % (nv, size, size / nv))
         acked = state(c, sid)

@@ -3,7 +3,8 @@
  * Kelvinlet engine, the way h_brush.c publishes), does not depend on the thread count, covers
  * pinned and moving brushes and surface-aware strokes (issue 14 item 7: the part not connected
  * to the brush stays exactly at rest, the replay matches a longhand masked live stroke on 1 and
- * 2 threads); the blob round-trips (version 2 carries `surface`, version 1 blobs still decode)
+ * 2 threads); the blob round-trips (version 3 carries `arith`, version 2 `surface`; version 2
+ * and 1 blobs still decode, as arithmetic 1)
  * and malformed blobs are refused; the checksum sees every bit. */
 #include <math.h>
 #include <stdarg.h>
@@ -271,7 +272,8 @@ static void test_surface_replay(void **st)
     free(b);
 }
 
-/* Version 2 carries `surface`; a version 1 blob (no surface field) still decodes (surface 0). */
+/* Version 3 carries `arith`, version 2 `surface`; version 2 and 1 blobs (no arith, no surface
+ * field) still decode, as arithmetic version 1 (what the builds that wrote them evaluated). */
 static void test_blob_versions(void **st)
 {
     (void)st;
@@ -281,18 +283,56 @@ static void test_blob_versions(void **st)
     size_t len = 0;
     assert_int_equal(df_stroke_recipe_encode(&r, &b, &len, NULL), DF_OK);
     assert_int_equal(len, DF_STROKE_RECIPE_FIXED);
-    assert_memory_equal(b, "DSR2", 4);
+    assert_memory_equal(b, "DSR3", 4);
     assert_int_equal(df_stroke_recipe_decode(b, len, &back, NULL), DF_OK);
     assert_int_equal(back.brush.surface, 1);
+    assert_int_equal(back.brush.arith, DF_KELVINLET_ARITH_CURRENT); /* arith 0 is written resolved */
+    r.brush.arith = DF_KELVINLET_ARITH_1;
+    uint8_t *b1 = NULL;
+    assert_int_equal(df_stroke_recipe_encode(&r, &b1, &len, NULL), DF_OK);
+    assert_int_equal(df_stroke_recipe_decode(b1, len, &back, NULL), DF_OK);
+    assert_int_equal(back.brush.arith, DF_KELVINLET_ARITH_1);
+    free(b1);
+    const int bad_arith[] = {0, -1, DF_KELVINLET_ARITH_CURRENT + 1};
+    for (size_t i = 0; i < sizeof bad_arith / sizeof bad_arith[0]; i++) {
+        int32_t v = bad_arith[i], keep;
+        memcpy(&keep, b + 36, 4);
+        memcpy(b + 36, &v, 4);                  /* arith (i32 at offset 36) unknown */
+        df_error e;
+        assert_int_equal(df_stroke_recipe_decode(b, len, &back, &e), DF_EFORMAT);
+        assert_non_null(strstr(e.msg, "arithmetic version"));
+        assert_int_equal(back.brush.arith, 0);  /* zeroed */
+        memcpy(b + 36, &keep, 4);
+        if (bad_arith[i] != 0) {                /* 0 (current) is legal in a brush */
+            r.brush.arith = bad_arith[i];
+            uint8_t *nb = NULL;
+            size_t nl = 0;
+            assert_int_equal(df_stroke_recipe_encode(&r, &nb, &nl, &e), DF_EINVAL);
+            assert_null(nb);
+        }
+    }
+    r.brush.arith = DF_KELVINLET_ARITH_1;
     b[32] = 2;                                  /* surface (i32 at offset 32) not 0/1 */
     assert_int_equal(df_stroke_recipe_decode(b, len, &back, NULL), DF_EFORMAT);
-    /* the version 1 layout of the same recipe: magic DSR1, no surface field */
+    b[32] = 1;
+    /* the version 2 layout of the same recipe: magic DSR2, no arith field */
+    uint8_t v2[DF_STROKE_RECIPE_FIXED_V2];
+    memcpy(v2, "DSR2", 4);
+    memcpy(v2 + 4, b + 4, 32);
+    memcpy(v2 + 36, b + 40, DF_STROKE_RECIPE_FIXED - 40);
+    assert_int_equal(df_stroke_recipe_decode(v2, sizeof v2, &back, NULL), DF_OK);
+    assert_int_equal(back.brush.surface, 1);
+    assert_int_equal(back.brush.arith, DF_KELVINLET_ARITH_1);
+    assert_memory_equal(back.load, r.load, sizeof r.load);
+    assert_int_equal(df_stroke_recipe_decode(v2, sizeof v2 - 1, &back, NULL), DF_EFORMAT);
+    /* the version 1 layout: magic DSR1, no surface field either */
     uint8_t v1[DF_STROKE_RECIPE_FIXED_V1];
     memcpy(v1, "DSR1", 4);
-    memcpy(v1 + 4, b + 4, 28);
-    memcpy(v1 + 32, b + 36, DF_STROKE_RECIPE_FIXED - 36);
+    memcpy(v1 + 4, v2 + 4, 28);
+    memcpy(v1 + 32, v2 + 36, DF_STROKE_RECIPE_FIXED_V2 - 36);
     assert_int_equal(df_stroke_recipe_decode(v1, sizeof v1, &back, NULL), DF_OK);
     assert_int_equal(back.brush.surface, 0);
+    assert_int_equal(back.brush.arith, DF_KELVINLET_ARITH_1);
     assert_memory_equal(back.load, r.load, sizeof r.load);
     assert_memory_equal(&back.brush.radius, &r.brush.radius, 8);
     assert_int_equal(df_stroke_recipe_decode(v1, sizeof v1 - 1, &back, NULL), DF_EFORMAT);
