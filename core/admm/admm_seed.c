@@ -36,8 +36,9 @@ static double objective_at(const df_admm *s, const double *V0, const double *G, 
     return isfinite(E) ? E : INFINITY;
 }
 
-/* Gs = V0 + shrink_tau(G - V0) per free vertex (u -> u max(0, 1 - tau / |u|)), tau = shrink x
- * the largest handle displacement |target_h - V0_h|; returns tau */
+/* Gs = V0 + the proposal's displacements u_i = G_i - V0_i shrunk (admm_seed.h): u_i x
+ * max(0, |u_i| - tau) / |u_i| x dmax / (dmax - tau), tau = shrink x dmax, dmax the largest handle
+ * displacement |target_h - V0_h|; returns tau */
 static double shrink_proposal(const df_admm *s, const double *V0, const double *G, double shrink,
                               double *Gs)
 {
@@ -49,15 +50,61 @@ static double shrink_proposal(const df_admm *s, const double *V0, const double *
         dmax = d > dmax ? d : dmax;
     }
     double tau = shrink * dmax;
+    if (!(tau > 0.0)) {
+        memcpy(Gs, G, 3 * (size_t)s->nv * sizeof *Gs);
+        return 0.0;
+    }
+    double gain = dmax / (dmax - tau);
     for (int32_t i = 0; i < s->nv; i++) {
         const double *g = G + 3 * (size_t)i, *x = V0 + 3 * (size_t)i;
         double u[3] = {g[0] - x[0], g[1] - x[1], g[2] - x[2]};
         double m = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        double f = m > tau ? 1.0 - tau / m : 0.0;
+        double f = m > tau ? (m - tau) / m * gain : 0.0;
         for (int c = 0; c < 3; c++)
-            Gs[3 * (size_t)i + c] = tau > 0.0 ? x[c] + f * u[c] : g[c];
+            Gs[3 * (size_t)i + c] = x[c] + f * u[c];
     }
     return tau;
+}
+
+/* The best alpha in (0, 1] for the (shrunk) proposal G: the grid alphas k / DF_ADMM_SEED_GRID,
+ * k >= 1, then golden section over the cells beside the best one. Returns its objective
+ * (+inf when every candidate inverts), *alpha the alpha; *e_one the objective at alpha 1. */
+static double search_alpha(const df_admm *s, const double *V0, const double *G, double *X,
+                           double *alpha, double *e_one, int *count)
+{
+    double Eg[DF_ADMM_SEED_GRID + 1];
+    int best = 1;
+    Eg[0] = INFINITY;
+    for (int k = 1; k <= DF_ADMM_SEED_GRID; k++) {
+        Eg[k] = objective_at(s, V0, G, (double)k / DF_ADMM_SEED_GRID, X, count);
+        if (Eg[k] < Eg[best])
+            best = k;
+    }
+    *e_one = Eg[DF_ADMM_SEED_GRID];
+    double a_best = (double)best / DF_ADMM_SEED_GRID, e_best = Eg[best];
+    if (isfinite(e_best)) {
+        const double g = 0.5 * (sqrt(5.0) - 1.0);
+        double lo = (double)(best - 1) / DF_ADMM_SEED_GRID;
+        double hi = (double)(best < DF_ADMM_SEED_GRID ? best + 1 : best) / DF_ADMM_SEED_GRID;
+        double c = hi - g * (hi - lo), d = lo + g * (hi - lo);
+        double ec = objective_at(s, V0, G, c, X, count);
+        double ed = objective_at(s, V0, G, d, X, count);
+        for (int it = 2; it < DF_ADMM_SEED_REFINE; it++) {
+            if (ec < ed) {
+                hi = d; d = c; ed = ec;
+                c = hi - g * (hi - lo);
+                ec = objective_at(s, V0, G, c, X, count);
+            } else {
+                lo = c; c = d; ec = ed;
+                d = lo + g * (hi - lo);
+                ed = objective_at(s, V0, G, d, X, count);
+            }
+        }
+        if (ec < e_best) { e_best = ec; a_best = c; }
+        if (ed < e_best) { e_best = ed; a_best = d; }
+    }
+    *alpha = a_best;
+    return e_best;
 }
 
 int df_admm_seed(df_admm *s, const double *V0, const double *G0, double shrink,
@@ -65,63 +112,49 @@ int df_admm_seed(df_admm *s, const double *V0, const double *G0, double shrink,
 {
     if (!s || !V0 || !G0)
         return df_error_set(err, DF_EINVAL, "admm_seed: NULL argument");
-    if (!(shrink >= 0.0 && shrink <= 1.0))
-        return df_error_set(err, DF_EINVAL, "admm_seed: shrink %g is not in [0, 1]", shrink);
+    if (!(shrink == DF_ADMM_SEED_SHRINK_AUTO || (shrink >= 0.0 && shrink <= DF_ADMM_SEED_SHRINK_MAX)))
+        return df_error_set(err, DF_EINVAL, "admm_seed: shrink %g is neither in [0, %g] nor "
+                            "DF_ADMM_SEED_SHRINK_AUTO (%g)", shrink, DF_ADMM_SEED_SHRINK_MAX,
+                            DF_ADMM_SEED_SHRINK_AUTO);
     size_t n = 3 * (size_t)s->nv;
     for (size_t i = 0; i < n; i++)
         if (!isfinite(V0[i]) || !isfinite(G0[i]))
             return df_error_set(err, DF_EINVAL, "admm_seed: vertex %d of the %s is not finite",
                                 (int)(i / 3), isfinite(V0[i]) ? "proposal" : "start");
-    double *X = malloc(n * sizeof *X), *G = malloc(n * sizeof *G);
-    if (!X || !G) {
-        free(X); free(G);
+    double *X = malloc(n * sizeof *X), *G = malloc(n * sizeof *G), *Gb = malloc(n * sizeof *Gb);
+    if (!X || !G || !Gb) {
+        free(X); free(G); free(Gb);
         return df_error_set(err, DF_ENOMEM, "admm_seed: out of memory (%d vertices)", (int)s->nv);
     }
-    df_admm_seed_report r = {0.0, 0.0, 0.0, 0.0, 0.0, 0};
-    r.tau = shrink_proposal(s, V0, G0, shrink, G);
-    double Eg[DF_ADMM_SEED_GRID + 1];
-    int best = 0;
-    for (int k = 0; k <= DF_ADMM_SEED_GRID; k++) {
-        Eg[k] = objective_at(s, V0, G, (double)k / DF_ADMM_SEED_GRID, X, &r.evaluations);
-        if (Eg[k] < Eg[best])
-            best = k;
-    }
-    r.e_plain = Eg[0];
-    r.e_full = Eg[DF_ADMM_SEED_GRID];
-    double a_best = (double)best / DF_ADMM_SEED_GRID, e_best = Eg[best];
-    if (best > 0) { /* golden section over the two cells around the best grid point */
-        const double g = 0.5 * (sqrt(5.0) - 1.0);
-        double lo = (double)(best - 1) / DF_ADMM_SEED_GRID;
-        double hi = (double)(best < DF_ADMM_SEED_GRID ? best + 1 : best) / DF_ADMM_SEED_GRID;
-        double c = hi - g * (hi - lo), d = lo + g * (hi - lo);
-        double ec = objective_at(s, V0, G, c, X, &r.evaluations);
-        double ed = objective_at(s, V0, G, d, X, &r.evaluations);
-        for (int it = 2; it < DF_ADMM_SEED_REFINE; it++) {
-            if (ec < ed) {
-                hi = d; d = c; ed = ec;
-                c = hi - g * (hi - lo);
-                ec = objective_at(s, V0, G, c, X, &r.evaluations);
-            } else {
-                lo = c; c = d; ec = ed;
-                d = lo + g * (hi - lo);
-                ed = objective_at(s, V0, G, d, X, &r.evaluations);
-            }
+    df_admm_seed_report r = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
+    r.e_plain = objective_at(s, V0, G0, 0.0, X, &r.evaluations);
+    int auto_shrink = shrink == DF_ADMM_SEED_SHRINK_AUTO;
+    int steps = auto_shrink ? DF_ADMM_SEED_SHRINK_STEPS : 0;
+    double e_best = INFINITY, a_best = 0.0, s_best = 0.0, t_best = 0.0;
+    for (int k = 0; k <= steps; k++) {
+        double sh = auto_shrink ? DF_ADMM_SEED_SHRINK_MAX * k / steps : shrink, a, e_one;
+        double tau = shrink_proposal(s, V0, G0, sh, G);
+        double e = search_alpha(s, V0, G, X, &a, &e_one, &r.evaluations);
+        if (k == 0 || e < e_best)
+            r.e_one = e_one;
+        if (e < e_best) {
+            e_best = e; a_best = a; s_best = sh; t_best = tau;
+            double *t = Gb; Gb = G; G = t;   /* keep the best shrunk proposal */
         }
-        if (ec < e_best) { e_best = ec; a_best = c; }
-        if (ed < e_best) { e_best = ed; a_best = d; }
     }
     int rc;
-    if (a_best > 0.0 && e_best < r.e_plain) {
-        df_admm_seed_point(s, V0, G, a_best, X, NULL);
+    if (e_best < r.e_plain) {
+        df_admm_seed_point(s, V0, Gb, a_best, X, NULL);
         rc = df_admm_set_positions(s, X, NULL, err);
         r.alpha = a_best;
+        r.shrink = s_best;
+        r.tau = t_best;
         r.e_seed = e_best;
     } else {
         rc = df_admm_set_positions(s, V0, NULL, err);
         r.e_seed = r.e_plain;
     }
-    free(X);
-    free(G);
+    free(X); free(G); free(Gb);
     if (rc == DF_OK && rep)
         *rep = r;
     return rc;

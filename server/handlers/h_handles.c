@@ -370,9 +370,8 @@ static int targets_check(const df_session *s, const df_handleset *hs, const doub
 /* Option KELVINLET_GUESS: the solver starts from the Kelvinlet field of the handles' move
  * (core/kelvinlet/kelvinlet_guess.h: default radius, the solver's Poisson ratio for Neo-Hookean,
  * 0.5 otherwise) applied to the session's current positions, restricted to the vertices it moves
- * by more than DF_ADMM_SEED_SHRINK of the largest handle move and scaled by the line search of
- * core/admm/admm_seed.h; the plain start (the current positions) when that does not lower the
- * objective. Needs the targets set first. */
+ * most and scaled, both chosen by the objective (core/admm/admm_seed.h); the plain start (the
+ * current positions) when that does not lower the objective. Needs the targets set first. */
 static int guess_positions(df_admm *solver, const df_session *s, const df_handleset *hs,
                            const double *targets, df_error *err)
 {
@@ -385,10 +384,11 @@ static int guess_positions(df_admm *solver, const df_session *s, const df_handle
                                 NULL, NULL, err);
     df_admm_seed_report rep;
     if (rc == DF_OK)
-        rc = df_admm_seed(solver, s->cur, G, DF_ADMM_SEED_SHRINK, &rep, err);
+        rc = df_admm_seed(solver, s->cur, G, DF_ADMM_SEED_SHRINK_AUTO, &rep, err);
     if (rc == DF_OK)
-        df_log(DF_LOG_DEBUG, "session %llu: Kelvinlet guess: alpha %.3f (objective %.6g, plain "
-               "start %.6g)", (unsigned long long)s->id, rep.alpha, rep.e_seed, rep.e_plain);
+        df_log(DF_LOG_DEBUG, "session %llu: Kelvinlet guess: shrink %.2f alpha %.3f (objective "
+               "%.6g, plain start %.6g)", (unsigned long long)s->id, rep.shrink, rep.alpha,
+               rep.e_seed, rep.e_plain);
     free(G);
     return rc;
 }

@@ -2,7 +2,8 @@
  * of admm_test_util.h (the x = 0 face fixed, the x = 3 face moved), with the Kelvinlet guess
  * (core/kelvinlet/kelvinlet_guess.h) as the proposal: alpha = 0 is the plain start bit for bit
  * (a proposal that does not lower the objective is refused, and the run from it equals the plain
- * run); the chosen start's objective, recomputed here with df_admm_evaluate, is no higher than
+ * run); the searched shrink starts no higher than two of its candidates given alone; the chosen
+ * start's objective, recomputed here with df_admm_evaluate, is no higher than
  * that of the rest state with the handles on their targets; the start is the soft-thresholded
  * proposal scaled by alpha, recomputed here from the proposal; the run from the seed reaches the
  * plain start's converged objective; bad input is refused with the solver unchanged. */
@@ -94,7 +95,7 @@ static void test_alpha_zero_is_the_plain_start(void **state)
         if (pass == 1) memcpy(G, V0, n * sizeof *G);
         df_admm *s = make(&bh);
         df_admm_seed_report rep;
-        assert_int_equal(df_admm_seed(s, V0, G, pass ? 0.0 : DF_ADMM_SEED_SHRINK, &rep, &err), DF_OK);
+        assert_int_equal(df_admm_seed(s, V0, G, pass ? 0.0 : DF_ADMM_SEED_SHRINK_AUTO, &rep, &err), DF_OK);
         assert_true(rep.alpha == 0.0);
         assert_true(rep.e_seed == rep.e_plain);
         assert_memory_equal(df_admm_positions(s), V0, n * sizeof *V0);
@@ -124,22 +125,27 @@ static void test_seed_objective_not_above_the_rest_state(void **state)
         dmax = fmax(dmax, tu_dist(bh.tg + 3 * k, V0 + 3 * (size_t)bh.h[k]));
     }
     double *G = guess(&bh, V0);
-    const double shrinks[2] = {0.0, DF_ADMM_SEED_SHRINK};
-    for (int c = 0; c < 2; c++) {
+    const double shrinks[3] = {0.0, 0.3, DF_ADMM_SEED_SHRINK_AUTO}; /* 0 and 0.3: AUTO candidates */
+    double e_fixed = INFINITY;
+    for (int c = 0; c < 3; c++) {
         df_admm *s = make(&bh);
         df_admm_seed_report rep;
         df_error err;
         double e_rest = objective(s, X0);
         assert_int_equal(df_admm_seed(s, V0, G, shrinks[c], &rep, &err), DF_OK);
-        print_message("shrink %g: alpha %.4f, start E %.9g, rest state E %.9g, alpha 1 E %.9g, %d evaluations\n",
-                      shrinks[c], rep.alpha, rep.e_seed, rep.e_plain, rep.e_full, rep.evaluations);
+        print_message("shrink %g: used %g, alpha %.4f, start E %.9g, rest state E %.9g, alpha 1 E %.9g, "
+                      "%d evaluations\n", shrinks[c], rep.shrink, rep.alpha, rep.e_seed, rep.e_plain, rep.e_one,
+                      rep.evaluations);
+        if (shrinks[c] >= 0) assert_true(rep.shrink == shrinks[c]);
+        if (shrinks[c] >= 0) e_fixed = fmin(e_fixed, rep.e_seed);
+        else assert_true(rep.e_seed <= e_fixed); /* the search's minimum is over both */
         assert_true(fabs(rep.e_plain - e_rest) <= 1e-12 * e_rest);
         assert_true(rep.alpha > 0.0 && rep.alpha <= 1.0); /* the guess helps on the bar */
         const double *V = df_admm_positions(s);
         double e_start = objective(s, V);
         assert_true(fabs(rep.e_seed - e_start) <= 1e-12 * e_start);
         assert_true(e_start <= e_rest);
-        assert_true(fabs(rep.tau - shrinks[c] * dmax) <= 1e-15 * dmax);
+        assert_true(fabs(rep.tau - rep.shrink * dmax) <= 1e-15 * dmax);
         for (int32_t i = 0; i < bh.m.nv; i++) {
             int k = is_handle(&bh, i);
             const double *x = V + 3 * (size_t)i, *x0 = V0 + 3 * (size_t)i, *g = G + 3 * (size_t)i;
@@ -147,7 +153,8 @@ static void test_seed_objective_not_above_the_rest_state(void **state)
                 assert_memory_equal(x, bh.tg + 3 * k, 3 * sizeof(double));
                 continue;
             }
-            double m = tu_dist(g, x0), f = m > rep.tau ? 1.0 - rep.tau / m : 0.0;
+            double m = tu_dist(g, x0);
+            double f = rep.tau == 0.0 ? 1.0 : m > rep.tau ? (m - rep.tau) / m * dmax / (dmax - rep.tau) : 0.0;
             for (int d = 0; d < 3; d++)
                 assert_true(fabs(x[d] - (x0[d] + rep.alpha * f * (g[d] - x0[d]))) <= 1e-14);
         }
@@ -167,7 +174,7 @@ static void test_seeded_run_reaches_the_plain_objective(void **state)
     assert_int_equal(df_admm_run(a, NULL, &plain, &err), DF_OK);
     double *G = guess(&bh, bh.m.V);
     df_admm_seed_report rep;
-    assert_int_equal(df_admm_seed(b, bh.m.V, G, DF_ADMM_SEED_SHRINK, &rep, &err), DF_OK);
+    assert_int_equal(df_admm_seed(b, bh.m.V, G, DF_ADMM_SEED_SHRINK_AUTO, &rep, &err), DF_OK);
     assert_int_equal(df_admm_run(b, NULL, &seeded, &err), DF_OK);
     print_message("plain %d iterations E %.12g, seeded (alpha %.3f) %d iterations E %.12g\n", plain.iterations,
                   plain.objective, rep.alpha, seeded.iterations, seeded.objective);
@@ -189,13 +196,14 @@ static void test_bad_input(void **state)
     double *G = guess(&bh, bh.m.V), *before = malloc(n * sizeof *before), *X = malloc(n * sizeof *X);
     memcpy(before, df_admm_positions(s), n * sizeof *before);
     df_error err;
-    df_admm_seed_report rep = {-1, -1, -1, -1, -1, -1};
+    df_admm_seed_report rep = {-1, -1, -1, -1, -1, -1, -1};
     assert_int_equal(df_admm_seed(NULL, bh.m.V, G, 0.0, &rep, &err), DF_EINVAL);
     assert_int_equal(df_admm_seed(s, NULL, G, 0.0, &rep, &err), DF_EINVAL);
     assert_int_equal(df_admm_seed(s, bh.m.V, NULL, 0.0, &rep, &err), DF_EINVAL);
     assert_int_equal(df_admm_seed(s, bh.m.V, G, -0.1, &rep, &err), DF_EINVAL);
     assert_non_null(strstr(err.msg, "shrink"));
-    assert_int_equal(df_admm_seed(s, bh.m.V, G, 1.5, &rep, &err), DF_EINVAL);
+    assert_int_equal(df_admm_seed(s, bh.m.V, G, DF_ADMM_SEED_SHRINK_MAX + 0.01, &rep, &err), DF_EINVAL);
+    assert_int_equal(df_admm_seed(s, bh.m.V, G, -0.5, &rep, &err), DF_EINVAL);
     assert_int_equal(df_admm_seed(s, bh.m.V, G, NAN, &rep, &err), DF_EINVAL);
     G[7] = NAN;
     assert_int_equal(df_admm_seed(s, bh.m.V, G, 0.0, &rep, &err), DF_EINVAL);
