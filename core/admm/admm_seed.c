@@ -134,7 +134,13 @@ int df_admm_seed(df_admm *s, const double *V0, const double *G0, double shrink,
     for (int k = 0; k <= steps; k++) {
         double sh = auto_shrink ? DF_ADMM_SEED_SHRINK_MAX * k / steps : shrink, a, e_one;
         double tau = shrink_proposal(s, V0, G0, sh, G);
-        double e = search_alpha(s, V0, G, X, &a, &e_one, &r.evaluations);
+        double e;
+        if (isfinite(r.e_plain)) {
+            e = search_alpha(s, V0, G, X, &a, &e_one, &r.evaluations);
+        } else { /* no finite reference: the whole (shrunk) field or nothing (admm_seed.h) */
+            a = 1.0;
+            e = e_one = objective_at(s, V0, G, 1.0, X, &r.evaluations);
+        }
         if (k == 0 || e < e_best)
             r.e_one = e_one;
         if (e < e_best) {

@@ -6,7 +6,8 @@
  * start's objective, recomputed here with df_admm_evaluate, is no higher than
  * that of the rest state with the handles on their targets; the start is the soft-thresholded
  * proposal scaled by alpha, recomputed here from the proposal; the run from the seed reaches the
- * plain start's converged objective; bad input is refused with the solver unchanged. */
+ * plain start's converged objective; Neo-Hookean with an inverted plain start takes alpha 1 or
+ * nothing; bad input is refused with the solver unchanged. */
 #include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -187,6 +188,41 @@ static void test_seeded_run_reaches_the_plain_objective(void **state)
     free(G); tu_bar_free(&bh);
 }
 
+/* Neo-Hookean on the bar with the x = 3 face pushed by -0.6 in x as well, past the next vertex layer
+ * at x = 2.5: the plain start with the handles on target inverts (+inf), so only alpha 1 (or the
+ * plain start) may be chosen;
+ * when the unshrunk field is uninverted, a candidate exists and alpha 1 must be taken, starting
+ * no higher than it. */
+static void test_neohookean_without_a_finite_reference(void **state)
+{
+    (void)state;
+    tu_bar bh = tu_bar_load();
+    for (int k = 0; k < bh.nh; k++)
+        if (bh.m.V[3 * (size_t)bh.h[k]] == 3.0) bh.tg[3 * k] -= 0.6;
+    size_t n = 3 * (size_t)bh.m.nv;
+    df_admm_params p;
+    df_admm_params_default(&p, DF_ADMM_NEOHOOKEAN);
+    p.threads = 1;
+    df_admm *s = NULL;
+    df_error err;
+    assert_int_equal(df_admm_create(&bh.m, &p, bh.h, bh.nh, NULL, 0, &s, &err), DF_OK);
+    assert_int_equal(df_admm_set_targets(s, bh.tg, &err), DF_OK);
+    double *G = guess(&bh, bh.m.V), e_g = INFINITY, el, lo;
+    if (df_admm_evaluate(s, G, &el, &lo, &err) == DF_OK) e_g = el + lo; /* handles on target */
+    df_admm_seed_report rep;
+    assert_int_equal(df_admm_seed(s, bh.m.V, G, DF_ADMM_SEED_SHRINK_AUTO, &rep, &err), DF_OK);
+    print_message("NH: plain start E %g, unshrunk field E %g; alpha %g shrink %g start E %g, %d evaluations\n",
+                  rep.e_plain, e_g, rep.alpha, rep.shrink, rep.e_seed, rep.evaluations);
+    assert_false(isfinite(rep.e_plain));
+    assert_int_equal(rep.evaluations, 1 + DF_ADMM_SEED_SHRINK_STEPS + 1);
+    assert_true(rep.alpha == 0.0 || rep.alpha == 1.0);
+    if (isfinite(e_g)) assert_true(rep.alpha == 1.0 && rep.e_seed <= e_g);
+    if (rep.alpha == 1.0) assert_true(fabs(objective(s, df_admm_positions(s)) - rep.e_seed) <= 1e-12 * rep.e_seed);
+    else assert_memory_equal(df_admm_positions(s), bh.m.V, n * sizeof(double));
+    df_admm_free(s);
+    free(G); tu_bar_free(&bh);
+}
+
 static void test_bad_input(void **state)
 {
     (void)state;
@@ -222,6 +258,7 @@ int main(void)
         cmocka_unit_test(test_alpha_zero_is_the_plain_start),
         cmocka_unit_test(test_seed_objective_not_above_the_rest_state),
         cmocka_unit_test(test_seeded_run_reaches_the_plain_objective),
+        cmocka_unit_test(test_neohookean_without_a_finite_reference),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
