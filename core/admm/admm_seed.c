@@ -129,9 +129,9 @@ int df_admm_seed(df_admm *s, const double *V0, const double *G0, double shrink,
     df_admm_seed_report r = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0};
     r.e_plain = objective_at(s, V0, G0, 0.0, X, &r.evaluations);
     int auto_shrink = shrink == DF_ADMM_SEED_SHRINK_AUTO;
-    int steps = auto_shrink ? DF_ADMM_SEED_SHRINK_STEPS : 0;
+    int k0 = auto_shrink ? 1 : 0, steps = auto_shrink ? DF_ADMM_SEED_SHRINK_STEPS : 0;
     double e_best = INFINITY, a_best = 0.0, s_best = 0.0, t_best = 0.0;
-    for (int k = 0; k <= steps; k++) {
+    for (int k = k0; k <= steps; k++) {
         double sh = auto_shrink ? DF_ADMM_SEED_SHRINK_MAX * k / steps : shrink, a, e_one;
         double tau = shrink_proposal(s, V0, G0, sh, G);
         double e;
@@ -141,7 +141,7 @@ int df_admm_seed(df_admm *s, const double *V0, const double *G0, double shrink,
             a = 1.0;
             e = e_one = objective_at(s, V0, G, 1.0, X, &r.evaluations);
         }
-        if (k == 0 || e < e_best)
+        if (k == k0 || e < e_best)
             r.e_one = e_one;
         if (e < e_best) {
             e_best = e; a_best = a; s_best = sh; t_best = tau;

@@ -139,9 +139,11 @@ static int row(const experiment *x, int full)
     int hg = hit(g, target), hp = hit(p, target);
     printf("  target: the guess's final objective no worse than the plain start's (within %g): %s\n",
            QUALITY_REL, g->objective <= target * (1.0 + QUALITY_REL) ? "MET" : "MISS");
-    if (hg && hp)
-        printf("  saved by the guess: %d iterations, %.3f s (%s)\n", hp - hg, p->tr.t[hp] - g->tr.t[hg],
-               g->rep.alpha > 0 ? "seeded" : "line search kept the plain start");
+    if (g->rep.alpha == 0)
+        printf("  saved by the guess: nothing (no candidate lowered the start's objective: the plain start)\n");
+    else if (hg && hp)
+        printf("  saved by the guess: %d iterations, %.3f s (the guess's cost included; timings under load)\n",
+               hp - hg, p->tr.t[hp] - g->tr.t[hg]);
     return 0;
 }
 
