@@ -137,7 +137,7 @@ static const dc_cli_opt MOVE_OPTS[M_COUNT] = {
     {"progress-every", 1, "--progress-every N progress event every N iterations (default 10)"},
     {"progress", 1, CTL_PROGRESS_HELP},
     {"kelvinlet-guess", 0, "--kelvinlet-guess  start the solver from the Kelvinlet field of the "
-                           "handles' move"},
+                           "handles' move (line-searched; never a higher starting objective)"},
     {"polish", 0, "--polish           after ADMM, polish by projected Newton to a relative KKT "
                   "residual of 1e-9 (tet meshes: arap, acap, neohookean)"},
 };

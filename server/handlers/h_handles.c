@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/admm/admm_seed.h"
 #include "core/kelvinlet/kelvinlet_guess.h"
 #include "proto/wire_core_map.h"
 #include "server/session/cache.h"
@@ -368,7 +369,9 @@ static int targets_check(const df_session *s, const df_handleset *hs, const doub
 
 /* Option KELVINLET_GUESS: the solver starts from the Kelvinlet field of the handles' move
  * (core/kelvinlet/kelvinlet_guess.h: default radius, the solver's Poisson ratio for Neo-Hookean,
- * 0.5 otherwise) applied to the session's current positions, the handles on their targets. */
+ * 0.5 otherwise) applied to the session's current positions, restricted to the vertices it moves
+ * most and scaled, both chosen by the objective (core/admm/admm_seed.h); the plain start (the
+ * current positions) when that does not lower the objective. Needs the targets set first. */
 static int guess_positions(df_admm *solver, const df_session *s, const df_handleset *hs,
                            const double *targets, df_error *err)
 {
@@ -379,8 +382,13 @@ static int guess_positions(df_admm *solver, const df_session *s, const df_handle
     double nu = hs->params.energy == DF_ADMM_NEOHOOKEAN ? hs->params.poisson : 0.5;
     int rc = df_kelvinlet_guess(s->cur, s->mesh.nv, hs->handles, hs->nh, targets, 0.0, nu, G,
                                 NULL, NULL, err);
+    df_admm_seed_report rep;
     if (rc == DF_OK)
-        rc = df_admm_set_positions(solver, G, NULL, err);
+        rc = df_admm_seed(solver, s->cur, G, DF_ADMM_SEED_SHRINK_AUTO, &rep, err);
+    if (rc == DF_OK)
+        df_log(DF_LOG_DEBUG, "session %llu: Kelvinlet guess: shrink %.2f alpha %.3f (objective "
+               "%.6g, plain start %.6g)", (unsigned long long)s->id, rep.shrink, rep.alpha,
+               rep.e_seed, rep.e_plain);
     free(G);
     return rc;
 }
@@ -417,11 +425,12 @@ static int move_setup(df_job *j)
      * client's edit since the solver's last run invalidates its warm start there. A target
      * with z != 0 on a 2D session is refused here (df_admm_set_targets, EINVAL). */
     if (r->mv.options & DF_WORK_OPT_KELVINLET_GUESS) {
-        rc = guess_positions(r->solver, s, hs, r->mv.targets, &j->err);
+        rc = df_admm_set_targets(r->solver, r->mv.targets, &j->err);
+        if (rc == DF_OK) rc = guess_positions(r->solver, s, hs, r->mv.targets, &j->err);
     } else {
         rc = df_admm_set_positions(r->solver, s->cur, NULL, &j->err);
+        if (rc == DF_OK) rc = df_admm_set_targets(r->solver, r->mv.targets, &j->err);
     }
-    if (rc == DF_OK) rc = df_admm_set_targets(r->solver, r->mv.targets, &j->err);
     r->progress_every = r->mv.progress_every;
     r->uf_prev = s->uf; /* its iterates are encoded one from the other (publish_iterate) */
     r->version = atomic_load(&s->version);

@@ -100,7 +100,8 @@ class EditRequestsMixin:
         progress iterates (and displacement frames) are queued as events. progress: a callback
         for the "solve" stage (iterations of the budget) and a solver rebuild ("factorize"); see
         the module doc. kelvinlet_guess: the solver starts from the Kelvinlet field of the
-        handles' move (option bit KELVINLET_GUESS, PROTOCOL.md 4.16). polish: after ADMM, a
+        handles' move, support-restricted and line-searched (never a higher starting objective
+        than the plain start; option bit KELVINLET_GUESS, PROTOCOL.md 4.16). polish: after ADMM, a
         projected-Newton polish to a relative KKT residual of 1e-9 (option bit POLISH; tet
         meshes with arap, acap or neohookean; the result's residual is then its KKT residual)."""
         opts = (pg.WORK_OPT_PROGRESS if progress is not None else 0) | (
