@@ -117,6 +117,9 @@ struct df_admm {
     double win_best, win_prev; /* best stop residual of the current / previous window (-1: none) */
     int rho_gap;             /* iterations between two penalty changes (refactorization cost) */
     int rho_wait;            /* iterations left before the next change may happen */
+    int held_run;            /* consecutive held (inverted Neo-Hookean) iterates */
+    int gam_locked;          /* 1: a lowering of the element penalties was undone (inverted
+                                iterates); Neo-Hookean keeps g = 1 from then on */
     double gscale;           /* element penalties: current gamma_e over the operators' gamma_e */
     int broken;              /* a failed refactorization could not restore the affine system */
 };

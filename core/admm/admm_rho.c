@@ -1,7 +1,9 @@
 /* admm_rho.c — the adaptive ADMM penalty (admm.h, DF_ADMM_RHO_RULE): the initial rho from the
  * problem's scales, the refactorization-cost gap between two changes, and relative residual
- * balancing of the Z = V - Vrest block (Boyd et al. 2011 sec. 3.4.1 with the scale-invariant
- * relative residuals of Wohlberg 2017) with the scaled duals U rescaled at each change. */
+ * balancing of the Z = V - Vrest block and of the element block (Boyd et al. 2011 sec. 3.4.1 with
+ * the scale-invariant relative residuals of Wohlberg 2017) with the scaled duals U, W rescaled at
+ * each change; for Neo-Hookean the element penalties go back to 1 when lowering them produced
+ * inverted iterates. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,6 +76,8 @@ void admm_rho_init(df_admm *s)
     s->rho_floor = conv > 0 ? DF_ADMM_RHO_FLOOR * conv : rho0 / DF_ADMM_RHO_RANGE;
     s->rho_ceil = rho0 * DF_ADMM_RHO_RANGE;
     s->win_prev = -1.0;
+    s->held_run = 0;
+    s->gam_locked = 0;
 }
 
 void admm_rho_set_gap(df_admm *s)
@@ -116,10 +120,40 @@ static int stalled(df_admm *s, double resid)
     return st;
 }
 
+/* multiplies every gamma_e by fg (one numeric refactorization at the current rho) and rescales
+ * the scaled element duals W so that the multipliers lambda = gamma W stay */
+static int scale_gamma(df_admm *s, double fg, df_error *err)
+{
+    int rc = admm_system_refactor(s, s->p.rho, fg, err);
+    if (rc) return rc;
+    for (int64_t o = 0; o < 9 * (int64_t)s->ne; o++) s->W[o] /= fg;
+    s->gscale *= fg;
+    return DF_OK;
+}
+
+/* Neo-Hookean elements may take lowered penalties only with no damped handle step pending (the
+ * handles at their targets: while they are on their way, iterates invert easily) and while no
+ * lowering has been undone (gam_locked) */
+static int nh_gamma_free(const df_admm *s)
+{
+    return !s->tgt_pending && !s->gam_locked;
+}
+
 int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int *changed, df_error *err)
 {
     *changed = 0;
     if (!s->rho_adaptive) return DF_OK;
+    s->held_run = held ? s->held_run + 1 : 0;
+    if (s->gscale < 1.0 && s->held_run >= DF_ADMM_GAMMA_HELD) {
+        /* inverted iterates after the element penalties were lowered (Neo-Hookean: only it
+         * holds iterates): back to g = 1 at once, no gap, and no lowering again */
+        int rc = scale_gamma(s, 1.0 / s->gscale, err);
+        if (rc) return rc;
+        s->gscale = 1.0;
+        s->gam_locked = 1;
+        s->held_run = 0;
+        goto done;
+    }
     int stall = !held && stalled(s, resid);
     if (stall) s->stall_pending = 1;
     if (s->rho_wait > 0) { s->rho_wait--; return DF_OK; }
@@ -135,9 +169,10 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
         s->win_n = 0;
     } else if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
         fr = balance(rs->pri_z, rs->dual_z);
-        /* element penalties: not for Neo-Hookean, whose gamma_e bounds its prox's curvature (with
-         * g = 0.25 the pig teaser never reached its targets) */
-        if (s->family == ADMM_FAM_ELEMENT && s->p.energy != DF_ADMM_NEOHOOKEAN) {
+        /* element penalties; Neo-Hookean only once its handles are at their targets (lowered
+         * while they were still damped, g = 0.25 kept the pig teaser's iterates inverted for
+         * good) */
+        if (s->family == ADMM_FAM_ELEMENT && (s->p.energy != DF_ADMM_NEOHOOKEAN || nh_gamma_free(s))) {
             fg = balance(rs->pri_e, rs->dual_e);
             if (fg > DF_ADMM_GAMMA_MAX_STEP) fg = DF_ADMM_GAMMA_MAX_STEP;
             if (fg < 1.0 / DF_ADMM_GAMMA_MAX_STEP) fg = 1.0 / DF_ADMM_GAMMA_MAX_STEP;
@@ -162,6 +197,7 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
         for (int64_t o = 0; o < 9 * (int64_t)s->ne; o++) s->W[o] /= fg;
         s->gscale *= fg;
     }
+done:
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     s->st.rho_changes++;
     s->rho_wait = s->rho_gap;
