@@ -118,7 +118,7 @@ int main(int argc, char **argv)
         PAPER_PIG_ARAP,
         PAPER_PIG_NH,
         PAPER_BAR3_ARAP,
-        {"bar3 Neo-Hookean", "bar3", "bar3_init1.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.1, 0, 0},
+        {"bar3 Neo-Hookean", "bar3", "bar3_init1.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.1, 0, 0, 0},
     };
     if (argc > 1) radius_scale = atof(argv[1]);
     int only = argc > 2 ? atoi(argv[2]) : -1, bad = 0;
