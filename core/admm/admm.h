@@ -130,7 +130,8 @@ typedef enum df_admm_energy {
  * (DF_ADMM_RESIDUAL) of a window of DF_ADMM_RHO_STALL_WINDOW non-inverted iterations is no better
  * than the previous window's and above max(tol, DF_ADMM_RHO_STALL_MIN) (the iteration cycles: small penalties near c can, e.g. the table
  * case w 2e-7 oscillated at 1e-6 relative forever at 1.25 c), the next change multiplies rho by
- * DF_ADMM_RHO_STALL_STEP and raises the floor to it. A change is one numeric-only refactorization (the global
+ * DF_ADMM_RHO_STALL_STEP and raises the floor to it (Neo-Hookean with g < 1: the change instead
+ * takes g back to 1 for good, rho kept). A change is one numeric-only refactorization (the global
  * matrix is reassembled with the same pattern and factorized, supernodal, into a copy of the kept
  * symbolic analysis, then converted to the simplicial LL^T the solves use, as at create; no new
  * analysis; the affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
