@@ -125,13 +125,19 @@ typedef enum df_admm_energy {
  * df_admm_run) iterate; its element penalties change only once the handles are at their targets
  * (lowered while damped handle steps were pending, the pig teaser's iterates stayed inverted),
  * and when DF_ADMM_GAMMA_HELD consecutive iterates are held while g < 1, g goes back to 1 at once
- * (one refactorization, no gap) and stays there for the solver's life (until a reset_rest). (Raising rho while iterates stay inverted was tried: on the pig teaser it
+ * (one refactorization, no gap) and stays there for the solver's life (until a reset_rest); the
+ * same happens after a failed trial (below). (Raising rho while iterates stay inverted was tried: on the pig teaser it
  * doubled rho 22 times and never reached the targets.) Stall watch: when the best stop residual
  * (DF_ADMM_RESIDUAL) of a window of DF_ADMM_RHO_STALL_WINDOW non-inverted iterations is no better
  * than the previous window's and above max(tol, DF_ADMM_RHO_STALL_MIN) (the iteration cycles: small penalties near c can, e.g. the table
  * case w 2e-7 oscillated at 1e-6 relative forever at 1.25 c), the next change multiplies rho by
- * DF_ADMM_RHO_STALL_STEP and raises the floor to it (Neo-Hookean with g < 1: the change instead
- * takes g back to 1 for good, rho kept). A change is one numeric-only refactorization (the global
+ * DF_ADMM_RHO_STALL_STEP and raises the floor to it (with g < 1 the change instead takes g back to
+ * 1 for good, rho kept). Lowered element penalties are on trial: each window of
+ * DF_ADMM_GAMMA_TRIAL non-inverted iterations while g < 1 must lower the best stop residual by
+ * DF_ADMM_GAMMA_GAIN against the window before (the first window: against the iterations since the
+ * previous change), else g goes back to 1 at once (no gap) and the element penalties are not
+ * balanced again (a table-like bar, ARAP w 2e-7 at 1/100 scale, cycled ~1e-3 above the reference
+ * at g = 0.25 until the stall watch caught it at 400 iterations; 124 with the trial). A change is one numeric-only refactorization (the global
  * matrix is reassembled with the same pattern and factorized, supernodal, into a copy of the kept
  * symbolic analysis, then converted to the simplicial LL^T the solves use, as at create; no new
  * analysis; the affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
@@ -156,6 +162,8 @@ typedef enum df_admm_energy {
 #define DF_ADMM_GAMMA_MAX 4.0
 #define DF_ADMM_GAMMA_MAX_STEP 4.0
 #define DF_ADMM_GAMMA_HELD 3
+#define DF_ADMM_GAMMA_TRIAL 50
+#define DF_ADMM_GAMMA_GAIN 2.0
 
 typedef struct df_admm_params {
     df_admm_energy energy;

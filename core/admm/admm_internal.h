@@ -120,6 +120,9 @@ struct df_admm {
     int held_run;            /* consecutive held (inverted Neo-Hookean) iterates */
     int gam_locked;          /* 1: a lowering of the element penalties was undone (inverted
                                 iterates); Neo-Hookean keeps g = 1 from then on */
+    double best_since_change;/* best stop residual since the last penalty change */
+    int g_trial;             /* iterations left in the trial of lowered element penalties (0: none) */
+    double g_trial_ref, g_trial_best; /* best residual before the lowering / during the trial */
     double gscale;           /* element penalties: current gamma_e over the operators' gamma_e */
     int broken;              /* a failed refactorization could not restore the affine system */
 };

@@ -78,6 +78,8 @@ void admm_rho_init(df_admm *s)
     s->win_prev = -1.0;
     s->held_run = 0;
     s->gam_locked = 0;
+    s->g_trial = 0;
+    s->best_since_change = INFINITY;
 }
 
 void admm_rho_set_gap(df_admm *s)
@@ -131,12 +133,12 @@ static int scale_gamma(df_admm *s, double fg, df_error *err)
     return DF_OK;
 }
 
-/* Neo-Hookean elements may take lowered penalties only with no damped handle step pending (the
- * handles at their targets: while they are on their way, iterates invert easily) and while no
- * lowering has been undone (gam_locked) */
-static int nh_gamma_free(const df_admm *s)
+/* 1 when the element penalties may be balanced: while no lowering has been undone (gam_locked),
+ * and for Neo-Hookean only with no damped handle step pending (the handles at their targets:
+ * while they are on their way, iterates invert easily) */
+static int gamma_free(const df_admm *s)
 {
-    return !s->tgt_pending && !s->gam_locked;
+    return !s->gam_locked && (s->p.energy != DF_ADMM_NEOHOOKEAN || !s->tgt_pending);
 }
 
 int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int *changed, df_error *err)
@@ -144,9 +146,27 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
     *changed = 0;
     if (!s->rho_adaptive) return DF_OK;
     s->held_run = held ? s->held_run + 1 : 0;
-    if (s->gscale < 1.0 && s->held_run >= DF_ADMM_GAMMA_HELD) {
+    int trial_failed = 0;
+    if (!held && isfinite(resid)) {
+        if (resid < s->best_since_change) s->best_since_change = resid;
+        if (s->g_trial > 0 && s->gscale < 1.0) {
+            /* lowered element penalties stay on trial: each window of DF_ADMM_GAMMA_TRIAL
+             * iterations must lower the best stop residual by DF_ADMM_GAMMA_GAIN against the window
+             * before (the first: against the iterations before the lowering); else they cycle */
+            if (resid < s->g_trial_best) s->g_trial_best = resid;
+            if (--s->g_trial == 0) {
+                if (!(s->g_trial_best * DF_ADMM_GAMMA_GAIN <= s->g_trial_ref) && s->g_trial_best >= s->p.tol)
+                    trial_failed = 1;
+                s->g_trial = DF_ADMM_GAMMA_TRIAL;
+                s->g_trial_ref = s->g_trial_best;
+                s->g_trial_best = INFINITY;
+            }
+        }
+    }
+    if (s->gscale < 1.0 && (s->held_run >= DF_ADMM_GAMMA_HELD || trial_failed)) {
         /* inverted iterates after the element penalties were lowered (Neo-Hookean: only it
-         * holds iterates): back to g = 1 at once, no gap, and no lowering again */
+         * holds iterates), or a failed trial: back to g = 1 at once, no gap, and no element
+         * balancing again */
         int rc = scale_gamma(s, 1.0 / s->gscale, err);
         if (rc) return rc;
         s->gscale = 1.0;
@@ -158,11 +178,10 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
     if (stall) s->stall_pending = 1;
     if (s->rho_wait > 0) { s->rho_wait--; return DF_OK; }
     double rho = s->p.rho, fr = 1.0, fg = 1.0;
-    if (s->stall_pending && s->p.energy == DF_ADMM_NEOHOOKEAN && s->gscale < 1.0) {
-        /* Neo-Hookean cycling with lowered element penalties (gamma_e is sized to its prox's
-         * curvature; a bar moved twice the unit tests' move cycled at g = 0.25 while the stall
-         * watch doubled rho 14 times, 1.3% above the reference after 6000 iterations): back to
-         * g = 1 for good, rho kept */
+    if (s->stall_pending && s->gscale < 1.0) {
+        /* cycling with lowered element penalties (a Neo-Hookean bar moved twice the unit tests'
+         * move cycled at g = 0.25 while the stall watch doubled rho 14 times, 1.3% above the
+         * reference after 6000 iterations): back to g = 1 for good, rho kept */
         fg = 1.0 / s->gscale;
         s->gam_locked = 1;
         s->stall_pending = 0;
@@ -182,7 +201,7 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
         /* element penalties; Neo-Hookean only once its handles are at their targets (lowered
          * while they were still damped, g = 0.25 kept the pig teaser's iterates inverted for
          * good) */
-        if (s->family == ADMM_FAM_ELEMENT && (s->p.energy != DF_ADMM_NEOHOOKEAN || nh_gamma_free(s))) {
+        if (s->family == ADMM_FAM_ELEMENT && gamma_free(s)) {
             fg = balance(rs->pri_e, rs->dual_e);
             if (fg > DF_ADMM_GAMMA_MAX_STEP) fg = DF_ADMM_GAMMA_MAX_STEP;
             if (fg < 1.0 / DF_ADMM_GAMMA_MAX_STEP) fg = 1.0 / DF_ADMM_GAMMA_MAX_STEP;
@@ -206,8 +225,14 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
     if (fg != 1.0) {
         for (int64_t o = 0; o < 9 * (int64_t)s->ne; o++) s->W[o] /= fg;
         s->gscale *= fg;
+        if (fg < 1.0) { /* a lowering: on trial */
+            s->g_trial = DF_ADMM_GAMMA_TRIAL;
+            s->g_trial_ref = s->best_since_change;
+            s->g_trial_best = INFINITY;
+        }
     }
 done:
+    s->best_since_change = INFINITY;
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     s->st.rho_changes++;
     s->rho_wait = s->rho_gap;

@@ -148,9 +148,10 @@ static void test_neohookean_scales(void **st) { (void)st; scales_case(DF_ADMM_NE
 
 /* Neo-Hookean element penalties (DF_ADMM_RHO_RULE): the bar moved twice as far as in the scale
  * tests: the balancing lowers the element penalties (a change that keeps rho, which is at its
- * floor from the start), the iteration then cycles, and the stall watch must take g back to 1
- * (raising rho instead, it doubled rho 14 times and ended 1.3% above the reference after 6000
- * iterations); the run reaches the fixed-rho reference objective */
+ * floor from the start), the iteration then cycles, and the rule must take g back to 1 (the
+ * lowering's trial or the stall watch; raising rho instead, the stall watch doubled rho 14 times
+ * and ended 1.3% above the reference after 6000 iterations); the run converges to the fixed-rho
+ * reference objective */
 typedef struct nhtrace {
     const df_admm *s;
     int changes_keep_rho;  /* penalty changes with rho unchanged */
