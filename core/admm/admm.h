@@ -153,8 +153,8 @@ typedef enum df_admm_energy {
 #define DF_ADMM_RHO_RANGE 1e6
 #define DF_ADMM_RHO_IMBALANCE 10.0
 #define DF_ADMM_RHO_MAX_STEP 10.0
-#define DF_ADMM_RHO_COST 5.0
-#define DF_ADMM_RHO_MIN_GAP 10
+#define DF_ADMM_RHO_COST 2.0
+#define DF_ADMM_RHO_MIN_GAP 5
 #define DF_ADMM_RHO_STALL_WINDOW 200
 #define DF_ADMM_RHO_STALL_STEP 2.0
 #define DF_ADMM_RHO_STALL_MIN 1e-12
