@@ -123,7 +123,8 @@ typedef enum df_admm_energy {
  * (DF_ADMM_GAMMA_MAX_STEP for g); rho and g are multiplied by their factors (Boyd et al. 2011
  * sec. 3.4.1 residual balancing). Neo-Hookean: no balancing after an inverted (held, see
  * df_admm_run) iterate; its element penalties change only once the handles are at their targets
- * (lowered while damped handle steps were pending, the pig teaser's iterates stayed inverted),
+ * (with g = 0.25 from the start the pig teaser never reached them; lowered at its 100th
+ * iteration, once they were there, its iterates stayed inverted),
  * and when DF_ADMM_GAMMA_HELD consecutive iterates are held while g < 1, g goes back to 1 at once
  * (one refactorization, no gap) and stays there for the solver's life (until a reset_rest); the
  * same happens after a failed trial (below). (Raising rho while iterates stay inverted was tried: on the pig teaser it

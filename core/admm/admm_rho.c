@@ -2,8 +2,8 @@
  * problem's scales, the refactorization-cost gap between two changes, and relative residual
  * balancing of the Z = V - Vrest block and of the element block (Boyd et al. 2011 sec. 3.4.1 with
  * the scale-invariant relative residuals of Wohlberg 2017) with the scaled duals U, W rescaled at
- * each change; for Neo-Hookean the element penalties go back to 1 when lowering them produced
- * inverted iterates. */
+ * each change; lowered element penalties go back to 1 for good when they produce inverted
+ * (Neo-Hookean) iterates, fail their trial (too little progress) or stall. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -198,9 +198,10 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
         s->win_n = 0;
     } else if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
         fr = balance(rs->pri_z, rs->dual_z);
-        /* element penalties; Neo-Hookean only once its handles are at their targets (lowered
-         * while they were still damped, g = 0.25 kept the pig teaser's iterates inverted for
-         * good) */
+        /* element penalties; Neo-Hookean only once its handles are at their targets (with
+         * g = 0.25 from the start the pig teaser never reached them); a lowering can still
+         * invert iterates (the pig teaser, lowered at its 100th iteration, stayed inverted at
+         * g = 0.25 without the held rule above) */
         if (s->family == ADMM_FAM_ELEMENT && gamma_free(s)) {
             fg = balance(rs->pri_e, rs->dual_e);
             if (fg > DF_ADMM_GAMMA_MAX_STEP) fg = DF_ADMM_GAMMA_MAX_STEP;
