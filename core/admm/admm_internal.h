@@ -87,6 +87,8 @@ struct df_admm {
     int cc_started;
     cholmod_factor *L;
     cholmod_factor *Lsym;    /* adaptive penalties: copy of the supernodal symbolic analysis */
+    struct admm_kcache *kcache; /* adaptive penalties: K split by part for refactorizations
+                                (admm_system.c), NULL until the first one */
     cholmod_dense *rhs;      /* nfree x 3 column-major */
     cholmod_dense *sol, *sol_y, *sol_e; /* cholmod_solve2 result and workspaces, reused */
     /* affine constraints: Schur complement on top of the factorization */
@@ -168,6 +170,8 @@ void admm_trip_free(admm_trip *t);
  * pattern) and refactored numerically (supernodal, from the kept symbolic copy Lsym), K_fh P and the affine Schur complement
  * rebuilt; on error the old weights are restored (s->broken if even that fails) */
 int admm_system_refactor(df_admm *s, double rho_new, double gscale, df_error *err);
+/* admm_system.c: frees the refactorizations' assembly cache (NULL-safe; admm_free_system calls it) */
+void admm_kcache_free(df_admm *s);
 
 /* admm_rho.c: the adaptive penalty (admm.h, DF_ADMM_RHO_RULE). admm_rho_init: at create, after the
  * operators, before the system is built: chooses p.rho when params.rho <= 0 (else keeps it) and
