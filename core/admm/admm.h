@@ -106,27 +106,39 @@ typedef enum df_admm_energy {
  * and k_el the median over vertices of the elastic part of the global matrix's diagonal
  * (sum_e gamma_e |g_e,a|^2, or the spokes-and-rims weights):
  *   initial rho = DF_ADMM_RHO_INIT_LOC c when c > 0, else DF_ADMM_RHO_INIT_EL k_el (1 when 0)
- *   (the balancing then takes it to the floor on every shared-mesh case; starting at the floor
- *   was measured slower on Neo-Hookean: 519 vs 144 iterations on the unit tests' bar);
+ *   (INIT_LOC = FLOOR: the balancing took a higher start down to the floor on every shared-mesh
+ *   case anyway, at the price of one refactorization and its slower first iterations; the Z block's
+ *   dual residual stays far above its primal one near c);
  *   rho stays in [DF_ADMM_RHO_FLOOR c, initial x DF_ADMM_RHO_RANGE] (c = 0: initial / RANGE below),
  *   so rho > c always; the element penalties are gamma_e x g with one global g in
  *   [DF_ADMM_GAMMA_MIN, DF_ADMM_GAMMA_MAX], initially 1.
  * After every iteration, per block, the relative residuals (Wohlberg 2017; penalty-free, so the
  * rule does not depend on the length unit or the energy scale) of the Z block
  *     pri_z = ||V - Vrest - Z|| / max(||V - Vrest||, ||Z||),   dual_z = ||Z_k - Z_k-1|| / ||U||
- * and of the element block (gamma_e metric, F_e(V) = R_e X_e; element-family energies but
- * Neo-Hookean, whose gamma_e is tied to its prox's curvature: g = 1 there)
+ * and of the element block (gamma_e metric, F_e(V) = R_e X_e; element-family energies;
+ * Neo-Hookean only while no damped handle step is pending, see below)
  *     pri_e = ||F(V) - RX|| / max(||F(V)||, ||RX||),            dual_e = ||RX_k - RX_k-1|| / ||W||
  * give a factor sqrt(pri / dual) when pri > DF_ADMM_RHO_IMBALANCE dual or
  * dual > DF_ADMM_RHO_IMBALANCE pri (then < 1), else 1, at most DF_ADMM_RHO_MAX_STEP either way
  * (DF_ADMM_GAMMA_MAX_STEP for g); rho and g are multiplied by their factors (Boyd et al. 2011
  * sec. 3.4.1 residual balancing). Neo-Hookean: no balancing after an inverted (held, see
- * df_admm_run) iterate. (Raising rho while iterates stay inverted was tried: on the pig teaser it
+ * df_admm_run) iterate; its element penalties change only once the handles are at their targets
+ * (with g = 0.25 from the start the pig teaser never reached them; lowered at its 100th
+ * iteration, once they were there, its iterates stayed inverted),
+ * and when DF_ADMM_GAMMA_HELD consecutive iterates are held while g < 1, g goes back to 1 at once
+ * (one refactorization, no gap) and stays there for the solver's life (until a reset_rest); the
+ * same happens after a failed trial (below). (Raising rho while iterates stay inverted was tried: on the pig teaser it
  * doubled rho 22 times and never reached the targets.) Stall watch: when the best stop residual
  * (DF_ADMM_RESIDUAL) of a window of DF_ADMM_RHO_STALL_WINDOW non-inverted iterations is no better
  * than the previous window's and above max(tol, DF_ADMM_RHO_STALL_MIN) (the iteration cycles: small penalties near c can, e.g. the table
  * case w 2e-7 oscillated at 1e-6 relative forever at 1.25 c), the next change multiplies rho by
- * DF_ADMM_RHO_STALL_STEP and raises the floor to it. A change is one numeric-only refactorization (the global
+ * DF_ADMM_RHO_STALL_STEP and raises the floor to it (with g < 1 the change instead takes g back to
+ * 1 for good, rho kept). Lowered element penalties are on trial: each window of
+ * DF_ADMM_GAMMA_TRIAL non-inverted iterations while g < 1 must lower the best stop residual by
+ * DF_ADMM_GAMMA_GAIN against the window before (the first window: against the iterations since the
+ * previous change), else g goes back to 1 at once (no gap) and the element penalties are not
+ * balanced again (a table-like bar, ARAP w 2e-7 at 1/100 scale, cycled ~1e-3 above the reference
+ * at g = 0.25 until the stall watch caught it at 400 iterations; 124 with the trial). A change is one numeric-only refactorization (the global
  * matrix is reassembled with the same pattern and factorized, supernodal, into a copy of the kept
  * symbolic analysis, then converted to the simplicial LL^T the solves use, as at create; no new
  * analysis; the affine Schur complement is rebuilt), the scaled duals are rescaled so that the multipliers stay
@@ -136,20 +148,23 @@ typedef enum df_admm_energy {
  * about 1 / DF_ADMM_RHO_COST of the iteration time. The rule is deterministic (no timing enters
  * it); the penalties persist across df_admm_run calls (a reset_rest starts over).
  * df_admm_result and df_admm_stats count the changes; df_admm_rho reports rho. */
-#define DF_ADMM_RHO_INIT_LOC 1.5
+#define DF_ADMM_RHO_INIT_LOC 1.25
 #define DF_ADMM_RHO_INIT_EL 1.0
 #define DF_ADMM_RHO_FLOOR 1.25
 #define DF_ADMM_RHO_RANGE 1e6
 #define DF_ADMM_RHO_IMBALANCE 10.0
 #define DF_ADMM_RHO_MAX_STEP 10.0
-#define DF_ADMM_RHO_COST 5.0
-#define DF_ADMM_RHO_MIN_GAP 10
+#define DF_ADMM_RHO_COST 2.0
+#define DF_ADMM_RHO_MIN_GAP 5
 #define DF_ADMM_RHO_STALL_WINDOW 200
 #define DF_ADMM_RHO_STALL_STEP 2.0
 #define DF_ADMM_RHO_STALL_MIN 1e-12
 #define DF_ADMM_GAMMA_MIN 0.25
 #define DF_ADMM_GAMMA_MAX 4.0
 #define DF_ADMM_GAMMA_MAX_STEP 4.0
+#define DF_ADMM_GAMMA_HELD 3
+#define DF_ADMM_GAMMA_TRIAL 50
+#define DF_ADMM_GAMMA_GAIN 2.0
 
 typedef struct df_admm_params {
     df_admm_energy energy;

@@ -87,6 +87,8 @@ struct df_admm {
     int cc_started;
     cholmod_factor *L;
     cholmod_factor *Lsym;    /* adaptive penalties: copy of the supernodal symbolic analysis */
+    struct admm_kcache *kcache; /* adaptive penalties: K split by part for refactorizations
+                                (admm_system.c), NULL until the first one */
     cholmod_dense *rhs;      /* nfree x 3 column-major */
     cholmod_dense *sol, *sol_y, *sol_e; /* cholmod_solve2 result and workspaces, reused */
     /* affine constraints: Schur complement on top of the factorization */
@@ -117,6 +119,12 @@ struct df_admm {
     double win_best, win_prev; /* best stop residual of the current / previous window (-1: none) */
     int rho_gap;             /* iterations between two penalty changes (refactorization cost) */
     int rho_wait;            /* iterations left before the next change may happen */
+    int held_run;            /* consecutive held (inverted Neo-Hookean) iterates */
+    int gam_locked;          /* 1: a lowering of the element penalties was undone (inverted
+                                iterates); Neo-Hookean keeps g = 1 from then on */
+    double best_since_change;/* best stop residual since the last penalty change */
+    int g_trial;             /* iterations left in the trial of lowered element penalties (0: none) */
+    double g_trial_ref, g_trial_best; /* best residual before the lowering / during the trial */
     double gscale;           /* element penalties: current gamma_e over the operators' gamma_e */
     int broken;              /* a failed refactorization could not restore the affine system */
 };
@@ -162,6 +170,8 @@ void admm_trip_free(admm_trip *t);
  * pattern) and refactored numerically (supernodal, from the kept symbolic copy Lsym), K_fh P and the affine Schur complement
  * rebuilt; on error the old weights are restored (s->broken if even that fails) */
 int admm_system_refactor(df_admm *s, double rho_new, double gscale, df_error *err);
+/* admm_system.c: frees the refactorizations' assembly cache (NULL-safe; admm_free_system calls it) */
+void admm_kcache_free(df_admm *s);
 
 /* admm_rho.c: the adaptive penalty (admm.h, DF_ADMM_RHO_RULE). admm_rho_init: at create, after the
  * operators, before the system is built: chooses p.rho when params.rho <= 0 (else keeps it) and

@@ -1,7 +1,9 @@
 /* admm_rho.c — the adaptive ADMM penalty (admm.h, DF_ADMM_RHO_RULE): the initial rho from the
  * problem's scales, the refactorization-cost gap between two changes, and relative residual
- * balancing of the Z = V - Vrest block (Boyd et al. 2011 sec. 3.4.1 with the scale-invariant
- * relative residuals of Wohlberg 2017) with the scaled duals U rescaled at each change. */
+ * balancing of the Z = V - Vrest block and of the element block (Boyd et al. 2011 sec. 3.4.1 with
+ * the scale-invariant relative residuals of Wohlberg 2017) with the scaled duals U, W rescaled at
+ * each change; lowered element penalties go back to 1 for good when they produce inverted
+ * (Neo-Hookean) iterates, fail their trial (too little progress) or stall. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,6 +76,10 @@ void admm_rho_init(df_admm *s)
     s->rho_floor = conv > 0 ? DF_ADMM_RHO_FLOOR * conv : rho0 / DF_ADMM_RHO_RANGE;
     s->rho_ceil = rho0 * DF_ADMM_RHO_RANGE;
     s->win_prev = -1.0;
+    s->held_run = 0;
+    s->gam_locked = 0;
+    s->g_trial = 0;
+    s->best_since_change = INFINITY;
 }
 
 void admm_rho_set_gap(df_admm *s)
@@ -116,15 +122,72 @@ static int stalled(df_admm *s, double resid)
     return st;
 }
 
+/* multiplies every gamma_e by fg (one numeric refactorization at the current rho) and rescales
+ * the scaled element duals W so that the multipliers lambda = gamma W stay */
+static int scale_gamma(df_admm *s, double fg, df_error *err)
+{
+    int rc = admm_system_refactor(s, s->p.rho, fg, err);
+    if (rc) return rc;
+    for (int64_t o = 0; o < 9 * (int64_t)s->ne; o++) s->W[o] /= fg;
+    s->gscale *= fg;
+    return DF_OK;
+}
+
+/* 1 when the element penalties may be balanced: while no lowering has been undone (gam_locked),
+ * and for Neo-Hookean only with no damped handle step pending (the handles at their targets:
+ * while they are on their way, iterates invert easily) */
+static int gamma_free(const df_admm *s)
+{
+    return !s->gam_locked && (s->p.energy != DF_ADMM_NEOHOOKEAN || !s->tgt_pending);
+}
+
 int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int *changed, df_error *err)
 {
     *changed = 0;
     if (!s->rho_adaptive) return DF_OK;
+    s->held_run = held ? s->held_run + 1 : 0;
+    int trial_failed = 0;
+    if (!held && isfinite(resid)) {
+        if (resid < s->best_since_change) s->best_since_change = resid;
+        if (s->g_trial > 0 && s->gscale < 1.0) {
+            /* lowered element penalties stay on trial: each window of DF_ADMM_GAMMA_TRIAL
+             * iterations must lower the best stop residual by DF_ADMM_GAMMA_GAIN against the window
+             * before (the first: against the iterations before the lowering); else they cycle */
+            if (resid < s->g_trial_best) s->g_trial_best = resid;
+            if (--s->g_trial == 0) {
+                if (!(s->g_trial_best * DF_ADMM_GAMMA_GAIN <= s->g_trial_ref) && s->g_trial_best >= s->p.tol)
+                    trial_failed = 1;
+                s->g_trial = DF_ADMM_GAMMA_TRIAL;
+                s->g_trial_ref = s->g_trial_best;
+                s->g_trial_best = INFINITY;
+            }
+        }
+    }
+    if (s->gscale < 1.0 && (s->held_run >= DF_ADMM_GAMMA_HELD || trial_failed)) {
+        /* inverted iterates after the element penalties were lowered (Neo-Hookean: only it
+         * holds iterates), or a failed trial: back to g = 1 at once, no gap, and no element
+         * balancing again */
+        int rc = scale_gamma(s, 1.0 / s->gscale, err);
+        if (rc) return rc;
+        s->gscale = 1.0;
+        s->gam_locked = 1;
+        s->held_run = 0;
+        goto done;
+    }
     int stall = !held && stalled(s, resid);
     if (stall) s->stall_pending = 1;
     if (s->rho_wait > 0) { s->rho_wait--; return DF_OK; }
     double rho = s->p.rho, fr = 1.0, fg = 1.0;
-    if (s->stall_pending) {
+    if (s->stall_pending && s->gscale < 1.0) {
+        /* cycling with lowered element penalties (a Neo-Hookean bar moved twice the unit tests'
+         * move cycled at g = 0.25 while the stall watch doubled rho 14 times, 1.3% above the
+         * reference after 6000 iterations): back to g = 1 for good, rho kept */
+        fg = 1.0 / s->gscale;
+        s->gam_locked = 1;
+        s->stall_pending = 0;
+        s->win_prev = -1.0;
+        s->win_n = 0;
+    } else if (s->stall_pending) {
         /* no progress over a whole window: a stiffer Z block, and the floor follows (the balancing
          * would otherwise lower it again) */
         fr = DF_ADMM_RHO_STALL_STEP;
@@ -135,9 +198,11 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
         s->win_n = 0;
     } else if (!held) { /* an inverted (held) Neo-Hookean iterate's residuals say nothing about balance */
         fr = balance(rs->pri_z, rs->dual_z);
-        /* element penalties: not for Neo-Hookean, whose gamma_e bounds its prox's curvature (with
-         * g = 0.25 the pig teaser never reached its targets) */
-        if (s->family == ADMM_FAM_ELEMENT && s->p.energy != DF_ADMM_NEOHOOKEAN) {
+        /* element penalties; Neo-Hookean only once its handles are at their targets (with
+         * g = 0.25 from the start the pig teaser never reached them); a lowering can still
+         * invert iterates (the pig teaser, lowered at its 100th iteration, stayed inverted at
+         * g = 0.25 without the held rule above) */
+        if (s->family == ADMM_FAM_ELEMENT && gamma_free(s)) {
             fg = balance(rs->pri_e, rs->dual_e);
             if (fg > DF_ADMM_GAMMA_MAX_STEP) fg = DF_ADMM_GAMMA_MAX_STEP;
             if (fg < 1.0 / DF_ADMM_GAMMA_MAX_STEP) fg = 1.0 / DF_ADMM_GAMMA_MAX_STEP;
@@ -161,7 +226,14 @@ int admm_rho_adapt(df_admm *s, const admm_resid *rs, int held, double resid, int
     if (fg != 1.0) {
         for (int64_t o = 0; o < 9 * (int64_t)s->ne; o++) s->W[o] /= fg;
         s->gscale *= fg;
+        if (fg < 1.0) { /* a lowering: on trial */
+            s->g_trial = DF_ADMM_GAMMA_TRIAL;
+            s->g_trial_ref = s->best_since_change;
+            s->g_trial_best = INFINITY;
+        }
     }
+done:
+    s->best_since_change = INFINITY;
     if (s->p.accelerate) admm_aa_reset(&s->aa);
     s->st.rho_changes++;
     s->rho_wait = s->rho_gap;

@@ -173,7 +173,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < 4; i++) unload(&L[i]);
     printf("== interactive drag\n");
     experiment teaser_nh = PAPER_PIG_TEASER_NH;
-    experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0};
+    experiment teaser_arap = {"pig teaser ARAP", "pig", "pig_init_teaser.node", DF_ADMM_ARAP, 0.1, 0.01, 0, 0, 0};
     interactive(&teaser_arap, 0);
     interactive(&teaser_nh, 0);
     interactive(&teaser_nh, 1);

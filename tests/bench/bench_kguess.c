@@ -162,8 +162,8 @@ int main(int argc, char **argv)
         PAPER_PIG_ARAP,
         PAPER_PIG_NH,
         PAPER_BAR3_ARAP,
-        {"bar3 Neo-Hookean", "bar3", "bar3_init1.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.1, 0, 0},
-        {"table ARAP", "table", NULL, DF_ADMM_ARAP, 0.1, TABLE_H, 0, 0},
+        {"bar3 Neo-Hookean", "bar3", "bar3_init1.node", DF_ADMM_NEOHOOKEAN, 5e5, 0.1, 0, 0, 0},
+        {"table ARAP", "table", NULL, DF_ADMM_ARAP, 0.1, TABLE_H, 0, 0, 0},
         PAPER_PIG_TEASER_NH,
         PAPER_APPLE_NH,
     };
