@@ -195,4 +195,12 @@ static inline double tu_dist(const double *a, const double *b)
     return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
 }
 
+/* 1 when every handle of `bh` sits within `tol` of its target in positions V (nv x 3), else 0. */
+static inline int tu_handles_on_target(const double *V, const tu_bar *bh, double tol)
+{
+    for (int k = 0; k < bh->nh; k++)
+        if (!(tu_dist(V + 3 * (size_t)bh->h[k], bh->tg + 3 * k) <= tol)) return 0;
+    return 1;
+}
+
 #endif

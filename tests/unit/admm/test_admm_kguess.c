@@ -76,9 +76,7 @@ static void test_admm_from_guess(void **state)
     assert_true(plain.converged && seeded.converged);
     assert_true(fabs(seeded.objective - plain.objective) / (plain.objective + 1.0) < 1e3 * TOL);
     assert_true(seeded.iterations <= plain.iterations);
-    const double *V = df_admm_positions(b);
-    for (int k = 0; k < bh.nh; k++)
-        assert_true(tu_dist(V + 3 * (size_t)bh.h[k], bh.tg + 3 * k) <= 1e-9);
+    assert_true(tu_handles_on_target(df_admm_positions(b), &bh, 1e-9));
     df_admm_free(a); df_admm_free(b);
     free(G); tu_bar_free(&bh);
 }

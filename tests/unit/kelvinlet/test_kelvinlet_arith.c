@@ -22,29 +22,9 @@
 #include <cmocka.h>
 
 #include "core/kelvinlet/kelvinlet.h"
+#include "tests/unit/kelvinlet/kelvinlet_test_brush.h"
 
 #define NPTS 4099
-
-static df_kelvinlet_brush make(int type, int dim, int order, double ratio, double nu,
-                               double radius)
-{
-    df_kelvinlet_brush b;
-    df_kelvinlet_brush_defaults(&b);
-    b.type = (df_kelvinlet_type)type;
-    b.dim = dim;
-    b.order = order;
-    b.ratio = ratio;
-    b.radius = radius;
-    b.nu = nu;
-    b.centre[0] = 0.1;
-    b.centre[1] = -0.05;
-    b.centre[2] = dim == 3 ? 0.02 : 0.0;
-    b.tip[0] = 0.01;
-    b.tip[1] = -0.004;
-    b.tip[2] = dim == 3 ? 0.02 : 0.0;
-    b.omega[2] = 0.3;
-    return b;
-}
 
 /* NPTS points from the centre out to ~8 radii (z = 0 in 2D), the first exactly at the centre. */
 static float *points(int dim, double radius)
@@ -86,7 +66,7 @@ static void test_v2_2d_grab_accuracy(void **st)
         for (int order = 1; order <= 3; order++)
             for (size_t q = 0; q < sizeof ratios / sizeof ratios[0]; q++)
                 for (size_t k = 0; k < sizeof nus / sizeof nus[0]; k++) {
-                    df_kelvinlet_brush b = make(DF_KELVINLET_GRAB, 2, order, ratios[q], nus[k],
+                    df_kelvinlet_brush b = tk_brush(DF_KELVINLET_GRAB, 2, order, ratios[q], nus[k],
                                                 radii[ri]);
                     b.centre[0] = x[0];               /* the first point: the float centre */
                     b.centre[1] = x[1];
@@ -136,7 +116,7 @@ static void test_versions_differ_only_in_2d_grab_1_3(void **st)
     for (int dim = 2; dim <= 3; dim++)
         for (int type = DF_KELVINLET_GRAB; type <= DF_KELVINLET_TWIST; type++)
             for (int order = 1; order <= DF_KELVINLET_MAX_ORDER; order++) {
-                df_kelvinlet_brush b = make(type, dim, order, 1.1, 0.3, 0.25);
+                df_kelvinlet_brush b = tk_brush(type, dim, order, 1.1, 0.3, 0.25);
                 const float *x = dim == 2 ? x2 : x3;
                 b.arith = DF_KELVINLET_ARITH_1;
                 assert_int_equal(disp(b, x, NPTS, d1), DF_OK);
@@ -170,7 +150,7 @@ static void test_unknown_version_refused(void **st)
     (void)st;
     const int bad[] = {-1, DF_KELVINLET_ARITH_CURRENT + 1, 1000};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        df_kelvinlet_brush b = make(DF_KELVINLET_GRAB, 2, 1, 1.1, 0.3, 0.25);
+        df_kelvinlet_brush b = tk_brush(DF_KELVINLET_GRAB, 2, 1, 1.1, 0.3, 0.25);
         b.arith = bad[i];
         df_kelvinlet_prepared p;
         p.nsrc = 77;

@@ -15,36 +15,9 @@
 #include <cmocka.h>
 
 #include "core/kelvinlet/kelvinlet.h"
+#include "tests/unit/kelvinlet/kelvinlet_test_brush.h"
 
 #define NPTS 10007   /* not a multiple of any SIMD width or block */
-
-static df_kelvinlet_brush make(int type, int dim, int order, double ratio, double nu)
-{
-    static const double G[9] = {0.1, 0.02, 0, 0.02, -0.05, 0.01, 0, 0.01, -0.05};
-    df_kelvinlet_brush b;
-    df_kelvinlet_brush_defaults(&b);
-    b.type = (df_kelvinlet_type)type;
-    b.dim = dim;
-    b.order = order;
-    b.ratio = ratio;
-    b.radius = 0.25;
-    b.nu = nu;
-    b.centre[0] = 0.1;
-    b.centre[1] = -0.05;
-    b.centre[2] = dim == 3 ? 0.02 : 0.0;
-    b.tip[0] = 0.01;
-    b.tip[1] = -0.004;
-    b.tip[2] = dim == 3 ? 0.02 : 0.0;
-    b.omega[0] = dim == 3 ? 0.1 : 0.0;
-    b.omega[2] = 0.3;
-    b.s = 0.1;
-    memcpy(b.grad, G, sizeof G);
-    if (dim == 2) {   /* the upper-left 2x2, traceless for pinch */
-        b.grad[2] = b.grad[5] = b.grad[6] = b.grad[7] = b.grad[8] = 0.0;
-        b.grad[4] = -b.grad[0];
-    }
-    return b;
-}
 
 static float *points(int dim)
 {
@@ -70,7 +43,7 @@ static void check(int dim, double ratio, double nu)
         for (int order = 1; order <= DF_KELVINLET_MAX_ORDER; order++) {
             if (t == DF_KELVINLET_SCALE && nu == 0.5)
                 continue;   /* singular by design */
-            df_kelvinlet_brush b = make(t, dim, order, ratio, nu);
+            df_kelvinlet_brush b = tk_brush(t, dim, order, ratio, nu, 0.25);
             df_kelvinlet_prepared p;
             df_error e;
             if (df_kelvinlet_prepare(&b, &p, &e) != DF_OK)
