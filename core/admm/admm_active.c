@@ -205,6 +205,12 @@ int32_t admm_act_fresh_size(df_admm *s)
     return qt;
 }
 
+static int cmp_i32(const void *x, const void *y)
+{
+    int32_t u = *(const int32_t *)x, v = *(const int32_t *)y;
+    return (u > v) - (u < v);
+}
+
 static void snap_vertex(df_admm *s, int32_t i)
 {
     size_t o = 3 * (size_t)i;
@@ -218,6 +224,7 @@ static void snap_vertex(df_admm *s, int32_t i)
  * local step so the residual snapshot sees current values; leaving ones W = 0) */
 static void region_lists(df_admm *s, admm_active *a)
 {
+    qsort(a->rv, (size_t)a->nr, sizeof(int32_t), cmp_i32); /* memory order (as ae below) */
     uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
     a->nfr = 0;
     for (int32_t k = 0; k < a->nr; k++) {
@@ -284,6 +291,9 @@ static void region_lists(df_admm *s, admm_active *a)
     a->ae2 = tmp;
     a->nae = n;
     a->gam3_ae = gsum;
+    /* memory order: the element loops of every iteration then walk the per-element arrays
+     * (RX, W, grad, gam, vol) and the vertex rows forward instead of in BFS order */
+    qsort(a->ae, (size_t)n, sizeof(int32_t), cmp_i32);
 }
 
 /* one entry K(i, j) of the global matrix into the sub-system (free row i) or its couplings */

@@ -15,6 +15,8 @@
  * put at rest (what the full iterate's far field costs) and the converged objective of the same
  * targets; the issue's target is printed as given (against the full iterate) and, beside it, the
  * comparison against the full iterate on the active region.
+ * Per variant, where an update's time goes (df_admm_result's split, ms per update) and the region
+ * builds, CHOLMOD analyses and factorizations, over updates 1-2 (where the region grows) and 3-10.
  * The full solve on the 1M mesh is not run by default (its whole-mesh factorization alone takes
  * about a minute and 1.7 GB on this machine); BENCH_LOCAL_FULL1M=1 runs it.
  * Target (issue 14): a 20-iteration warm update on the 1M mesh moving <= 2% of the vertices in
@@ -121,6 +123,11 @@ typedef struct outcome {
     double create_s, mean_ms, max_ms, cpu_ms, E[UPDATES], E_conv;
     int updates, conv_iters, converged;
     df_admm_active_stats st;
+    /* where an update's time goes (df_admm_result's split, ms per update; CPU of the calling
+     * thread's view: wall inside df_admm_run) and the region analyses / factorizations, over the
+     * first 2 updates (where the region grows) and over the other updates */
+    double t_loc[2], t_prox[2], t_glob[2], t_oth[2];
+    long an[2], fac[2], grows[2];
     int32_t moved;
     double *pos;    /* with keep: the positions after each update (updates x nv x 3), else NULL */
 } outcome;
@@ -205,8 +212,19 @@ static int drag(const grid *g, int active, int band, double tail, int updates, i
             if (g->drag[k]) tg[3 * (size_t)k + 2] = g->tg[3 * (size_t)k + 2] + STEP * g->hsp * (u + 1);
         df_admm_budget b = {.max_iters = iters};
         df_admm_result r;
+        df_admm_stats s0, s1;
+        df_admm_active_stats a0, a1;
+        df_admm_get_stats(s, &s0);
+        df_admm_get_active_stats(s, &a0);
         double t = bench_now(), c = cpu_now();
         if (df_admm_set_targets(s, tg, &err) || df_admm_run(s, &b, &r, &err)) { printf("  run: %s\n", err.msg); break; }
+        df_admm_get_stats(s, &s1);
+        df_admm_get_active_stats(s, &a1);
+        int ph = u >= 2, nph = ph ? updates - 2 : (updates < 2 ? updates : 2);
+        o->t_loc[ph] += r.t_local1 * 1e3 / nph; o->t_prox[ph] += r.t_local2 * 1e3 / nph;
+        o->t_glob[ph] += r.t_global * 1e3 / nph; o->t_oth[ph] += (r.t_total - r.t_local1 - r.t_local2 - r.t_global) * 1e3 / nph;
+        o->an[ph] += s1.analyses - s0.analyses; o->fac[ph] += s1.factorizations - s0.factorizations;
+        o->grows[ph] += a1.grows - a0.grows + a1.rebuilds - a0.rebuilds;
         double ms = (bench_now() - t) * 1e3;
         o->cpu_ms += (cpu_now() - c) * 1e3 / updates;
         o->mean_ms += ms / updates;
@@ -309,6 +327,11 @@ int main(int argc, char **argv)
             printf("%9s %8s  %-10s   create %.2f s (full %s); converged %s in %d its; certificates %ld, check "
                    "grows %ld, tail grows %ld, fallbacks %ld\n", "", "", "", a->create_s, fc, a->converged ? "yes" : "NO",
                    a->conv_iters, a->st.checks, a->st.check_grows, a->st.tail_grows, a->st.fallbacks);
+            for (int ph = 0; ph < 2; ph++)
+                printf("%9s %8s  %-10s   updates %s: ms per update: local step %.1f, SC-L1 prox %.1f, global step + duals "
+                       "+ objective %.1f, other (region builds and growth, certificates, tail test) %.1f; region builds %ld, analyses %ld, "
+                       "factorizations %ld\n", "", "", "", ph ? "3-10" : "1-2 ", a->t_loc[ph], a->t_prox[ph], a->t_glob[ph],
+                       a->t_oth[ph], a->grows[ph], a->an[ph], a->fac[ph]);
             split sp;
             if (have_full && split_gap(&g, &full, a, &cref, &sp) == 0) {
                 printf("%9s %8s  %-10s   20-it objectives, update %d (largest gap): full %.12e, active %.12e (%s by %.1e),\n"

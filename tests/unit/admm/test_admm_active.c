@@ -382,6 +382,58 @@ static void test_tail_test_follows_full(void **state)
     free_pair(full, tail, &sc);
 }
 
+/* the tail test over the warm updates of one drag: the region is built once and kept (it never
+ * shrinks back, so later updates do not re-grow it), every CHOLMOD analysis / factorization
+ * belongs to a region build or growth (none per update otherwise), and the final result equals both
+ * the full solve's and that of a region grown from scratch for the last update (a new solver per
+ * update, at rest, given that update's targets: its region is built from the handles and grown
+ * again by the tail test). Expected values: the full solve of the same targets. */
+static void test_tail_region_kept(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 16);
+    df_admm_params pf = arap_params(&sc, 0), pt = arap_params(&sc, 1);
+    pt.active_tail = 1e-6;
+    df_admm *full = make(&sc, &pf), *kept = make(&sc, &pt), *regrown = NULL;
+    int32_t prev_region = 0;
+    for (int k = 1; k <= 4; k++) {
+        set_drag2(full, kept, &sc, 0.3 * k);
+        df_admm_stats s0, s1;
+        df_admm_active_stats a0, a1, r1;
+        df_admm_get_stats(kept, &s0);
+        df_admm_get_active_stats(kept, &a0);
+        run2(full, kept, 20, NULL, NULL);
+        df_admm_get_stats(kept, &s1);
+        df_admm_get_active_stats(kept, &a1);
+        assert_int_equal(a1.rebuilds, 1);
+        assert_int_equal(a1.fallbacks, 0);
+        assert_true(a1.region_vertices >= prev_region);
+        prev_region = a1.region_vertices;
+        long builds = (a1.grows - a0.grows) + (a1.rebuilds - a0.rebuilds);
+        assert_int_equal(s1.analyses - s0.analyses, builds);
+        assert_int_equal(s1.factorizations - s0.factorizations, builds);
+        /* the re-grown region: a new solver at rest given this update's targets */
+        df_admm_free(regrown);
+        regrown = make(&sc, &pt);
+        set_drag(regrown, &sc, 0.3 * k);
+        (void)run(regrown, 20);
+        df_admm_get_active_stats(regrown, &r1);
+        assert_int_equal(r1.rebuilds, 1);
+        assert_int_equal(r1.fallbacks, 0);
+    }
+    df_admm_active_stats st;
+    df_admm_get_active_stats(kept, &st);
+    assert_true(st.tail_grows > 0);
+    df_admm_result rf, rk, rr;
+    run2(full, kept, 20000, &rf, &rk);
+    rr = run(regrown, 20000);
+    assert_same(full, kept, &rf, &rk, sc.m.nv);
+    assert_same(full, regrown, &rf, &rr, sc.m.nv);
+    df_admm_free(regrown);
+    free_pair(full, kept, &sc);
+}
+
 /* set_positions (e.g. an undo or a brush edit somewhere else) and reset_rest in active mode give the
  * full solve's results */
 static void test_set_positions_and_reset_rest(void **state)
@@ -499,6 +551,7 @@ int main(void)
         cmocka_unit_test(test_region_grows_with_drag),
         cmocka_unit_test(test_certificate_grows_region),
         cmocka_unit_test(test_tail_test_follows_full),
+        cmocka_unit_test(test_tail_region_kept),
         cmocka_unit_test(test_set_positions_and_reset_rest),
         cmocka_unit_test(test_affine_falls_back),
         cmocka_unit_test(test_bad_params),
