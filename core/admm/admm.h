@@ -222,11 +222,17 @@ typedef struct df_admm_params {
  * change of the order of the full solve's far-field round-off). With params.active (and no
  * feature that falls back) df_admm_create builds no whole-mesh factorization; the first full run
  * builds it. df_admm_stats counts the region analyses, factorizations and solves too.
- * Tail test (params.active_tail = tol > 0; off by default): after every iteration, when the
- * SC-L1 charge w sum a_i |Vout_i - Vrest_i| of the region's edge (its vertices next to the
- * outside) exceeds tol |E|, the region grows by one ring at the edge vertices whose charge
- * exceeds their share tol |E| / (edge size) (counted in df_admm_active_stats.tail_grows). The
- * charge vanishes at convergence, so converged results are unchanged.
+ * Tail test (params.active_tail = tol > 0; off by default; DF_ADMM_ACTIVE_TAIL recommended):
+ * after every iteration, when the SC-L1 charge w sum a_i |Vout_i - Vrest_i| of the region's edge
+ * (its vertices next to the outside) exceeds tol |E|, the region grows at the edge vertices whose
+ * charge c exceeds their share tol |E| / (edge size), each by the rings its charge needs to decay
+ * to that share: ceil(log(c / share) / (0.7 log q)), 1 to 8 rings, q the decay of the per-vertex
+ * mean charge from depth 2 to depth 1 (admm_active_tail.c; counted in
+ * df_admm_active_stats.tail_grows). Probe: in a run that starts on a freshly built region (a
+ * drag's first update), when the first iteration grows the region, the region's state from before
+ * it is put back and the run starts again on the grown region (up to 3 times per run; counted in
+ * tail_probes; the redone iteration is not in df_admm_result.iterations; not with Neo-Hookean's
+ * damped handle steps). The charge vanishes at convergence, so converged results are unchanged.
  * Exactness: converged results equal the full solve's (objective ~1e-14 relative in the tests).
  * A fixed number of iterations is not the same computation as the full solve's: there the global
  * step's decaying response (about 6x per ring on bench_local's grids) moves every vertex a little
@@ -237,15 +243,17 @@ typedef struct df_admm_params {
  * field outside the region costs 1.7e-6 (the full iterate with that far field put at rest is
  * within 1.3e-7 of the active one; 1.6e-9 with 6 rings). No region growth, penalty change or
  * stop happens in those updates, and both start from the same state: the difference is the
- * global step's response beyond the band alone. The tail test with tol 3e-6 brings it to 7e-9,
- * but the region it needs is ~3x the default band's (CPU per update ~4x). Where its time goes
- * (bench_local's 1M grid): the region is built and grown (one ring per growth, 8 analyses +
- * factorizations) in the first two updates only and then kept (it never shrinks back during a
- * drag); later updates are the iterations on its ~2.8k vertices / ~18k elements: local steps
- * ~50%, duals + objective ~25%, the region's solves ~13% of the CPU. */
+ * global step's response beyond the band alone. That gap comes mostly from the iterations run
+ * while the region was too small: ADMM damps an early difference only ~0.6x per iteration. The
+ * tail test with DF_ADMM_ACTIVE_TAIL (3e-4) brings it to 6.4e-9 with a region of ~1.3k vertices
+ * (~1.4x the default band's, 2 growths + the first build); the one-ring growth it replaces needed
+ * tol 3e-6, ~2.8k vertices and 8 builds for 7.2e-9. Where its time goes (bench_local's 1M grid):
+ * the region is built and grown in the first two updates only and then kept (it never shrinks
+ * back during a drag); later updates are the iterations on its vertices and elements. */
 #define DF_ADMM_ACTIVE_BAND 3
 #define DF_ADMM_ACTIVE_CHECK 10
 #define DF_ADMM_ACTIVE_MAX_FRAC 0.5
+#define DF_ADMM_ACTIVE_TAIL 3e-4   /* the recommended params.active_tail ("Tail test") */
 
 /* Fills `p` with the defaults for `energy` (w 1e-4, s 0.01, rho 0 = adaptive, tol 1e-11,
  * max_iters 500, E 1e7, nu 0.45, a_i = 1, no acceleration, Anderson m 5, cloth limits [0.9, 1.1],
@@ -427,6 +435,7 @@ typedef struct df_admm_active_stats {
     int32_t region_elements;   /* elements (per-vertex energies: cells) iterated on */
     int32_t support;           /* support size at the end of the last active run */
     long tail_grows;           /* growths by the tail test (params.active_tail) */
+    long tail_probes;          /* first iterations redone on a grown region (tail test probe) */
 } df_admm_active_stats;
 
 /* Copies the active-set counters. NULL-safe (zeroes `out` for a NULL solver). */

@@ -36,8 +36,9 @@ void admm_active_free(df_admm *s)
     free_factor(s);
     free(a->adj_ptr); free(a->adj); free(a->hmap); free(a->in); free(a->depth); free(a->rv);
     free(a->fr); free(a->edge); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
-    free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp);
+    free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp); free(a->tbud);
     free(a->va);
+    admm_act_probe_free(a);
     free(a);
     s->act = NULL;
 }
@@ -119,9 +120,10 @@ int admm_act_init(df_admm *s, df_error *err)
     a->rfv = malloc(nv * sizeof(int32_t));
     a->rfidx = malloc(nv * sizeof(int32_t));
     a->stamp = calloc(nv, sizeof(uint32_t));
+    a->tbud = malloc(nv * sizeof(int32_t));
     if (s->family == ADMM_FAM_VERTEX) a->tstamp = calloc((size_t)s->sr_ptr[s->nv] + 1, sizeof(uint32_t));
     if (!a->hmap || !a->in || !a->depth || !a->rv || !a->fr || !a->edge || !a->ae || !a->ae2 || !a->emark || !a->work || !a->sup ||
-        !a->rfv || !a->rfidx || !a->stamp || (s->family == ADMM_FAM_VERTEX && !a->tstamp) || build_graph(s, a)) {
+        !a->rfv || !a->rfidx || !a->stamp || !a->tbud || (s->family == ADMM_FAM_VERTEX && !a->tstamp) || build_graph(s, a)) {
         df_admm_active_stats keep = a->st;
         admm_active_free(s);
         s->act = calloc(1, sizeof(admm_active));
@@ -138,7 +140,7 @@ int admm_act_init(df_admm *s, df_error *err)
 
 int admm_active_prepare(df_admm *s, df_error *err) { return admm_act_init(s, err); }
 
-static uint32_t next_stamp(admm_active *a, uint32_t *arr, size_t n)
+uint32_t admm_act_stamp(admm_active *a, uint32_t *arr, size_t n)
 {
     uint32_t *gen = arr == a->stamp ? &a->gen : &a->tgen;
     if (++*gen == 0) { /* wrapped: clear */
@@ -154,7 +156,7 @@ void admm_act_support(df_admm *s, int whole)
 {
     admm_active *a = s->act;
     int32_t n = 0;
-    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
+    uint32_t g = admm_act_stamp(a, a->stamp, (size_t)s->nv);
     const double zero[3] = {0, 0, 0};
     if (whole) {
         for (int32_t i = 0; i < s->nv; i++)
@@ -190,7 +192,7 @@ int admm_act_needs_grow(const df_admm *s)
 int32_t admm_act_fresh_size(df_admm *s)
 {
     admm_active *a = s->act;
-    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
+    uint32_t g = admm_act_stamp(a, a->stamp, (size_t)s->nv);
     int32_t qh = 0, qt = 0;
     for (int32_t k = 0; k < a->nsup; k++)
         if (a->stamp[a->sup[k]] != g) { a->stamp[a->sup[k]] = g; a->work[qt++] = a->sup[k]; }
@@ -225,7 +227,7 @@ static void snap_vertex(df_admm *s, int32_t i)
 static void region_lists(df_admm *s, admm_active *a)
 {
     qsort(a->rv, (size_t)a->nr, sizeof(int32_t), cmp_i32); /* memory order (as ae below) */
-    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
+    uint32_t g = admm_act_stamp(a, a->stamp, (size_t)s->nv);
     a->nfr = 0;
     for (int32_t k = 0; k < a->nr; k++) {
         int32_t v = a->rv[k];
@@ -236,7 +238,7 @@ static void region_lists(df_admm *s, admm_active *a)
         }
     }
     /* depths: multi-source BFS from the fringe into the region */
-    g = next_stamp(a, a->stamp, (size_t)s->nv);
+    g = admm_act_stamp(a, a->stamp, (size_t)s->nv);
     int32_t qh = 0, qt = 0;
     for (int32_t k = 0; k < a->nfr; k++) { a->work[qt++] = a->fr[k]; a->stamp[a->fr[k]] = g; a->depth[a->fr[k]] = 0; }
     while (qh < qt) {
@@ -337,7 +339,7 @@ static int factor_sub(df_admm *s, admm_active *a, df_error *err)
                 }
         }
     } else {
-        uint32_t tg = next_stamp(a, a->tstamp, (size_t)s->sr_ptr[s->nv] + 1);
+        uint32_t tg = admm_act_stamp(a, a->tstamp, (size_t)s->sr_ptr[s->nv] + 1);
         for (int32_t k = 0; k < a->nr && !rc; k++) {
             int32_t v = a->rv[k];
             for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1] && !rc; p++) {
@@ -425,7 +427,7 @@ int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra,
         a->tail_added = 0;
     }
     /* BFS `band` rings from the seeds (support and extra); depth[] holds the hop count here */
-    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
+    uint32_t g = admm_act_stamp(a, a->stamp, (size_t)s->nv);
     int32_t qh = 0, qt = 0;
     for (int pass = 0; pass < 2; pass++) {
         const int32_t *list = pass ? extra : a->sup;
@@ -568,36 +570,6 @@ int32_t admm_act_certify(df_admm *s)
         if (a->hmap[v] >= 0) continue; /* a handle is constrained, not optimal */
         double fn = force_norm(s, v);
         if (!(fn <= s->p.w * s->a[v])) a->sup[a->nsup + n++] = v;
-    }
-    return n;
-}
-
-/* SC-L1 slope charge w a_i |Vout_i - Vrest_i| of vertex i */
-static double charge(const df_admm *s, int32_t i)
-{
-    const double *x = s->Vout + 3 * (size_t)i, *r = s->Vrest + 3 * (size_t)i;
-    double d0 = x[0] - r[0], d1 = x[1] - r[1], d2 = x[2] - r[2];
-    return s->p.w * s->a[i] * sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-}
-
-int32_t admm_act_tail(df_admm *s, double E, double tol)
-{
-    admm_active *a = s->act;
-    if (s->p.w == 0.0 || a->nedge == 0 || !(fabs(E) > 0)) return 0;
-    double sum = 0, share = tol * fabs(E) / a->nedge;
-    for (int32_t k = 0; k < a->nedge; k++) sum += charge(s, a->edge[k]);
-    if (!(sum > tol * fabs(E))) return 0;
-    uint32_t g = next_stamp(a, a->stamp, (size_t)s->nv);
-    int32_t n = 0;
-    for (int32_t k = 0; k < a->nedge; k++) {
-        int32_t i = a->edge[k];
-        if (!(charge(s, i) > share)) continue;
-        for (int32_t p = a->adj_ptr[i]; p < a->adj_ptr[i + 1]; p++) {
-            int32_t u = a->adj[p];
-            if (a->in[u] || a->stamp[u] == g) continue;
-            a->stamp[u] = g;
-            a->sup[a->nsup + n++] = u;
-        }
     }
     return n;
 }

@@ -26,6 +26,7 @@ typedef struct admm_active {
                                 fringe vertices); ae2: scratch of the same size */
     uint8_t *emark;          /* ne (element family) or nv (cells): 1 when in ae */
     int32_t *work;           /* nv scratch (BFS queue) */
+    int32_t *tbud;           /* nv scratch: the tail test's ring budget per vertex */
     uint32_t *stamp, gen;    /* nv visit stamps (no clearing per pass) */
     uint32_t *tstamp, tgen;  /* spokes-and-rims entry stamps (vertex family) */
     int kfhp_dirty;          /* handle targets moved by a damped step: the full system's K_fh P is
@@ -47,6 +48,13 @@ typedef struct admm_active {
     /* damped steps: the undamped global solution on the region (nr x 3, capacity cap_v) */
     int64_t cap_v;
     double *va;
+    /* the tail test's probe (admm_active_tail.c): the region's state at the start of a run on a
+     * fresh region */
+    int32_t pr_nr, *pr_rv, pr_nae, *pr_ae;
+    int64_t pr_cap_v, pr_cap_e;
+    double *pr_v, *pr_e;     /* per vertex V U Z Vout (12), per element W R X (18) */
+    uint8_t *pr_mark;        /* ne scratch */
+    double pr_E, pr_el, pr_lo;
     df_admm_active_stats st;
 } admm_active;
 
@@ -65,13 +73,22 @@ int admm_act_needs_grow(const df_admm *s);
 /* far-field certificate: appends the failing fringe vertices to act->sup after its nsup entries
  * (nsup unchanged) and returns their number */
 int32_t admm_act_certify(df_admm *s);
-/* tail test (admm.h DF_ADMM_ACTIVE, edge tail): appends to act->sup after its nsup entries (nsup
- * unchanged) the fringe vertices next to edge vertices whose SC-L1 charge w a_i |Vout_i - Vrest_i|
- * exceeds tol |E| / nedge, and returns their number (0 when the summed edge charge is within
- * tol |E|) */
-int32_t admm_act_tail(df_admm *s, double E, double tol);
 /* sub-system solve: rhs already in act->rhs; *x the nrf x 3 column-major answer */
 int admm_act_solve(df_admm *s, const double **x, df_error *err);
 int admm_act_buffers(df_admm *s, df_error *err);
+
+/* next generation of a stamp array (a->stamp: nv entries, a->tstamp: spokes-and-rims entries) */
+uint32_t admm_act_stamp(admm_active *a, uint32_t *arr, size_t n);
+
+/* admm_active_tail.c. Tail test (admm.h DF_ADMM_ACTIVE, "Tail test"): when the summed SC-L1
+ * charge w a_i |Vout_i - Vrest_i| of the edge exceeds tol |E|, appends to act->sup after its nsup
+ * entries (nsup unchanged) the outside vertices within the predicted number of rings of each edge
+ * vertex whose charge exceeds tol |E| / nedge, and returns their number (0: no growth). Probe:
+ * admm_act_probe_save saves the region's state (and the objective) / puts it back after the
+ * region grew (elements that entered get their local step from the restored positions) / frees */
+int32_t admm_act_tail(df_admm *s, double E, double tol);
+int admm_act_probe_save(df_admm *s, df_error *err);
+void admm_act_probe_restore(df_admm *s);
+void admm_act_probe_free(admm_active *a);
 
 #endif

@@ -21,6 +21,8 @@
 #define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
 /* a run starts from a fresh region when the current one is this many times larger than needed */
 #define ACT_SHRINK 2
+/* tail test: restarts of a run on a fresh region whose first iteration grew it (the probe) */
+#define ACT_PROBES 3
 
 /* The residuals of the stop test (admm_resid.c's, over the region) are summed inside the
  * kernels from each item's old and new values, without snapshots: squared norms of r, A x, z, s
@@ -345,6 +347,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     int rc = admm_act_init(s, err);
     if (rc) return rc;
     a = s->act;
+    int fresh_run = !a->valid;
     if (!a->valid) {
         admm_act_support(s, s->act_dirty); /* pristine (at rest since create): the handles only */
         a->st.rebuilds++;
@@ -356,6 +359,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             /* the support shrank (a drag back): rebuild from it; the vertices leaving the region
              * go exactly to rest (they are off it by no more than the iterations' residual) */
             a->st.rebuilds++;
+            fresh_run = 1;
             rc = admm_act_build(s, 1, NULL, 0, err);
         } else if (a->rho_fact != s->p.rho) rc = admm_act_build(s, 0, NULL, 0, err); /* rho changed: refactor */
     }
@@ -376,6 +380,10 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         E_prev = el0 + lo0;
         s->E_last = E_prev; s->el_last = el0; s->lo_last = lo0;
     }
+    /* the tail test's probe (admm_active_probe.c; not with damped handle steps, whose applied
+     * targets move during the iteration) */
+    int probes = fresh_run && s->p.active_tail > 0 && !s->damp ? ACT_PROBES : 0;
+    if (probes && (rc = admm_act_probe_save(s, err))) return rc;
     double t_loop = admm_now(), t_it = t_loop, last_ms = 0.0;
     int certified = 0, fell_back = 0;
     for (int it = 0; it < maxit; it++) {
@@ -432,6 +440,17 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             conv = 0;
             if (grow(s, by_check, nt, err, &rc)) { fell_back = 1; break; }
             if (rc) break;
+            if (it == 0 && probes > 0) { /* the probe: start again on the grown region */
+                probes--;
+                a->st.tail_probes++;
+                admm_act_probe_restore(s);
+                E_prev = s->E_last;
+                r.iterations = 0;
+                r.t_other += admm_now() - ta;
+                t_it = admm_now();
+                it = -1;
+                continue;
+            }
         }
         r.t_other += admm_now() - ta;
         double t_end = admm_now();

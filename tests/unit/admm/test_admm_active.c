@@ -4,7 +4,8 @@
  * 1e-8 positions; the vertices outside the region stay bitwise at rest; the region grows when the
  * handle drags further and shrinks when it comes back; with a band of one ring only the far-field certificate can grow the region
  * and it does; the tail test makes a 20-iteration update follow the full solve's iterate closely
- * (and converges to the same result); set_positions and reset_rest keep working in active mode (same result as the full
+ * (and converges to the same result), and its probe redoes a first iteration that grew the region
+ * (one reported iteration is the full solve's first iterate); set_positions and reset_rest keep working in active mode (same result as the full
  * solve); affine constraints fall back to the full solve (bit-identical to it); bad parameters are
  * refused. Expected values come from the full solve of the same problem. */
 #include <stdarg.h>
@@ -254,7 +255,7 @@ static void test_tri_tail_equals_full(void **state)
     scene sc;
     tri_scene(&sc, 40);
     df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1);
-    pa.active_tail = 1e-6;
+    pa.active_tail = 3e-4;
     df_admm *full, *act;
     drag_pair(&sc, &pf, &pa, 4, 0.3, &full, &act);
     df_admm_active_stats st;
@@ -346,8 +347,8 @@ static void test_certificate_grows_region(void **state)
 
 /* the tail test (params.active_tail): an unconverged 20-iteration update follows the full solve's
  * iterate, whose global step moves every vertex a little, far more closely than the plain band
- * (Dirichlet at rest on the fringe) does: the region grows one ring wherever its edge still
- * carries SC-L1 charge. Expected values: the full solve of the same update; converged, the result
+ * (Dirichlet at rest on the fringe) does: the region grows, by the rings the charge's decay asks
+ * for, wherever its edge still carries SC-L1 charge. Expected values: the full solve of the same update; converged, the result
  * is the full solve's as without the test. */
 static void test_tail_test_follows_full(void **state)
 {
@@ -355,7 +356,7 @@ static void test_tail_test_follows_full(void **state)
     scene sc;
     tet_scene(&sc, 16);
     df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1), pt = pa;
-    pt.active_tail = 1e-6;
+    pt.active_tail = 3e-4;
     df_admm *full = make(&sc, &pf), *act = make(&sc, &pa), *tail = make(&sc, &pt);
     set_drag2(full, act, &sc, 0.3);
     set_drag(tail, &sc, 0.3);
@@ -394,7 +395,7 @@ static void test_tail_region_kept(void **state)
     scene sc;
     tet_scene(&sc, 16);
     df_admm_params pf = arap_params(&sc, 0), pt = arap_params(&sc, 1);
-    pt.active_tail = 1e-6;
+    pt.active_tail = 3e-4;
     df_admm *full = make(&sc, &pf), *kept = make(&sc, &pt), *regrown = NULL;
     int32_t prev_region = 0;
     for (int k = 1; k <= 4; k++) {
@@ -432,6 +433,55 @@ static void test_tail_region_kept(void **state)
     assert_same(full, regrown, &rf, &rr, sc.m.nv);
     df_admm_free(regrown);
     free_pair(full, kept, &sc);
+}
+
+/* the tail test's probe (admm.h "Tail test"): a drag's first update starts on a region built
+ * from the handles, and its first iteration shows the region too small; the region grows (several
+ * rings at once where the edge carries charge) and the iteration is redone from the state before
+ * it. Expected values: the full solve's first and second iterates of the same update. After one
+ * reported iteration the tail-test solver is at the full solve's first iterate (far closer than
+ * the plain band's first iterate, and not at the second iterate: the probe's iteration left no
+ * trace); the region is smaller than half the mesh (grown where the charge is, no fallback), and
+ * converged the result is the full solve's. */
+static void test_tail_probe(void **state)
+{
+    (void)state;
+    scene sc;
+    tet_scene(&sc, 16);
+    df_admm_params pf = arap_params(&sc, 0), pa = arap_params(&sc, 1), pt = pa;
+    pt.active_tail = DF_ADMM_ACTIVE_TAIL;
+    df_admm *full = make(&sc, &pf), *full2 = make(&sc, &pf), *band = make(&sc, &pa), *tail = make(&sc, &pt);
+    set_drag2(full, full2, &sc, 0.3);
+    set_drag2(band, tail, &sc, 0.3);
+    df_admm_result r1, r2, rb, rt;
+    run2(full, full2, 1, &r1, NULL);
+    r2 = run(full2, 1); /* the full solve's second iterate */
+    run2(band, tail, 1, &rb, &rt);
+    assert_int_equal(rt.iterations, 1);
+    df_admm_active_stats st, sb;
+    df_admm_get_active_stats(tail, &st);
+    df_admm_get_active_stats(band, &sb);
+    double E1 = fabs(r1.objective);
+    double d_tail = fabs(rt.objective - r1.objective) / E1, d_band = fabs(rb.objective - r1.objective) / E1;
+    double d_12 = fabs(r2.objective - r1.objective) / E1;
+    print_message("1 iteration: probes %ld, tail grows %ld, region %d (band %d) of %d; |E - E_full1| / E_full1: tail "
+                  "%.2e, band %.2e; second full iterate %.2e away\n", st.tail_probes, st.tail_grows, st.region_vertices,
+                  sb.region_vertices, sc.m.nv, d_tail, d_band, d_12);
+    assert_true(st.tail_probes >= 1);
+    assert_int_equal(st.tail_probes, st.tail_grows);
+    assert_int_equal(sb.tail_probes, 0);
+    assert_true(st.region_vertices > sb.region_vertices);
+    assert_true(d_tail * 10.0 < d_band);
+    assert_true(d_tail * 10.0 < d_12);
+    assert_int_equal(st.fallbacks, 0);
+    assert_true(count_moved(tail, &sc.m) <= st.region_vertices);
+    assert_true(st.region_vertices < sc.m.nv / 2);
+    df_admm_result rf, rc;
+    run2(full, tail, 20000, &rf, &rc);
+    assert_same(full, tail, &rf, &rc, sc.m.nv);
+    df_admm_free(full2);
+    df_admm_free(band);
+    free_pair(full, tail, &sc);
 }
 
 /* set_positions (e.g. an undo or a brush edit somewhere else) and reset_rest in active mode give the
@@ -552,6 +602,7 @@ int main(void)
         cmocka_unit_test(test_certificate_grows_region),
         cmocka_unit_test(test_tail_test_follows_full),
         cmocka_unit_test(test_tail_region_kept),
+        cmocka_unit_test(test_tail_probe),
         cmocka_unit_test(test_set_positions_and_reset_rest),
         cmocka_unit_test(test_affine_falls_back),
         cmocka_unit_test(test_bad_params),
