@@ -3,7 +3,8 @@
  * its vertices, the global step on its free vertices with the region's factor, Neo-Hookean damped
  * handle steps), the same scale-invariant stop test as the full solve (admm.h DF_ADMM_RESIDUAL;
  * the far field adds its constant share sum gam_e |I|^2 to the residual scales), region growth,
- * the far-field certificate, the tail test (params.active_tail) and the fallback to the full
+ * the far-field certificate, the tail test (params.active_tail) with its probe (a first
+ * iteration that grew a fresh region is redone on the grown one) and the fallback to the full
  * solve. */
 #include <math.h>
 #include <stdlib.h>
@@ -380,7 +381,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         E_prev = el0 + lo0;
         s->E_last = E_prev; s->el_last = el0; s->lo_last = lo0;
     }
-    /* the tail test's probe (admm_active_probe.c; not with damped handle steps, whose applied
+    /* the tail test's probe (admm_active_tail.c; not with damped handle steps, whose applied
      * targets move during the iteration) */
     int probes = fresh_run && s->p.active_tail > 0 && !s->damp ? ACT_PROBES : 0;
     if (probes && (rc = admm_act_probe_save(s, err))) return rc;
