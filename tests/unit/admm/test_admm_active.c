@@ -435,14 +435,38 @@ static void test_tail_region_kept(void **state)
     free_pair(full, kept, &sc);
 }
 
+/* hops over the vertex graph (vertices sharing an element) from the dragged handles, into dist
+ * (nv; -1: not reached) */
+static void hops_from_drag(const scene *sc, int32_t *dist)
+{
+    const df_mesh *m = &sc->m;
+    int32_t nv = m->nv, ne = m->ne, esz = 4;
+    for (int32_t i = 0; i < nv; i++) dist[i] = -1;
+    for (int k = 0; k < sc->nh; k++)
+        if (sc->drag[k]) dist[sc->h[k]] = 0;
+    for (int changed = 1, d = 0; changed; d++) { /* level by level over the elements */
+        changed = 0;
+        for (int32_t e = 0; e < ne; e++) {
+            const int32_t *el = m->E + (size_t)e * esz;
+            int touch = 0;
+            for (int c = 0; c < esz; c++) touch |= dist[el[c]] == d;
+            if (!touch) continue;
+            for (int c = 0; c < esz; c++)
+                if (dist[el[c]] < 0) { dist[el[c]] = d + 1; changed = 1; }
+        }
+    }
+}
+
 /* the tail test's probe (admm.h "Tail test"): a drag's first update starts on a region built
  * from the handles, and its first iteration shows the region too small; the region grows (several
  * rings at once where the edge carries charge) and the iteration is redone from the state before
  * it. Expected values: the full solve's first and second iterates of the same update. After one
  * reported iteration the tail-test solver is at the full solve's first iterate (far closer than
  * the plain band's first iterate, and not at the second iterate: the probe's iteration left no
- * trace); the region is smaller than half the mesh (grown where the charge is, no fallback), and
- * converged the result is the full solve's. */
+ * trace); the region grew by several rings at once but not by whole rings (the moved vertices,
+ * the region's, reach more than one ring beyond the first region, the handles + 3 rings, yet are
+ * fewer than the vertices within that many rings of the handles), and converged the result is the
+ * full solve's. */
 static void test_tail_probe(void **state)
 {
     (void)state;
@@ -474,8 +498,19 @@ static void test_tail_probe(void **state)
     assert_true(d_tail * 10.0 < d_band);
     assert_true(d_tail * 10.0 < d_12);
     assert_int_equal(st.fallbacks, 0);
-    assert_true(count_moved(tail, &sc.m) <= st.region_vertices);
-    assert_true(st.region_vertices < sc.m.nv / 2);
+    int32_t moved = count_moved(tail, &sc.m);
+    assert_true(moved <= st.region_vertices);
+    int32_t *dist = malloc((size_t)sc.m.nv * sizeof(int32_t)), dmax = 0, ball = 0;
+    hops_from_drag(&sc, dist);
+    const double *V = df_admm_positions(tail);
+    for (int32_t i = 0; i < sc.m.nv; i++)
+        if (memcmp(V + 3 * (size_t)i, sc.m.V + 3 * (size_t)i, 3 * sizeof(double)) && dist[i] > dmax) dmax = dist[i];
+    for (int32_t i = 0; i < sc.m.nv; i++) ball += dist[i] >= 0 && dist[i] <= dmax;
+    print_message("moved %d vertices, up to %d rings from the dragged handles; %d vertices within %d rings\n", moved,
+                  dmax, ball, dmax);
+    free(dist);
+    assert_true(dmax > DF_ADMM_ACTIVE_BAND + 1);
+    assert_true(moved < ball);
     df_admm_result rf, rc;
     run2(full, tail, 20000, &rf, &rc);
     assert_same(full, tail, &rf, &rc, sc.m.nv);
