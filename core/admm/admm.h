@@ -247,7 +247,10 @@ typedef struct df_admm_params {
  * while the region was too small: ADMM damps an early difference only ~0.6x per iteration. The
  * tail test with DF_ADMM_ACTIVE_TAIL (3e-4) brings it to 6.4e-9 with a region of ~1.3k vertices
  * (~1.4x the default band's, 2 growths + the first build); the one-ring growth it replaces needed
- * tol 3e-6, ~2.8k vertices and 8 builds for 7.2e-9. Where its time goes (bench_local's 1M grid):
+ * tol 3e-6, ~2.8k vertices and 8 builds for 7.2e-9. A region of that size cannot do much better:
+ * one fixed from the start to the vertices the full iterates of those updates move by more than
+ * 3e-6 drag steps (known only after the full solve; 1275 vertices) gives 7.3e-9 (measured with a
+ * throw-away hook, not in the API). Where its time goes (bench_local's 1M grid):
  * the region is built and grown in the first two updates only and then kept (it never shrinks
  * back during a drag); later updates are the iterations on its vertices and elements. */
 #define DF_ADMM_ACTIVE_BAND 3
