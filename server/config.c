@@ -192,7 +192,7 @@ static const int_key k_int_keys[] = {
     {"threads", offsetof(df_server_config, threads), 1, DF_CONFIG_MAX_THREADS},
     {"spin_us", offsetof(df_server_config, spin_us), 0, DF_CONFIG_MAX_SPIN_US},
     {"inline_us", offsetof(df_server_config, inline_us), 0, DF_CONFIG_MAX_INLINE_US},
-    {"admm_active", offsetof(df_server_config, admm_active), 0, 1},
+    {"admm_active", offsetof(df_server_config, admm_active), 0, 2},
     {"cursor_hz", offsetof(df_server_config, cursor_hz), 0, DF_CONFIG_MAX_CURSOR_HZ},
     {"max_upload_mb", offsetof(df_server_config, max_upload_mb), 1,
      DF_CONFIG_DEFAULT_MAX_UPLOAD_MB},

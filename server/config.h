@@ -212,7 +212,8 @@ typedef struct df_server_config {
     char advertise[DF_CONFIG_PATH_MAX]; /* config `advertise`: "host:port" ("" = tcp's) */
     int cluster_lease_ms;        /* session lease ttl, ms */
     int admm_active;             /* 1: handle sets solve in the active-set mode (admm.h
-                                    DF_ADMM_ACTIVE), default 0 */
+                                    DF_ADMM_ACTIVE), 2: the same with the tail test at
+                                    DF_ADMM_ACTIVE_TAIL (admm.h "Tail test"), default 0 */
 } df_server_config;
 
 /* Fills `cfg` with the defaults; the socket path comes from `xdg_runtime_dir` (may be NULL or "",

@@ -72,7 +72,9 @@ static int build_solver(const df_session *s, const df_handleset *hs, df_admm **o
     m.V = s->rest;
     df_work_report(w, DF_STAGE_FACTORIZE, 0, 1, 0, 1);
     df_admm_params p = hs->params;
-    p.active = s->srv->cfg.admm_active; /* config admm_active: the active-set mode */
+    /* config admm_active: 1 the active-set mode, 2 the same with the recommended tail test */
+    p.active = s->srv->cfg.admm_active != 0;
+    p.active_tail = s->srv->cfg.admm_active == 2 ? DF_ADMM_ACTIVE_TAIL : 0.0;
     int rc = df_admm_create(&m, &p, hs->handles, hs->nh, hs->affine, hs->n_affine, out, err);
     if (rc == DF_OK) df_work_report(w, DF_STAGE_FACTORIZE, 1, 1, 1, 1);
     return rc;

@@ -197,6 +197,7 @@ int df_h_stats(df_req *r, const uint8_t *p, df_error *err)
         put(&st, "admm.active_support", v->act.support);
         put(&st, "admm.active_region_grows", (double)v->act.grows);
         put(&st, "admm.active_check_grows", (double)v->act.check_grows);
+        put(&st, "admm.active_tail_grows", (double)v->act.tail_grows);
     }
     df_req_reply_stats(r, &st);
     return DF_OK;

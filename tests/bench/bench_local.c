@@ -7,7 +7,7 @@
  * units on every mesh, so the support (vertices that move) has the same size while the mesh grows.
  * For each mesh: the full solve (params.active = 0) against the active-set mode (params.active =
  * 1) with the default band (3 rings), twice that, and the default band with the tail test
- * (params.active_tail = TAIL, the value of the one-ring growth it replaced, and the recommended
+ * (params.active_tail = TAIL, the smallest value that meets 1e-8 over a whole drag at 100k, and the recommended
  * DF_ADMM_ACTIVE_TAIL): mean and largest update time (wall and CPU), the region and
  * support, the largest relative objective difference per update (the restricted and the full ADMM
  * iterates differ until converged), and after the drag both solves converged (tol 1e-12) and
@@ -41,7 +41,7 @@
 #define STEP 0.3    /* drag per update, grid spacings */
 #define TARGET_MS 33.0
 #define TARGET_REL 1e-8
-#define TAIL 3e-6   /* params.active_tail of the first tail-test variant */
+#define TAIL 5e-5   /* params.active_tail of the first tail-test variant */
 
 /* CPU seconds of the process (all threads): the work, whatever the machine's load */
 static double cpu_now(void)
@@ -277,7 +277,7 @@ int main(int argc, char **argv)
     /* the active variants: the default band, twice that, the default band with the tail test */
     enum { NVAR = 4, VAR_REC = 3 /* the recommended tail test */ };
     static const struct { int band; double tail; const char *name; } var[NVAR] = {
-        {DF_ADMM_ACTIVE_BAND, 0.0, "active b3"}, {2 * DF_ADMM_ACTIVE_BAND, 0.0, "active b6"}, {DF_ADMM_ACTIVE_BAND, TAIL, "b3 tail"},
+        {DF_ADMM_ACTIVE_BAND, 0.0, "active b3"}, {2 * DF_ADMM_ACTIVE_BAND, 0.0, "active b6"}, {DF_ADMM_ACTIVE_BAND, TAIL, "tail 5e-5"},
         {DF_ADMM_ACTIVE_BAND, DF_ADMM_ACTIVE_TAIL, "tail 3e-4"}};
     double upd100k[NVAR], fair100k[NVAR], ms1m[NVAR], cpu1m[NVAR];
     int below100k[NVAR];
@@ -285,10 +285,11 @@ int main(int argc, char **argv)
     for (int k = 0; k < 3; k++) {
         grid g;
         make_grid(sizes[k], &g);
-        /* the full solve: every update and the convergence run at 10k (and at 1M on request),
-         * the first 2 updates at 100k (one update there takes seconds on this machine), none at
-         * 1M by default (header comment) */
-        int full_updates = k == 0 || full1m ? UPDATES : k == 1 ? 2 : 0;
+        /* the full solve: every update and the convergence run at 10k and 100k (the accuracy
+         * target is read there: the full iterate's far-field drift, and so the gap, grows over a
+         * drag, so the first updates alone understate it), at 1M only on request (header
+         * comment) */
+        int full_updates = k < 2 || full1m ? UPDATES : 0;
         outcome full, act[NVAR];
         memset(&full, 0, sizeof(full));
         int have_full = full_updates > 0 && drag(&g, 0, 0, 0.0, full_updates, ITERS, 1, &full) == 0;
@@ -302,7 +303,7 @@ int main(int argc, char **argv)
         if (have_full)
             printf("%9d %8d  %-10s | %7.1f / %7.1f | %7.1f | %7s %7s %6.2f%% %6s | %9s %9s%s\n", g.m.ne, g.m.nv, "full",
                    full.mean_ms, full.max_ms, full.cpu_ms, "all", "-", 100.0 * full.moved / g.m.nv, "-", "", "",
-                   full_updates < UPDATES ? "  (first 2 updates only)" : "");
+                   full_updates < UPDATES ? "  (not every update)" : "");
         else
             printf("%9d %8d  %-10s | not run (whole-mesh factorization ~1 min, 1.7 GB; BENCH_LOCAL_FULL1M=1)\n", g.m.ne,
                    g.m.nv, "full");

@@ -140,6 +140,29 @@ static void test_stream_coalesce_thresholds(void **state)
     assert_true(hi == 4096 && lo == 4096);
 }
 
+/* admm_active: 0 full solve (default), 1 active set, 2 active set with the tail test; anything
+ * else is refused and leaves the value */
+static void test_admm_active_modes(void **state)
+{
+    (void)state;
+    df_server_config c;
+    df_error e;
+    df_config_defaults(&c, NULL);
+    assert_int_equal(c.admm_active, 0);
+    for (int v = 0; v <= 2; v++) {
+        char txt[8];
+        snprintf(txt, sizeof txt, "%d", v);
+        assert_int_equal(df_config_set(&c, "admm_active", txt, &e), DF_OK);
+        assert_int_equal(c.admm_active, v);
+    }
+    static const char *bad[] = {"3", "-1", "tail", ""};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        assert_int_not_equal(df_config_set(&c, "admm_active", bad[i], &e), DF_OK);
+        assert_non_null(strstr(e.msg, "admm_active"));
+        assert_int_equal(c.admm_active, 2);
+    }
+}
+
 static void test_parse_errors_leave_config_untouched(void **state)
 {
     (void)state;
@@ -505,6 +528,7 @@ int main(void)
         cmocka_unit_test(test_parse_file_text),
         cmocka_unit_test(test_parse_errors_leave_config_untouched),
         cmocka_unit_test(test_stream_coalesce_thresholds),
+        cmocka_unit_test(test_admm_active_modes),
         cmocka_unit_test(test_network_and_admission_keys),
         cmocka_unit_test(test_cluster_keys),
         cmocka_unit_test(test_load_file_and_cli),
