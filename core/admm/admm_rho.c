@@ -2,8 +2,9 @@
  * problem's scales, the refactorization-cost gap between two changes, and relative residual
  * balancing of the Z = V - Vrest block and of the element block (Boyd et al. 2011 sec. 3.4.1 with
  * the scale-invariant relative residuals of Wohlberg 2017) with the scaled duals U, W rescaled at
- * each change; element penalties of energies finite everywhere start at DF_ADMM_GAMMA_INIT (on
- * trial); lowered element penalties go back to 1 for good when they produce inverted
+ * each change; the element penalties start at DF_ADMM_GAMMA_INIT (energies finite everywhere, on
+ * trial) or DF_ADMM_GAMMA_INIT_NH (Neo-Hookean); lowered element penalties go back to 1 for good
+ * when they produce inverted
  * (Neo-Hookean) iterates, fail their trial (too little progress) or stall. */
 #include <math.h>
 #include <stdlib.h>
@@ -81,17 +82,18 @@ void admm_rho_init(df_admm *s)
     s->gam_locked = 0;
     s->g_trial = 0;
     s->best_since_change = INFINITY;
-    /* element penalties of an energy that is finite for every V (all but Neo-Hookean, whose
-     * lowered penalties invert iterates while its handles travel): start at g =
-     * DF_ADMM_GAMMA_INIT, where the balancing took every shared-mesh case at its first change,
-     * without that refactorization and the imbalanced iterations before it; on trial like any
-     * lowering (its first window against nothing) */
-    if (s->family == ADMM_FAM_ELEMENT && s->p.energy != DF_ADMM_NEOHOOKEAN) {
-        for (int32_t e = 0; e < s->ne; e++) s->gam[e] *= DF_ADMM_GAMMA_INIT;
-        s->gscale = DF_ADMM_GAMMA_INIT;
-        s->g_trial = DF_ADMM_GAMMA_TRIAL;
-        s->g_trial_ref = INFINITY;
-        s->g_trial_best = INFINITY;
+    /* the element penalties' start (admm.h DF_ADMM_RHO_RULE): energies finite for every V at
+     * DF_ADMM_GAMMA_INIT (below 1: on trial like any lowering, its first window against
+     * nothing), Neo-Hookean at DF_ADMM_GAMMA_INIT_NH */
+    if (s->family == ADMM_FAM_ELEMENT) {
+        double g0 = s->p.energy == DF_ADMM_NEOHOOKEAN ? DF_ADMM_GAMMA_INIT_NH : DF_ADMM_GAMMA_INIT;
+        for (int32_t e = 0; e < s->ne; e++) s->gam[e] *= g0;
+        s->gscale = g0;
+        if (g0 < 1.0) {
+            s->g_trial = DF_ADMM_GAMMA_TRIAL;
+            s->g_trial_ref = INFINITY;
+            s->g_trial_best = INFINITY;
+        }
     }
 }
 
