@@ -111,7 +111,21 @@ typedef enum df_admm_energy {
  *   dual residual stays far above its primal one near c);
  *   rho stays in [DF_ADMM_RHO_FLOOR c, initial x DF_ADMM_RHO_RANGE] (c = 0: initial / RANGE below),
  *   so rho > c always; the element penalties are gamma_e x g with one global g in
- *   [DF_ADMM_GAMMA_MIN, DF_ADMM_GAMMA_MAX], initially 1.
+ *   [DF_ADMM_GAMMA_MIN, DF_ADMM_GAMMA_MAX], initially DF_ADMM_GAMMA_INIT for the energies that are
+ *   finite for every V (ARAP, ACAP, cloth: every shared-mesh ARAP case balanced g to 0.25-0.31 at
+ *   its first change; starting there saves that refactorization and the imbalanced iterations
+ *   before it: to the bench's quality pig ARAP 54 iterations instead of 55 + 1 refactorization,
+ *   bar3 60 instead of 70 + 1, 72 at g = 1; g0 0.3-0.4 all gave 53-55 and 59-63), on trial like a
+ *   lowering (below; the first window passes); Neo-Hookean starts at DF_ADMM_GAMMA_INIT_NH (the
+ *   top of the range; below 1 its iterates invert while the handles travel: the pig took 107
+ *   iterations from g0 0.35). Its gamma_e sits below the energy's largest curvature at rest
+ *   ((2 mu + 3 lambda) vol, 2.6 gamma_e at nu 0.45), and a stiffer element block keeps the global
+ *   step's response to the handle move from inverting elements: the pig teaser's handles reach
+ *   their targets by damped steps at iteration 65 instead of a forced jump at 44 followed by 55
+ *   inverted iterates. To the bench's quality (iterations, g0 1 / 2 / 3 / 4 / 6): pig teaser
+ *   120 / 125 / 116 / 108 / 96, pig 84 / 82 / 80 / 72 / 128, apple 12 / 9 / 6 / 4 / 3, unit apple
+ *   (w 5) 58 / 53 / 48 / 44 / 39; the unit pig with the teaser's targets (w 5, inverted for ~1000
+ *   iterations whatever the start) 1101 at g0 1, 1245 at 2, 1304 at 4 (1147 at rho 1.25 w/s).
  * After every iteration, per block, the relative residuals (Wohlberg 2017; penalty-free, so the
  * rule does not depend on the length unit or the energy scale) of the Z block
  *     pri_z = ||V - Vrest - Z|| / max(||V - Vrest||, ||Z||),   dual_z = ||Z_k - Z_k-1|| / ||U||
@@ -120,6 +134,8 @@ typedef enum df_admm_energy {
  *     pri_e = ||F(V) - RX|| / max(||F(V)||, ||RX||),            dual_e = ||RX_k - RX_k-1|| / ||W||
  * give a factor sqrt(pri / dual) when pri > DF_ADMM_RHO_IMBALANCE dual or
  * dual > DF_ADMM_RHO_IMBALANCE pri (then < 1), else 1, at most DF_ADMM_RHO_MAX_STEP either way
+ * (a residual exactly 0 with the other not: the full step, e.g. Z still 0 while V left rest: the
+ * table-like tiny move raised rho at its first change instead of cycling at the floor)
  * (DF_ADMM_GAMMA_MAX_STEP for g); rho and g are multiplied by their factors (Boyd et al. 2011
  * sec. 3.4.1 residual balancing). Neo-Hookean: no balancing after an inverted (held, see
  * df_admm_run) iterate; its element penalties change only once the handles are at their targets
@@ -159,6 +175,8 @@ typedef enum df_admm_energy {
 #define DF_ADMM_RHO_STALL_WINDOW 200
 #define DF_ADMM_RHO_STALL_STEP 2.0
 #define DF_ADMM_RHO_STALL_MIN 1e-12
+#define DF_ADMM_GAMMA_INIT 0.35
+#define DF_ADMM_GAMMA_INIT_NH 4.0
 #define DF_ADMM_GAMMA_MIN 0.25
 #define DF_ADMM_GAMMA_MAX 4.0
 #define DF_ADMM_GAMMA_MAX_STEP 4.0

@@ -2,7 +2,9 @@
  * problem's scales, the refactorization-cost gap between two changes, and relative residual
  * balancing of the Z = V - Vrest block and of the element block (Boyd et al. 2011 sec. 3.4.1 with
  * the scale-invariant relative residuals of Wohlberg 2017) with the scaled duals U, W rescaled at
- * each change; lowered element penalties go back to 1 for good when they produce inverted
+ * each change; the element penalties start at DF_ADMM_GAMMA_INIT (energies finite everywhere, on
+ * trial) or DF_ADMM_GAMMA_INIT_NH (Neo-Hookean); lowered element penalties go back to 1 for good
+ * when they produce inverted
  * (Neo-Hookean) iterates, fail their trial (too little progress) or stall. */
 #include <math.h>
 #include <stdlib.h>
@@ -80,6 +82,19 @@ void admm_rho_init(df_admm *s)
     s->gam_locked = 0;
     s->g_trial = 0;
     s->best_since_change = INFINITY;
+    /* the element penalties' start (admm.h DF_ADMM_RHO_RULE): energies finite for every V at
+     * DF_ADMM_GAMMA_INIT (below 1: on trial like any lowering, its first window against
+     * nothing), Neo-Hookean at DF_ADMM_GAMMA_INIT_NH */
+    if (s->family == ADMM_FAM_ELEMENT) {
+        double g0 = s->p.energy == DF_ADMM_NEOHOOKEAN ? DF_ADMM_GAMMA_INIT_NH : DF_ADMM_GAMMA_INIT;
+        for (int32_t e = 0; e < s->ne; e++) s->gam[e] *= g0;
+        s->gscale = g0;
+        if (g0 < 1.0) {
+            s->g_trial = DF_ADMM_GAMMA_TRIAL;
+            s->g_trial_ref = INFINITY;
+            s->g_trial_best = INFINITY;
+        }
+    }
 }
 
 void admm_rho_set_gap(df_admm *s)
@@ -100,7 +115,11 @@ void admm_rho_set_gap(df_admm *s)
  * < 1 lowers it, 1 leaves it */
 static double balance(double pri, double dual)
 {
-    if (!(pri > 0) || !(dual > 0) || !isfinite(pri) || !isfinite(dual)) return 1.0;
+    if (!(pri >= 0) || !(dual >= 0) || !isfinite(pri) || !isfinite(dual) || (pri == 0 && dual == 0)) return 1.0;
+    /* one residual exactly 0 and the other not: the largest imbalance there is (e.g. pri 1,
+     * dual 0: the splitting variable has not moved at all while the constraint is violated) */
+    if (dual == 0) return DF_ADMM_RHO_MAX_STEP;
+    if (pri == 0) return 1.0 / DF_ADMM_RHO_MAX_STEP;
     double ratio = pri / dual;
     if (ratio > DF_ADMM_RHO_IMBALANCE) return fmin(sqrt(ratio), DF_ADMM_RHO_MAX_STEP);
     if (ratio * DF_ADMM_RHO_IMBALANCE < 1.0) return 1.0 / fmin(sqrt(1.0 / ratio), DF_ADMM_RHO_MAX_STEP);

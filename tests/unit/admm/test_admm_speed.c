@@ -1,7 +1,7 @@
 /* Unit tests of the ADMM speed work: the Neo-Hookean prox on a symmetric stretch matrix (loosely
  * converged warm Jacobi plus the first-order correction) against a fully converged reference, the
  * predictive time budget of df_admm_run, and the damped handle steps / feasible reporting of
- * Neo-Hookean runs (no inverted shape is reported). */
+ * Neo-Hookean runs (no inverted shape is reported; the same damped iterates on 1 and 3 threads). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -219,12 +219,56 @@ static void test_nh_damped_handles(void **st)
     tu_free(&m);
 }
 
+/* the damped steps' inversion checks stop early on every thread once an inverted element is found
+ * (admm_damp.c): the same decisions as a full scan, so the damped iterates on 1 and on 3 threads are
+ * bit-identical (a fixed rho: no thread-dependent reduction enters the iteration), and the handles
+ * did lag (damping happened) */
+static void test_nh_damped_threads_identical(void **st)
+{
+    (void)st;
+    int32_t *h; int nh; double *tg;
+    df_mesh m = bar_problem(6, -0.6, 0.6, 1, &h, &nh, &tg);
+    double *V1 = malloc((size_t)m.nv * 3 * sizeof(double));
+    assert_non_null(V1);
+    double lag1 = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        df_admm_params p;
+        df_admm_params_default(&p, DF_ADMM_NEOHOOKEAN);
+        p.threads = pass == 0 ? 1 : 3;
+        p.s = 0.05; p.w = 50; p.rho = 1.25 * p.w / p.s; p.tol = 0;
+        df_admm *s = NULL;
+        df_error err;
+        assert_int_equal(df_admm_create(&m, &p, h, nh, NULL, 0, &s, &err), DF_OK);
+        assert_int_equal(df_admm_set_targets(s, tg, &err), DF_OK);
+        df_admm_result r;
+        double lag = 0;
+        for (int k = 0; k < 8; k++) {
+            assert_int_equal(df_admm_run(s, &(df_admm_budget){1, 0, 0, NULL, NULL}, &r, &err), DF_OK);
+            const double *V = df_admm_positions(s);
+            for (int i = 0; i < nh; i++) lag = fmax(lag, tu_dist(V + 3 * h[i], tg + 3 * i));
+        }
+        if (pass == 0) {
+            memcpy(V1, df_admm_positions(s), (size_t)m.nv * 3 * sizeof(double));
+            lag1 = lag;
+        } else {
+            assert_memory_equal(V1, df_admm_positions(s), (size_t)m.nv * 3 * sizeof(double));
+            assert_true(lag == lag1);
+        }
+        df_admm_free(s);
+    }
+    assert_true(lag1 > 1e-3);
+    free(V1);
+    free(h); free(tg);
+    tu_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_nh_prox_sym),
         cmocka_unit_test(test_time_budget),
         cmocka_unit_test(test_nh_damped_handles),
+        cmocka_unit_test(test_nh_damped_threads_identical),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
