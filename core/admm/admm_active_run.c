@@ -29,17 +29,36 @@ typedef struct act_acc {
     double r2, ax2, z2, s2, y2;
 } act_acc;
 
+/* the G cache (admm_active.h): capacity for the region's elements; without memory the local step
+ * gathers F_e itself (gc_ok stays 0) */
+static void gc_reserve(admm_active *a)
+{
+    a->gc_ok = 0;
+    if (a->nae <= a->cap_gc) return;
+    int64_t c = a->nae + a->nae / 4;
+    free(a->gc);
+    a->gc = malloc((size_t)c * 9 * sizeof(double));
+    a->cap_gc = a->gc ? c : 0;
+}
+
 static void act_local_x(df_admm *s, act_acc *acc)
 {
     admm_active *a = s->act;
     if (s->family == ADMM_FAM_ELEMENT) {
         double s2 = 0, z2 = 0;
+        const double *gc = a->gc_ok ? a->gc : NULL;
         #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) reduction(+ : s2, z2) if (a->nae >= ACT_PAR_HEAVY)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
             double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
             memcpy(old, RX, sizeof(old));
-            admm_local_x_one(s, e);
+            if (gc) {
+                double G[9];
+                memcpy(G, gc + 9 * (size_t)k, sizeof(G));
+                admm_local_x_one_G(s, e, G);
+            } else {
+                admm_local_x_one(s, e);
+            }
             for (int c = 0; c < 9; c++) {
                 double d = RX[c] - old[c];
                 ds += d * d;
@@ -173,6 +192,7 @@ static double act_dual(df_admm *s, act_acc *acc)
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
         double r2 = 0, ax2 = 0, y2 = 0;
+        double *gc = a->cap_gc >= a->nae ? a->gc : NULL;
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
@@ -185,10 +205,13 @@ static double act_dual(df_admm *s, act_acc *acc)
                 W[c] += dw;
                 er += dw * dw; ea += F[c] * F[c]; ey += W[c] * W[c]; /* R X + dW = F */
             }
+            if (gc) /* the next local step's G = F_e(V) + W_e, as admm_local_x_one sums it */
+                for (int c = 0; c < 9; c++) gc[9 * (size_t)k + c] = F[c] + W[c];
             r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
             E += admm_element_energy_F(s, e, F);
         }
         acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
+        a->gc_ok = gc != NULL;
     }
     double r2 = 0, ax2 = 0, y2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
@@ -316,6 +339,7 @@ static int grow(df_admm *s, int by_check, int32_t n_tail, df_error *err, int *rc
     if (by_check) a->st.check_grows++;
     if (n_tail > 0) a->st.tail_grows++;
     *rc = admm_act_build(s, 0, a->sup + a->nsup, n_tail, err);
+    if (s->family == ADMM_FAM_ELEMENT) gc_reserve(a); /* ae changed */
     return !*rc && too_big(s);
 }
 
@@ -367,6 +391,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         return rc;
     }
     a->st.runs++;
+    if (s->family == ADMM_FAM_ELEMENT) gc_reserve(a);
     int maxit = budget && budget->max_iters > 0 ? budget->max_iters : s->p.max_iters;
     double max_ms = budget ? budget->max_ms : 0;
     int every = budget && budget->progress ? budget->progress_every : 0;

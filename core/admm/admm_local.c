@@ -31,7 +31,16 @@ static inline void element_contrib(df_admm *s, int32_t e, const double *RX, cons
         }
 }
 
-static void local_x_element_one(df_admm *s, int32_t e);
+static void local_x_element_G(df_admm *s, int32_t e, double G[9]);
+
+static void local_x_element_one(df_admm *s, int32_t e)
+{
+    double G[9];
+    const double *W = s->W + 9 * (size_t)e;
+    admm_element_F(s, s->V, e, G);
+    for (int k = 0; k < 9; k++) G[k] += W[k];
+    local_x_element_G(s, e, G);
+}
 
 static void local_x_element(df_admm *s)
 {
@@ -49,13 +58,18 @@ void admm_local_x_one(df_admm *s, int32_t e)
     element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);
 }
 
-static void local_x_element_one(df_admm *s, int32_t e)
+void admm_local_x_one_G(df_admm *s, int32_t e, double G[9])
+{
+    local_x_element_G(s, e, G);
+    element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);
+}
+
+/* local step 1 of element e from G = F_e(V) + W_e (G is scratch afterwards) */
+static void local_x_element_G(df_admm *s, int32_t e, double G[9])
 {
     const df_admm_energy en = s->p.energy;
     {
-        double G[9], *W = s->W + 9 * (size_t)e, *RX = s->RX + 9 * (size_t)e;
-        admm_element_F(s, s->V, e, G);
-        for (int k = 0; k < 9; k++) G[k] += W[k];
+        double *RX = s->RX + 9 * (size_t)e;
         double vol = s->vol[e], gam = s->gam[e];
         if (s->q == 2) {
             double Fc[6] = {G[0], G[1], G[3], G[4], G[6], G[7]}, U[6], sg[2], Vm[4];

@@ -434,6 +434,75 @@ static void test_tail_region_kept(void **state)
     free_pair(full, kept, &sc);
 }
 
+/* the active run keeps each element's G = F_e(V) + W_e from its dual update for the next
+ * iteration's local step; every run's first iteration gathers F_e from V itself. So 20 runs of
+ * one iteration (no reuse) and one run of 20 (reuse in 19) must give bitwise the same positions
+ * and objective, when both take the same region decisions: the far-field check after every
+ * iteration (active_check_every 1: also what a one-iteration run does at its end) and a region
+ * that does not grow during the compared iterations (checked). ARAP and Neo-Hookean (its local
+ * step also starts from G). */
+static void split_vs_one_run(df_admm_energy en)
+{
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params p = arap_params(&sc, 1);
+    if (en == DF_ADMM_NEOHOOKEAN) { /* as test_tet_neohookean_equals_full */
+        df_admm_params_default(&p, DF_ADMM_NEOHOOKEAN);
+        double h = sc.hsp, E = p.youngs, nu = p.poisson;
+        double stiff = E / (2 * (1 + nu)) + E * nu / ((1 + nu) * (1 - 2 * nu));
+        p.w = 1.0 * h * h * stiff;
+        p.s = 0.25 * h;
+        p.rho = 10.0 * h * stiff;
+        p.tol = 1e-13;
+        p.threads = 1;
+        p.active = 1;
+    }
+    p.active_band = 6;
+    p.active_check_every = 1;
+    df_admm *split = make(&sc, &p), *one = make(&sc, &p);
+    /* the same first update on both builds their regions */
+    set_drag(split, &sc, 0.3);
+    set_drag(one, &sc, 0.3);
+    df_admm_result r = run(split, 20), r1 = run(one, 20);
+    assert_memory_equal(df_admm_positions(split), df_admm_positions(one), (size_t)sc.m.nv * 3 * sizeof(double));
+    df_admm_active_stats a0, b0, a1, b1;
+    df_admm_get_active_stats(split, &a0);
+    df_admm_get_active_stats(one, &b0);
+    set_drag(split, &sc, 0.45);
+    set_drag(one, &sc, 0.45);
+    for (int k = 0; k < 20; k++) {
+        r = run(split, 1);
+        assert_int_equal(r.iterations, 1);
+    }
+    r1 = run(one, 20);
+    assert_int_equal(r1.iterations, 20);
+    df_admm_get_active_stats(split, &a1);
+    df_admm_get_active_stats(one, &b1);
+    assert_int_equal(a1.grows + a1.rebuilds, a0.grows + a0.rebuilds);
+    assert_int_equal(b1.grows + b1.rebuilds, b0.grows + b0.rebuilds);
+    assert_int_equal(a1.fallbacks, 0);
+    assert_int_equal(b1.fallbacks, 0);
+    assert_true(count_moved(one, &sc.m) > 0);
+    assert_memory_equal(df_admm_positions(split), df_admm_positions(one), (size_t)sc.m.nv * 3 * sizeof(double));
+    assert_memory_equal(&r.objective, &r1.objective, sizeof(double));
+    assert_memory_equal(&r.elastic, &r1.elastic, sizeof(double));
+    df_admm_free(split);
+    df_admm_free(one);
+    scene_free(&sc);
+}
+
+static void test_split_runs_equal_one_run_arap(void **state)
+{
+    (void)state;
+    split_vs_one_run(DF_ADMM_ARAP);
+}
+
+static void test_split_runs_equal_one_run_neohookean(void **state)
+{
+    (void)state;
+    split_vs_one_run(DF_ADMM_NEOHOOKEAN);
+}
+
 /* set_positions (e.g. an undo or a brush edit somewhere else) and reset_rest in active mode give the
  * full solve's results */
 static void test_set_positions_and_reset_rest(void **state)
@@ -552,6 +621,8 @@ int main(void)
         cmocka_unit_test(test_certificate_grows_region),
         cmocka_unit_test(test_tail_test_follows_full),
         cmocka_unit_test(test_tail_region_kept),
+        cmocka_unit_test(test_split_runs_equal_one_run_arap),
+        cmocka_unit_test(test_split_runs_equal_one_run_neohookean),
         cmocka_unit_test(test_set_positions_and_reset_rest),
         cmocka_unit_test(test_affine_falls_back),
         cmocka_unit_test(test_bad_params),
