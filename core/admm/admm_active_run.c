@@ -29,17 +29,21 @@ typedef struct act_acc {
     double r2, ax2, z2, s2, y2;
 } act_acc;
 
-/* the G cache (admm_active.h): capacity for the region's elements; without memory the local step
- * gathers F_e itself (gc_ok stays 0) */
+/* the G cache and the two F buffers of the lazy energy (admm_active.h), one allocation of
+ * 3 x cap_gc x 9 doubles: capacity for the region's elements; without memory the local step
+ * gathers F_e itself (gc_ok stays 0) and the energy is summed in every dual update */
 static void gc_reserve(admm_active *a)
 {
     a->gc_ok = 0;
     if (a->nae <= a->cap_gc) return;
     int64_t c = a->nae + a->nae / 4;
     free(a->gc);
-    a->gc = malloc((size_t)c * 9 * sizeof(double));
+    a->gc = malloc((size_t)c * 27 * sizeof(double));
     a->cap_gc = a->gc ? c : 0;
 }
+
+/* F buffer b (0, 1) of the lazy energy */
+static double *fbuf(const admm_active *a, int b) { return a->gc + (size_t)(1 + b) * 9 * (size_t)a->cap_gc; }
 
 static void act_local_x(df_admm *s, act_acc *acc)
 {
@@ -185,8 +189,9 @@ static int act_global(df_admm *s, df_error *err)
 }
 
 /* duals on the region; element family: also the elastic energy of the new V over the region's
- * elements (the outside is exactly at rest: zero energy) */
-static double act_dual(df_admm *s, act_acc *acc)
+ * elements (the outside is exactly at rest: zero energy), or, with fb (the lazy energy), F_e(V)
+ * of the region's elements stored in fb (nae x 9, ae order) and 0 returned */
+static double act_dual(df_admm *s, act_acc *acc, double *fb)
 {
     admm_active *a = s->act;
     double E = 0;
@@ -208,7 +213,8 @@ static double act_dual(df_admm *s, act_acc *acc)
             if (gc) /* the next local step's G = F_e(V) + W_e, as admm_local_x_one sums it */
                 for (int c = 0; c < 9; c++) gc[9 * (size_t)k + c] = F[c] + W[c];
             r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
-            E += admm_element_energy_F(s, e, F);
+            if (fb) memcpy(fb + 9 * (size_t)k, F, sizeof(F));
+            else E += admm_element_energy_F(s, e, F);
         }
         acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
         a->gc_ok = gc != NULL;
@@ -225,6 +231,53 @@ static double act_dual(df_admm *s, act_acc *acc)
     const double rho = s->p.rho;
     acc->r2 += rho * r2; acc->ax2 += rho * ax2; acc->y2 += rho * y2;
     return E;
+}
+
+/* The lazy energy (ARAP / ACAP tets, whose energy is finite and >= 0): the dual update stores
+ * F_e(V) (act_dual's fb) and the elastic energy of an iteration is summed from it only when
+ * something needs it: the stop test when it can pass (sqrt(tol) max(pri, dual) < tol; otherwise
+ * it fails whatever the objective), the last iteration of the call, a progress report, the tail
+ * test when the locality alone does not settle it (E >= lo), before a region growth (which
+ * changes ae), and the run's result. fb_energy sums it with act_dual's loop (same partition and
+ * order of the sum), so every reported value is bit-identical to summing it in every dual
+ * update. Two buffers: the objective of the iteration before is needed with the current one
+ * (the stop residual |E - E_prev| / |E|). */
+typedef struct lazy_it {
+    int pend;          /* el not summed yet: F_e in buffer buf */
+    int buf;
+    double el, lo, E;
+} lazy_it;
+
+static int lazy_ok(const df_admm *s)
+{
+    const admm_active *a = s->act;
+    return s->family == ADMM_FAM_ELEMENT && s->q == 3 && (s->p.energy == DF_ADMM_ARAP || s->p.energy == DF_ADMM_ACAP) &&
+           a->gc && a->cap_gc >= a->nae;
+}
+
+static double fb_energy(const df_admm *s, const double *fb)
+{
+    const admm_active *a = s->act;
+    double E = 0;
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
+    for (int32_t k = 0; k < a->nae; k++) E += admm_element_energy_F(s, a->ae[k], fb + 9 * (size_t)k);
+    return E;
+}
+
+static void lazy_resolve(const df_admm *s, lazy_it *x)
+{
+    if (!x->pend) return;
+    x->el = fb_energy(s, fbuf(s->act, x->buf));
+    x->E = x->el + x->lo;
+    x->pend = 0;
+}
+
+/* 1 when the stop test can pass with these residuals (admm_stop_residual's second term below tol) */
+static int conv_possible(const df_admm *s, double pri, double dual)
+{
+    const double sq_tol = sqrt(s->p.tol);
+    double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
+    return !(pd >= s->p.tol);
 }
 
 /* elastic energy of Vout over the region's elements or cells; locality over the region */
@@ -401,6 +454,11 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         E_prev = el0 + lo0;
         s->E_last = E_prev; s->el_last = el0; s->lo_last = lo0;
     }
+    /* the last iteration (cur) and the one before (prv), for the lazy energy; res_done: the stop
+     * residual and s->E_last are those of cur */
+    lazy_it cur = {0, 0, s->el_last, s->lo_last, E_prev}, prv = cur;
+    int res_done = 1;
+    double pri = INFINITY, dual = INFINITY;
     double t_loop = admm_now(), t_it = t_loop, last_ms = 0.0;
     int certified = 0, fell_back = 0;
     for (int it = 0; it < maxit; it++) {
@@ -418,26 +476,37 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         act_rhs(s);
         rc = act_global(s, err);
         if (rc) break;
-        double ef = act_dual(s, &acc);
+        int lz = lazy_ok(s), buf = cur.buf ^ 1; /* cur's F stays in its buffer */
+        double ef = act_dual(s, &acc, lz ? fbuf(a, buf) : NULL);
         double t3 = admm_now();
         r.t_local1 += t1 - t0; r.t_local2 += t2 - t1; r.t_global += t3 - t2;
-        double pri, dual;
         act_measure(s, &acc, &pri, &dual);
         int hold = s->damp && !isfinite(ef) && isfinite(s->E_last) && isfinite(s->el_last);
         if (!hold)
             for (int32_t k = 0; k < a->nr; k++)
                 memcpy(s->Vout + 3 * (size_t)a->rv[k], s->V + 3 * (size_t)a->rv[k], 3 * sizeof(double));
         double ta = admm_now();
-        double el = hold ? s->el_last : s->family == ADMM_FAM_ELEMENT ? ef : act_elastic(s);
-        double lo = hold ? s->lo_last : act_locality(s);
-        double E = hold ? s->E_last : el + lo;
+        prv = cur;
+        cur.pend = lz;
+        cur.buf = buf;
+        cur.el = hold ? s->el_last : lz ? NAN : s->family == ADMM_FAM_ELEMENT ? ef : act_elastic(s);
+        cur.lo = hold ? s->lo_last : act_locality(s);
+        cur.E = hold ? s->E_last : cur.el + cur.lo;
         r.iterations++;
         s->st.iterations++;
-        r.elastic = el; r.locality = lo; r.objective = E;
-        r.residual = admm_stop_residual(s, hold, E, E_prev, pri, dual);
-        E_prev = E;
-        s->E_last = E; s->el_last = el; s->lo_last = lo;
-        int conv = r.residual < s->p.tol;
+        int report = every > 0 && (r.iterations % every == 0 || it == maxit - 1);
+        res_done = 0;
+        int conv = 0;
+        if (!lz || report || it == maxit - 1 || conv_possible(s, pri, dual)) {
+            lazy_resolve(s, &prv);
+            lazy_resolve(s, &cur);
+            r.elastic = cur.el; r.locality = cur.lo; r.objective = cur.E;
+            r.residual = admm_stop_residual(s, hold, cur.E, prv.E, pri, dual);
+            s->E_last = cur.E; s->el_last = cur.el; s->lo_last = cur.lo;
+            res_done = 1;
+            conv = r.residual < s->p.tol;
+        }
+        E_prev = cur.E;
         /* region: grow when the support nears the edge; certify the far field periodically and
          * before reporting convergence */
         admm_act_support(s, 0);
@@ -450,11 +519,17 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             else certified = 1;
         }
         if (!need && !conv && s->p.active_tail > 0) { /* tail test (admm.h): every iteration */
-            nt = admm_act_tail(s, E, s->p.active_tail);
+            /* E >= lo: an edge charge within tol lo is within tol E (lazy_it) */
+            if (!cur.pend || !(cur.lo > 0) || admm_act_tail(s, cur.lo, s->p.active_tail) > 0) {
+                lazy_resolve(s, &cur);
+                nt = admm_act_tail(s, cur.E, s->p.active_tail);
+            }
             need = nt > 0;
         }
         if (need) {
             conv = 0;
+            lazy_resolve(s, &prv); /* their F buffers follow ae, which the growth changes */
+            lazy_resolve(s, &cur);
             if (grow(s, by_check, nt, err, &rc)) { fell_back = 1; break; }
             if (rc) break;
         }
@@ -462,11 +537,19 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         double t_end = admm_now();
         last_ms = (t_end - t_it) * 1e3;
         t_it = t_end;
-        if (every > 0 && (r.iterations % every == 0 || conv || it == maxit - 1)) {
-            df_admm_progress pr = {r.iterations, E, r.residual, s->Vout, s->nv};
+        if (every > 0 && (report || conv)) {
+            df_admm_progress pr = {r.iterations, cur.E, r.residual, s->Vout, s->nv};
             if (budget->progress(budget->user, &pr)) { r.stop = DF_ADMM_STOP_CALLBACK; break; }
         }
         if (conv) { r.converged = 1; r.stop = DF_ADMM_STOP_CONVERGED; break; }
+    }
+    if (!res_done) { /* the last iteration's objective and stop residual (lazy energy) */
+        lazy_resolve(s, &prv);
+        lazy_resolve(s, &cur);
+        r.elastic = cur.el; r.locality = cur.lo; r.objective = cur.E;
+        r.residual = admm_stop_residual(s, 0, cur.E, prv.E, pri, dual);
+        s->E_last = cur.E; s->el_last = cur.el; s->lo_last = cur.lo;
+        E_prev = cur.E;
     }
     if (!rc && fell_back) rc = finish_full(s, budget, tstart, &r, err);
     else if (!rc && !certified && r.iterations > 0) {
