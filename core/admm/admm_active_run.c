@@ -29,36 +29,37 @@ typedef struct act_acc {
     double r2, ax2, z2, s2, y2;
 } act_acc;
 
-/* the G cache and the two F buffers of the lazy energy (admm_active.h), one allocation of
- * 3 x cap_gc x 9 doubles: capacity for the region's elements; without memory the local step
- * gathers F_e itself (gc_ok stays 0) and the energy is summed in every dual update */
+/* the two F buffers (admm_active.h), one allocation of 2 x cap_gc x 9 doubles: capacity for the
+ * region's elements; without memory the local step gathers F_e itself (gc_ok stays 0) and the
+ * energy is summed in every dual update */
 static void gc_reserve(admm_active *a)
 {
     a->gc_ok = 0;
     if (a->nae <= a->cap_gc) return;
     int64_t c = a->nae + a->nae / 4;
     free(a->gc);
-    a->gc = malloc((size_t)c * 27 * sizeof(double));
+    a->gc = malloc((size_t)c * 18 * sizeof(double));
     a->cap_gc = a->gc ? c : 0;
 }
 
-/* F buffer b (0, 1) of the lazy energy */
-static double *fbuf(const admm_active *a, int b) { return a->gc + (size_t)(1 + b) * 9 * (size_t)a->cap_gc; }
+/* F buffer b (0, 1) */
+static double *fbuf(const admm_active *a, int b) { return a->gc + (size_t)b * 9 * (size_t)a->cap_gc; }
 
 static void act_local_x(df_admm *s, act_acc *acc)
 {
     admm_active *a = s->act;
     if (s->family == ADMM_FAM_ELEMENT) {
         double s2 = 0, z2 = 0;
-        const double *gc = a->gc_ok ? a->gc : NULL;
+        const double *fc = a->gc_ok ? fbuf(a, a->gc_buf) : NULL;
         #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) reduction(+ : s2, z2) if (a->nae >= ACT_PAR_HEAVY)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
             double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
             memcpy(old, RX, sizeof(old));
-            if (gc) {
+            if (fc) { /* G = F_e(V) + W_e, as admm_local_x_one sums it */
                 double G[9];
-                memcpy(G, gc + 9 * (size_t)k, sizeof(G));
+                const double *F = fc + 9 * (size_t)k, *W = s->W + 9 * (size_t)e;
+                for (int c = 0; c < 9; c++) G[c] = F[c] + W[c];
                 admm_local_x_one_G(s, e, G);
             } else {
                 admm_local_x_one(s, e);
@@ -188,16 +189,17 @@ static int act_global(df_admm *s, df_error *err)
     return DF_OK;
 }
 
-/* duals on the region; element family: also the elastic energy of the new V over the region's
- * elements (the outside is exactly at rest: zero energy), or, with fb (the lazy energy), F_e(V)
- * of the region's elements stored in fb (nae x 9, ae order) and 0 returned */
-static double act_dual(df_admm *s, act_acc *acc, double *fb)
+/* duals on the region; element family: F_e(V) of the region's elements stored in F buffer buf
+ * (nae x 9, ae order; when there is one) for the next local step and the lazy energy, and the
+ * elastic energy of the new V over the region's elements (the outside is exactly at rest: zero
+ * energy) returned, or 0 when lazy (then the buffer is there: lazy_ok) */
+static double act_dual(df_admm *s, act_acc *acc, int buf, int lazy)
 {
     admm_active *a = s->act;
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
         double r2 = 0, ax2 = 0, y2 = 0;
-        double *gc = a->cap_gc >= a->nae ? a->gc : NULL;
+        double *fb = a->gc && a->cap_gc >= a->nae ? fbuf(a, buf) : NULL;
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
@@ -210,14 +212,13 @@ static double act_dual(df_admm *s, act_acc *acc, double *fb)
                 W[c] += dw;
                 er += dw * dw; ea += F[c] * F[c]; ey += W[c] * W[c]; /* R X + dW = F */
             }
-            if (gc) /* the next local step's G = F_e(V) + W_e, as admm_local_x_one sums it */
-                for (int c = 0; c < 9; c++) gc[9 * (size_t)k + c] = F[c] + W[c];
             r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
             if (fb) memcpy(fb + 9 * (size_t)k, F, sizeof(F));
-            else E += admm_element_energy_F(s, e, F);
+            if (!lazy) E += admm_element_energy_F(s, e, F);
         }
         acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
-        a->gc_ok = gc != NULL;
+        a->gc_ok = fb != NULL;
+        a->gc_buf = buf;
     }
     double r2 = 0, ax2 = 0, y2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
@@ -477,7 +478,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         rc = act_global(s, err);
         if (rc) break;
         int lz = lazy_ok(s), buf = cur.buf ^ 1; /* cur's F stays in its buffer */
-        double ef = act_dual(s, &acc, lz ? fbuf(a, buf) : NULL);
+        double ef = act_dual(s, &acc, buf, lz);
         double t3 = admm_now();
         r.t_local1 += t1 - t0; r.t_local2 += t2 - t1; r.t_global += t3 - t2;
         act_measure(s, &acc, &pri, &dual);
