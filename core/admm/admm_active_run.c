@@ -45,46 +45,12 @@ static void gc_reserve(admm_active *a)
 /* F buffer b (0, 1) */
 static double *fbuf(const admm_active *a, int b) { return a->gc + (size_t)b * 9 * (size_t)a->cap_gc; }
 
-static void act_local_x(df_admm *s, act_acc *acc)
-{
-    admm_active *a = s->act;
-    if (s->family == ADMM_FAM_ELEMENT) {
-        double s2 = 0, z2 = 0;
-        const double *fc = a->gc_ok ? fbuf(a, a->gc_buf) : NULL;
-        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) reduction(+ : s2, z2) if (a->nae >= ACT_PAR_HEAVY)
-        for (int32_t k = 0; k < a->nae; k++) {
-            int32_t e = a->ae[k];
-            double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
-            memcpy(old, RX, sizeof(old));
-            if (fc) { /* G = F_e(V) + W_e, as admm_local_x_one sums it */
-                double G[9];
-                const double *F = fc + 9 * (size_t)k, *W = s->W + 9 * (size_t)e;
-                for (int c = 0; c < 9; c++) G[c] = F[c] + W[c];
-                admm_local_x_one_G(s, e, G);
-            } else {
-                admm_local_x_one(s, e);
-            }
-            for (int c = 0; c < 9; c++) {
-                double d = RX[c] - old[c];
-                ds += d * d;
-                dz += RX[c] * RX[c];
-            }
-            s2 += s->gam[e] * ds;
-            z2 += s->gam[e] * dz;
-        }
-        acc->s2 += s2;
-        acc->z2 += z2;
-    } else {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
-        for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
-    }
-}
-
-static void act_local_z(df_admm *s, act_acc *acc)
+/* local step 2 on the region (SC-L1 prox) with its residual sums in vertex order; *sec its time */
+static void act_local_z(df_admm *s, double *zs2, double *zz2, double *sec)
 {
     const admm_active *a = s->act;
     const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
-    double s2 = 0, z2 = 0;
+    double t0 = admm_now(), s2 = 0, z2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
         size_t o = 3 * (size_t)a->rv[k];
         double x[3], old[3] = {s->Z[o], s->Z[o + 1], s->Z[o + 2]};
@@ -96,23 +62,76 @@ static void act_local_z(df_admm *s, act_acc *acc)
             z2 += s->Z[o + c] * s->Z[o + c];
         }
     }
-    acc->s2 += rho * s2;
-    acc->z2 += rho * z2;
+    *zs2 = rho * s2;
+    *zz2 = rho * z2;
+    *sec = admm_now() - t0;
 }
 
-/* right-hand side of the region's free vertices: element (cell) pieces, rho (Vrest + Z - U), minus
- * the couplings to the fixed vertices (handles at their applied targets, the outside at rest) */
-static void act_rhs(df_admm *s)
+/* The local phase of an iteration in one OpenMP region (one fork): local step 1 on the region's
+ * elements (cells) with one thread doing local step 2 (the prox, independent of it) meanwhile,
+ * then, after the barrier, the right-hand side rows of the region's free vertices (element
+ * (cell) pieces, rho (Vrest + Z - U), minus the couplings to the outside at rest), and serially
+ * the couplings to the handles at their applied targets. *t_x: seconds of the phase up to the
+ * barrier less the prox's, *t_z: the prox's, *t_rhs: the rows' and couplings'. */
+static void act_local(df_admm *s, act_acc *acc, double *t_x, double *t_z, double *t_rhs)
 {
     admm_active *a = s->act;
+    const int elem = s->family == ADMM_FAM_ELEMENT;
     const int32_t nf = a->nrf;
-    if (nf == 0) return; /* every region vertex is a handle */
-    double *rhs = a->rhs->x;
-    admm_rhs_rows(s, a->rfv, nf, a->kout, rhs, nf >= ACT_PAR_LIGHT);
-    for (int64_t t = 0; t < a->ncp; t++) {
+    double *rhs = a->rhs ? a->rhs->x : NULL;
+    double s2 = 0, z2 = 0, zs2 = 0, zz2 = 0, tz = 0, t0 = admm_now(), t_mid = t0;
+    /* elements in ae order, G from the dual update's F buffer when it is current */
+    const double *fc = elem && a->gc_ok ? fbuf(a, a->gc_buf) : NULL;
+    #pragma omp parallel num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
+    {
+        #pragma omp single nowait
+        act_local_z(s, &zs2, &zz2, &tz);
+        if (elem) {
+            #pragma omp for schedule(dynamic, 256) reduction(+ : s2, z2)
+            for (int32_t k = 0; k < a->nae; k++) {
+                int32_t e = a->ae[k];
+                double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
+                memcpy(old, RX, sizeof(old));
+                if (fc) { /* G = F_e(V) + W_e, as admm_local_x_one sums it */
+                    double G[9];
+                    const double *F = fc + 9 * (size_t)k, *W = s->W + 9 * (size_t)e;
+                    for (int c = 0; c < 9; c++) G[c] = F[c] + W[c];
+                    admm_local_x_one_G(s, e, G);
+                } else {
+                    admm_local_x_one(s, e);
+                }
+                for (int c = 0; c < 9; c++) {
+                    double d = RX[c] - old[c];
+                    ds += d * d;
+                    dz += RX[c] * RX[c];
+                }
+                s2 += s->gam[e] * ds;
+                z2 += s->gam[e] * dz;
+            }
+        } else {
+            #pragma omp for schedule(static)
+            for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
+        }
+        /* the implicit barrier above also waits for the prox (Z) */
+        #pragma omp master
+        t_mid = admm_now();
+        #pragma omp for schedule(static)
+        for (int32_t f = 0; f < nf; f++) admm_rhs_row(s, a->rfv, nf, a->kout, rhs, f);
+    }
+    if (elem) {
+        acc->s2 += s2;
+        acc->z2 += z2;
+    }
+    acc->s2 += zs2;
+    acc->z2 += zz2;
+    for (int64_t t = 0; nf > 0 && t < a->ncp; t++) {
         const double *p = s->target + 3 * (size_t)a->hmap[a->cp_v[t]];
         for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * p[k];
     }
+    double t_end = admm_now();
+    *t_z = tz;
+    *t_x = t_mid - t0 - tz;
+    *t_rhs = t_end - t_mid;
 }
 
 static int any_inverted(const df_admm *s)
@@ -469,18 +488,15 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             if (el_ms + est * ADMM_BUDGET_MARGIN > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
         }
         act_acc acc = {0, 0, 0, 0, 0};
-        double t0 = admm_now();
-        act_local_x(s, &acc);
-        double t1 = admm_now();
-        act_local_z(s, &acc);
+        double t_x, t_z, t_rhs;
+        act_local(s, &acc, &t_x, &t_z, &t_rhs);
         double t2 = admm_now();
-        act_rhs(s);
         rc = act_global(s, err);
         if (rc) break;
         int lz = lazy_ok(s), buf = cur.buf ^ 1; /* cur's F stays in its buffer */
         double ef = act_dual(s, &acc, buf, lz);
         double t3 = admm_now();
-        r.t_local1 += t1 - t0; r.t_local2 += t2 - t1; r.t_global += t3 - t2;
+        r.t_local1 += t_x; r.t_local2 += t_z; r.t_global += t_rhs + t3 - t2;
         act_measure(s, &acc, &pri, &dual);
         int hold = s->damp && !isfinite(ef) && isfinite(s->E_last) && isfinite(s->el_last);
         if (!hold)

@@ -215,6 +215,8 @@ void admm_assemble_rhs(df_admm *s);
  * over its region's (sub = the outside couplings). */
 void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
                    int par);
+/* row f of admm_rhs_rows (no threads of its own: for callers' own parallel loops) */
+void admm_rhs_row(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs, int32_t f);
 /* dual updates; for the element family also returns sum_e E_e(F_e(V)) (the elastic energy of V
  * without bending, from the same F_e), else 0 */
 double admm_dual_update(df_admm *s);

@@ -219,35 +219,38 @@ void admm_local_z(df_admm *s)
     }
 }
 
+void admm_rhs_row(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs, int32_t f)
+{
+    const double rho = s->p.rho;
+    int32_t v = verts[f];
+    double b[3] = {0, 0, 0};
+    if (s->family == ADMM_FAM_ELEMENT) {
+        for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
+            const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
+            b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
+        }
+    } else {
+        for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
+            int32_t se = s->in_ent[p];
+            int32_t t = (se > 0 ? se : -se) - 1;
+            double sign = se > 0 ? 1.0 : -1.0;
+            const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
+            double w = sign * s->sr_w[t];
+            for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        size_t o = 3 * (size_t)v + k;
+        rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - sub[f + (size_t)k * nf];
+    }
+}
+
 void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
                    int par)
 {
     (void)par; /* read only by the OpenMP pragma (unused in serial builds: make tsan) */
-    const double rho = s->p.rho;
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (par)
-    for (int32_t f = 0; f < nf; f++) {
-        int32_t v = verts[f];
-        double b[3] = {0, 0, 0};
-        if (s->family == ADMM_FAM_ELEMENT) {
-            for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
-                const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
-                b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
-            }
-        } else {
-            for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
-                int32_t se = s->in_ent[p];
-                int32_t t = (se > 0 ? se : -se) - 1;
-                double sign = se > 0 ? 1.0 : -1.0;
-                const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
-                double w = sign * s->sr_w[t];
-                for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
-            }
-        }
-        for (int k = 0; k < 3; k++) {
-            size_t o = 3 * (size_t)v + k;
-            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - sub[f + (size_t)k * nf];
-        }
-    }
+    for (int32_t f = 0; f < nf; f++) admm_rhs_row(s, verts, nf, sub, rhs, f);
 }
 
 void admm_assemble_rhs(df_admm *s) { admm_rhs_rows(s, s->fvert, s->nfree, s->KfhP, s->rhs->x, 1); }
