@@ -37,7 +37,7 @@ void admm_active_free(df_admm *s)
     free(a->adj_ptr); free(a->adj); free(a->hmap); free(a->in); free(a->depth); free(a->rv);
     free(a->fr); free(a->edge); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
     free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp); free(a->tbud);
-    free(a->va);
+    free(a->va); free(a->gc);
     admm_act_probe_free(a);
     free(a);
     s->act = NULL;

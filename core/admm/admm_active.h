@@ -56,6 +56,13 @@ typedef struct admm_active {
     uint8_t *pr_mark;        /* ne scratch */
     double pr_E, pr_el, pr_lo;
     df_admm_active_stats st;
+    /* element family: two buffers (capacity cap_gc elements each) of F_e(V) of the region's
+     * elements (nae x 9, in ae order), written by the dual updates in turn, read by the next local
+     * step (G = F + W) and the lazy energy (admm_active_run.c); gc_ok 1 while buffer gc_buf
+     * matches V and ae (cleared at a run's start and by every region build) */
+    double *gc;
+    int64_t cap_gc;
+    int gc_ok, gc_buf;
 } admm_active;
 
 /* admm_active.c */

@@ -32,38 +32,28 @@ typedef struct act_acc {
     double r2, ax2, z2, s2, y2;
 } act_acc;
 
-static void act_local_x(df_admm *s, act_acc *acc)
+/* the two F buffers (admm_active.h), one allocation of 2 x cap_gc x 9 doubles: capacity for the
+ * region's elements; without memory the local step gathers F_e itself (gc_ok stays 0) and the
+ * energy is summed in every dual update */
+static void gc_reserve(admm_active *a)
 {
-    admm_active *a = s->act;
-    if (s->family == ADMM_FAM_ELEMENT) {
-        double s2 = 0, z2 = 0;
-        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) reduction(+ : s2, z2) if (a->nae >= ACT_PAR_HEAVY)
-        for (int32_t k = 0; k < a->nae; k++) {
-            int32_t e = a->ae[k];
-            double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
-            memcpy(old, RX, sizeof(old));
-            admm_local_x_one(s, e);
-            for (int c = 0; c < 9; c++) {
-                double d = RX[c] - old[c];
-                ds += d * d;
-                dz += RX[c] * RX[c];
-            }
-            s2 += s->gam[e] * ds;
-            z2 += s->gam[e] * dz;
-        }
-        acc->s2 += s2;
-        acc->z2 += z2;
-    } else {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
-        for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
-    }
+    a->gc_ok = 0;
+    if (a->nae <= a->cap_gc) return;
+    int64_t c = a->nae + a->nae / 4;
+    free(a->gc);
+    a->gc = malloc((size_t)c * 18 * sizeof(double));
+    a->cap_gc = a->gc ? c : 0;
 }
 
-static void act_local_z(df_admm *s, act_acc *acc)
+/* F buffer b (0, 1) */
+static double *fbuf(const admm_active *a, int b) { return a->gc + (size_t)b * 9 * (size_t)a->cap_gc; }
+
+/* local step 2 on the region (SC-L1 prox) with its residual sums in vertex order; *sec its time */
+static void act_local_z(df_admm *s, double *zs2, double *zz2, double *sec)
 {
     const admm_active *a = s->act;
     const double w = s->p.w, sth = s->p.s, rho = s->p.rho;
-    double s2 = 0, z2 = 0;
+    double t0 = admm_now(), s2 = 0, z2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
         size_t o = 3 * (size_t)a->rv[k];
         double x[3], old[3] = {s->Z[o], s->Z[o + 1], s->Z[o + 2]};
@@ -75,23 +65,76 @@ static void act_local_z(df_admm *s, act_acc *acc)
             z2 += s->Z[o + c] * s->Z[o + c];
         }
     }
-    acc->s2 += rho * s2;
-    acc->z2 += rho * z2;
+    *zs2 = rho * s2;
+    *zz2 = rho * z2;
+    *sec = admm_now() - t0;
 }
 
-/* right-hand side of the region's free vertices: element (cell) pieces, rho (Vrest + Z - U), minus
- * the couplings to the fixed vertices (handles at their applied targets, the outside at rest) */
-static void act_rhs(df_admm *s)
+/* The local phase of an iteration in one OpenMP region (one fork): local step 1 on the region's
+ * elements (cells) with one thread doing local step 2 (the prox, independent of it) meanwhile,
+ * then, after the barrier, the right-hand side rows of the region's free vertices (element
+ * (cell) pieces, rho (Vrest + Z - U), minus the couplings to the outside at rest), and serially
+ * the couplings to the handles at their applied targets. *t_x: seconds of the phase up to the
+ * barrier less the prox's, *t_z: the prox's, *t_rhs: the rows' and couplings'. */
+static void act_local(df_admm *s, act_acc *acc, double *t_x, double *t_z, double *t_rhs)
 {
     admm_active *a = s->act;
+    const int elem = s->family == ADMM_FAM_ELEMENT;
     const int32_t nf = a->nrf;
-    if (nf == 0) return; /* every region vertex is a handle */
-    double *rhs = a->rhs->x;
-    admm_rhs_rows(s, a->rfv, nf, a->kout, rhs, nf >= ACT_PAR_LIGHT);
-    for (int64_t t = 0; t < a->ncp; t++) {
+    double *rhs = a->rhs ? a->rhs->x : NULL;
+    double s2 = 0, z2 = 0, zs2 = 0, zz2 = 0, tz = 0, t0 = admm_now(), t_mid = t0;
+    /* elements in ae order, G from the dual update's F buffer when it is current */
+    const double *fc = elem && a->gc_ok ? fbuf(a, a->gc_buf) : NULL;
+    #pragma omp parallel num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
+    {
+        #pragma omp single nowait
+        act_local_z(s, &zs2, &zz2, &tz);
+        if (elem) {
+            #pragma omp for schedule(dynamic, 256) reduction(+ : s2, z2)
+            for (int32_t k = 0; k < a->nae; k++) {
+                int32_t e = a->ae[k];
+                double *RX = s->RX + 9 * (size_t)e, old[9], ds = 0, dz = 0;
+                memcpy(old, RX, sizeof(old));
+                if (fc) { /* G = F_e(V) + W_e, as admm_local_x_one sums it */
+                    double G[9];
+                    const double *F = fc + 9 * (size_t)k, *W = s->W + 9 * (size_t)e;
+                    for (int c = 0; c < 9; c++) G[c] = F[c] + W[c];
+                    admm_local_x_one_G(s, e, G);
+                } else {
+                    admm_local_x_one(s, e);
+                }
+                for (int c = 0; c < 9; c++) {
+                    double d = RX[c] - old[c];
+                    ds += d * d;
+                    dz += RX[c] * RX[c];
+                }
+                s2 += s->gam[e] * ds;
+                z2 += s->gam[e] * dz;
+            }
+        } else {
+            #pragma omp for schedule(static)
+            for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
+        }
+        /* the implicit barrier above also waits for the prox (Z) */
+        #pragma omp master
+        t_mid = admm_now();
+        #pragma omp for schedule(static)
+        for (int32_t f = 0; f < nf; f++) admm_rhs_row(s, a->rfv, nf, a->kout, rhs, f);
+    }
+    if (elem) {
+        acc->s2 += s2;
+        acc->z2 += z2;
+    }
+    acc->s2 += zs2;
+    acc->z2 += zz2;
+    for (int64_t t = 0; nf > 0 && t < a->ncp; t++) {
         const double *p = s->target + 3 * (size_t)a->hmap[a->cp_v[t]];
         for (int k = 0; k < 3; k++) rhs[a->cp_f[t] + (size_t)k * nf] -= a->cp_val[t] * p[k];
     }
+    double t_end = admm_now();
+    *t_z = tz;
+    *t_x = t_mid - t0 - tz;
+    *t_rhs = t_end - t_mid;
 }
 
 static int any_inverted(const df_admm *s)
@@ -168,14 +211,17 @@ static int act_global(df_admm *s, df_error *err)
     return DF_OK;
 }
 
-/* duals on the region; element family: also the elastic energy of the new V over the region's
- * elements (the outside is exactly at rest: zero energy) */
-static double act_dual(df_admm *s, act_acc *acc)
+/* duals on the region; element family: F_e(V) of the region's elements stored in F buffer buf
+ * (nae x 9, ae order; when there is one) for the next local step and the lazy energy, and the
+ * elastic energy of the new V over the region's elements (the outside is exactly at rest: zero
+ * energy) returned, or 0 when lazy (then the buffer is there: lazy_ok) */
+static double act_dual(df_admm *s, act_acc *acc, int buf, int lazy)
 {
     admm_active *a = s->act;
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
         double r2 = 0, ax2 = 0, y2 = 0;
+        double *fb = a->gc && a->cap_gc >= a->nae ? fbuf(a, buf) : NULL;
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
         for (int32_t k = 0; k < a->nae; k++) {
             int32_t e = a->ae[k];
@@ -189,9 +235,12 @@ static double act_dual(df_admm *s, act_acc *acc)
                 er += dw * dw; ea += F[c] * F[c]; ey += W[c] * W[c]; /* R X + dW = F */
             }
             r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
-            E += admm_element_energy_F(s, e, F);
+            if (fb) memcpy(fb + 9 * (size_t)k, F, sizeof(F));
+            if (!lazy) E += admm_element_energy_F(s, e, F);
         }
         acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
+        a->gc_ok = fb != NULL;
+        a->gc_buf = buf;
     }
     double r2 = 0, ax2 = 0, y2 = 0;
     for (int32_t k = 0; k < a->nr; k++) {
@@ -205,6 +254,53 @@ static double act_dual(df_admm *s, act_acc *acc)
     const double rho = s->p.rho;
     acc->r2 += rho * r2; acc->ax2 += rho * ax2; acc->y2 += rho * y2;
     return E;
+}
+
+/* The lazy energy (ARAP / ACAP tets, whose energy is finite and >= 0): the dual update stores
+ * F_e(V) (act_dual's fb) and the elastic energy of an iteration is summed from it only when
+ * something needs it: the stop test when it can pass (sqrt(tol) max(pri, dual) < tol; otherwise
+ * it fails whatever the objective), the last iteration of the call, a progress report, the tail
+ * test when the locality alone does not settle it (E >= lo), before a region growth (which
+ * changes ae), and the run's result. fb_energy sums it with act_dual's loop (same partition and
+ * order of the sum), so every reported value is bit-identical to summing it in every dual
+ * update. Two buffers: the objective of the iteration before is needed with the current one
+ * (the stop residual |E - E_prev| / |E|). */
+typedef struct lazy_it {
+    int pend;          /* el not summed yet: F_e in buffer buf */
+    int buf;
+    double el, lo, E;
+} lazy_it;
+
+static int lazy_ok(const df_admm *s)
+{
+    const admm_active *a = s->act;
+    return s->family == ADMM_FAM_ELEMENT && s->q == 3 && (s->p.energy == DF_ADMM_ARAP || s->p.energy == DF_ADMM_ACAP) &&
+           a->gc && a->cap_gc >= a->nae;
+}
+
+static double fb_energy(const df_admm *s, const double *fb)
+{
+    const admm_active *a = s->act;
+    double E = 0;
+    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
+    for (int32_t k = 0; k < a->nae; k++) E += admm_element_energy_F(s, a->ae[k], fb + 9 * (size_t)k);
+    return E;
+}
+
+static void lazy_resolve(const df_admm *s, lazy_it *x)
+{
+    if (!x->pend) return;
+    x->el = fb_energy(s, fbuf(s->act, x->buf));
+    x->E = x->el + x->lo;
+    x->pend = 0;
+}
+
+/* 1 when the stop test can pass with these residuals (admm_stop_residual's second term below tol) */
+static int conv_possible(const df_admm *s, double pri, double dual)
+{
+    const double sq_tol = sqrt(s->p.tol);
+    double pd = sq_tol > 0 ? sq_tol * (pri > dual ? pri : dual) : 0.0;
+    return !(pd >= s->p.tol);
 }
 
 /* elastic energy of Vout over the region's elements or cells; locality over the region */
@@ -319,6 +415,7 @@ static int grow(df_admm *s, int by_check, int32_t n_tail, df_error *err, int *rc
     if (by_check) a->st.check_grows++;
     if (n_tail > 0) a->st.tail_grows++;
     *rc = admm_act_build(s, 0, a->sup + a->nsup, n_tail, err);
+    if (s->family == ADMM_FAM_ELEMENT) gc_reserve(a); /* ae changed */
     return !*rc && too_big(s);
 }
 
@@ -372,6 +469,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         return rc;
     }
     a->st.runs++;
+    if (s->family == ADMM_FAM_ELEMENT) gc_reserve(a);
     int maxit = budget && budget->max_iters > 0 ? budget->max_iters : s->p.max_iters;
     double max_ms = budget ? budget->max_ms : 0;
     int every = budget && budget->progress ? budget->progress_every : 0;
@@ -385,6 +483,11 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
      * targets move during the iteration) */
     int probes = fresh_run && s->p.active_tail > 0 && !s->damp ? ACT_PROBES : 0;
     if (probes && (rc = admm_act_probe_save(s, err))) return rc;
+    /* the last iteration (cur) and the one before (prv), for the lazy energy; res_done: the stop
+     * residual and s->E_last are those of cur */
+    lazy_it cur = {0, 0, s->el_last, s->lo_last, E_prev}, prv = cur;
+    int res_done = 1;
+    double pri = INFINITY, dual = INFINITY;
     double t_loop = admm_now(), t_it = t_loop, last_ms = 0.0;
     int certified = 0, fell_back = 0;
     for (int it = 0; it < maxit; it++) {
@@ -394,34 +497,42 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             if (el_ms + est * ADMM_BUDGET_MARGIN > max_ms) { r.stop = DF_ADMM_STOP_TIME; break; }
         }
         act_acc acc = {0, 0, 0, 0, 0};
-        double t0 = admm_now();
-        act_local_x(s, &acc);
-        double t1 = admm_now();
-        act_local_z(s, &acc);
+        double t_x, t_z, t_rhs;
+        act_local(s, &acc, &t_x, &t_z, &t_rhs);
         double t2 = admm_now();
-        act_rhs(s);
         rc = act_global(s, err);
         if (rc) break;
-        double ef = act_dual(s, &acc);
+        int lz = lazy_ok(s), buf = cur.buf ^ 1; /* cur's F stays in its buffer */
+        double ef = act_dual(s, &acc, buf, lz);
         double t3 = admm_now();
-        r.t_local1 += t1 - t0; r.t_local2 += t2 - t1; r.t_global += t3 - t2;
-        double pri, dual;
+        r.t_local1 += t_x; r.t_local2 += t_z; r.t_global += t_rhs + t3 - t2;
         act_measure(s, &acc, &pri, &dual);
         int hold = s->damp && !isfinite(ef) && isfinite(s->E_last) && isfinite(s->el_last);
         if (!hold)
             for (int32_t k = 0; k < a->nr; k++)
                 memcpy(s->Vout + 3 * (size_t)a->rv[k], s->V + 3 * (size_t)a->rv[k], 3 * sizeof(double));
         double ta = admm_now();
-        double el = hold ? s->el_last : s->family == ADMM_FAM_ELEMENT ? ef : act_elastic(s);
-        double lo = hold ? s->lo_last : act_locality(s);
-        double E = hold ? s->E_last : el + lo;
+        prv = cur;
+        cur.pend = lz;
+        cur.buf = buf;
+        cur.el = hold ? s->el_last : lz ? NAN : s->family == ADMM_FAM_ELEMENT ? ef : act_elastic(s);
+        cur.lo = hold ? s->lo_last : act_locality(s);
+        cur.E = hold ? s->E_last : cur.el + cur.lo;
         r.iterations++;
         s->st.iterations++;
-        r.elastic = el; r.locality = lo; r.objective = E;
-        r.residual = admm_stop_residual(s, hold, E, E_prev, pri, dual);
-        E_prev = E;
-        s->E_last = E; s->el_last = el; s->lo_last = lo;
-        int conv = r.residual < s->p.tol;
+        int report = every > 0 && (r.iterations % every == 0 || it == maxit - 1);
+        res_done = 0;
+        int conv = 0;
+        if (!lz || report || it == maxit - 1 || conv_possible(s, pri, dual)) {
+            lazy_resolve(s, &prv);
+            lazy_resolve(s, &cur);
+            r.elastic = cur.el; r.locality = cur.lo; r.objective = cur.E;
+            r.residual = admm_stop_residual(s, hold, cur.E, prv.E, pri, dual);
+            s->E_last = cur.E; s->el_last = cur.el; s->lo_last = cur.lo;
+            res_done = 1;
+            conv = r.residual < s->p.tol;
+        }
+        E_prev = cur.E;
         /* region: grow when the support nears the edge; certify the far field periodically and
          * before reporting convergence */
         admm_act_support(s, 0);
@@ -434,11 +545,17 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
             else certified = 1;
         }
         if (!need && !conv && s->p.active_tail > 0) { /* tail test (admm.h): every iteration */
-            nt = admm_act_tail(s, E, s->p.active_tail);
+            /* E >= lo: an edge charge within tol lo is within tol E (lazy_it) */
+            if (!cur.pend || !(cur.lo > 0) || admm_act_tail(s, cur.lo, s->p.active_tail) > 0) {
+                lazy_resolve(s, &cur);
+                nt = admm_act_tail(s, cur.E, s->p.active_tail);
+            }
             need = nt > 0;
         }
         if (need) {
             conv = 0;
+            lazy_resolve(s, &prv); /* their F buffers follow ae, which the growth changes */
+            lazy_resolve(s, &cur);
             if (grow(s, by_check, nt, err, &rc)) { fell_back = 1; break; }
             if (rc) break;
             if (it == 0 && probes > 0) { /* the probe: start again on the grown region */
@@ -446,6 +563,12 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
                 a->st.tail_probes++;
                 admm_act_probe_restore(s);
                 E_prev = s->E_last;
+                /* the lazy energy and residuals start again from the restored state (the growth
+                 * already invalidated the F buffers: gc_ok 0) */
+                cur = (lazy_it){0, 0, s->el_last, s->lo_last, E_prev};
+                prv = cur;
+                res_done = 1;
+                pri = dual = INFINITY;
                 r.iterations = 0;
                 r.t_other += admm_now() - ta;
                 t_it = admm_now();
@@ -457,11 +580,19 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         double t_end = admm_now();
         last_ms = (t_end - t_it) * 1e3;
         t_it = t_end;
-        if (every > 0 && (r.iterations % every == 0 || conv || it == maxit - 1)) {
-            df_admm_progress pr = {r.iterations, E, r.residual, s->Vout, s->nv};
+        if (every > 0 && (report || conv)) {
+            df_admm_progress pr = {r.iterations, cur.E, r.residual, s->Vout, s->nv};
             if (budget->progress(budget->user, &pr)) { r.stop = DF_ADMM_STOP_CALLBACK; break; }
         }
         if (conv) { r.converged = 1; r.stop = DF_ADMM_STOP_CONVERGED; break; }
+    }
+    if (!res_done) { /* the last iteration's objective and stop residual (lazy energy) */
+        lazy_resolve(s, &prv);
+        lazy_resolve(s, &cur);
+        r.elastic = cur.el; r.locality = cur.lo; r.objective = cur.E;
+        r.residual = admm_stop_residual(s, 0, cur.E, prv.E, pri, dual);
+        s->E_last = cur.E; s->el_last = cur.el; s->lo_last = cur.lo;
+        E_prev = cur.E;
     }
     if (!rc && fell_back) rc = finish_full(s, budget, tstart, &r, err);
     else if (!rc && !certified && r.iterations > 0) {

@@ -201,6 +201,10 @@ void admm_damp_apply(df_admm *s, double t);
 /* admm_local.c: local steps and the global right-hand side. admm_local_x_one: local step 1 of
  * element e (R_e X_e) and its right-hand side pieces Ce (element family only). */
 void admm_local_x_one(df_admm *s, int32_t e);
+/* the same from G = F_e(V) + W_e computed by the caller (the active-set run keeps it from its
+ * dual update, admm_active_run.c): bit-identical to admm_local_x_one when G holds exactly
+ * admm_element_F(V, e) + W_e summed in that order; G is scratch afterwards */
+void admm_local_x_one_G(df_admm *s, int32_t e, double G[9]);
 void admm_local_x(df_admm *s);
 void admm_local_z(df_admm *s);
 void admm_assemble_rhs(df_admm *s);
@@ -211,6 +215,8 @@ void admm_assemble_rhs(df_admm *s);
  * over its region's (sub = the outside couplings). */
 void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
                    int par);
+/* row f of admm_rhs_rows (no threads of its own: for callers' own parallel loops) */
+void admm_rhs_row(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs, int32_t f);
 /* dual updates; for the element family also returns sum_e E_e(F_e(V)) (the elastic energy of V
  * without bending, from the same F_e), else 0 */
 double admm_dual_update(df_admm *s);

@@ -31,7 +31,16 @@ static inline void element_contrib(df_admm *s, int32_t e, const double *RX, cons
         }
 }
 
-static void local_x_element_one(df_admm *s, int32_t e);
+static void local_x_element_G(df_admm *s, int32_t e, double G[9]);
+
+static void local_x_element_one(df_admm *s, int32_t e)
+{
+    double G[9];
+    const double *W = s->W + 9 * (size_t)e;
+    admm_element_F(s, s->V, e, G);
+    for (int k = 0; k < 9; k++) G[k] += W[k];
+    local_x_element_G(s, e, G);
+}
 
 static void local_x_element(df_admm *s)
 {
@@ -49,13 +58,18 @@ void admm_local_x_one(df_admm *s, int32_t e)
     element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);
 }
 
-static void local_x_element_one(df_admm *s, int32_t e)
+void admm_local_x_one_G(df_admm *s, int32_t e, double G[9])
+{
+    local_x_element_G(s, e, G);
+    element_contrib(s, e, s->RX + 9 * (size_t)e, s->W + 9 * (size_t)e);
+}
+
+/* local step 1 of element e from G = F_e(V) + W_e (G is scratch afterwards) */
+static void local_x_element_G(df_admm *s, int32_t e, double G[9])
 {
     const df_admm_energy en = s->p.energy;
     {
-        double G[9], *W = s->W + 9 * (size_t)e, *RX = s->RX + 9 * (size_t)e;
-        admm_element_F(s, s->V, e, G);
-        for (int k = 0; k < 9; k++) G[k] += W[k];
+        double *RX = s->RX + 9 * (size_t)e;
         double vol = s->vol[e], gam = s->gam[e];
         if (s->q == 2) {
             double Fc[6] = {G[0], G[1], G[3], G[4], G[6], G[7]}, U[6], sg[2], Vm[4];
@@ -205,35 +219,38 @@ void admm_local_z(df_admm *s)
     }
 }
 
+void admm_rhs_row(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs, int32_t f)
+{
+    const double rho = s->p.rho;
+    int32_t v = verts[f];
+    double b[3] = {0, 0, 0};
+    if (s->family == ADMM_FAM_ELEMENT) {
+        for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
+            const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
+            b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
+        }
+    } else {
+        for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
+            int32_t se = s->in_ent[p];
+            int32_t t = (se > 0 ? se : -se) - 1;
+            double sign = se > 0 ? 1.0 : -1.0;
+            const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
+            double w = sign * s->sr_w[t];
+            for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        size_t o = 3 * (size_t)v + k;
+        rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - sub[f + (size_t)k * nf];
+    }
+}
+
 void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const double *sub, double *rhs,
                    int par)
 {
     (void)par; /* read only by the OpenMP pragma (unused in serial builds: make tsan) */
-    const double rho = s->p.rho;
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) if (par)
-    for (int32_t f = 0; f < nf; f++) {
-        int32_t v = verts[f];
-        double b[3] = {0, 0, 0};
-        if (s->family == ADMM_FAM_ELEMENT) {
-            for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
-                const double *C = s->Ce + 3 * (size_t)s->ve_ent[p];
-                b[0] += C[0]; b[1] += C[1]; b[2] += C[2];
-            }
-        } else {
-            for (int32_t p = s->in_ptr[v]; p < s->in_ptr[v + 1]; p++) {
-                int32_t se = s->in_ent[p];
-                int32_t t = (se > 0 ? se : -se) - 1;
-                double sign = se > 0 ? 1.0 : -1.0;
-                const double *R = s->Rv + 9 * (size_t)s->sr_own[t], *dr = s->sr_d + 3 * (size_t)t;
-                double w = sign * s->sr_w[t];
-                for (int r = 0; r < 3; r++) b[r] += w * (R[3 * r] * dr[0] + R[3 * r + 1] * dr[1] + R[3 * r + 2] * dr[2]);
-            }
-        }
-        for (int k = 0; k < 3; k++) {
-            size_t o = 3 * (size_t)v + k;
-            rhs[f + (size_t)k * nf] = b[k] + rho * (s->Vrest[o] + s->Z[o] - s->U[o]) - sub[f + (size_t)k * nf];
-        }
-    }
+    for (int32_t f = 0; f < nf; f++) admm_rhs_row(s, verts, nf, sub, rhs, f);
 }
 
 void admm_assemble_rhs(df_admm *s) { admm_rhs_rows(s, s->fvert, s->nfree, s->KfhP, s->rhs->x, 1); }

@@ -1,0 +1,273 @@
+/* Unit tests of the active-set run's reuse paths (core/admm/admm_active_run.c): the F_e(V) buffer
+ * the dual update leaves for the next local step and the lazy elastic energy (summed only when
+ * something needs it) must give bitwise the same iterates, objectives and stop residuals as
+ * gathering F_e and summing the energy in every iteration. The reference is the same solver run so
+ * that the reuse cannot happen: one-iteration runs (every run's first iteration gathers) and a
+ * progress report every iteration (which needs the energy every iteration). Scene as in
+ * test_admm_active.c: a tet grid, bottom face pinned, a 3 x 3 top patch dragged up. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "core/admm/admm.h"
+#include "tests/unit/admm/admm_test_util.h"
+
+typedef struct scene {
+    df_mesh m;
+    int32_t *h;
+    int nh;
+    double *tg;     /* rest positions of the handles */
+    uint8_t *drag;  /* per handle: 1 when dragged */
+    double hsp;     /* grid spacing */
+    double dir[3];  /* drag direction per unit of `amount` */
+} scene;
+
+/* tet grid n^3 over [0,1]^3: bottom face pinned, 3 x 3 patch at the top centre dragged up */
+static void tet_scene(scene *sc, int n)
+{
+    memset(sc, 0, sizeof(*sc));
+    sc->m = tu_bar3d(n, n, n, 1.0, 1.0, 1.0);
+    sc->hsp = 1.0 / n;
+    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
+    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
+    sc->drag = calloc((size_t)sc->m.nv, 1);
+    for (int32_t i = 0; i < sc->m.nv; i++) {
+        const double *x = sc->m.V + 3 * (size_t)i;
+        long ii = lround(x[0] * n), jj = lround(x[1] * n);
+        int top = x[2] == 1.0 && labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
+        if (top || x[2] == 0.0) {
+            sc->drag[sc->nh] = (uint8_t)top;
+            memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
+            sc->h[sc->nh++] = i;
+        }
+    }
+    sc->dir[2] = 1.0;
+}
+
+static void scene_free(scene *sc)
+{
+    tu_free(&sc->m);
+    free(sc->h); free(sc->tg); free(sc->drag);
+}
+
+/* ARAP with w, s, rho scaled by the grid spacing (a support of a few rings) */
+static df_admm_params arap_params(const scene *sc, int active)
+{
+    df_admm_params p;
+    df_admm_params_default(&p, DF_ADMM_ARAP);
+    double h = sc->hsp;
+    if (sc->m.kind == DF_MESH_TET) { /* per-vertex stiffness ~ h: w ~ h^2 keeps the support in rings */
+        p.w = 0.5 * h * h;
+        p.rho = 6.0 * h;
+    } else { /* spokes and rims: stiffness ~ 1, w ~ h */
+        p.w = 0.5 * h;
+        p.rho = 6.0;
+    }
+    p.s = 0.25 * h;
+    p.tol = 1e-13;
+    p.max_iters = 20000;
+    p.threads = 1;
+    p.active = active;
+    return p;
+}
+
+static df_admm *make(const scene *sc, const df_admm_params *p)
+{
+    df_admm *s = NULL;
+    df_error err;
+    assert_int_equal(df_admm_create(&sc->m, p, sc->h, sc->nh, NULL, 0, &s, &err), DF_OK);
+    return s;
+}
+
+/* targets: dragged handles moved by amount * hsp along dir */
+static void set_drag(df_admm *s, const scene *sc, double amount)
+{
+    double *t = malloc((size_t)sc->nh * 3 * sizeof(double));
+    memcpy(t, sc->tg, (size_t)sc->nh * 3 * sizeof(double));
+    for (int k = 0; k < sc->nh; k++)
+        if (sc->drag[k])
+            for (int c = 0; c < 3; c++) t[3 * k + c] += amount * sc->hsp * sc->dir[c];
+    df_error err;
+    assert_int_equal(df_admm_set_targets(s, t, &err), DF_OK);
+    free(t);
+}
+
+static df_admm_result run(df_admm *s, int iters)
+{
+    df_admm_budget b = {.max_iters = iters};
+    df_admm_result r;
+    df_error err;
+    assert_int_equal(df_admm_run(s, &b, &r, &err), DF_OK);
+    return r;
+}
+
+static int32_t count_moved(const df_admm *s, const df_mesh *m)
+{
+    const double *V = df_admm_positions(s);
+    int32_t n = 0;
+    for (int32_t i = 0; i < m->nv; i++)
+        if (memcmp(V + 3 * (size_t)i, m->V + 3 * (size_t)i, 3 * sizeof(double))) n++;
+    return n;
+}
+
+/* the active run keeps each element's F_e(V) from its dual update for the next iteration's local
+ * step (G = F + W); every run's first iteration gathers F_e from V itself. So 20 runs of one
+ * iteration (no reuse) and one run of 20 (reuse in 19) must give bitwise the same positions,
+ * objective and stop residual, when both take the same region decisions: the far-field check
+ * after every iteration (active_check_every 1: also what a one-iteration run does at its end) and
+ * a region that does not grow during the compared iterations (checked). ARAP and Neo-Hookean (its
+ * local step also starts from G). */
+static void split_vs_one_run(df_admm_energy en)
+{
+    scene sc;
+    tet_scene(&sc, 10);
+    df_admm_params p = arap_params(&sc, 1);
+    if (en == DF_ADMM_NEOHOOKEAN) { /* as test_tet_neohookean_equals_full */
+        df_admm_params_default(&p, DF_ADMM_NEOHOOKEAN);
+        double h = sc.hsp, E = p.youngs, nu = p.poisson;
+        double stiff = E / (2 * (1 + nu)) + E * nu / ((1 + nu) * (1 - 2 * nu));
+        p.w = 1.0 * h * h * stiff;
+        p.s = 0.25 * h;
+        p.rho = 10.0 * h * stiff;
+        p.tol = 1e-13;
+        p.threads = 1;
+        p.active = 1;
+    }
+    p.active_band = 6;
+    p.active_check_every = 1;
+    df_admm *split = make(&sc, &p), *one = make(&sc, &p);
+    /* the same first update on both builds their regions */
+    set_drag(split, &sc, 0.3);
+    set_drag(one, &sc, 0.3);
+    df_admm_result r = run(split, 20), r1 = run(one, 20);
+    assert_memory_equal(df_admm_positions(split), df_admm_positions(one), (size_t)sc.m.nv * 3 * sizeof(double));
+    df_admm_active_stats a0, b0, a1, b1;
+    df_admm_get_active_stats(split, &a0);
+    df_admm_get_active_stats(one, &b0);
+    set_drag(split, &sc, 0.45);
+    set_drag(one, &sc, 0.45);
+    for (int k = 0; k < 20; k++) {
+        r = run(split, 1);
+        assert_int_equal(r.iterations, 1);
+    }
+    r1 = run(one, 20);
+    assert_int_equal(r1.iterations, 20);
+    df_admm_get_active_stats(split, &a1);
+    df_admm_get_active_stats(one, &b1);
+    assert_int_equal(a1.grows + a1.rebuilds, a0.grows + a0.rebuilds);
+    assert_int_equal(b1.grows + b1.rebuilds, b0.grows + b0.rebuilds);
+    assert_int_equal(a1.fallbacks, 0);
+    assert_int_equal(b1.fallbacks, 0);
+    assert_true(count_moved(one, &sc.m) > 0);
+    assert_memory_equal(df_admm_positions(split), df_admm_positions(one), (size_t)sc.m.nv * 3 * sizeof(double));
+    assert_memory_equal(&r.objective, &r1.objective, sizeof(double));
+    assert_memory_equal(&r.elastic, &r1.elastic, sizeof(double));
+    assert_memory_equal(&r.residual, &r1.residual, sizeof(double));
+    df_admm_free(split);
+    df_admm_free(one);
+    scene_free(&sc);
+}
+
+/* progress callback of test_lazy_energy_matches_eager: counts the reports */
+static int count_reports(void *user, const df_admm_progress *p)
+{
+    (void)p;
+    (*(int *)user)++;
+    return 0;
+}
+
+/* The active run sums the elastic energy of an iteration only when something needs it (the stop
+ * test when it can pass, a progress report, the tail test when the locality alone does not decide
+ * it, a region growth, the last iteration); a progress report every iteration needs it in every
+ * iteration. The same drag with and without reports must give bitwise the same positions,
+ * objectives, stop residuals and region decisions (tail test on, so it grows the region). */
+static void lazy_vs_eager(df_admm_energy en)
+{
+    scene sc;
+    tet_scene(&sc, 16);
+    df_admm_params p = arap_params(&sc, 1);
+    p.energy = en;
+    p.active_tail = DF_ADMM_ACTIVE_TAIL;
+    df_admm *eager = make(&sc, &p), *lazy = make(&sc, &p);
+    int reports = 0;
+    for (int k = 1; k <= 4; k++) {
+        set_drag(eager, &sc, 0.3 * k);
+        set_drag(lazy, &sc, 0.3 * k);
+        df_admm_budget be = {.max_iters = 20, .progress_every = 1, .progress = count_reports, .user = &reports};
+        df_admm_result re, rl;
+        df_error err;
+        int before = reports;
+        assert_int_equal(df_admm_run(eager, &be, &re, &err), DF_OK);
+        assert_int_equal(reports - before, 20);
+        rl = run(lazy, 20);
+        assert_int_equal(re.iterations, rl.iterations);
+        assert_memory_equal(df_admm_positions(eager), df_admm_positions(lazy), (size_t)sc.m.nv * 3 * sizeof(double));
+        assert_memory_equal(&re.objective, &rl.objective, sizeof(double));
+        assert_memory_equal(&re.elastic, &rl.elastic, sizeof(double));
+        assert_memory_equal(&re.locality, &rl.locality, sizeof(double));
+        assert_memory_equal(&re.residual, &rl.residual, sizeof(double));
+    }
+    df_admm_active_stats se, sl;
+    df_admm_get_active_stats(eager, &se);
+    df_admm_get_active_stats(lazy, &sl);
+    assert_true(sl.tail_grows > 0);
+    assert_int_equal(sl.fallbacks, 0);
+    assert_int_equal(se.fallbacks, 0);
+    assert_int_equal(se.tail_grows, sl.tail_grows);
+    assert_int_equal(se.grows, sl.grows);
+    assert_int_equal(se.region_vertices, sl.region_vertices);
+    if (en == DF_ADMM_ARAP) { /* converged: the stop test passes at the same iteration (ACAP takes
+                                 too long here) */
+        df_admm_budget be = {.max_iters = 20000, .progress_every = 1, .progress = count_reports, .user = &reports};
+        df_admm_result re, rl;
+        df_error err;
+        assert_int_equal(df_admm_run(eager, &be, &re, &err), DF_OK);
+        rl = run(lazy, 20000);
+        assert_true(re.converged);
+        assert_true(rl.converged);
+        assert_int_equal(re.iterations, rl.iterations);
+        assert_memory_equal(&re.objective, &rl.objective, sizeof(double));
+        assert_memory_equal(&re.residual, &rl.residual, sizeof(double));
+        assert_memory_equal(df_admm_positions(eager), df_admm_positions(lazy), (size_t)sc.m.nv * 3 * sizeof(double));
+    }
+    df_admm_free(eager);
+    df_admm_free(lazy);
+    scene_free(&sc);
+}
+
+static void test_lazy_energy_matches_eager_arap(void **state)
+{
+    (void)state;
+    lazy_vs_eager(DF_ADMM_ARAP);
+}
+
+static void test_lazy_energy_matches_eager_acap(void **state)
+{
+    (void)state;
+    lazy_vs_eager(DF_ADMM_ACAP);
+}
+
+static void test_split_runs_equal_one_run_arap(void **state)
+{
+    (void)state;
+    split_vs_one_run(DF_ADMM_ARAP);
+}
+
+static void test_split_runs_equal_one_run_neohookean(void **state)
+{
+    (void)state;
+    split_vs_one_run(DF_ADMM_NEOHOOKEAN);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_split_runs_equal_one_run_arap),
+        cmocka_unit_test(test_split_runs_equal_one_run_neohookean),
+        cmocka_unit_test(test_lazy_energy_matches_eager_arap),
+        cmocka_unit_test(test_lazy_energy_matches_eager_acap),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
