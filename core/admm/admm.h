@@ -271,8 +271,7 @@ typedef struct df_admm_params {
  * multi-ring growth replaced needed 3e-6 and ~2.8k vertices for 7.2e-9 over two updates. A region
  * fixed from the start to the vertices the full iterates of the first two updates move by more
  * than 3e-6 drag steps (known only after the full solve; 1275 vertices) gives 7.3e-9 there
- * (measured with a
- * throw-away hook, not in the API). Where its time goes (bench_local's 1M grid):
+ * (measured with a throw-away hook, not in the API). Where its time goes (bench_local's 1M grid):
  * the region is built and grown in the first two updates only and then kept (it never shrinks
  * back during a drag); later updates are the iterations on its vertices and elements. */
 #define DF_ADMM_ACTIVE_BAND 3
