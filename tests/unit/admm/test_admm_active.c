@@ -16,118 +16,7 @@
 
 #include "core/admm/admm.h"
 #include "tests/unit/admm/admm_test_util.h"
-
-typedef struct scene {
-    df_mesh m;
-    int32_t *h;
-    int nh;
-    double *tg;     /* rest positions of the handles */
-    uint8_t *drag;  /* per handle: 1 when dragged */
-    double hsp;     /* grid spacing */
-    double dir[3];  /* drag direction per unit of `amount` */
-} scene;
-
-/* tet grid n^3 over [0,1]^3: bottom face pinned, 3 x 3 patch at the top centre dragged up */
-static void tet_scene(scene *sc, int n)
-{
-    memset(sc, 0, sizeof(*sc));
-    sc->m = tu_bar3d(n, n, n, 1.0, 1.0, 1.0);
-    sc->hsp = 1.0 / n;
-    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
-    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
-    sc->drag = calloc((size_t)sc->m.nv, 1);
-    for (int32_t i = 0; i < sc->m.nv; i++) {
-        const double *x = sc->m.V + 3 * (size_t)i;
-        long ii = lround(x[0] * n), jj = lround(x[1] * n);
-        int top = x[2] == 1.0 && labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
-        if (top || x[2] == 0.0) {
-            sc->drag[sc->nh] = (uint8_t)top;
-            memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
-            sc->h[sc->nh++] = i;
-        }
-    }
-    sc->dir[2] = 1.0;
-}
-
-/* planar triangle grid n x n over [0,1]^2: left column pinned, 3 x 3 centre patch dragged in x, y */
-static void tri_scene(scene *sc, int n)
-{
-    memset(sc, 0, sizeof(*sc));
-    sc->m = tu_grid2d(n, n, 1.0, 1.0);
-    sc->hsp = 1.0 / n;
-    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
-    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
-    sc->drag = calloc((size_t)sc->m.nv, 1);
-    for (int32_t i = 0; i < sc->m.nv; i++) {
-        const double *x = sc->m.V + 3 * (size_t)i;
-        long ii = lround(x[0] * n), jj = lround(x[1] * n);
-        int mid = labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
-        if (mid || ii == 0) {
-            sc->drag[sc->nh] = (uint8_t)mid;
-            memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
-            sc->h[sc->nh++] = i;
-        }
-    }
-    sc->dir[0] = 0.8;
-    sc->dir[1] = 0.6;
-}
-
-static void scene_free(scene *sc)
-{
-    tu_free(&sc->m);
-    free(sc->h); free(sc->tg); free(sc->drag);
-}
-
-/* ARAP with w, s, rho scaled by the grid spacing (a support of a few rings) */
-static df_admm_params arap_params(const scene *sc, int active)
-{
-    df_admm_params p;
-    df_admm_params_default(&p, DF_ADMM_ARAP);
-    double h = sc->hsp;
-    if (sc->m.kind == DF_MESH_TET) { /* per-vertex stiffness ~ h: w ~ h^2 keeps the support in rings */
-        p.w = 0.5 * h * h;
-        p.rho = 6.0 * h;
-    } else { /* spokes and rims: stiffness ~ 1, w ~ h */
-        p.w = 0.5 * h;
-        p.rho = 6.0;
-    }
-    p.s = 0.25 * h;
-    p.tol = 1e-13;
-    p.max_iters = 20000;
-    p.threads = 1;
-    p.active = active;
-    return p;
-}
-
-static df_admm *make(const scene *sc, const df_admm_params *p)
-{
-    df_admm *s = NULL;
-    df_error err;
-    assert_int_equal(df_admm_create(&sc->m, p, sc->h, sc->nh, NULL, 0, &s, &err), DF_OK);
-    return s;
-}
-
-/* targets: dragged handles moved by amount * hsp along dir */
-static void set_drag(df_admm *s, const scene *sc, double amount)
-{
-    double *t = malloc((size_t)sc->nh * 3 * sizeof(double));
-    memcpy(t, sc->tg, (size_t)sc->nh * 3 * sizeof(double));
-    for (int k = 0; k < sc->nh; k++)
-        if (sc->drag[k])
-            for (int c = 0; c < 3; c++) t[3 * k + c] += amount * sc->hsp * sc->dir[c];
-    df_error err;
-    assert_int_equal(df_admm_set_targets(s, t, &err), DF_OK);
-    free(t);
-}
-
-static df_admm_result run(df_admm *s, int iters)
-{
-    df_admm_budget b = {.max_iters = iters};
-    df_admm_result r;
-    df_error err;
-    assert_int_equal(df_admm_run(s, &b, &r, &err), DF_OK);
-    return r;
-}
+#include "tests/unit/admm/active_scene.h"
 
 /* the same drag on both solvers (set_drag) */
 static void set_drag2(df_admm *full, df_admm *act, const scene *sc, double amount)
@@ -171,14 +60,6 @@ static double max_diff(const double *a, const double *b, int32_t nv)
     return d;
 }
 
-static int32_t count_moved(const df_admm *s, const df_mesh *m)
-{
-    const double *V = df_admm_positions(s);
-    int32_t n = 0;
-    for (int32_t i = 0; i < m->nv; i++)
-        if (memcmp(V + 3 * (size_t)i, m->V + 3 * (size_t)i, 3 * sizeof(double))) n++;
-    return n;
-}
 
 /* both converged: equal objectives (1e-8 relative, also re-evaluated from the positions) and
  * positions (1e-8, mesh size 1) */
