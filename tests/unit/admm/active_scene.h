@@ -19,47 +19,42 @@ typedef struct scene {
     double dir[3];  /* drag direction per unit of `amount` */
 } scene;
 
-/* tet grid n^3 over [0,1]^3: bottom face pinned, 3 x 3 patch at the top centre dragged up */
-static inline void tet_scene(scene *sc, int n)
+/* Fills *sc from grid mesh m of n cells per side over the unit square or cube: each vertex whose
+ * grid indices (i, j) lie within one cell of the centre, and on the top face for a tet grid, is a
+ * dragged handle; each on the bottom face (tets) or the left column (triangles) a pinned one. */
+static inline void scene_fill(scene *sc, df_mesh m, int n)
 {
     memset(sc, 0, sizeof(*sc));
-    sc->m = tu_bar3d(n, n, n, 1.0, 1.0, 1.0);
+    sc->m = m;
     sc->hsp = 1.0 / n;
-    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
-    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
-    sc->drag = calloc((size_t)sc->m.nv, 1);
-    for (int32_t i = 0; i < sc->m.nv; i++) {
-        const double *x = sc->m.V + 3 * (size_t)i;
+    sc->h = malloc((size_t)m.nv * sizeof(int32_t));
+    sc->tg = malloc((size_t)m.nv * 3 * sizeof(double));
+    sc->drag = calloc((size_t)m.nv, 1);
+    int tet = m.kind == DF_MESH_TET;
+    for (int32_t i = 0; i < m.nv; i++) {
+        const double *x = m.V + 3 * (size_t)i;
         long ii = lround(x[0] * n), jj = lround(x[1] * n);
-        int top = x[2] == 1.0 && labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
-        if (top || x[2] == 0.0) {
-            sc->drag[sc->nh] = (uint8_t)top;
+        int mid = labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
+        int dragged = tet ? mid && x[2] == 1.0 : mid, pinned = tet ? x[2] == 0.0 : ii == 0;
+        if (dragged || pinned) {
+            sc->drag[sc->nh] = (uint8_t)dragged;
             memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
             sc->h[sc->nh++] = i;
         }
     }
+}
+
+/* tet grid n^3 over [0,1]^3: bottom face pinned, 3 x 3 patch at the top centre dragged up */
+static inline void tet_scene(scene *sc, int n)
+{
+    scene_fill(sc, tu_bar3d(n, n, n, 1.0, 1.0, 1.0), n);
     sc->dir[2] = 1.0;
 }
 
 /* planar triangle grid n x n over [0,1]^2: left column pinned, 3 x 3 centre patch dragged in x, y */
 static inline void tri_scene(scene *sc, int n)
 {
-    memset(sc, 0, sizeof(*sc));
-    sc->m = tu_grid2d(n, n, 1.0, 1.0);
-    sc->hsp = 1.0 / n;
-    sc->h = malloc((size_t)sc->m.nv * sizeof(int32_t));
-    sc->tg = malloc((size_t)sc->m.nv * 3 * sizeof(double));
-    sc->drag = calloc((size_t)sc->m.nv, 1);
-    for (int32_t i = 0; i < sc->m.nv; i++) {
-        const double *x = sc->m.V + 3 * (size_t)i;
-        long ii = lround(x[0] * n), jj = lround(x[1] * n);
-        int mid = labs(ii - n / 2) <= 1 && labs(jj - n / 2) <= 1;
-        if (mid || ii == 0) {
-            sc->drag[sc->nh] = (uint8_t)mid;
-            memcpy(sc->tg + 3 * (size_t)sc->nh, x, 3 * sizeof(double));
-            sc->h[sc->nh++] = i;
-        }
-    }
+    scene_fill(sc, tu_grid2d(n, n, 1.0, 1.0), n);
     sc->dir[0] = 0.8;
     sc->dir[1] = 0.6;
 }
