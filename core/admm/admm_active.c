@@ -11,6 +11,10 @@
 #include "core/admm/admm_active.h"
 #include "core/admm/svd3.h"
 
+/* the far-field certificate's fringe scan forks threads from this many fringe vertices (each
+ * costs a dozen element stresses) */
+#define ACT_CERT_PAR 128
+
 void admm_active_stale(df_admm *s)
 {
     if (!s) return;
@@ -564,13 +568,18 @@ int32_t admm_act_certify(df_admm *s)
 {
     admm_active *a = s->act;
     a->st.checks++;
-    int32_t n = 0;
+    /* the fringe's force norms (independent, read-only: each an element gather and a polar
+     * decomposition or Neo-Hookean stress per moved element around it) on the team, their
+     * verdicts in work[]; the failing vertices listed afterwards in fringe order */
+    int32_t *bad = a->work;
+    #pragma omp parallel for schedule(dynamic, 64) num_threads(s->nthreads) if (a->nfr >= ACT_CERT_PAR)
     for (int32_t k = 0; k < a->nfr; k++) {
         int32_t v = a->fr[k];
-        if (a->hmap[v] >= 0) continue; /* a handle is constrained, not optimal */
-        double fn = force_norm(s, v);
-        if (!(fn <= s->p.w * s->a[v])) a->sup[a->nsup + n++] = v;
+        bad[k] = a->hmap[v] < 0 && !(force_norm(s, v) <= s->p.w * s->a[v]); /* a handle is constrained, not optimal */
     }
+    int32_t n = 0;
+    for (int32_t k = 0; k < a->nfr; k++)
+        if (bad[k]) a->sup[a->nsup + n++] = a->fr[k];
     return n;
 }
 

@@ -31,7 +31,7 @@ typedef struct admm_active {
     int32_t nae, *ae, *ae2;  /* elements touching the region (vertex family: cells of region and
                                 fringe vertices); ae2: scratch of the same size */
     uint8_t *emark;          /* ne (element family) or nv (cells): 1 when in ae */
-    int32_t *work;           /* nv scratch (BFS queue) */
+    int32_t *work;           /* nv scratch (BFS queue, the certificate's verdicts) */
     int32_t *tbud;           /* nv scratch: the tail test's ring budget per vertex */
     uint32_t *stamp, gen;    /* nv visit stamps (no clearing per pass) */
     uint32_t *tstamp, tgen;  /* spokes-and-rims entry stamps (vertex family) */
@@ -85,7 +85,8 @@ int32_t admm_act_fresh_size(df_admm *s);
 /* 1 when a support vertex lies within band - 1 rings of the region's edge or outside it */
 int admm_act_needs_grow(const df_admm *s);
 /* far-field certificate: appends the failing fringe vertices to act->sup after its nsup entries
- * (nsup unchanged) and returns their number */
+ * (nsup unchanged, fringe order) and returns their number; the fringe scan on the solver's team
+ * from ACT_CERT_PAR fringe vertices (admm_active.c), act->work as scratch */
 int32_t admm_act_certify(df_admm *s);
 /* sub-system solve: rhs already in act->rhs; *x the nrf x 3 column-major answer */
 int admm_act_solve(df_admm *s, const double **x, df_error *err);
