@@ -11,6 +11,10 @@
 #include "core/admm/admm_active.h"
 #include "core/admm/svd3.h"
 
+/* the far-field certificate's fringe scan forks threads from this many fringe vertices (each
+ * costs a dozen element stresses) */
+#define ACT_CERT_PAR 128
+
 void admm_active_stale(df_admm *s)
 {
     if (!s) return;
@@ -223,7 +227,8 @@ static void snap_vertex(df_admm *s, int32_t i)
 }
 
 /* the region's lists after in[] changed: fringe, depths, elements / cells (entering ones get their
- * local step so the residual snapshot sees current values; leaving ones W = 0) */
+ * local step so the residual snapshot sees current values, elements on the team from
+ * ACT_PAR_HEAVY region elements; leaving ones W = 0) */
 static void region_lists(df_admm *s, admm_active *a)
 {
     qsort(a->rv, (size_t)a->nr, sizeof(int32_t), cmp_i32); /* memory order (as ae below) */
@@ -263,7 +268,6 @@ static void region_lists(df_admm *s, admm_active *a)
             for (int32_t p = s->ve_ptr[v]; p < s->ve_ptr[v + 1]; p++) {
                 int32_t e = s->ve_ent[p] / s->esz;
                 if (a->emark[e] & 1) continue;
-                if (a->emark[e] == 0) admm_local_x_one(s, e);
                 a->emark[e] = a->emark[e] == 2 ? 3 : 1;
                 a->ae2[n++] = e;
                 gsum += 3.0 * s->gam[e];
@@ -280,6 +284,11 @@ static void region_lists(df_admm *s, admm_active *a)
                 a->ae2[n++] = v;
             }
         }
+    }
+    if (s->family == ADMM_FAM_ELEMENT) { /* entering elements (mark 1): their local step, on the team */
+        #pragma omp parallel for schedule(dynamic, 256) num_threads(s->nthreads) if (n >= ACT_PAR_HEAVY)
+        for (int32_t k = 0; k < n; k++)
+            if (a->emark[a->ae2[k]] == 1) admm_local_x_one(s, a->ae2[k]);
     }
     for (int32_t k = 0; k < a->nae; k++) { /* leaving: still 2; their vertices are at rest now */
         int32_t e = a->ae[k];
@@ -564,13 +573,18 @@ int32_t admm_act_certify(df_admm *s)
 {
     admm_active *a = s->act;
     a->st.checks++;
-    int32_t n = 0;
+    /* the fringe's force norms (independent, read-only: each an element gather and a polar
+     * decomposition or Neo-Hookean stress per moved element around it) on the team, their
+     * verdicts in work[]; the failing vertices listed afterwards in fringe order */
+    int32_t *bad = a->work;
+    #pragma omp parallel for schedule(dynamic, 64) num_threads(s->nthreads) if (a->nfr >= ACT_CERT_PAR)
     for (int32_t k = 0; k < a->nfr; k++) {
         int32_t v = a->fr[k];
-        if (a->hmap[v] >= 0) continue; /* a handle is constrained, not optimal */
-        double fn = force_norm(s, v);
-        if (!(fn <= s->p.w * s->a[v])) a->sup[a->nsup + n++] = v;
+        bad[k] = a->hmap[v] < 0 && !(force_norm(s, v) <= s->p.w * s->a[v]); /* a handle is constrained, not optimal */
     }
+    int32_t n = 0;
+    for (int32_t k = 0; k < a->nfr; k++)
+        if (bad[k]) a->sup[a->nsup + n++] = a->fr[k];
     return n;
 }
 

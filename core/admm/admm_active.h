@@ -9,6 +9,12 @@
 
 #include "core/admm/admm_internal.h"
 
+/* a region's loops fork threads only when they have this much work: an OpenMP fork/join (a futex
+ * wake-up with the passive wait policy) costs tens of microseconds, a whole light loop over a
+ * small region less */
+#define ACT_PAR_HEAVY 1024      /* elements / cells with a local solve (polar, SVD, prox) */
+#define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
+
 typedef struct admm_active {
     int valid;               /* region built and every vertex outside it exactly at rest */
     int band, check_every;
@@ -25,7 +31,7 @@ typedef struct admm_active {
     int32_t nae, *ae, *ae2;  /* elements touching the region (vertex family: cells of region and
                                 fringe vertices); ae2: scratch of the same size */
     uint8_t *emark;          /* ne (element family) or nv (cells): 1 when in ae */
-    int32_t *work;           /* nv scratch (BFS queue) */
+    int32_t *work;           /* nv scratch (BFS queue, the certificate's verdicts) */
     int32_t *tbud;           /* nv scratch: the tail test's ring budget per vertex */
     uint32_t *stamp, gen;    /* nv visit stamps (no clearing per pass) */
     uint32_t *tstamp, tgen;  /* spokes-and-rims entry stamps (vertex family) */
@@ -60,7 +66,8 @@ typedef struct admm_active {
      * elements (nae x 9, in ae order), written by the dual updates in turn, read by the next local
      * step (G = F + W) and the lazy energy (admm_active_run.c); gc_ok 1 while buffer gc_buf
      * matches V and ae (cleared at a run's start and by every region build) */
-    double *gc;
+    double *gc;              /* also the partial sums of admm_active_elem.c after the two buffers:
+                                cap_gc x 4 doubles at gc + 18 cap_gc */
     int64_t cap_gc;
     int gc_ok, gc_buf;
 } admm_active;
@@ -78,7 +85,8 @@ int32_t admm_act_fresh_size(df_admm *s);
 /* 1 when a support vertex lies within band - 1 rings of the region's edge or outside it */
 int admm_act_needs_grow(const df_admm *s);
 /* far-field certificate: appends the failing fringe vertices to act->sup after its nsup entries
- * (nsup unchanged) and returns their number */
+ * (nsup unchanged, fringe order) and returns their number; the fringe scan on the solver's team
+ * from ACT_CERT_PAR fringe vertices (admm_active.c), act->work as scratch */
 int32_t admm_act_certify(df_admm *s);
 /* sub-system solve: rhs already in act->rhs; *x the nrf x 3 column-major answer */
 int admm_act_solve(df_admm *s, const double **x, df_error *err);
@@ -97,5 +105,15 @@ int32_t admm_act_tail(df_admm *s, double E, double tol);
 int admm_act_probe_save(df_admm *s, df_error *err);
 void admm_act_probe_restore(df_admm *s);
 void admm_act_probe_free(admm_active *a);
+
+/* admm_active_elem.c: the region's element sums (element family), threaded from ACT_PAR_HEAVY
+ * elements with sums bit-identical to one thread's below ACT_PAR_LIGHT (file header).
+ * admm_act_dual_elems: W_e += F_e(V) - R_e X_e for the region's elements (s->V, s->RX, s->W),
+ * F_e(V) into fb (nae x 9, ae order) when fb is not NULL; *r2, *ax2, *y2: the sums of gam_e
+ * |F - R X|^2, gam_e |F|^2, gam_e |W_e|^2 (new W); returns the elastic energy sum_e E_e(F_e(V)),
+ * 0 when lazy. admm_act_energy: the elastic energy of the region's elements from fb (nae x 9, ae
+ * order) or, fb NULL, from F_e(V). Called from the solver's thread; no allocation, no errors. */
+double admm_act_dual_elems(df_admm *s, double *fb, int lazy, double *r2, double *ax2, double *y2);
+double admm_act_energy(const df_admm *s, const double *fb, const double *V);
 
 #endif

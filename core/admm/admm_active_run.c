@@ -15,11 +15,6 @@
 #include "core/admm/scl1.h"
 
 #define ADMM_BUDGET_MARGIN 1.05 /* as admm_run.c */
-/* a region's loops fork threads only when they have this much work: an OpenMP fork/join (a futex
- * wake-up with the passive wait policy) costs tens of microseconds, a whole light loop over a
- * small region less */
-#define ACT_PAR_HEAVY 1024      /* elements / cells with a local solve (polar, SVD, prox) */
-#define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
 /* a run starts from a fresh region when the current one is this many times larger than needed */
 #define ACT_SHRINK 2
 /* tail test: restarts of a run on a fresh region whose first iteration grew it (the probe) */
@@ -32,16 +27,17 @@ typedef struct act_acc {
     double r2, ax2, z2, s2, y2;
 } act_acc;
 
-/* the two F buffers (admm_active.h), one allocation of 2 x cap_gc x 9 doubles: capacity for the
- * region's elements; without memory the local step gathers F_e itself (gc_ok stays 0) and the
- * energy is summed in every dual update */
+/* the two F buffers (admm_active.h) and the partial sums (admm_active_elem.c), one allocation of
+ * cap_gc x (2 x 9 + 4) doubles: capacity for the region's elements; without memory the local step
+ * gathers F_e itself (gc_ok stays 0), the energy is summed in every dual update and the element
+ * sums run on one thread below ACT_PAR_LIGHT */
 static void gc_reserve(admm_active *a)
 {
     a->gc_ok = 0;
     if (a->nae <= a->cap_gc) return;
     int64_t c = a->nae + a->nae / 4;
     free(a->gc);
-    a->gc = malloc((size_t)c * 18 * sizeof(double));
+    a->gc = malloc((size_t)c * 22 * sizeof(double));
     a->cap_gc = a->gc ? c : 0;
 }
 
@@ -220,24 +216,9 @@ static double act_dual(df_admm *s, act_acc *acc, int buf, int lazy)
     admm_active *a = s->act;
     double E = 0;
     if (s->family == ADMM_FAM_ELEMENT) {
-        double r2 = 0, ax2 = 0, y2 = 0;
+        double r2, ax2, y2;
         double *fb = a->gc && a->cap_gc >= a->nae ? fbuf(a, buf) : NULL;
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
-        for (int32_t k = 0; k < a->nae; k++) {
-            int32_t e = a->ae[k];
-            double F[9], er = 0, ea = 0, ey = 0;
-            admm_element_F(s, s->V, e, F);
-            double *W = s->W + 9 * (size_t)e;
-            const double *RX = s->RX + 9 * (size_t)e;
-            for (int c = 0; c < 9; c++) {
-                double dw = F[c] - RX[c];
-                W[c] += dw;
-                er += dw * dw; ea += F[c] * F[c]; ey += W[c] * W[c]; /* R X + dW = F */
-            }
-            r2 += s->gam[e] * er; ax2 += s->gam[e] * ea; y2 += s->gam[e] * ey;
-            if (fb) memcpy(fb + 9 * (size_t)k, F, sizeof(F));
-            if (!lazy) E += admm_element_energy_F(s, e, F);
-        }
+        E = admm_act_dual_elems(s, fb, lazy, &r2, &ax2, &y2);
         acc->r2 += r2; acc->ax2 += ax2; acc->y2 += y2;
         a->gc_ok = fb != NULL;
         a->gc_buf = buf;
@@ -278,19 +259,10 @@ static int lazy_ok(const df_admm *s)
            a->gc && a->cap_gc >= a->nae;
 }
 
-static double fb_energy(const df_admm *s, const double *fb)
-{
-    const admm_active *a = s->act;
-    double E = 0;
-    #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
-    for (int32_t k = 0; k < a->nae; k++) E += admm_element_energy_F(s, a->ae[k], fb + 9 * (size_t)k);
-    return E;
-}
-
 static void lazy_resolve(const df_admm *s, lazy_it *x)
 {
     if (!x->pend) return;
-    x->el = fb_energy(s, fbuf(s->act, x->buf));
+    x->el = admm_act_energy(s, fbuf(s->act, x->buf), NULL);
     x->E = x->el + x->lo;
     x->pend = 0;
 }
@@ -309,15 +281,7 @@ static double act_elastic(const df_admm *s)
     const admm_active *a = s->act;
     const double *V = s->Vout;
     double E = 0;
-    if (s->family == ADMM_FAM_ELEMENT) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
-        for (int32_t k = 0; k < a->nae; k++) {
-            double F[9];
-            admm_element_F(s, V, a->ae[k], F);
-            E += admm_element_energy_F(s, a->ae[k], F);
-        }
-        return E;
-    }
+    if (s->family == ADMM_FAM_ELEMENT) return admm_act_energy(s, NULL, V);
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_HEAVY)
     for (int32_t k = 0; k < a->nae; k++) E += admm_vertex_energy(s, V, a->ae[k]);
     return E;

@@ -3,8 +3,9 @@
  * something needs it) must give bitwise the same iterates, objectives and stop residuals as
  * gathering F_e and summing the energy in every iteration. The reference is the same solver run so
  * that the reuse cannot happen: one-iteration runs (every run's first iteration gathers) and a
- * progress report every iteration (which needs the energy every iteration). Scene: active_scene.h's
- * tet grid, bottom face pinned, a 3 x 3 top patch dragged up. */
+ * progress report every iteration (which needs the energy every iteration). And the element sums
+ * threaded with their terms summed in element order (admm_active_elem.c) against one thread.
+ * Scene: active_scene.h's tet grid, bottom face pinned, a 3 x 3 top patch dragged up. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -12,6 +13,7 @@
 #include <cmocka.h>
 
 #include "core/admm/admm.h"
+#include "core/admm/admm_active.h" /* ACT_PAR_HEAVY, ACT_PAR_LIGHT */
 #include "tests/unit/admm/admm_test_util.h"
 #include "tests/unit/admm/active_scene.h"
 
@@ -141,6 +143,75 @@ static void lazy_vs_eager(df_admm_energy en)
     scene_free(&sc);
 }
 
+/* Regions of ACT_PAR_HEAVY to ACT_PAR_LIGHT elements run their element loops that end in sums
+ * (dual update, elastic energy) on the team with the terms summed afterwards in element order
+ * (admm_active_elem.c): 2 threads must give bitwise the positions, objectives, stop residuals and
+ * region decisions of 1 thread, with the lazy energy and with a report every iteration (the
+ * energy summed in every dual update). A drag of 4 updates with the tail test (it grows the
+ * region; the region's size in that range checked). */
+static void threads_vs_one(df_admm_energy en)
+{
+    scene sc;
+    tet_scene(&sc, 16);
+    df_admm_params p = arap_params(&sc, 1);
+    p.energy = en;
+    p.active_tail = DF_ADMM_ACTIVE_TAIL;
+    p.threads = 1;
+    df_admm *one = make(&sc, &p);
+    p.threads = 2;
+    df_admm *lazy = make(&sc, &p), *eager = make(&sc, &p);
+    int reports = 0;
+    for (int k = 1; k <= 4; k++) {
+        set_drag(one, &sc, 0.3 * k);
+        set_drag(lazy, &sc, 0.3 * k);
+        set_drag(eager, &sc, 0.3 * k);
+        df_admm_budget be = {.max_iters = 20, .progress_every = 1, .progress = count_reports, .user = &reports};
+        df_admm_result r1, rl, re;
+        df_error err;
+        r1 = run(one, 20);
+        rl = run(lazy, 20);
+        assert_int_equal(df_admm_run(eager, &be, &re, &err), DF_OK);
+        const df_admm_result *two[2] = {&rl, &re};
+        const df_admm *s2[2] = {lazy, eager};
+        for (int j = 0; j < 2; j++) {
+            assert_int_equal(two[j]->iterations, r1.iterations);
+            assert_memory_equal(df_admm_positions(s2[j]), df_admm_positions(one), (size_t)sc.m.nv * 3 * sizeof(double));
+            assert_memory_equal(&two[j]->objective, &r1.objective, sizeof(double));
+            assert_memory_equal(&two[j]->elastic, &r1.elastic, sizeof(double));
+            assert_memory_equal(&two[j]->residual, &r1.residual, sizeof(double));
+        }
+    }
+    assert_true(reports > 0);
+    df_admm_active_stats s1, sl, se;
+    df_admm_get_active_stats(one, &s1);
+    df_admm_get_active_stats(lazy, &sl);
+    df_admm_get_active_stats(eager, &se);
+    assert_true(sl.region_elements >= ACT_PAR_HEAVY);
+    assert_true(sl.region_elements < ACT_PAR_LIGHT);
+    assert_true(sl.tail_grows > 0);
+    assert_int_equal(sl.fallbacks, 0);
+    assert_int_equal(sl.grows, s1.grows);
+    assert_int_equal(se.grows, s1.grows);
+    assert_int_equal(sl.region_vertices, s1.region_vertices);
+    assert_int_equal(se.region_vertices, s1.region_vertices);
+    df_admm_free(one);
+    df_admm_free(lazy);
+    df_admm_free(eager);
+    scene_free(&sc);
+}
+
+static void test_threads_equal_one_thread_arap(void **state)
+{
+    (void)state;
+    threads_vs_one(DF_ADMM_ARAP);
+}
+
+static void test_threads_equal_one_thread_acap(void **state)
+{
+    (void)state;
+    threads_vs_one(DF_ADMM_ACAP);
+}
+
 static void test_lazy_energy_matches_eager_arap(void **state)
 {
     (void)state;
@@ -172,6 +243,8 @@ int main(void)
         cmocka_unit_test(test_split_runs_equal_one_run_neohookean),
         cmocka_unit_test(test_lazy_energy_matches_eager_arap),
         cmocka_unit_test(test_lazy_energy_matches_eager_acap),
+        cmocka_unit_test(test_threads_equal_one_thread_arap),
+        cmocka_unit_test(test_threads_equal_one_thread_acap),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
