@@ -150,7 +150,7 @@ static void test_admm_active_modes(void **state)
     df_config_defaults(&c, NULL);
     assert_int_equal(c.admm_active, 0);
     for (int v = 0; v <= 2; v++) {
-        char txt[8];
+        char txt[16];
         snprintf(txt, sizeof txt, "%d", v);
         assert_int_equal(df_config_set(&c, "admm_active", txt, &e), DF_OK);
         assert_int_equal(c.admm_active, v);
