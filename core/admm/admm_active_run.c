@@ -83,7 +83,9 @@ static void act_local(df_admm *s, act_acc *acc, double *t_x, double *t_z, double
     const double *fc = elem && a->gc_ok ? fbuf(a, a->gc_buf) : NULL;
     #pragma omp parallel num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
     {
+#ifdef _OPENMP /* (builds without OpenMP, e.g. make tsan's -fopenmp-simd, warn on these two) */
         #pragma omp single nowait
+#endif
         act_local_z(s, &zs2, &zz2, &tz);
         if (elem) {
             #pragma omp for schedule(dynamic, 256) reduction(+ : s2, z2)
@@ -112,7 +114,9 @@ static void act_local(df_admm *s, act_acc *acc, double *t_x, double *t_z, double
             for (int32_t k = 0; k < a->nae; k++) admm_fit_vertex(s, s->V, a->ae[k], s->Rv + 9 * (size_t)a->ae[k]);
         }
         /* the implicit barrier above also waits for the prox (Z) */
+#ifdef _OPENMP
         #pragma omp master
+#endif
         t_mid = admm_now();
         #pragma omp for schedule(static)
         for (int32_t f = 0; f < nf; f++) admm_rhs_row(s, a->rfv, nf, a->kout, rhs, f);

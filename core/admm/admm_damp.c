@@ -49,13 +49,17 @@ static int any_inverted(const df_admm *s, const double *V)
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) shared(bad)
     for (int32_t e = 0; e < s->ne; e++) {
         int seen;
+#ifdef _OPENMP /* (builds without OpenMP, e.g. make tsan's -fopenmp-simd, warn on these) */
         #pragma omp atomic read
+#endif
         seen = bad;
         if (seen) continue;
         double F[9];
         admm_element_F(s, V, e, F); /* Neo-Hookean: tets, q = 3 */
         if (!(admm_det3(F) > 0)) {
+#ifdef _OPENMP
             #pragma omp atomic write
+#endif
             bad = 1;
         }
     }
