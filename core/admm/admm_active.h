@@ -14,6 +14,8 @@
  * small region less */
 #define ACT_PAR_HEAVY 1024      /* elements / cells with a local solve (polar, SVD, prox) */
 #define ACT_PAR_LIGHT 16384     /* a few dozen flops per item */
+/* elements per work item of the 4-lane tet kernels (admm_tet4.c) in the region's loops */
+#define ACT_TET4_CHUNK 256
 
 typedef struct admm_active {
     int valid;               /* region built and every vertex outside it exactly at rest */

@@ -5,7 +5,8 @@
  * OpenMP reduction (as since the active mode's start); from ACT_PAR_HEAVY elements up to that, the
  * items in parallel with each element's terms stored in a partial-sum buffer (act->gc's tail) and
  * summed afterwards on the calling thread in element order, so every sum is bit-identical to one
- * thread's (the serial loop below ACT_PAR_HEAVY). */
+ * thread's (the serial loop below ACT_PAR_HEAVY). Tets with an F buffer: the dual update four
+ * elements at a time (admm_tet4.c; the same terms bit for bit, summed in the same order). */
 #include <string.h>
 
 #include "core/admm/admm_active.h"
@@ -44,13 +45,32 @@ double admm_act_dual_elems(df_admm *s, double *fb, int lazy, double *r2o, double
     admm_active *a = s->act;
     double E = 0, r2 = 0, ax2 = 0, y2 = 0;
     double *pt = parts(s);
+    const int tet4 = fb && s->esz == 4 && s->q == 3; /* admm_tet4.c: same bits, 4 at a time */
     if (pt) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads)
-        for (int32_t k = 0; k < a->nae; k++) dual_one(s, k, fb, lazy, pt + 4 * (size_t)k);
+        if (tet4) {
+            #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+            for (int32_t b = 0; b < a->nae; b += ACT_TET4_CHUNK)
+                admm_dual_tet4(s, a->ae + b, fb + 9 * (size_t)b, a->nae - b < ACT_TET4_CHUNK ? a->nae - b : ACT_TET4_CHUNK, lazy,
+                               pt + 4 * (size_t)b);
+        } else {
+            #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+            for (int32_t k = 0; k < a->nae; k++) dual_one(s, k, fb, lazy, pt + 4 * (size_t)k);
+        }
         for (int32_t k = 0; k < a->nae; k++) {
             const double *t = pt + 4 * (size_t)k;
             r2 += t[0]; ax2 += t[1]; y2 += t[2];
             if (!lazy) E += t[3];
+        }
+    } else if (tet4) {
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
+        for (int32_t b = 0; b < a->nae; b += ACT_TET4_CHUNK) {
+            double t[4 * ACT_TET4_CHUNK];
+            int32_t m = a->nae - b < ACT_TET4_CHUNK ? a->nae - b : ACT_TET4_CHUNK;
+            admm_dual_tet4(s, a->ae + b, fb + 9 * (size_t)b, m, lazy, t);
+            for (int32_t k = 0; k < m; k++) {
+                r2 += t[4 * k]; ax2 += t[4 * k + 1]; y2 += t[4 * k + 2];
+                if (!lazy) E += t[4 * k + 3];
+            }
         }
     } else {
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E, r2, ax2, y2) if (a->nae >= ACT_PAR_LIGHT)
@@ -90,3 +110,4 @@ double admm_act_energy(const df_admm *s, const double *fb, const double *V)
     for (int32_t k = 0; k < a->nae; k++) E += energy_one(s, k, fb, V);
     return E;
 }
+

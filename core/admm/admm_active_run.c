@@ -81,13 +81,19 @@ static void act_local(df_admm *s, act_acc *acc, double *t_x, double *t_z, double
     double s2 = 0, z2 = 0, zs2 = 0, zz2 = 0, tz = 0, t0 = admm_now(), t_mid = t0;
     /* elements in ae order, G from the dual update's F buffer when it is current */
     const double *fc = elem && a->gc_ok ? fbuf(a, a->gc_buf) : NULL;
+    /* ARAP / ACAP tets from the F buffer: four elements at a time (admm_tet4.c, same bits) */
+    const int tet4 = fc && s->q == 3 && s->esz == 4 && (s->p.energy == DF_ADMM_ARAP || s->p.energy == DF_ADMM_ACAP);
     #pragma omp parallel num_threads(s->nthreads) if (a->nae >= ACT_PAR_HEAVY)
     {
 #ifdef _OPENMP /* (builds without OpenMP, e.g. make tsan's -fopenmp-simd, warn on these two) */
         #pragma omp single nowait
 #endif
         act_local_z(s, &zs2, &zz2, &tz);
-        if (elem) {
+        if (tet4) {
+            #pragma omp for schedule(dynamic, 1) reduction(+ : s2, z2)
+            for (int32_t b = 0; b < a->nae; b += ACT_TET4_CHUNK)
+                admm_local_tet4(s, a->ae + b, fc + 9 * (size_t)b, a->nae - b < ACT_TET4_CHUNK ? a->nae - b : ACT_TET4_CHUNK, &s2, &z2);
+        } else if (elem) {
             #pragma omp for schedule(dynamic, 256) reduction(+ : s2, z2)
             for (int32_t k = 0; k < a->nae; k++) {
                 int32_t e = a->ae[k];

@@ -205,6 +205,16 @@ void admm_local_x_one(df_admm *s, int32_t e);
  * dual update, admm_active_run.c): bit-identical to admm_local_x_one when G holds exactly
  * admm_element_F(V, e) + W_e summed in that order; G is scratch afterwards */
 void admm_local_x_one_G(df_admm *s, int32_t e, double G[9]);
+/* admm_tet4.c: dual update of the tet elements ae[0..n) (s->esz 4, s->q 3; any energy) four at
+ * a time, bit-identical to admm_active_elem.c's per-element update: W_e += F_e(V) - R_e X_e, F_e(V)
+ * into fb row k (n x 9, ae order), element k's terms gam |dW|^2, gam |F|^2, gam |W new|^2 and its
+ * energy (0 when lazy) into t[4k .. 4k + 3]. No threads of its own. */
+void admm_dual_tet4(df_admm *s, const int32_t *ae, double *fb, int32_t n, int lazy, double *t);
+/* admm_tet4.c: local step 1 of the ARAP / ACAP tet elements ae[0..n) (s->q 3, s->esz 4)
+ * four at a time, G_k = fb row k (F_e(V), n x 9 in ae order) + W_e, writing RX and Ce of each,
+ * bit-identical to admm_local_x_one_G per element; *s2 += sum gam_e |RX_e new - old|^2 and
+ * *z2 += sum gam_e |RX_e new|^2, summed in ae order within the call. No threads of its own. */
+void admm_local_tet4(df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *s2, double *z2);
 void admm_local_x(df_admm *s);
 void admm_local_z(df_admm *s);
 void admm_assemble_rhs(df_admm *s);
@@ -250,11 +260,20 @@ double admm_vertex_energy(const df_admm *s, const double *V, int32_t i);
 
 /* F_e(V) = sum_a V_a g_{e,a}^T of kept element e (3 x q, row stride 3, unused columns 0); inline
  * for the per-element loops of the full and the active-set paths (one summation order for both) */
-static inline void admm_element_F(const df_admm *s, const double *V, int32_t e, double F[9])
+static inline __attribute__((always_inline)) void admm_element_F(const df_admm *s, const double *V, int32_t e, double F[9])
 {
     const int32_t *el = s->E + (size_t)e * s->esz;
     const double *g = s->grad + (size_t)e * s->esz * 3;
     for (int k = 0; k < 9; k++) F[k] = 0.0;
+    if (s->esz == 4 && s->q == 3) { /* tets: the same sums with constant bounds (unrolled) */
+        for (int a = 0; a < 4; a++) {
+            const double *x = V + 3 * (size_t)el[a];
+            const double *ga = g + 3 * a;
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 3; c++) F[3 * r + c] += x[r] * ga[c];
+        }
+        return;
+    }
     for (int a = 0; a < s->esz; a++) {
         const double *x = V + 3 * (size_t)el[a];
         const double *ga = g + 3 * a;
