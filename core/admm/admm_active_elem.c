@@ -100,14 +100,31 @@ double admm_act_energy(const df_admm *s, const double *fb, const double *V)
     const admm_active *a = s->act;
     double E = 0;
     double *pt = parts(s);
+    /* ARAP / ACAP tets from an F buffer: four at a time (admm_tet4.c, the same bits) */
+    const int tet4 = fb && s->esz == 4 && s->q == 3 && (s->p.energy == DF_ADMM_ARAP || s->p.energy == DF_ADMM_ACAP);
     if (pt) {
-        #pragma omp parallel for schedule(static) num_threads(s->nthreads)
-        for (int32_t k = 0; k < a->nae; k++) pt[k] = energy_one(s, k, fb, V);
+        if (tet4) {
+            #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+            for (int32_t b = 0; b < a->nae; b += ACT_TET4_CHUNK)
+                admm_energy_tet4(s, a->ae + b, fb + 9 * (size_t)b, a->nae - b < ACT_TET4_CHUNK ? a->nae - b : ACT_TET4_CHUNK, pt + b);
+        } else {
+            #pragma omp parallel for schedule(static) num_threads(s->nthreads)
+            for (int32_t k = 0; k < a->nae; k++) pt[k] = energy_one(s, k, fb, V);
+        }
         for (int32_t k = 0; k < a->nae; k++) E += pt[k];
+        return E;
+    }
+    if (tet4) {
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
+        for (int32_t b = 0; b < a->nae; b += ACT_TET4_CHUNK) {
+            double t[ACT_TET4_CHUNK];
+            int32_t m = a->nae - b < ACT_TET4_CHUNK ? a->nae - b : ACT_TET4_CHUNK;
+            admm_energy_tet4(s, a->ae + b, fb + 9 * (size_t)b, m, t);
+            for (int32_t k = 0; k < m; k++) E += t[k];
+        }
         return E;
     }
     #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E) if (a->nae >= ACT_PAR_LIGHT)
     for (int32_t k = 0; k < a->nae; k++) E += energy_one(s, k, fb, V);
     return E;
 }
-

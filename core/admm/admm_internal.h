@@ -210,6 +210,9 @@ void admm_local_x_one_G(df_admm *s, int32_t e, double G[9]);
  * into fb row k (n x 9, ae order), element k's terms gam |dW|^2, gam |F|^2, gam |W new|^2 and its
  * energy (0 when lazy) into t[4k .. 4k + 3]. No threads of its own. */
 void admm_dual_tet4(df_admm *s, const int32_t *ae, double *fb, int32_t n, int lazy, double *t);
+/* admm_tet4.c: elastic energies (ARAP / ACAP tets) of the elements ae[0..n) from their F rows fb
+ * (n x 9, ae order) into out[0..n), bit-identical to admm_element_energy_F. No threads. */
+void admm_energy_tet4(const df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *out);
 /* admm_tet4.c: local step 1 of the ARAP / ACAP tet elements ae[0..n) (s->q 3, s->esz 4)
  * four at a time, G_k = fb row k (F_e(V), n x 9 in ae order) + W_e, writing RX and Ce of each,
  * bit-identical to admm_local_x_one_G per element; *s2 += sum gam_e |RX_e new - old|^2 and

@@ -84,18 +84,19 @@ static inline __attribute__((always_inline)) void store_rows(double *const r[4],
     else for (int l = 0; l < 4; l++) r[l][8] = in[8][l];
 }
 
-/* the lanes' polar rotations R of A (row-major 3 x 3, entry k in A[k]); *ok: lanes where
- * df_admm_polar3 would return 0 (R valid there) */
-static inline __attribute__((always_inline)) void polar4(const v4d A[9], v4d R[9], v4m *ok)
+/* the lanes' trace root t of df_admm_trace_sym3 / svd3.c's trace_root (Newton from sqrt(3 I1),
+ * the scalar loop's stop per lane), with C = A^T A packed, I1 and J; *ok: lanes where the
+ * closed form applies (I1 > 0 and J >= TRACE_MIN_DET_REL (I1 / 3)^(3/2)) */
+static inline __attribute__((always_inline)) void trace4(const v4d A[9], v4d C[6], v4d *I1o, v4d *Jo, v4d *to, v4m *ok)
 {
-    v4d C0 = A[0] * A[0] + A[3] * A[3] + A[6] * A[6];
-    v4d C1 = A[0] * A[1] + A[3] * A[4] + A[6] * A[7];
-    v4d C2 = A[0] * A[2] + A[3] * A[5] + A[6] * A[8];
-    v4d C3 = A[1] * A[1] + A[4] * A[4] + A[7] * A[7];
-    v4d C4 = A[1] * A[2] + A[4] * A[5] + A[7] * A[8];
-    v4d C5 = A[2] * A[2] + A[5] * A[5] + A[8] * A[8];
-    v4d I1 = C0 + C3 + C5;
-    v4d I2 = C0 * C3 + C0 * C5 + C3 * C5 - C1 * C1 - C2 * C2 - C4 * C4;
+    C[0] = A[0] * A[0] + A[3] * A[3] + A[6] * A[6];
+    C[1] = A[0] * A[1] + A[3] * A[4] + A[6] * A[7];
+    C[2] = A[0] * A[2] + A[3] * A[5] + A[6] * A[8];
+    C[3] = A[1] * A[1] + A[4] * A[4] + A[7] * A[7];
+    C[4] = A[1] * A[2] + A[4] * A[5] + A[7] * A[8];
+    C[5] = A[2] * A[2] + A[5] * A[5] + A[8] * A[8];
+    v4d I1 = C[0] + C[3] + C[5];
+    v4d I2 = C[0] * C[3] + C[0] * C[5] + C[3] * C[5] - C[1] * C[1] - C[2] * C[2] - C[4] * C[4];
     v4d J = A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
             A[2] * (A[3] * A[7] - A[4] * A[6]);
     const v4d zero = {0, 0, 0, 0};
@@ -117,6 +118,19 @@ static inline __attribute__((always_inline)) void polar4(const v4d A[9], v4d R[9
         act &= ~(adt <= 1e-9 * t);
     }
     *ok = pos & (J >= TRACE_MIN_DET_REL * (I1 / 3.0) * r3);
+    *I1o = I1;
+    *Jo = J;
+    *to = t;
+}
+
+/* the lanes' polar rotations R of A (row-major 3 x 3, entry k in A[k]); *ok: lanes where
+ * df_admm_polar3 would return 0 (R valid there) */
+static inline __attribute__((always_inline)) void polar4(const v4d A[9], v4d R[9], v4m *ok)
+{
+    v4d Cp[6], I1, J, t;
+    trace4(A, Cp, &I1, &J, &t, ok);
+    const v4d zero = {0, 0, 0, 0};
+    v4d C0 = Cp[0], C1 = Cp[1], C2 = Cp[2], C3 = Cp[3], C4 = Cp[4], C5 = Cp[5];
     v4d i2 = 0.5 * (t * t - I1);
     v4d P[9] = {C0 + i2, C1, C2, C1, C3 + i2, C4, C2, C4, C5 + i2};
     v4d Q[9] = {t * C0 + J, t * C1, t * C2, t * C1, t * C3 + J, t * C4, t * C2, t * C4, t * C5 + J};
@@ -302,4 +316,33 @@ void admm_dual_tet4(df_admm *s, const int32_t *ae, double *fb, int32_t n, int la
         memcpy(fb + 9 * (size_t)k0, F, sizeof(F));
         tl[3] = lazy ? 0.0 : admm_element_energy_F(s, e, F);
     }
+}
+
+/* elements ae[k0 .. k0 + 4) with F rows fb (rows k0..): energies into out[k0..] (lanes where
+ * the closed-form trace fails: admm_element_energy_F) */
+TET4_CLONES
+static void energy4(const df_admm *s, const int32_t *ae, const double *fb, int32_t k0, double *out)
+{
+    v4d F[9], C[6], I1c, J, t, vol;
+    v4m ok;
+    const double *rf[4] = {fb + 9 * (size_t)k0, fb + 9 * (size_t)(k0 + 1), fb + 9 * (size_t)(k0 + 2), fb + 9 * (size_t)(k0 + 3)};
+    load_rows(rf, 9, F);
+    trace4(F, C, &I1c, &J, &t, &ok);
+    v4d I1 = {0, 0, 0, 0};
+    for (int k = 0; k < 9; k++) I1 += F[k] * F[k];
+    v4d d = s->p.energy == DF_ADMM_ACAP ? I1 - t * t / 3.0 : I1 - 2.0 * t + 3.0;
+    for (int l = 0; l < 4; l++) {
+        int32_t e = ae[k0 + l];
+        vol[l] = s->vol[e];
+    }
+    v4d E = 0.5 * vol * d;
+    for (int l = 0; l < 4; l++)
+        out[k0 + l] = !ok[l] ? admm_element_energy_F(s, ae[k0 + l], rf[l]) : d[l] > 0 ? E[l] : 0.5 * vol[l] * 0.0;
+}
+
+void admm_energy_tet4(const df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *out)
+{
+    int32_t k0 = 0;
+    for (; k0 + 4 <= n; k0 += 4) energy4(s, ae, fb, k0, out);
+    for (; k0 < n; k0++) out[k0] = admm_element_energy_F(s, ae[k0], fb + 9 * (size_t)k0);
 }

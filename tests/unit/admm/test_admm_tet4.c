@@ -1,6 +1,6 @@
 /* Unit tests of the 4-lane tet kernels (core/admm/admm_tet4.c) against the scalar per-element
- * code they replace, bit for bit: local step 1 (ARAP, ACAP) against admm_local_x_one_G and the
- * dual update against the per-element formula, on a tet bar with random positions (some
+ * code they replace, bit for bit: local step 1 (ARAP, ACAP) against admm_local_x_one_G, the
+ * dual update against the per-element formula and the energies against admm_element_energy_F, on a tet bar with random positions (some
  * elements inverted or flattened, so both the closed-form lanes and the scalar SVD fallback
  * run inside one block), random duals, a shuffled element order and a count that is not a
  * multiple of 4 (the block tail). White-box: the solver's state through admm_internal.h. */
@@ -156,12 +156,35 @@ static void test_dual(void **st)
     }
 }
 
+/* the elastic energies from F rows against admm_element_energy_F (ARAP, ACAP) */
+static void test_energy(void **st)
+{
+    (void)st;
+    static const df_admm_energy en[2] = {DF_ADMM_ARAP, DF_ADMM_ACAP};
+    for (int k = 0; k < 2; k++) {
+        fixture f;
+        setup(&f, en[k], 157);
+        double *ref = malloc((size_t)f.n * sizeof(double)), *vec = malloc((size_t)f.n * sizeof(double));
+        int fallback = 0;
+        for (int32_t i = 0; i < f.n; i++) {
+            ref[i] = admm_element_energy_F(f.s, f.ae[i], f.fb + 9 * (size_t)i);
+            fallback += !(admm_det3(f.fb + 9 * (size_t)i) > 0);
+        }
+        assert_true(fallback > 0);
+        admm_energy_tet4(f.s, f.ae, f.fb, f.n, vec);
+        assert_memory_equal(vec, ref, (size_t)f.n * sizeof(double));
+        free(ref); free(vec);
+        teardown(&f);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_local_arap),
         cmocka_unit_test(test_local_acap),
         cmocka_unit_test(test_dual),
+        cmocka_unit_test(test_energy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
