@@ -40,7 +40,7 @@ void admm_active_free(df_admm *s)
     free_factor(s);
     free(a->adj_ptr); free(a->adj); free(a->hmap); free(a->in); free(a->depth); free(a->rv);
     free(a->fr); free(a->edge); free(a->ae); free(a->ae2); free(a->emark); free(a->work); free(a->sup); free(a->rfv);
-    free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp); free(a->tbud);
+    free(a->rfidx); free(a->cp_f); free(a->cp_v); free(a->cp_val); free(a->kout); free(a->stamp); free(a->tstamp); free(a->tbud); free(a->hs);
     free(a->va); free(a->gc);
     admm_act_probe_free(a);
     free(a);
@@ -125,9 +125,10 @@ int admm_act_init(df_admm *s, df_error *err)
     a->rfidx = malloc(nv * sizeof(int32_t));
     a->stamp = calloc(nv, sizeof(uint32_t));
     a->tbud = malloc(nv * sizeof(int32_t));
+    a->hs = malloc(((size_t)s->nh + 1) * sizeof(int32_t));
     if (s->family == ADMM_FAM_VERTEX) a->tstamp = calloc((size_t)s->sr_ptr[s->nv] + 1, sizeof(uint32_t));
     if (!a->hmap || !a->in || !a->depth || !a->rv || !a->fr || !a->edge || !a->ae || !a->ae2 || !a->emark || !a->work || !a->sup ||
-        !a->rfv || !a->rfidx || !a->stamp || !a->tbud || (s->family == ADMM_FAM_VERTEX && !a->tstamp) || build_graph(s, a)) {
+        !a->rfv || !a->rfidx || !a->stamp || !a->tbud || !a->hs || (s->family == ADMM_FAM_VERTEX && !a->tstamp) || build_graph(s, a)) {
         df_admm_active_stats keep = a->st;
         admm_active_free(s);
         s->act = calloc(1, sizeof(admm_active));
@@ -156,7 +157,7 @@ uint32_t admm_act_stamp(admm_active *a, uint32_t *arr, size_t n)
 
 static int differs3(const double *x, const double *y) { return x[0] != y[0] || x[1] != y[1] || x[2] != y[2]; }
 
-void admm_act_support(df_admm *s, int whole)
+void admm_act_support(df_admm *s, int whole, int iter)
 {
     admm_active *a = s->act;
     int32_t n = 0;
@@ -171,11 +172,23 @@ void admm_act_support(df_admm *s, int whole)
             if (differs3(s->Z + 3 * (size_t)i, zero)) { a->sup[n++] = i; a->stamp[i] = g; }
         }
     }
-    for (int32_t h = 0; h < s->nh; h++) {
-        int32_t v = s->hidx[h];
-        const double *r = s->Vrest + 3 * (size_t)v;
-        if (a->stamp[v] != g && (differs3(s->target + 3 * (size_t)h, r) || differs3(s->target_req + 3 * (size_t)h, r) ||
-                                 differs3(s->V + 3 * (size_t)v, r) || differs3(s->Vout + 3 * (size_t)v, r))) {
+    /* the handles off rest: from the run's list (iter: no damped steps, list made this run), or
+     * by a scan over all handles, kept as the run's list when iter */
+    int cache = iter && !s->damp && a->hs;
+    if (!(cache && a->hs_ok)) {
+        a->nhs = 0;
+        for (int32_t h = 0; h < s->nh; h++) {
+            int32_t v = s->hidx[h];
+            const double *r = s->Vrest + 3 * (size_t)v;
+            if (differs3(s->target + 3 * (size_t)h, r) || differs3(s->target_req + 3 * (size_t)h, r) ||
+                differs3(s->V + 3 * (size_t)v, r) || differs3(s->Vout + 3 * (size_t)v, r))
+                a->hs[a->nhs++] = v;
+        }
+        a->hs_ok = cache;
+    }
+    for (int32_t k = 0; k < a->nhs; k++) {
+        int32_t v = a->hs[k];
+        if (a->stamp[v] != g) {
             a->sup[n++] = v;
             a->stamp[v] = g;
         }

@@ -41,6 +41,8 @@ typedef struct admm_active {
                                 stale (refreshed before any full run) */
     int bypass;              /* set while the active run finishes with the full solve */
     int32_t nsup, *sup;      /* support (scratch list, nv) */
+    int32_t nhs, *hs;        /* handles off rest (nh capacity): admm_act_support's handle scan */
+    int hs_ok;               /* hs holds this run's list (steady within a run: see admm_act_support) */
     /* sub-system on the region's free vertices (region minus handles) */
     int32_t nrf, *rfv;       /* free region vertex list */
     int32_t *rfidx;          /* nv: index in rfv or -1 */
@@ -80,8 +82,13 @@ int admm_act_init(df_admm *s, df_error *err);                 /* allocates s->ac
  * or grown (union with the current region); refactors. extra (n_extra vertices) join the region
  * themselves, without rings around them (the tail test's one-ring growth). */
 int admm_act_build(df_admm *s, int fresh, const int32_t *extra, int32_t n_extra, df_error *err);
-/* support scan over the region (or, stale, the whole mesh) into act->sup */
-void admm_act_support(df_admm *s, int whole);
+/* support scan over the region (or, stale, the whole mesh) into act->sup: the vertices with
+ * Z != 0 and the handles off rest (target, requested target, V or Vout). iter: a call after an
+ * iteration's global step, which reuses the handle list of the run's first such call (hs_ok;
+ * without damped handle steps, targets, V and Vout of the handles stay put within a run: V =
+ * target after every global step); admm_active_run.c clears hs_ok at a run's start, a region
+ * build and the probe's restore */
+void admm_act_support(df_admm *s, int whole, int iter);
 /* size of the region a fresh build from act->sup would have (support grown by band rings) */
 int32_t admm_act_fresh_size(df_admm *s);
 /* 1 when a support vertex lies within band - 1 rings of the region's edge or outside it */

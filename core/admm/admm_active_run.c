@@ -386,6 +386,7 @@ static int grow(df_admm *s, int by_check, int32_t n_tail, df_error *err, int *rc
 {
     admm_active *a = s->act;
     a->st.grows++;
+    a->hs_ok = 0;
     if (by_check) a->st.check_grows++;
     if (n_tail > 0) a->st.tail_grows++;
     *rc = admm_act_build(s, 0, a->sup + a->nsup, n_tail, err);
@@ -421,11 +422,11 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     a = s->act;
     int fresh_run = !a->valid;
     if (!a->valid) {
-        admm_act_support(s, s->act_dirty); /* pristine (at rest since create): the handles only */
+        admm_act_support(s, s->act_dirty, 0); /* pristine (at rest since create): the handles only */
         a->st.rebuilds++;
         rc = admm_act_build(s, 1, NULL, 0, err);
     } else {
-        admm_act_support(s, 0);
+        admm_act_support(s, 0, 0);
         if (admm_act_needs_grow(s)) { a->st.grows++; rc = admm_act_build(s, 0, NULL, 0, err); }
         else if ((int64_t)ACT_SHRINK * ((int64_t)admm_act_fresh_size(s) + a->tail_added) < a->nr) {
             /* the support shrank (a drag back): rebuild from it; the vertices leaving the region
@@ -443,6 +444,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         return rc;
     }
     a->st.runs++;
+    a->hs_ok = 0;
     if (s->family == ADMM_FAM_ELEMENT) gc_reserve(a);
     int maxit = budget && budget->max_iters > 0 ? budget->max_iters : s->p.max_iters;
     double max_ms = budget ? budget->max_ms : 0;
@@ -509,7 +511,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
         E_prev = cur.E;
         /* region: grow when the support nears the edge; certify the far field periodically and
          * before reporting convergence */
-        admm_act_support(s, 0);
+        admm_act_support(s, 0, 1);
         int need = admm_act_needs_grow(s), by_check = 0;
         int32_t nt = 0;
         certified = 0;
@@ -536,6 +538,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
                 probes--;
                 a->st.tail_probes++;
                 admm_act_probe_restore(s);
+                a->hs_ok = 0;
                 E_prev = s->E_last;
                 /* the lazy energy and residuals start again from the restored state (the growth
                  * already invalidated the F buffers: gc_ok 0) */
@@ -571,7 +574,7 @@ int admm_active_run(df_admm *s, const df_admm_budget *budget, df_admm_result *re
     if (!rc && fell_back) rc = finish_full(s, budget, tstart, &r, err);
     else if (!rc && !certified && r.iterations > 0) {
         /* certify the reported state; a failure grows the region for the next run */
-        admm_act_support(s, 0);
+        admm_act_support(s, 0, 0);
         int32_t nf = admm_act_certify(s);
         if (nf > 0 || admm_act_needs_grow(s)) {
             a->nsup += nf;
