@@ -14,6 +14,8 @@
 /* relative deviatoric size |S - tr S / 3 I| / (tr S / 3) below which the Neo-Hookean local step
  * uses the isotropic expansion instead of an eigen-decomposition */
 #define ADMM_NH_ISO_REL 1e-8
+/* elements per work item of the 4-lane tet kernels (admm_tet4.c) */
+#define TET4_CHUNK 256
 
 /* per-element right-hand side contributions C_{e,a} = gam_e (R_e X_e - W_e) g_{e,a}, gathered per
  * vertex by admm_assemble_rhs (element-ordered writes, no atomics) */
@@ -51,8 +53,31 @@ static void local_x_element_one(df_admm *s, int32_t e)
     local_x_element_G(s, e, G);
 }
 
+/* ARAP / ACAP tets: the 4-lane kernels of admm_tet4.c (the same bits as the per-element code) */
+static int tet4(const df_admm *s)
+{
+    return s->esz == 4 && s->q == 3 && (s->p.energy == DF_ADMM_ARAP || s->p.energy == DF_ADMM_ACAP);
+}
+
+/* local step 1 of elements e0 .. e0 + n (n <= TET4_CHUNK) by admm_local_tet4 */
+static void local_x_tet4(df_admm *s, int32_t e0, int32_t n)
+{
+    int32_t idx[TET4_CHUNK] = {0};
+    double fb[9 * TET4_CHUNK], s2 = 0, z2 = 0;
+    for (int32_t k = 0; k < n; k++) {
+        idx[k] = e0 + k;
+        admm_element_F(s, s->V, e0 + k, fb + 9 * (size_t)k);
+    }
+    admm_local_tet4(s, idx, fb, n, &s2, &z2); /* the residual sums are not needed here */
+}
+
 static void local_x_element(df_admm *s)
 {
+    if (tet4(s)) {
+        #pragma omp parallel for schedule(dynamic, 1) num_threads(s->nthreads)
+        for (int32_t e = 0; e < s->ne; e += TET4_CHUNK) local_x_tet4(s, e, s->ne - e < TET4_CHUNK ? s->ne - e : TET4_CHUNK);
+        return;
+    }
     /* dynamic chunks: inverted / badly conditioned elements take the slower SVD path */
     #pragma omp parallel for schedule(dynamic, 1024) num_threads(s->nthreads)
     for (int32_t e = 0; e < s->ne; e++) {
@@ -264,10 +289,25 @@ void admm_rhs_rows(const df_admm *s, const int32_t *verts, int32_t nf, const dou
 
 void admm_assemble_rhs(df_admm *s) { admm_rhs_rows(s, s->fvert, s->nfree, s->KfhP, s->rhs->x, 1); }
 
+/* the dual update and energies of elements e0 .. e0 + n (n <= TET4_CHUNK) by admm_dual_tet4 (W
+ * as below, the same bits); returns their energy summed in element order */
+static double dual_tet4(df_admm *s, int32_t e0, int32_t n)
+{
+    int32_t idx[TET4_CHUNK] = {0};
+    double fb[9 * TET4_CHUNK], t[4 * TET4_CHUNK], E = 0;
+    for (int32_t k = 0; k < n; k++) idx[k] = e0 + k;
+    admm_dual_tet4(s, idx, fb, n, 0, t);
+    for (int32_t k = 0; k < n; k++) E += t[4 * k + 3];
+    return E;
+}
+
 double admm_dual_update(df_admm *s)
 {
     double E = 0;
-    if (s->family == ADMM_FAM_ELEMENT) {
+    if (s->family == ADMM_FAM_ELEMENT && tet4(s)) {
+        #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
+        for (int32_t e = 0; e < s->ne; e += TET4_CHUNK) E += dual_tet4(s, e, s->ne - e < TET4_CHUNK ? s->ne - e : TET4_CHUNK);
+    } else if (s->family == ADMM_FAM_ELEMENT) {
         #pragma omp parallel for schedule(static) num_threads(s->nthreads) reduction(+ : E)
         for (int32_t e = 0; e < s->ne; e++) {
             double F[9];

@@ -251,6 +251,31 @@ void admm_local_tet4(df_admm *s, const int32_t *ae, const double *fb, int32_t n,
     *z2o += z2;
 }
 
+/* the energies of the four elements e[l] (ARAP / ACAP) from their F rows rf[l] (lanes where the
+ * closed-form trace fails: admm_element_energy_F) */
+static inline __attribute__((always_inline)) void energy4(const df_admm *s, const int32_t e[4], const double *const rf[4], double out[4])
+{
+    v4d F[9], C[6], I1c, J, t;
+    v4m ok;
+    load_rows(rf, 9, F);
+    trace4(F, C, &I1c, &J, &t, &ok);
+    v4d I1 = {0, 0, 0, 0};
+    for (int k = 0; k < 9; k++) I1 += F[k] * F[k];
+    v4d d = s->p.energy == DF_ADMM_ACAP ? I1 - t * t / 3.0 : I1 - 2.0 * t + 3.0;
+    v4d vol = {s->vol[e[0]], s->vol[e[1]], s->vol[e[2]], s->vol[e[3]]};
+    v4d E = 0.5 * vol * d;
+    for (int l = 0; l < 4; l++)
+        out[l] = !ok[l] ? admm_element_energy_F(s, e[l], rf[l]) : d[l] > 0 ? E[l] : 0.5 * vol[l] * 0.0;
+}
+
+TET4_CLONES
+static void energy_block4(const df_admm *s, const int32_t *ae, const double *fb, int32_t k0, double *out)
+{
+    const int32_t e[4] = {ae[k0], ae[k0 + 1], ae[k0 + 2], ae[k0 + 3]};
+    const double *rf[4] = {fb + 9 * (size_t)k0, fb + 9 * (size_t)(k0 + 1), fb + 9 * (size_t)(k0 + 2), fb + 9 * (size_t)(k0 + 3)};
+    energy4(s, e, rf, out + k0);
+}
+
 /* elements ae[k0 .. k0 + 4): F_e(V), W_e += F - R X, F rows into fb rows k0.., terms as dual_one */
 TET4_CLONES
 static void dual4(df_admm *s, const int32_t *ae, double *fb, int32_t k0, int lazy, double *t)
@@ -259,7 +284,8 @@ static void dual4(df_admm *s, const int32_t *ae, double *fb, int32_t k0, int laz
     int32_t e[4];
     const int32_t *el[4];
     const double *rg[4], *ro[4];
-    double *rw[4], *rf[4];
+    double *rw[4];
+    const double *rf[4];
     for (int l = 0; l < 4; l++) {
         e[l] = ae[k0 + l];
         el[l] = s->E + 4 * (size_t)e[l];
@@ -289,11 +315,15 @@ static void dual4(df_admm *s, const int32_t *ae, double *fb, int32_t k0, int laz
     }
     er = gam * er; ea = gam * ea; ey = gam * ey;
     store_rows(rw, 9, W);
-    store_rows(rf, 9, F);
+    store_rows((double *const *)rf, 9, F);
+    double en[4] = {0, 0, 0, 0};
+    if (!lazy && (s->p.energy == DF_ADMM_ARAP || s->p.energy == DF_ADMM_ACAP)) energy4(s, e, rf, en);
+    else if (!lazy)
+        for (int l = 0; l < 4; l++) en[l] = admm_element_energy_F(s, e[l], rf[l]);
     for (int l = 0; l < 4; l++) {
         double *tl = t + 4 * (size_t)(k0 + l);
         tl[0] = er[l]; tl[1] = ea[l]; tl[2] = ey[l];
-        tl[3] = lazy ? 0.0 : admm_element_energy_F(s, e[l], rf[l]);
+        tl[3] = en[l];
     }
 }
 
@@ -318,31 +348,9 @@ void admm_dual_tet4(df_admm *s, const int32_t *ae, double *fb, int32_t n, int la
     }
 }
 
-/* elements ae[k0 .. k0 + 4) with F rows fb (rows k0..): energies into out[k0..] (lanes where
- * the closed-form trace fails: admm_element_energy_F) */
-TET4_CLONES
-static void energy4(const df_admm *s, const int32_t *ae, const double *fb, int32_t k0, double *out)
-{
-    v4d F[9], C[6], I1c, J, t, vol;
-    v4m ok;
-    const double *rf[4] = {fb + 9 * (size_t)k0, fb + 9 * (size_t)(k0 + 1), fb + 9 * (size_t)(k0 + 2), fb + 9 * (size_t)(k0 + 3)};
-    load_rows(rf, 9, F);
-    trace4(F, C, &I1c, &J, &t, &ok);
-    v4d I1 = {0, 0, 0, 0};
-    for (int k = 0; k < 9; k++) I1 += F[k] * F[k];
-    v4d d = s->p.energy == DF_ADMM_ACAP ? I1 - t * t / 3.0 : I1 - 2.0 * t + 3.0;
-    for (int l = 0; l < 4; l++) {
-        int32_t e = ae[k0 + l];
-        vol[l] = s->vol[e];
-    }
-    v4d E = 0.5 * vol * d;
-    for (int l = 0; l < 4; l++)
-        out[k0 + l] = !ok[l] ? admm_element_energy_F(s, ae[k0 + l], rf[l]) : d[l] > 0 ? E[l] : 0.5 * vol[l] * 0.0;
-}
-
 void admm_energy_tet4(const df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *out)
 {
     int32_t k0 = 0;
-    for (; k0 + 4 <= n; k0 += 4) energy4(s, ae, fb, k0, out);
+    for (; k0 + 4 <= n; k0 += 4) energy_block4(s, ae, fb, k0, out);
     for (; k0 < n; k0++) out[k0] = admm_element_energy_F(s, ae[k0], fb + 9 * (size_t)k0);
 }
