@@ -213,6 +213,10 @@ void admm_dual_tet4(df_admm *s, const int32_t *ae, double *fb, int32_t n, int la
 /* admm_tet4.c: elastic energies (ARAP / ACAP tets) of the elements ae[0..n) from their F rows fb
  * (n x 9, ae order) into out[0..n), bit-identical to admm_element_energy_F. No threads. */
 void admm_energy_tet4(const df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *out);
+/* admm_tet4.c: |grad_i E_elastic| at positions V for vertex i of an ARAP / ACAP tet mesh (the
+ * active-set certificate's force norm: the moved elements around i, four at a time), bit-identical
+ * to the per-element sum in admm_active.c. No threads. */
+double admm_force_tet4(const df_admm *s, const double *V, int32_t i);
 /* admm_tet4.c: local step 1 of the ARAP / ACAP tet elements ae[0..n) (s->q 3, s->esz 4)
  * four at a time, G_k = fb row k (F_e(V), n x 9 in ae order) + W_e, writing RX and Ce of each,
  * bit-identical to admm_local_x_one_G per element; *s2 += sum gam_e |RX_e new - old|^2 and

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "core/admm/admm_internal.h"
+#include "core/admm/svd3.h"
 
 #ifdef DF_NO_TARGET_CLONES
 #define TET4_CLONES
@@ -353,4 +354,87 @@ void admm_energy_tet4(const df_admm *s, const int32_t *ae, const double *fb, int
     int32_t k0 = 0;
     for (; k0 + 4 <= n; k0 += 4) energy_block4(s, ae, fb, k0, out);
     for (; k0 < n; k0++) out[k0] = admm_element_energy_F(s, ae[k0], fb + 9 * (size_t)k0);
+}
+
+/* P = F - sc R (sc = 1 ARAP, tr(R^T F) / 3 ACAP; R the polar rotation of F, by the SVD where the
+ * closed form fails) of m elements' F rows (m x 9): four lanes when m is 4, else per element */
+TET4_CLONES
+static void stress_block(const df_admm *s, const double (*Fr)[9], int m, double (*P)[9])
+{
+    unsigned bad = (1u << m) - 1;
+    if (m == 4) {
+        v4d F[9], R[9];
+        v4m ok;
+        const double *rf[4] = {Fr[0], Fr[1], Fr[2], Fr[3]};
+        load_rows(rf, 9, F);
+        polar4(F, R, &ok);
+        v4d sc = {1.0, 1.0, 1.0, 1.0};
+        if (s->p.energy == DF_ADMM_ACAP) {
+            v4d tS = {0, 0, 0, 0};
+            for (int k = 0; k < 9; k++) tS += R[k] * F[k];
+            sc = tS / 3.0;
+        }
+        v4d Pv[9];
+        for (int k = 0; k < 9; k++) Pv[k] = F[k] - sc * R[k];
+        bad = 0;
+        for (int l = 0; l < 4; l++) {
+            if (!ok[l]) { bad |= 1u << l; continue; }
+            for (int k = 0; k < 9; k++) P[l][k] = Pv[k][l];
+        }
+    }
+    for (int l = 0; l < m; l++) {
+        if (!(bad >> l & 1)) continue;
+        const double *F = Fr[l];
+        double R[9];
+        if (df_admm_polar3(F, R) != 0) {
+            double U[9], sg[3], Vm[9];
+            df_admm_svd3(F, U, sg, Vm);
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 3; c++)
+                    R[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
+        }
+        double sc = 1.0;
+        if (s->p.energy == DF_ADMM_ACAP) {
+            double tS = 0;
+            for (int k = 0; k < 9; k++) tS += R[k] * F[k];
+            sc = tS / 3.0;
+        }
+        for (int k = 0; k < 9; k++) P[l][k] = F[k] - sc * R[k];
+    }
+}
+
+static int moved4(const df_admm *s, const double *V, const int32_t *el)
+{
+    for (int c = 0; c < 4; c++) {
+        const double *x = V + 3 * (size_t)el[c], *r = s->Vrest + 3 * (size_t)el[c];
+        if (x[0] != r[0] || x[1] != r[1] || x[2] != r[2]) return 1;
+    }
+    return 0;
+}
+
+double admm_force_tet4(const df_admm *s, const double *V, int32_t i)
+{
+    double f[3] = {0, 0, 0};
+    int32_t p = s->ve_ptr[i], pe = s->ve_ptr[i + 1];
+    while (p < pe) {
+        int32_t e[4], cor[4];
+        double Fr[4][9], P[4][9];
+        int m = 0;
+        for (; p < pe && m < 4; p++) {
+            int32_t ee = s->ve_ent[p] / 4;
+            if (!moved4(s, V, s->E + 4 * (size_t)ee)) continue; /* exactly the rest element: zero gradient */
+            e[m] = ee;
+            cor[m] = s->ve_ent[p] % 4;
+            admm_element_F(s, V, ee, Fr[m]);
+            m++;
+        }
+        if (m == 0) break;
+        stress_block(s, (const double (*)[9])Fr, m, P);
+        for (int l = 0; l < m; l++) {
+            const double *gc = s->grad + (size_t)e[l] * 12 + 3 * cor[l];
+            for (int r = 0; r < 3; r++)
+                f[r] += s->vol[e[l]] * (P[l][3 * r] * gc[0] + P[l][3 * r + 1] * gc[1] + P[l][3 * r + 2] * gc[2]);
+        }
+    }
+    return sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
 }

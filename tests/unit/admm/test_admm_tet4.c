@@ -1,6 +1,7 @@
 /* Unit tests of the 4-lane tet kernels (core/admm/admm_tet4.c) against the scalar per-element
  * code they replace, bit for bit: local step 1 (ARAP, ACAP) against admm_local_x_one_G, the
- * dual update against the per-element formula and the energies against admm_element_energy_F, on a tet bar with random positions (some
+ * dual update against the per-element formula, the energies against admm_element_energy_F and
+ * the certificate's force norm against the per-element sum, on a tet bar with random positions (some
  * elements inverted or flattened, so both the closed-form lanes and the scalar SVD fallback
  * run inside one block), random duals, a shuffled element order and a count that is not a
  * multiple of 4 (the block tail). White-box: the solver's state through admm_internal.h. */
@@ -15,6 +16,7 @@
 
 #include "core/admm/admm.h"
 #include "core/admm/admm_internal.h"
+#include "core/admm/svd3.h"
 #include "tests/unit/admm/admm_test_util.h"
 
 static double urand(unsigned *seed) { return 2.0 * rand_r(seed) / (double)RAND_MAX - 1.0; }
@@ -178,6 +180,59 @@ static void test_energy(void **st)
     }
 }
 
+/* the certificate's force norm: the per-element sum of admm_active.c (vol_e (F - sc R) g_corner
+ * over the moved elements around i) against admm_force_tet4, every vertex, with a third of the
+ * vertices put back exactly at rest (unmoved elements skipped) */
+static double force_ref(const df_admm *s, const double *V, int32_t i)
+{
+    double f[3] = {0, 0, 0};
+    for (int32_t p = s->ve_ptr[i]; p < s->ve_ptr[i + 1]; p++) {
+        int32_t e = s->ve_ent[p] / 4, corner = s->ve_ent[p] % 4;
+        const int32_t *el = s->E + 4 * (size_t)e;
+        int moved = 0;
+        for (int c = 0; c < 4; c++) moved |= memcmp(V + 3 * (size_t)el[c], s->Vrest + 3 * (size_t)el[c], 3 * sizeof(double)) != 0;
+        if (!moved) continue;
+        double F[9], R[9], P[9], sc = 1.0;
+        admm_element_F(s, V, e, F);
+        if (df_admm_polar3(F, R) != 0) {
+            double U[9], sg[3], Vm[9];
+            df_admm_svd3(F, U, sg, Vm);
+            for (int r = 0; r < 3; r++)
+                for (int c = 0; c < 3; c++)
+                    R[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
+        }
+        if (s->p.energy == DF_ADMM_ACAP) {
+            double tS = 0;
+            for (int k = 0; k < 9; k++) tS += R[k] * F[k];
+            sc = tS / 3.0;
+        }
+        for (int k = 0; k < 9; k++) P[k] = F[k] - sc * R[k];
+        const double *gc = s->grad + (size_t)e * 12 + 3 * corner;
+        for (int r = 0; r < 3; r++) f[r] += s->vol[e] * (P[3 * r] * gc[0] + P[3 * r + 1] * gc[1] + P[3 * r + 2] * gc[2]);
+    }
+    return sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+}
+
+static void test_force(void **st)
+{
+    (void)st;
+    static const df_admm_energy en[2] = {DF_ADMM_ARAP, DF_ADMM_ACAP};
+    for (int k = 0; k < 2; k++) {
+        fixture f;
+        setup(&f, en[k], 4);
+        df_admm *s = f.s;
+        for (int32_t i = 0; i < s->nv; i += 3) memcpy(s->V + 3 * (size_t)i, s->Vrest + 3 * (size_t)i, 3 * sizeof(double));
+        int zero = 0;
+        for (int32_t i = 0; i < s->nv; i++) {
+            double a = force_ref(s, s->V, i), b = admm_force_tet4(s, s->V, i);
+            assert_memory_equal(&a, &b, sizeof(double));
+            zero += a == 0.0;
+        }
+        assert_true(zero < s->nv / 4);
+        teardown(&f);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -185,6 +240,7 @@ int main(void)
         cmocka_unit_test(test_local_acap),
         cmocka_unit_test(test_dual),
         cmocka_unit_test(test_energy),
+        cmocka_unit_test(test_force),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
