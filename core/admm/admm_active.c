@@ -9,7 +9,6 @@
 #include <string.h>
 
 #include "core/admm/admm_active.h"
-#include "core/admm/svd3.h"
 
 /* the far-field certificate's fringe scan forks threads from this many fringe vertices (each
  * costs a dozen element stresses) */
@@ -549,21 +548,7 @@ static double force_norm(const df_admm *s, int32_t i)
                     P[k] = s->mu * (F[k] - fit) + s->lambda * lJ * fit;
                 }
             } else {
-                double R[9];
-                if (df_admm_polar3(F, R) != 0) {
-                    double U[9], sg[3], Vm[9];
-                    df_admm_svd3(F, U, sg, Vm);
-                    for (int r = 0; r < 3; r++)
-                        for (int c = 0; c < 3; c++)
-                            R[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
-                }
-                double sc = 1.0;
-                if (s->p.energy == DF_ADMM_ACAP) {
-                    double tS = 0;
-                    for (int k = 0; k < 9; k++) tS += R[k] * F[k];
-                    sc = tS / 3.0;
-                }
-                for (int k = 0; k < 9; k++) P[k] = F[k] - sc * R[k];
+                admm_rot_stress(s, F, P);
             }
             const double *gc = g + 3 * corner;
             for (int r = 0; r < 3; r++) f[r] += s->vol[e] * (P[3 * r] * gc[0] + P[3 * r + 1] * gc[1] + P[3 * r + 2] * gc[2]);

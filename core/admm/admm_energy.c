@@ -32,6 +32,25 @@ double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9])
     return 0.5 * vol * (d > 0 ? d : 0.0);
 }
 
+void admm_rot_stress(const df_admm *s, const double F[9], double P[9])
+{
+    double R[9];
+    if (df_admm_polar3(F, R) != 0) {
+        double U[9], sg[3], Vm[9];
+        df_admm_svd3(F, U, sg, Vm);
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++)
+                R[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
+    }
+    double sc = 1.0;
+    if (s->p.energy == DF_ADMM_ACAP) {
+        double tS = 0;
+        for (int k = 0; k < 9; k++) tS += R[k] * F[k];
+        sc = tS / 3.0;
+    }
+    for (int k = 0; k < 9; k++) P[k] = F[k] - sc * R[k];
+}
+
 static double element_energy(const df_admm *s, const double *V, int32_t e)
 {
     double F[9];

@@ -261,6 +261,10 @@ double admm_elastic(const df_admm *s, const double *V);
 double admm_locality(const df_admm *s, const double *V);
 double admm_bending(const df_admm *s, const double *V);
 double admm_element_energy_F(const df_admm *s, int32_t e, const double F[9]);
+/* the ARAP / ACAP stress direction P = F - sc R (row-major 3 x 3; R the polar rotation of F, by
+ * the SVD where the closed form fails; sc = 1 for ARAP, tr(R^T F) / 3 for ACAP): the elastic
+ * gradient of an element is vol_e P g_{e,a} at corner a */
+void admm_rot_stress(const df_admm *s, const double F[9], double P[9]);
 /* elastic energy of vertex i's spokes-and-rims cell at V (vertex family): sum over its entries t
  * of sr_w[t] / 2 |s_i R_i d_t - (V_b - V_a)|^2 with s_i R_i = admm_fit_vertex(V, i) */
 double admm_vertex_energy(const df_admm *s, const double *V, int32_t i);

@@ -14,7 +14,6 @@
 #include <string.h>
 
 #include "core/admm/admm_internal.h"
-#include "core/admm/svd3.h"
 
 #ifdef DF_NO_TARGET_CLONES
 #define TET4_CLONES
@@ -382,25 +381,8 @@ static void stress_block(const df_admm *s, const double (*Fr)[9], int m, double 
             for (int k = 0; k < 9; k++) P[l][k] = Pv[k][l];
         }
     }
-    for (int l = 0; l < m; l++) {
-        if (!(bad >> l & 1)) continue;
-        const double *F = Fr[l];
-        double R[9];
-        if (df_admm_polar3(F, R) != 0) {
-            double U[9], sg[3], Vm[9];
-            df_admm_svd3(F, U, sg, Vm);
-            for (int r = 0; r < 3; r++)
-                for (int c = 0; c < 3; c++)
-                    R[3 * r + c] = U[3 * r] * Vm[3 * c] + U[3 * r + 1] * Vm[3 * c + 1] + U[3 * r + 2] * Vm[3 * c + 2];
-        }
-        double sc = 1.0;
-        if (s->p.energy == DF_ADMM_ACAP) {
-            double tS = 0;
-            for (int k = 0; k < 9; k++) tS += R[k] * F[k];
-            sc = tS / 3.0;
-        }
-        for (int k = 0; k < 9; k++) P[l][k] = F[k] - sc * R[k];
-    }
+    for (int l = 0; l < m; l++)
+        if (bad >> l & 1) admm_rot_stress(s, Fr[l], P[l]);
 }
 
 static int moved4(const df_admm *s, const double *V, const int32_t *el)
