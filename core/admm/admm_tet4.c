@@ -38,7 +38,8 @@ static inline __attribute__((always_inline)) v4d blend(v4m m, v4d a, v4d b) /* m
 static inline __attribute__((always_inline)) int any(v4m m) { return (m[0] | m[1] | m[2] | m[3]) != 0; }
 
 /* columns c0 .. c0 + 3 of the four rows r[l] (unaligned) as 4 lane vectors: load, 4 x 4 transpose
- * in registers (lane inserts through memory would stall on store forwarding) */
+ * in registers (lane inserts through memory would stall on store forwarding);
+ * __builtin_shufflevector: gcc >= 12 and clang (the fuzzers' compiler) both have it */
 static inline __attribute__((always_inline)) void load4x4(const double *const r[4], int c0, v4d out[4])
 {
     v4d a, b, c, d;
@@ -46,21 +47,21 @@ static inline __attribute__((always_inline)) void load4x4(const double *const r[
     memcpy(&b, r[1] + c0, sizeof b);
     memcpy(&c, r[2] + c0, sizeof c);
     memcpy(&d, r[3] + c0, sizeof d);
-    v4d t0 = __builtin_shuffle(a, b, (v4m){0, 4, 2, 6}), t1 = __builtin_shuffle(a, b, (v4m){1, 5, 3, 7});
-    v4d t2 = __builtin_shuffle(c, d, (v4m){0, 4, 2, 6}), t3 = __builtin_shuffle(c, d, (v4m){1, 5, 3, 7});
-    out[0] = __builtin_shuffle(t0, t2, (v4m){0, 1, 4, 5});
-    out[1] = __builtin_shuffle(t1, t3, (v4m){0, 1, 4, 5});
-    out[2] = __builtin_shuffle(t0, t2, (v4m){2, 3, 6, 7});
-    out[3] = __builtin_shuffle(t1, t3, (v4m){2, 3, 6, 7});
+    v4d t0 = __builtin_shufflevector(a, b, 0, 4, 2, 6), t1 = __builtin_shufflevector(a, b, 1, 5, 3, 7);
+    v4d t2 = __builtin_shufflevector(c, d, 0, 4, 2, 6), t3 = __builtin_shufflevector(c, d, 1, 5, 3, 7);
+    out[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+    out[1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    out[2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+    out[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
 }
 
 /* the inverse: lane vectors in[0..3] to columns c0 .. c0 + 3 of the rows r[l] */
 static inline __attribute__((always_inline)) void store4x4(double *const r[4], int c0, const v4d in[4])
 {
-    v4d t0 = __builtin_shuffle(in[0], in[1], (v4m){0, 4, 2, 6}), t1 = __builtin_shuffle(in[0], in[1], (v4m){1, 5, 3, 7});
-    v4d t2 = __builtin_shuffle(in[2], in[3], (v4m){0, 4, 2, 6}), t3 = __builtin_shuffle(in[2], in[3], (v4m){1, 5, 3, 7});
-    v4d a = __builtin_shuffle(t0, t2, (v4m){0, 1, 4, 5}), b = __builtin_shuffle(t1, t3, (v4m){0, 1, 4, 5});
-    v4d c = __builtin_shuffle(t0, t2, (v4m){2, 3, 6, 7}), d = __builtin_shuffle(t1, t3, (v4m){2, 3, 6, 7});
+    v4d t0 = __builtin_shufflevector(in[0], in[1], 0, 4, 2, 6), t1 = __builtin_shufflevector(in[0], in[1], 1, 5, 3, 7);
+    v4d t2 = __builtin_shufflevector(in[2], in[3], 0, 4, 2, 6), t3 = __builtin_shufflevector(in[2], in[3], 1, 5, 3, 7);
+    v4d a = __builtin_shufflevector(t0, t2, 0, 1, 4, 5), b = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    v4d c = __builtin_shufflevector(t0, t2, 2, 3, 6, 7), d = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
     memcpy(r[0] + c0, &a, sizeof a);
     memcpy(r[1] + c0, &b, sizeof b);
     memcpy(r[2] + c0, &c, sizeof c);
