@@ -4,7 +4,8 @@
  * the certificate's force norm against the per-element sum, on a tet bar with random positions (some
  * elements inverted or flattened, so both the closed-form lanes and the scalar SVD fallback
  * run inside one block), random duals, a shuffled element order and a count that is not a
- * multiple of 4 (the block tail). White-box: the solver's state through admm_internal.h. */
+ * multiple of 4 (the block tail); each kernel as the library has it (the clone the CPU picks) and
+ * compiled here for the portable target. White-box: the solver's state through admm_internal.h. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -18,6 +19,24 @@
 #include "core/admm/admm_internal.h"
 #include "core/admm/svd3.h"
 #include "tests/unit/admm/admm_test_util.h"
+
+/* The kernels once more, compiled here for the portable target only (no target_clones: the
+ * build's baseline, x86-64-v2 SSE), under other names, so that the clone the running CPU picks
+ * in the library and the portable lowering are both held to the scalar bits */
+#define DF_NO_TARGET_CLONES
+#define admm_local_tet4 portable_local_tet4
+#define admm_dual_tet4 portable_dual_tet4
+#define admm_energy_tet4 portable_energy_tet4
+#define admm_force_tet4 portable_force_tet4
+void portable_local_tet4(df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *s2, double *z2);
+void portable_dual_tet4(df_admm *s, const int32_t *ae, double *fb, int32_t n, int lazy, double *t);
+void portable_energy_tet4(const df_admm *s, const int32_t *ae, const double *fb, int32_t n, double *out);
+double portable_force_tet4(const df_admm *s, const double *V, int32_t i);
+#include "core/admm/admm_tet4.c"
+#undef admm_local_tet4
+#undef admm_dual_tet4
+#undef admm_energy_tet4
+#undef admm_force_tet4
 
 static double urand(unsigned *seed) { return 2.0 * rand_r(seed) / (double)RAND_MAX - 1.0; }
 
@@ -106,14 +125,16 @@ static void local_matches(df_admm_energy en)
     }
     assert_true(inverted > 0 && inverted < f.n / 2); /* both paths inside the blocks */
     double *rx1 = dup(s->RX, nrx), *ce1 = dup(s->Ce, nce);
-    memcpy(s->RX, rx0, nrx * sizeof(double));
-    memcpy(s->Ce, ce0, nce * sizeof(double));
-    double s2v = 0, z2v = 0;
-    admm_local_tet4(s, f.ae, f.fb, f.n, &s2v, &z2v);
-    assert_memory_equal(s->RX, rx1, nrx * sizeof(double));
-    assert_memory_equal(s->Ce, ce1, nce * sizeof(double));
-    assert_memory_equal(&s2v, &s2, sizeof(double));
-    assert_memory_equal(&z2v, &z2, sizeof(double));
+    for (int pass = 0; pass < 2; pass++) { /* the library's clone, then the portable build */
+        memcpy(s->RX, rx0, nrx * sizeof(double));
+        memcpy(s->Ce, ce0, nce * sizeof(double));
+        double s2v = 0, z2v = 0;
+        (pass ? portable_local_tet4 : admm_local_tet4)(s, f.ae, f.fb, f.n, &s2v, &z2v);
+        assert_memory_equal(s->RX, rx1, nrx * sizeof(double));
+        assert_memory_equal(s->Ce, ce1, nce * sizeof(double));
+        assert_memory_equal(&s2v, &s2, sizeof(double));
+        assert_memory_equal(&z2v, &z2, sizeof(double));
+    }
     free(rx0); free(ce0); free(rx1); free(ce1);
     teardown(&f);
 }
@@ -147,12 +168,14 @@ static void test_dual(void **st)
             t[3] = lazy ? 0.0 : admm_element_energy_F(s, e, F);
         }
         double *w1 = dup(s->W, nw);
-        memcpy(s->W, w0, nw * sizeof(double));
-        memset(f.fb, 0, (size_t)f.n * 9 * sizeof(double));
-        admm_dual_tet4(s, f.ae, f.fb, f.n, lazy, tv);
-        assert_memory_equal(s->W, w1, nw * sizeof(double));
-        assert_memory_equal(f.fb, fr, (size_t)f.n * 9 * sizeof(double));
-        assert_memory_equal(tv, tr, (size_t)f.n * 4 * sizeof(double));
+        for (int pass = 0; pass < 2; pass++) {
+            memcpy(s->W, w0, nw * sizeof(double));
+            memset(f.fb, 0, (size_t)f.n * 9 * sizeof(double));
+            (pass ? portable_dual_tet4 : admm_dual_tet4)(s, f.ae, f.fb, f.n, lazy, tv);
+            assert_memory_equal(s->W, w1, nw * sizeof(double));
+            assert_memory_equal(f.fb, fr, (size_t)f.n * 9 * sizeof(double));
+            assert_memory_equal(tv, tr, (size_t)f.n * 4 * sizeof(double));
+        }
         free(w0); free(w1); free(fr); free(tr); free(tv);
         teardown(&f);
     }
@@ -174,6 +197,8 @@ static void test_energy(void **st)
         }
         assert_true(fallback > 0);
         admm_energy_tet4(f.s, f.ae, f.fb, f.n, vec);
+        assert_memory_equal(vec, ref, (size_t)f.n * sizeof(double));
+        portable_energy_tet4(f.s, f.ae, f.fb, f.n, vec);
         assert_memory_equal(vec, ref, (size_t)f.n * sizeof(double));
         free(ref); free(vec);
         teardown(&f);
@@ -224,8 +249,9 @@ static void test_force(void **st)
         for (int32_t i = 0; i < s->nv; i += 3) memcpy(s->V + 3 * (size_t)i, s->Vrest + 3 * (size_t)i, 3 * sizeof(double));
         int zero = 0;
         for (int32_t i = 0; i < s->nv; i++) {
-            double a = force_ref(s, s->V, i), b = admm_force_tet4(s, s->V, i);
+            double a = force_ref(s, s->V, i), b = admm_force_tet4(s, s->V, i), c = portable_force_tet4(s, s->V, i);
             assert_memory_equal(&a, &b, sizeof(double));
+            assert_memory_equal(&a, &c, sizeof(double));
             zero += a == 0.0;
         }
         assert_true(zero < s->nv / 4);
