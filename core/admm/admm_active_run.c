@@ -124,7 +124,7 @@ static void act_local(df_admm *s, act_acc *acc, double *t_x, double *t_z, double
         #pragma omp master
 #endif
         t_mid = admm_now();
-        #pragma omp for schedule(static)
+        #pragma omp for schedule(static) nowait /* the region's end is the barrier */
         for (int32_t f = 0; f < nf; f++) admm_rhs_row(s, a->rfv, nf, a->kout, rhs, f);
     }
     if (elem) {

@@ -21,7 +21,9 @@
  * The full solve on the 1M mesh is not run by default (its whole-mesh factorization alone takes
  * about a minute and 1.7 GB on this machine); BENCH_LOCAL_FULL1M=1 runs it.
  * Target (issue 14): a 20-iteration warm update on the 1M mesh moving <= 2% of the vertices in
- * <= 33 ms on 2 threads, final objective equal to the full solve's within 1e-8 relative. */
+ * <= 33 ms on 2 threads, final objective equal to the full solve's within 1e-8 relative. The table
+ * runs with passive OpenMP waits (main); the recommended variant's 1M drag is also timed in a
+ * child process under libgomp's default policy, the daemon's (daemon_wait_run). */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -252,9 +254,44 @@ static int drag(const grid *g, int active, int band, double tail, int updates, i
     return o->ran ? 0 : -1;
 }
 
+/* The recommended variant's 1M drag once more in a child process under libgomp's default wait
+ * policy (threads spin a while at a barrier, then sleep), which the daemon runs with (deformd sets
+ * none); the table's runs use passive waits (main). The child (DAEMON_WAIT_ENV set) prints its
+ * mean wall and CPU ms per update and 1 when the drag moved <= 2% of the vertices; *wall, *cpu,
+ * *small: those, or NAN when it failed. */
+#define DAEMON_WAIT_ENV "BENCH_LOCAL_DAEMON_WAIT"
+
+static int daemon_wait_child(void)
+{
+    grid g;
+    outcome o;
+    make_grid(55, &g);
+    int rc = drag(&g, 1, DF_ADMM_ACTIVE_BAND, DF_ADMM_ACTIVE_TAIL, UPDATES, ITERS, 0, &o);
+    if (!rc) printf("%.6f %.6f %d\n", o.mean_ms, o.cpu_ms, o.moved <= 0.02 * g.m.nv); /* <= 2% moved */
+    free_grid(&g);
+    return rc ? 1 : 0;
+}
+
+static void daemon_wait_run(double *wall, double *cpu, int *small)
+{
+    *wall = *cpu = NAN;
+    *small = 0;
+    char exe[4096], cmd[4200];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    if (n <= 0) return;
+    exe[n] = 0;
+    snprintf(cmd, sizeof(cmd), "env -u OMP_WAIT_POLICY %s=1 '%s'", DAEMON_WAIT_ENV, exe);
+    FILE *f = popen(cmd, "r");
+    if (!f) return;
+    if (fscanf(f, "%lf %lf %d", wall, cpu, small) != 3) *wall = *cpu = NAN;
+    if (pclose(f) != 0) *wall = *cpu = NAN;
+}
+
 int main(int argc, char **argv)
 {
     (void)argc;
+    const char *dw = getenv(DAEMON_WAIT_ENV);
+    if (dw && *dw) return daemon_wait_child();
     /* as bench_admm: on a shared machine OpenMP threads spinning at barriers while their partner
      * is descheduled cost more than they save; re-run once with the passive policy unless the
      * caller chose one (libgomp reads it at load) */
@@ -378,6 +415,15 @@ int main(int argc, char **argv)
         else
             printf("target 1M: converged objective equal to the full solve's within 1e-8: not measured at 1M (full solve "
                    "not run; 10k row: conv dE; BENCH_LOCAL_FULL1M=1 measures it)\n");
+        double dwall, dcpu;
+        int dsmall;
+        daemon_wait_run(&dwall, &dcpu, &dsmall);
+        if (isfinite(dwall))
+            printf("target 1M, %s under libgomp's default wait policy (the daemon's; the table: passive waits): mean "
+                   "update %.1f ms wall, %.1f ms CPU (spinning included): %s\n", var[VAR_REC].name, dwall, dcpu,
+                   dwall <= TARGET_MS && dsmall ? "MET" : "MISS");
+        else
+            printf("target 1M, %s under libgomp's default wait policy: the child run failed: MISS\n", var[VAR_REC].name);
     }
     return 0;
 }
