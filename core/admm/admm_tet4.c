@@ -1,15 +1,18 @@
-/* admm_tet4.c — the element kernels of ARAP / ACAP tets four elements at a time (4-lane vectors):
- * the dual update with F_e(V) (admm_dual_tet4, as admm_active_elem.c's dual_one) and local step 1
- * (admm_local_tet4): the closed-form
- * polar rotation of svd3.c's df_admm_polar3 (Newton on the trace root, Cayley-Hamilton) and
- * local_x_element_G's ARAP / ACAP update with element_contrib's right-hand side pieces
- * (admm_local.c), written over 4-lane vectors (gcc vector extensions). Every lane performs the
- * scalar code's operations in the scalar code's order (no FMA contraction: -ffp-contract=off, and
- * a lane's Newton loop stops where the scalar one would), so the results are bit-identical to
- * admm_local_x_one_G per element; an element whose G fails the closed form's conditions (not
- * well conditioned, inverted) takes the scalar path, which then runs its SVD fallback.
+/* admm_tet4.c — the element kernels of ARAP / ACAP tets (4-node tetrahedra), four elements at a
+ * time in 4-lane vectors (gcc vector extensions): local step 1 (admm_local_tet4: the closed-form
+ * polar rotation of svd3.c's df_admm_polar3, Newton on the trace root and Cayley-Hamilton, then
+ * local_x_element_G's ARAP / ACAP update and element_contrib's right-hand side pieces, admm_local.c),
+ * the dual update with F_e(V) (admm_dual_tet4, as admm_active_elem.c's dual_one; any energy), the
+ * element energies from F rows (admm_energy_tet4, as admm_element_energy_F) and the certificate's
+ * force norm (admm_force_tet4, as admm_active.c's force_norm).
+ * Bits: every lane performs the scalar code's operations in the scalar code's order (no FMA
+ * contraction: -ffp-contract=off; a lane's Newton loop stops where the scalar one would), so the
+ * results are bit-identical to the per-element code; an element whose matrix fails the closed
+ * form's conditions (not well conditioned, inverted) takes the scalar path and its SVD fallback,
+ * and so do the fewer than four elements at a block's end (test_admm_tet4).
  * SIMD: target_clones as in core/kelvinlet/kelvinlet_apply.c (AVX-512, AVX2 and the portable
- * build; -DDF_NO_TARGET_CLONES drops them). */
+ * build, picked at load; -DDF_NO_TARGET_CLONES drops them). An 8-lane variant (two blocks'
+ * dependency chains interleaved) measured no faster on this machine. */
 #include <math.h>
 #include <string.h>
 
